@@ -1,0 +1,132 @@
+// Typed, validated configuration of hapticd. Plain values in SI units; every field has the
+// default the daemon uses when the YAML leaves it out. Parsing and validation live in
+// config_loader.h; nothing here knows about YAML.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace hapticd::config {
+
+enum class ClockMode { kRealtime, kFreerun };
+enum class DriverKind { kSim, kHid, kCan, kGpio };
+enum class Discretization { kBackward, kTustin };
+enum class GateMode { kEnforce, kWarn };
+
+// Polynomial coefficients in ascending powers of z^-1: {a0, a1, ...} means a0 + a1 z^-1 + ...
+using Coefficients = std::vector<double>;
+
+struct LoopConfig {
+  double rate_hz = 1000.0;  // sample rate 1/T (Hz), in (0, 100000]
+  ClockMode clock = ClockMode::kRealtime;
+  int rt_priority = 80;           // SCHED_FIFO priority, 1..99
+  int cpu = -1;                   // CPU the RT thread is pinned to; -1 = not pinned
+  int overrun_fault_streak = 10;  // consecutive overruns that fault the loop, >= 1
+
+  double sample_period_s() const { return 1.0 / rate_hz; }
+};
+
+// A time profile used for the hand's set-point (m) and the force operator (N).
+// constant/step/ramp/press are stored as breakpoints of a piecewise-linear function
+// (held constant before the first and after the last point; two points at the same time
+// make a jump); sine is offset + amplitude * sin(2 pi f t + phase).
+struct ProfilePoint {
+  double t_s = 0.0;
+  double value = 0.0;
+};
+struct ProfileSpec {
+  enum class Shape { kConstant, kStep, kRamp, kSine, kPress };
+  Shape shape = Shape::kConstant;
+  std::vector<ProfilePoint> points;  // all shapes but sine
+  double offset = 0.0;               // sine only
+  double amplitude = 0.0;            // sine only
+  double frequency_hz = 0.0;         // sine only
+  double phase_rad = 0.0;            // sine only
+};
+
+// Imposed motion: positions at the sample instants are offset + amplitude*cos(2 pi f t + phase);
+// between samples the position is linear (constant velocity inside each period).
+struct MotionSpec {
+  double offset = 0.0;
+  double amplitude = 0.0;
+  double frequency_hz = 1.0;
+  double phase_rad = 0.0;
+};
+
+struct OperatorSpec {
+  enum class Kind { kNone, kHand, kForce, kMotion, kReplay };
+  Kind kind = Kind::kHand;
+  double stiffness = 300.0;  // hand: k_h (N/m), > 0
+  double damping = 5.0;      // hand: b_h (N s/m), >= 0; acts against the device velocity
+  ProfileSpec setpoint;      // hand: set-point (m); its spring force is the bias force
+  ProfileSpec force;         // force: operator force (N)
+  MotionSpec motion;         // motion
+  std::string replay_log;    // replay: tick log whose positions are imposed (absolute path)
+};
+
+struct SimDeviceConfig {
+  double counts_per_unit = 1.0e5;  // encoder resolution (counts per m); 0 = ideal encoder
+  double noise_counts = 0.0;       // std dev of Gaussian encoder noise in counts; 0 = off
+  std::uint64_t seed = 1;          // seed of the encoder noise
+  double initial_position = 0.0;   // m
+  double initial_velocity = 0.0;   // m/s
+  OperatorSpec op;
+};
+
+struct DeviceConfig {
+  DriverKind driver = DriverKind::kSim;
+  double mass = 0.1;       // m (kg), > 0
+  double damping = 2.0;    // b (N s/m), > 0: the device's own physical damping
+  double max_force = 10.0; // |u| saturation (N), > 0
+  SimDeviceConfig sim;
+};
+
+struct CouplingConfig {
+  bool present = false;
+  Coefficients numerator;    // C(z) numerator, powers of z^-1
+  Coefficients denominator;  // C(z) denominator, powers of z^-1, leading coefficient != 0
+};
+
+struct WallConfig {
+  double position = 0.0;  // x0 (m)
+  int normal = 1;         // +1: wall occupies x > x0; -1: x < x0
+  double stiffness = 1000.0;  // K (N/m), >= 0
+  double damping = 0.0;       // B (N s/m), >= 0
+  Discretization discretization = Discretization::kBackward;
+  int delay_samples = 0;      // computation delay d beyond the driver's own, 0..1000
+  bool no_pull = false;       // clamp f >= 0 (outside the theorems)
+  CouplingConfig coupling;
+};
+
+struct SafetyConfig {
+  GateMode gate = GateMode::kEnforce;
+  double operator_passivity_shortage = 0.0;  // eta (N s/m), >= 0
+  double passivity_margin = 0.1;  // pass needs b_req <= (1 - margin) b; in [0, 1)
+  double max_speed = 10.0;  // |dx/dt| between samples above this is an encoder fault (m/s)
+};
+
+struct AnalysisConfig {
+  double operator_stiffness = 500.0;  // k_h of the operator model for the oscillation check
+  double operator_damping = 5.0;      // b_h of that model
+  Coefficients transparency_weight_numerator{1.0};    // W(z), powers of z^-1
+  Coefficients transparency_weight_denominator{1.0};
+};
+
+struct TelemetryConfig {
+  std::string log_path;              // empty: no tick log unless --log is given
+  std::uint32_t ring_capacity = 65536;  // records between RT thread and writer, >= 64
+};
+
+struct Config {
+  std::string source_name;     // file name shown in messages ("config/sim.yaml")
+  std::string effective_yaml;  // the configuration after --set, as recorded in tick logs
+  LoopConfig loop;
+  DeviceConfig device;
+  WallConfig wall;
+  SafetyConfig safety;
+  AnalysisConfig analysis;
+  TelemetryConfig telemetry;
+};
+
+}  // namespace hapticd::config

@@ -1,0 +1,38 @@
+// One fixed-size record per tick, written by the RT thread into the SPSC ring and appended
+// to the binary log by the writer thread. The layout is part of the log format (version 1):
+// little-endian, no padding, 72 bytes.
+#pragma once
+
+#include <cstdint>
+#include <type_traits>
+
+namespace hapticd::telemetry {
+
+enum TickFlag : std::uint32_t {
+  kFlagContact = 1u << 0,         // penetration > 0 at this sample
+  kFlagSaturated = 1u << 1,       // |command| was limited to device.max_force
+  kFlagFault = 1u << 2,           // the loop faulted on this tick (zero force commanded)
+  kFlagOverrun = 1u << 3,         // this tick finished after the next deadline
+  kFlagNoPullClamped = 1u << 4,   // wall.no_pull turned a pulling force into zero
+  kFlagStale = 1u << 5,           // the device had no new position this tick
+  kFlagOutputDisabled = 1u << 6,  // output not enabled (zero force regardless of the law)
+};
+
+struct TickRecord {
+  std::uint64_t tick = 0;
+  std::int64_t scheduled_ns = 0;     // deadline of this tick since loop start (freerun: k*T)
+  std::int32_t wake_latency_ns = 0;  // wake time minus deadline (freerun: 0, nothing waits)
+  std::int32_t compute_ns = 0;       // read+step+write time (freerun: 0, see the summary)
+  double position = 0.0;             // x as read from the device
+  double penetration = 0.0;          // p = n (x - x0)
+  double velocity = 0.0;             // backward-difference estimate (x_k - x_{k-1}) / T
+  double force_computed = 0.0;       // f_k = E(z)[xi(p_ve)]_k, before delay and limits
+  double force_commanded = 0.0;      // u written to the device: -n f_{k-d}, clamped, saturated
+  std::uint32_t flags = 0;           // TickFlag bits
+  std::uint32_t device_status = 0;   // PositionSample::device_status
+};
+
+static_assert(std::is_trivially_copyable_v<TickRecord>);
+static_assert(sizeof(TickRecord) == 72, "TickRecord is part of the log format");
+
+}  // namespace hapticd::telemetry
