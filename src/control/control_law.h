@@ -1,0 +1,44 @@
+// Everything the per-tick controller needs, resolved from the configuration once, off the RT
+// thread: normalised filter coefficients and the cached constants of DESIGN.md §3, so the
+// tick multiplies and never divides.
+#pragma once
+
+#include <array>
+#include <cstddef>
+
+#include "config/config.h"
+
+namespace hapticd::control {
+
+inline constexpr std::size_t kMaxTaps = 16;  // coefficients per polynomial (order 15)
+
+// A causal IIR filter num(z^-1)/den(z^-1) with den[0] normalised to 1.
+struct FilterCoefficients {
+  std::array<double, kMaxTaps> num{};
+  std::array<double, kMaxTaps> den{};  // den[0] == 1
+  std::size_t num_taps = 1;
+  std::size_t den_taps = 1;
+};
+
+struct ControlLaw {
+  double wall_position = 0.0;      // x0
+  double normal = 1.0;             // n
+  FilterCoefficients environment;  // E(z)
+  bool has_coupling = false;
+  FilterCoefficients coupling;  // C(z)
+  int delay_samples = 0;        // d: f_{k-d} is commanded at tick k
+  bool no_pull = false;
+  double max_force = 0.0;
+  double sample_period = 0.0;
+  // Cached derived constants.
+  double inv_sample_period = 0.0;
+  double e0 = 0.0;                 // E's direct feed-through
+  double c0 = 0.0;                 // C's direct feed-through
+  double inv_one_plus_e0c0 = 1.0;  // 1 / (1 + e0 c0)
+};
+
+// Not RT-safe. Throws std::invalid_argument for a law the controller cannot run
+// (too many coefficients, negative feed-through).
+ControlLaw make_control_law(const config::Config& cfg);
+
+}  // namespace hapticd::control

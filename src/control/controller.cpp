@@ -1,0 +1,75 @@
+#include "control/controller.h"
+
+#include <cmath>
+
+#include "telemetry/tick_record.h"
+
+namespace hapticd::control {
+
+Controller::Controller(const ControlLaw& law)
+    : law_(law), delay_line_(static_cast<std::size_t>(law.delay_samples) + 1, 0.0) {}
+
+void Controller::reset() noexcept {
+  xi_.clear();
+  force_.clear();
+  proxy_.clear();
+  for (double& v : delay_line_) v = 0.0;
+  delay_head_ = 0;
+  have_last_position_ = false;
+}
+
+ControlOutput Controller::step(double position) noexcept {
+  ControlOutput out;
+  out.penetration = law_.normal * (position - law_.wall_position);
+  out.velocity = have_last_position_ ? (position - last_position_) * law_.inv_sample_period : 0.0;
+  last_position_ = position;
+  have_last_position_ = true;
+
+  // C(z)[f]_k = c0 f_k + c_past; the proxy penetration without c0 f_k is q = p - c_past.
+  double c_past = 0.0;
+  if (law_.has_coupling) {
+    const FilterCoefficients& c = law_.coupling;
+    for (std::size_t i = 1; i < c.num_taps; ++i) c_past += c.num[i] * force_.at(i - 1);
+    for (std::size_t i = 1; i < c.den_taps; ++i) c_past -= c.den[i] * proxy_.at(i - 1);
+  }
+  const double q = out.penetration - c_past;
+
+  // E(z)[xi]_k = e0 xi_k + r: r holds everything that depends on past samples only.
+  const FilterCoefficients& e = law_.environment;
+  double r = 0.0;
+  for (std::size_t i = 1; i < e.num_taps; ++i) r += e.num[i] * xi_.at(i - 1);
+  for (std::size_t i = 1; i < e.den_taps; ++i) r -= e.den[i] * force_.at(i - 1);
+
+  // The unique solution of f = e0 max(q - c0 f, 0) + r for e0, c0 >= 0.
+  double f = r;
+  double xi = 0.0;
+  if (q - law_.c0 * r > 0.0) {
+    f = (r + law_.e0 * q) * law_.inv_one_plus_e0c0;
+    xi = q - law_.c0 * f;
+    out.flags |= telemetry::kFlagContact;
+  }
+  xi_.push(xi);
+  force_.push(f);
+  proxy_.push(law_.c0 * f + c_past);
+  out.force_computed = f;
+
+  // Delay line of d + 1 slots: after writing f_k, the slot after it holds f_{k-d}.
+  const std::size_t n = delay_line_.size();
+  delay_head_ = delay_head_ + 1 == n ? 0 : delay_head_ + 1;
+  delay_line_[delay_head_] = f;
+  double applied = delay_line_[delay_head_ + 1 == n ? 0 : delay_head_ + 1];
+
+  if (law_.no_pull && applied < 0.0) {
+    applied = 0.0;
+    out.flags |= telemetry::kFlagNoPullClamped;
+  }
+  double u = -law_.normal * applied;
+  if (std::abs(u) > law_.max_force) {
+    u = std::copysign(law_.max_force, u);
+    out.flags |= telemetry::kFlagSaturated;
+  }
+  out.force_commanded = u;
+  return out;
+}
+
+}  // namespace hapticd::control

@@ -1,0 +1,62 @@
+// The per-tick contact law of DESIGN.md §3: penetration p = n (x - x0), the unilateral
+// nonlinearity xi(p) = max(p, 0), the environment filter E(z), the virtual coupling C(z)
+// through the closed-form solution of its algebraic loop, the delay line, then no_pull and
+// saturation (outside the linear filters, as outside the theorems).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "control/control_law.h"
+
+namespace hapticd::control {
+
+struct ControlOutput {
+  double penetration = 0.0;      // p = n (x - x0)
+  double velocity = 0.0;         // (x_k - x_{k-1}) / T
+  double force_computed = 0.0;   // f_k, wall force along n (positive pushes out of the wall)
+  double force_commanded = 0.0;  // u = -n f_{k-d}, after no_pull and saturation
+  std::uint32_t flags = 0;       // telemetry::TickFlag bits: contact, saturated, no-pull clamped
+};
+
+class Controller {
+ public:
+  // Not RT-safe: allocates the delay line.
+  explicit Controller(const ControlLaw& law);
+
+  // RT-safe: called every tick. Never allocates, locks or throws; `position` must be finite.
+  ControlOutput step(double position) noexcept;
+
+  // RT-safe. Clears every filter state and the delay line (as at construction).
+  void reset() noexcept;
+
+  const ControlLaw& law() const noexcept { return law_; }
+
+ private:
+  // Past values of one signal: at(i) is the value i+1 samples ago.
+  class History {
+   public:
+    void push(double v) noexcept {
+      head_ = (head_ + 1) & (kMaxTaps - 1);
+      v_[head_] = v;
+    }
+    double at(std::size_t i) const noexcept { return v_[(head_ - i) & (kMaxTaps - 1)]; }
+    void clear() noexcept { v_.fill(0.0); }
+
+   private:
+    std::array<double, kMaxTaps> v_{};
+    std::size_t head_ = 0;
+  };
+  static_assert((kMaxTaps & (kMaxTaps - 1)) == 0, "History indexes with a mask");
+
+  ControlLaw law_;
+  History xi_;     // xi(p_ve) fed to E
+  History force_;  // f, E's output and C's input
+  History proxy_;  // C's output
+  std::vector<double> delay_line_;
+  std::size_t delay_head_ = 0;
+  double last_position_ = 0.0;
+  bool have_last_position_ = false;
+};
+
+}  // namespace hapticd::control

@@ -1,0 +1,146 @@
+// The contact law against sequences computed by hand from DESIGN.md §3.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "alloc_counter.h"
+#include "control/controller.h"
+#include "telemetry/tick_record.h"
+
+namespace hapticd::control {
+namespace {
+
+using telemetry::kFlagContact;
+using telemetry::kFlagNoPullClamped;
+using telemetry::kFlagSaturated;
+
+config::Config wall(double k, double b,
+                    config::Discretization disc = config::Discretization::kBackward) {
+  config::Config c;
+  c.loop.rate_hz = 1000.0;  // T = 1 ms
+  c.wall.stiffness = k;
+  c.wall.damping = b;
+  c.wall.discretization = disc;
+  c.device.max_force = 1e9;
+  return c;
+}
+
+TEST(Controller, BackwardWallIsKXiPlusBDifferenceOfXi) {
+  Controller ctl(make_control_law(wall(1000, 0.5)));
+  // x: outside, enters 1 mm, 3 mm, back to 2 mm, leaves.
+  const std::vector<double> x{-0.001, 0.001, 0.003, 0.002, -0.0005, -0.001};
+  const std::vector<double> xi{0, 0.001, 0.003, 0.002, 0, 0};
+  double prev = 0.0;
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    const ControlOutput o = ctl.step(x[k]);
+    const double f = 1000 * xi[k] + 0.5 * (xi[k] - prev) / 1e-3;
+    prev = xi[k];
+    EXPECT_NEAR(o.force_computed, f, 1e-12) << "k=" << k;
+    EXPECT_NEAR(o.force_commanded, -f, 1e-12) << "k=" << k;  // n = +1: u = -f
+    EXPECT_EQ((o.flags & kFlagContact) != 0, xi[k] > 0) << "k=" << k;
+    EXPECT_DOUBLE_EQ(o.penetration, x[k]);
+  }
+}
+
+TEST(Controller, ReleaseStepPullsUnlessNoPull) {
+  // Leaving contact, the damping term -B xi_{k-1}/T pulls toward the wall; no_pull clamps it.
+  config::Config c = wall(1000, 0.5);
+  Controller pulls(make_control_law(c));
+  pulls.step(0.002);
+  const ControlOutput released = pulls.step(-0.001);
+  EXPECT_NEAR(released.force_computed, -0.5 * 0.002 / 1e-3, 1e-12);
+  EXPECT_NEAR(released.force_commanded, 1.0, 1e-12);
+
+  c.wall.no_pull = true;
+  Controller clamped(make_control_law(c));
+  clamped.step(0.002);
+  const ControlOutput o = clamped.step(-0.001);
+  EXPECT_NEAR(o.force_computed, -1.0, 1e-12);  // the law is unchanged...
+  EXPECT_EQ(o.force_commanded, 0.0);           // ...only the command is clamped
+  EXPECT_TRUE(o.flags & kFlagNoPullClamped);
+}
+
+TEST(Controller, TustinWallIsTheBilinearRecursion) {
+  Controller ctl(make_control_law(wall(1000, 0.5, config::Discretization::kTustin)));
+  const std::vector<double> x{0.0, 0.001, 0.0025, 0.002, -0.001, -0.002};
+  double f_prev = 0.0, xi_prev = 0.0;
+  const double a = 1000 + 2 * 0.5 / 1e-3, b = 1000 - 2 * 0.5 / 1e-3;
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    const double xi = std::max(x[k], 0.0);
+    const double f = -f_prev + a * xi + b * xi_prev;  // (1 + z^-1) f = (a + b z^-1) xi
+    EXPECT_NEAR(ctl.step(x[k]).force_computed, f, 1e-9) << "k=" << k;
+    f_prev = f;
+    xi_prev = xi;
+  }
+}
+
+TEST(Controller, DelayCommandsTheForceComputedDSamplesEarlier) {
+  config::Config c = wall(1000, 0.0);
+  c.wall.delay_samples = 2;
+  Controller ctl(make_control_law(c));
+  const std::vector<double> x{0.001, 0.002, 0.003, 0.004, 0.005};
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    const ControlOutput o = ctl.step(x[k]);
+    EXPECT_NEAR(o.force_computed, 1000 * x[k], 1e-12);
+    EXPECT_NEAR(o.force_commanded, k < 2 ? 0.0 : -1000 * x[k - 2], 1e-12) << "k=" << k;
+  }
+}
+
+TEST(Controller, NormalAndWallPositionSetPenetrationAndForceDirection) {
+  config::Config c = wall(1000, 0.0);
+  c.wall.position = 0.05;
+  c.wall.normal = -1;  // wall occupies x < 0.05
+  Controller ctl(make_control_law(c));
+  const ControlOutput out = ctl.step(0.06);  // 10 mm on the free side
+  EXPECT_NEAR(out.penetration, -0.01, 1e-15);
+  EXPECT_EQ(out.force_commanded, 0.0);
+  const ControlOutput in = ctl.step(0.048);  // 2 mm inside
+  EXPECT_NEAR(in.penetration, 0.002, 1e-15);
+  EXPECT_NEAR(in.force_commanded, +2.0, 1e-12);  // pushes toward +x, out of the wall
+}
+
+TEST(Controller, SaturatesToMaxForceKeepingTheSign) {
+  config::Config c = wall(1000, 0.0);
+  c.device.max_force = 1.5;
+  Controller ctl(make_control_law(c));
+  const ControlOutput o = ctl.step(0.004);
+  EXPECT_NEAR(o.force_computed, 4.0, 1e-12);
+  EXPECT_EQ(o.force_commanded, -1.5);
+  EXPECT_TRUE(o.flags & kFlagSaturated);
+  EXPECT_FALSE(ctl.step(0.001).flags & kFlagSaturated);
+}
+
+TEST(Controller, VelocityIsTheBackwardDifference) {
+  Controller ctl(make_control_law(wall(0, 0)));
+  EXPECT_EQ(ctl.step(0.010).velocity, 0.0);  // no previous sample yet
+  EXPECT_NEAR(ctl.step(0.012).velocity, 2.0, 1e-12);
+}
+
+TEST(Controller, ResetForgetsHistory) {
+  Controller ctl(make_control_law(wall(1000, 0.5)));
+  ctl.step(0.003);
+  ctl.reset();
+  EXPECT_NEAR(ctl.step(0.001).force_computed, 1000 * 0.001 + 0.5 * 0.001 / 1e-3, 1e-12);
+}
+
+TEST(Controller, StepDoesNotAllocate) {
+  config::Config c = wall(2000, 0.2);
+  c.wall.delay_samples = 3;
+  c.wall.coupling = {true, {0.1, -0.0752, 0.0016, -0.0101}, {1, -1.8407, 0.8444, -0.0037}};
+  Controller ctl(make_control_law(c));
+  testing::AllocationScope scope;
+  double sink = 0.0;
+  for (int k = 0; k < 20000; ++k) sink += ctl.step(0.001 * ((k % 7) - 3)).force_commanded;
+  EXPECT_EQ(scope.count(), 0u);
+  EXPECT_TRUE(std::isfinite(sink));
+}
+
+TEST(ControlLaw, RejectsNegativeCouplingFeedThrough) {
+  config::Config c = wall(1000, 0.0);
+  c.wall.coupling = {true, {-0.1}, {1.0}};
+  EXPECT_THROW(make_control_law(c), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace hapticd::control
