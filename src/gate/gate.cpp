@@ -1,0 +1,165 @@
+#include "gate/gate.h"
+
+#include <cmath>
+#include <numbers>
+
+#include "analysis/coupling.h"
+#include "analysis/oscillation.h"
+#include "analysis/wall_model.h"
+#include "gate/number_format.h"
+
+namespace hapticd::gate {
+namespace {
+
+using analysis::StiffnessLimit;
+using analysis::TransferFunction;
+
+double to_hz(double theta, double t) { return theta / (2.0 * std::numbers::pi * t); }
+
+analysis::WallParams wall_params(const config::Config& cfg, double stiffness) {
+  return {stiffness, cfg.wall.damping, cfg.loop.sample_period_s(),
+          cfg.wall.discretization == config::Discretization::kTustin
+              ? analysis::WallDiscretization::kTustin
+              : analysis::WallDiscretization::kBackward};
+}
+
+std::optional<TransferFunction> coupling_of(const config::Config& cfg) {
+  if (!cfg.wall.coupling.present) return std::nullopt;
+  return TransferFunction{cfg.wall.coupling.numerator, cfg.wall.coupling.denominator};
+}
+
+std::string passivity_reason(const config::Config& cfg, const GateReport& r) {
+  const PassivityReport& p = r.passivity;
+  const double b = cfg.device.damping;
+  const double m = cfg.safety.passivity_margin;
+  std::string s = "passivity: required damping b_req = " + format_number(p.required_damping) +
+                  " N s/m exceeds (1 - safety.passivity_margin) x device.damping = (1 - " +
+                  format_number(m) + ") x " + format_number(b) + " = " +
+                  format_number(p.available_damping) + " N s/m";
+  if (!p.note.empty()) return s + " (" + p.note + ")";
+  s += " (worst at " + format_number(p.worst_frequency_hz) + " Hz, delay " +
+       std::to_string(r.delay_samples) + " samples)";
+  switch (p.max_stiffness.kind) {
+    case StiffnessLimit::Kind::kBounded:
+      s += "; wall.stiffness must be <= " + format_number(p.max_stiffness.value) +
+           " N/m to pass (now " + format_number(cfg.wall.stiffness) + ")";
+      break;
+    case StiffnessLimit::Kind::kNone:
+      s += "; no wall.stiffness passes, not even 0: wall.damping = " +
+           format_number(cfg.wall.damping) +
+           " N s/m alone needs more than the device has; lower it or add wall.coupling";
+      break;
+    case StiffnessLimit::Kind::kUnbounded:
+      break;
+  }
+  if (std::isfinite(p.required_damping) && m < 1.0) {
+    s += ", or device.damping >= " + format_number(p.required_damping / (1.0 - m)) + " N s/m";
+  }
+  return s;
+}
+
+void analyse_oscillation(const config::Config& cfg, const TransferFunction& e,
+                         const std::optional<TransferFunction>& c, GateReport& r) {
+  const double t = r.sample_period_s;
+  if (c && r.coupling.admissible && analysis::poly_has_root_at(c->den, 1.0)) {
+    r.oscillation.note =
+        "not applicable: the coupling's pole at z = 1 makes the loop gain unbounded at DC; "
+        "seed 002 Theorem 1 (the DSPR check) covers oscillation instead";
+    return;
+  }
+  // The loop seen by xi(.): E (z^-d G + C), which is DESIGN.md's E z^-d G without coupling.
+  const TransferFunction g = analysis::device_operator_zoh(cfg.device.mass, cfg.device.damping,
+                                                           cfg.analysis.operator_stiffness,
+                                                           cfg.analysis.operator_damping, t);
+  TransferFunction path = analysis::tf_delay(g, r.delay_samples);
+  if (c) path = analysis::tf_sum(path, *c);
+  const analysis::OscillationCheck o = analysis::oscillation_check(analysis::tf_product(e, path));
+  r.oscillation = {o.applicable,          o.note,           o.tsai_colgate,         o.tsypkin,
+                   o.tsai_colgate_margin, o.tsypkin_margin, to_hz(o.worst_theta, t)};
+}
+
+}  // namespace
+
+GateReport evaluate_gate(const config::Config& cfg, int device_delay_samples) {
+  GateReport r;
+  const double t = cfg.loop.sample_period_s();
+  const double b = cfg.device.damping;
+  const double eta = cfg.safety.operator_passivity_shortage;
+  r.sample_period_s = t;
+  r.wall_delay_samples = cfg.wall.delay_samples;
+  r.device_delay_samples = device_delay_samples;
+  r.delay_samples = cfg.wall.delay_samples + device_delay_samples;
+  r.device_damping = b;
+
+  const TransferFunction e = analysis::environment_filter(wall_params(cfg, cfg.wall.stiffness));
+  const std::optional<TransferFunction> c = coupling_of(cfg);
+  const TransferFunction h = analysis::contact_map(e, c);
+  r.static_stiffness = analysis::static_stiffness(e, c);
+
+  // Passivity (seed 001) of what will run: H delayed by the wall's and the driver's samples.
+  const analysis::PassivityBound pb = analysis::passivity_bound(h, t, r.delay_samples, eta);
+  PassivityReport& p = r.passivity;
+  p.required_damping = pb.required_damping;
+  p.available_damping = (1.0 - cfg.safety.passivity_margin) * b;
+  p.margin = (b - pb.required_damping) / b;
+  p.worst_frequency_hz = pb.worst_frequency_hz;
+  p.passive = pb.required_damping <= p.available_damping;
+  p.note = pb.note;
+  p.max_stiffness = analysis::max_stiffness(
+      [&](double k) {
+        return analysis::contact_map(analysis::environment_filter(wall_params(cfg, k)), c);
+      },
+      t, r.delay_samples, eta, p.available_damping);
+
+  // Coupling (seed 002).
+  r.coupling.present = c.has_value();
+  if (c) {
+    const analysis::CouplingCheck cc = analysis::coupling_check(*c, t, b);
+    r.coupling.admissible = cc.admissible;
+    r.coupling.dspr = cc.dspr;
+    r.coupling.dspr_min_real = cc.dspr_min_real;
+    r.coupling.note = cc.note;
+    const TransferFunction w{cfg.analysis.transparency_weight_numerator,
+                             cfg.analysis.transparency_weight_denominator};
+    const analysis::Extremum g = analysis::transparency_gamma(h, e, w);
+    r.coupling.transparency_gamma = g.value;
+    r.coupling.transparency_frequency_hz = to_hz(g.theta, t);
+  }
+
+  analyse_oscillation(cfg, e, c, r);
+
+  // Verdict: passivity decides; the other checks inform.
+  if (!p.passive) r.reasons.push_back(passivity_reason(cfg, r));
+  if (c && !r.coupling.admissible) r.reasons.push_back("coupling: " + r.coupling.note);
+  r.pass = r.reasons.empty();
+
+  if (c && r.coupling.admissible && !r.coupling.dspr) {
+    r.warnings.push_back("coupling: seed 002 Theorem 1 does not hold (" + r.coupling.note + ")");
+  }
+  if (c && r.delay_samples > 0) {
+    r.warnings.push_back("coupling: seed 002 Theorem 1 assumes no delay; with " +
+                         std::to_string(r.delay_samples) +
+                         " samples the passivity bound is what guarantees the loop");
+  }
+  if (!r.oscillation.applicable && !r.oscillation.note.empty() && !c) {
+    r.warnings.push_back("oscillation: " + r.oscillation.note);
+  } else if (r.oscillation.applicable && !r.oscillation.tsai_colgate) {
+    r.warnings.push_back(
+        "oscillation: the Tsai-Colgate criterion fails for the modelled operator (worst at " +
+        format_number(r.oscillation.worst_frequency_hz) +
+        " Hz): a limit cycle is not excluded for that hand");
+  }
+  if (cfg.wall.discretization == config::Discretization::kTustin) {
+    r.warnings.push_back(
+        "wall.discretization tustin: E(z) has a pole at z = -1, so after each release the "
+        "damping term leaves a force alternating at the Nyquist frequency that never decays");
+  }
+  if (cfg.wall.no_pull) {
+    r.warnings.push_back(
+        "wall.no_pull clamps f >= 0: outside the theorems, which cover the linear wall only "
+        "(the clamped pull can be the part that was dissipating energy on release)");
+  }
+  return r;
+}
+
+}  // namespace hapticd::gate

@@ -1,0 +1,17 @@
+#include "gate/number_format.h"
+
+#include <cmath>
+#include <cstdio>
+
+namespace hapticd::gate {
+
+std::string format_number(double v, int digits) {
+  if (std::isnan(v)) return "nan";
+  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+  if (v == 0.0) return "0";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*g", digits, v);
+  return buf;
+}
+
+}  // namespace hapticd::gate
