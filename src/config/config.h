@@ -3,6 +3,7 @@
 // config_loader.h; nothing here knows about YAML.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -16,6 +17,10 @@ enum class GateMode { kEnforce, kWarn };
 
 // Polynomial coefficients in ascending powers of z^-1: {a0, a1, ...} means a0 + a1 z^-1 + ...
 using Coefficients = std::vector<double>;
+
+// Longest coupling numerator/denominator: the controller's filter histories are fixed-size so
+// the RT thread never allocates (a power of two: the histories index with a mask).
+inline constexpr std::size_t kMaxCouplingCoefficients = 16;
 
 struct LoopConfig {
   double rate_hz = 1000.0;  // sample rate 1/T (Hz), in (0, 100000]
@@ -76,9 +81,9 @@ struct SimDeviceConfig {
 
 struct DeviceConfig {
   DriverKind driver = DriverKind::kSim;
-  double mass = 0.1;       // m (kg), > 0
-  double damping = 2.0;    // b (N s/m), > 0: the device's own physical damping
-  double max_force = 10.0; // |u| saturation (N), > 0
+  double mass = 0.1;        // m (kg), > 0
+  double damping = 2.0;     // b (N s/m), > 0: the device's own physical damping
+  double max_force = 10.0;  // |u| saturation (N), > 0
   SimDeviceConfig sim;
 };
 
@@ -89,32 +94,33 @@ struct CouplingConfig {
 };
 
 struct WallConfig {
-  double position = 0.0;  // x0 (m)
-  int normal = 1;         // +1: wall occupies x > x0; -1: x < x0
+  double position = 0.0;      // x0 (m)
+  int normal = 1;             // +1: wall occupies x > x0; -1: x < x0
   double stiffness = 1000.0;  // K (N/m), >= 0
   double damping = 0.0;       // B (N s/m), >= 0
   Discretization discretization = Discretization::kBackward;
-  int delay_samples = 0;      // computation delay d beyond the driver's own, 0..1000
-  bool no_pull = false;       // clamp f >= 0 (outside the theorems)
+  int delay_samples = 0;  // computation delay d beyond the driver's own, 0..1000
+  bool no_pull = false;   // clamp f >= 0 (outside the theorems)
   CouplingConfig coupling;
 };
 
 struct SafetyConfig {
   GateMode gate = GateMode::kEnforce;
   double operator_passivity_shortage = 0.0;  // eta (N s/m), >= 0
-  double passivity_margin = 0.1;  // pass needs b_req <= (1 - margin) b; in [0, 1)
-  double max_speed = 10.0;  // |dx/dt| between samples above this is an encoder fault (m/s)
+  double passivity_margin = 0.1;             // pass needs b_req <= (1 - margin) b; in [0, 1)
+  double max_speed = 10.0;    // |dx/dt| between samples above this is an encoder fault (m/s)
+  int stale_fault_ticks = 3;  // consecutive reads with no new position that fault the loop
 };
 
 struct AnalysisConfig {
   double operator_stiffness = 500.0;  // k_h of the operator model for the oscillation check
   double operator_damping = 5.0;      // b_h of that model
-  Coefficients transparency_weight_numerator{1.0};    // W(z), powers of z^-1
+  Coefficients transparency_weight_numerator{1.0};  // W(z), powers of z^-1
   Coefficients transparency_weight_denominator{1.0};
 };
 
 struct TelemetryConfig {
-  std::string log_path;              // empty: no tick log unless --log is given
+  std::string log_path;                 // empty: no tick log unless --log is given
   std::uint32_t ring_capacity = 65536;  // records between RT thread and writer, >= 64
 };
 

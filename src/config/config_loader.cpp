@@ -1,0 +1,180 @@
+// Entry points: read the text, parse it, merge the --set overrides into the tree, validate it
+// against the schema, and record the merged document as Config::effective_yaml.
+#include "config/config_loader.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+#include <yaml-cpp/yaml.h>
+
+#include <cerrno>
+#include <filesystem>
+#include <system_error>
+
+#include "config/config_schema.h"
+#include "config/yaml_reader.h"
+
+namespace hapticd::config {
+namespace {
+
+std::string join_lines(const std::vector<std::string>& lines) {
+  std::string out;
+  for (std::size_t i = 0; i < lines.size(); ++i) {
+    if (i) out += '\n';
+    out += lines[i];
+  }
+  return out;
+}
+
+// "a.b.c" -> {a, b, c}; empty when any segment is empty.
+std::vector<std::string> split_key_path(std::string_view path) {
+  std::vector<std::string> segments;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t dot = path.find('.', start);
+    const std::string_view seg =
+        path.substr(start, dot == std::string_view::npos ? std::string_view::npos : dot - start);
+    if (seg.empty()) return {};
+    segments.emplace_back(seg);
+    if (dot == std::string_view::npos) return segments;
+    start = dot + 1;
+  }
+}
+
+std::string override_text(const Override& o) {
+  return o.text.empty() ? o.key_path + "=" + o.value : o.text;
+}
+
+// Writes each --set into the tree, creating missing intermediate mappings, and tells `diag`
+// which paths came from which argument (their yaml-cpp marks point into the value string).
+void apply_overrides(YAML::Node& root, const std::vector<Override>& overrides,
+                     detail::Diagnostics& diag) {
+  for (std::size_t i = 0; i < overrides.size(); ++i) {
+    const Override& o = overrides[i];
+    const std::string text = override_text(o);
+    const std::vector<std::string> segments = split_key_path(o.key_path);
+    if (segments.empty()) {
+      diag.set_error(text, i, "", "expected key.path=value");
+      continue;
+    }
+    YAML::Node value;
+    try {
+      value = YAML::Load(o.value);
+    } catch (const YAML::Exception& e) {
+      diag.set_error(text, i, o.key_path, "value is not valid YAML: " + e.msg);
+      continue;
+    }
+    // Walking down must rebind the handle with reset(): assigning one yaml-cpp Node to
+    // another overwrites the node it refers to, which would rewrite the document.
+    YAML::Node cur(root);
+    std::string path;
+    std::string created;  // the outermost mapping this --set had to create
+    bool blocked = false;
+    for (std::size_t s = 0; s + 1 < segments.size(); ++s) {
+      path = detail::child_path(path, segments[s]);
+      YAML::Node next = cur[segments[s]];
+      if (!next.IsDefined() || next.IsNull()) {
+        if (!next.IsDefined() && created.empty()) created = path;
+        next = YAML::Node(YAML::NodeType::Map);
+      } else if (!next.IsMap()) {
+        diag.set_error(text, i, path,
+                       "cannot set '" + o.key_path.substr(path.size() + 1) +
+                           "' inside it: it is not a mapping");
+        blocked = true;
+        break;
+      }
+      cur.reset(next);
+    }
+    if (blocked) continue;
+    cur[segments.back()] = value;
+    diag.set_origin(created.empty() ? o.key_path : created, text, i);
+  }
+}
+
+std::string emit(const YAML::Node& root) {
+  YAML::Emitter out;
+  out << root;
+  std::string text = out.c_str();
+  text += '\n';
+  return text;
+}
+
+std::string read_file(const std::string& path) {
+  auto fail = [&](int err) {
+    return ConfigError({path + ": cannot read: " + std::system_category().message(err)});
+  };
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw fail(errno);
+  std::string text;
+  char buf[16384];
+  while (true) {
+    const ssize_t n = ::read(fd, buf, sizeof buf);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      const int err = errno;
+      ::close(fd);
+      throw fail(err);
+    }
+    if (n == 0) break;
+    text.append(buf, static_cast<std::size_t>(n));
+  }
+  ::close(fd);
+  return text;
+}
+
+}  // namespace
+
+ConfigError::ConfigError(std::vector<std::string> messages)
+    : std::runtime_error(join_lines(messages)), messages_(std::move(messages)) {}
+
+Override parse_override(std::string_view arg) {
+  const std::size_t eq = arg.find('=');
+  if (eq == std::string_view::npos || split_key_path(arg.substr(0, eq)).empty()) {
+    throw ConfigError({"--set " + std::string(arg) + ": expected key.path=value"});
+  }
+  return {std::string(arg.substr(0, eq)), std::string(arg.substr(eq + 1)), std::string(arg)};
+}
+
+Config load_config_text(std::string_view yaml, const std::string& source_name,
+                        const std::vector<Override>& overrides, const std::string& base_dir) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(std::string(yaml));
+  } catch (const YAML::Exception& e) {
+    std::string where = source_name;
+    if (e.mark.line >= 0) {
+      where += ":" + std::to_string(e.mark.line + 1) + ":" + std::to_string(e.mark.column + 1);
+    }
+    throw ConfigError({where + ": YAML syntax error: " + e.msg});
+  }
+  // An empty document (or one that is all comments) is a configuration of defaults.
+  if (root.IsNull()) root.reset(YAML::Node(YAML::NodeType::Map));
+
+  detail::Diagnostics diag(source_name);
+  if (root.IsMap()) apply_overrides(root, overrides, diag);
+  Config config;
+  detail::read_config(diag, root, base_dir, config);
+  if (!diag.empty()) throw ConfigError(diag.messages());
+
+  if (config.device.sim.op.kind == OperatorSpec::Kind::kReplay) {
+    // The effective document travels inside tick logs; an absolute path keeps it meaningful
+    // when it is loaded again from somewhere else.
+    YAML::Node op = root["device"]["sim"]["operator"];
+    op["log"] = config.device.sim.op.replay_log;
+  }
+  config.source_name = source_name;
+  config.effective_yaml = emit(root);
+  return config;
+}
+
+Config load_config_file(const std::string& path, const std::vector<Override>& overrides) {
+  const std::string text = read_file(path);
+  std::string base_dir = std::filesystem::path(path).parent_path().string();
+  if (base_dir.empty()) base_dir = ".";
+  return load_config_text(text, path, overrides, base_dir);
+}
+
+Config load_embedded_default(const std::vector<Override>& overrides) {
+  return load_config_text(embedded_default_yaml(), "config/sim.yaml (embedded)", overrides, ".");
+}
+
+}  // namespace hapticd::config

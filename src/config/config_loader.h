@@ -1,0 +1,51 @@
+// YAML -> validated Config. Every problem in a document is collected and reported at once,
+// each as "SOURCE:LINE: key.path: what is wrong" (or "--set ARG: key.path: ..." for a value
+// that came from the command line), so a person can fix them all in one edit.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "config/config.h"
+
+namespace hapticd::config {
+
+// One --set key.path=value. `value` is parsed as YAML (so lists and booleans work); `text`
+// is the argument as the user typed it, used to prefix messages about that value.
+struct Override {
+  std::string key_path;
+  std::string value;
+  std::string text;
+};
+
+// Every message of one failed load; what() is the messages joined with '\n'.
+class ConfigError : public std::runtime_error {
+ public:
+  explicit ConfigError(std::vector<std::string> messages);
+  const std::vector<std::string>& messages() const noexcept { return messages_; }
+
+ private:
+  std::vector<std::string> messages_;
+};
+
+// "a.b.c=value" -> {"a.b.c", "value", arg}. Throws ConfigError
+// "--set ARG: expected key.path=value" when there is no '=' or a key segment is empty.
+Override parse_override(std::string_view arg);
+
+// Reads and validates a file; relative paths inside it (device.sim.operator.log) resolve
+// against the file's directory. Messages are prefixed with `path` as given.
+Config load_config_file(const std::string& path, const std::vector<Override>& overrides = {});
+
+// Same for text already in memory; `source_name` prefixes messages and `base_dir` resolves
+// relative paths.
+Config load_config_text(std::string_view yaml, const std::string& source_name,
+                        const std::vector<Override>& overrides = {},
+                        const std::string& base_dir = ".");
+
+// config/sim.yaml as compiled into the binary (source name "config/sim.yaml (embedded)").
+Config load_embedded_default(const std::vector<Override>& overrides = {});
+std::string_view embedded_default_yaml() noexcept;
+
+}  // namespace hapticd::config

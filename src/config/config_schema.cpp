@@ -1,0 +1,355 @@
+// The schema of a hapticd configuration, section by section. Each reader takes the keys it
+// knows, checks them, fills Config, and leaves the rest for MapReader::finish to report.
+#include "config/config_schema.h"
+
+#include <algorithm>
+#include <climits>
+#include <cstdint>
+#include <filesystem>
+#include <utility>
+
+namespace hapticd::config::detail {
+namespace {
+
+template <typename E>
+using Options = std::vector<std::pair<std::string, E>>;
+
+template <typename E>
+std::optional<E> choice(Diagnostics& diag, const Field& field, const Options<E>& options) {
+  std::vector<std::string> names;
+  for (const auto& o : options) names.push_back(o.first);
+  if (const auto i = read_choice(diag, field, names)) return options[*i].second;
+  return std::nullopt;
+}
+
+template <typename E>
+const std::string& name_of(const Options<E>& options, E value) {
+  return std::find_if(options.begin(), options.end(),
+                      [&](const auto& o) { return o.second == value; })
+      ->first;
+}
+
+void number(MapReader& m, std::string_view key, const Range& range, double& out) {
+  if (const auto v = read_number(m.diag(), m.take(key), range)) out = *v;
+}
+
+void integer(MapReader& m, std::string_view key, const IntRange& range, int& out) {
+  if (const auto v = read_integer(m.diag(), m.take(key), range)) out = static_cast<int>(*v);
+}
+
+const Options<ClockMode> kClocks{{"realtime", ClockMode::kRealtime},
+                                 {"freerun", ClockMode::kFreerun}};
+const Options<DriverKind> kDrivers{{"sim", DriverKind::kSim},
+                                   {"hid", DriverKind::kHid},
+                                   {"can", DriverKind::kCan},
+                                   {"gpio", DriverKind::kGpio}};
+const Options<Discretization> kDiscretizations{{"backward", Discretization::kBackward},
+                                               {"tustin", Discretization::kTustin}};
+const Options<GateMode> kGates{{"enforce", GateMode::kEnforce}, {"warn", GateMode::kWarn}};
+using Kind = OperatorSpec::Kind;
+const Options<Kind> kKinds{{"hand", Kind::kHand},
+                           {"force", Kind::kForce},
+                           {"motion", Kind::kMotion},
+                           {"replay", Kind::kReplay}};
+
+const std::vector<std::string> kOperatorKeys{"kind",  "stiffness", "damping",   "setpoint",
+                                             "force", "offset",    "amplitude", "frequency_hz",
+                                             "phase", "log"};
+
+std::vector<std::string> operator_keys_of(Kind kind) {
+  switch (kind) {
+    case Kind::kForce:
+      return {"kind", "force"};
+    case Kind::kMotion:
+      return {"kind", "offset", "amplitude", "frequency_hz", "phase"};
+    case Kind::kReplay:
+      return {"kind", "log"};
+    case Kind::kHand:
+    case Kind::kNone:
+      break;
+  }
+  return {"kind", "stiffness", "damping", "setpoint"};
+}
+
+std::string resolve_path(const std::string& path, const std::string& base_dir) {
+  namespace fs = std::filesystem;
+  fs::path p(path);
+  if (p.is_relative()) p = fs::path(base_dir) / p;
+  std::error_code ec;
+  const fs::path absolute = fs::absolute(p, ec);
+  return (ec ? p : absolute).lexically_normal().string();
+}
+
+// Imposed motion: x = offset + amplitude cos(2 pi f t + phase), sampled at rate_hz, so f
+// above Nyquist would alias into a different motion than the one written.
+void read_motion(MapReader& m, const std::string& reason, std::optional<double> rate_hz,
+                 MotionSpec& out) {
+  Diagnostics& d = m.diag();
+  MotionSpec spec;
+  bool ok = true;
+  auto required = [&](std::string_view key, const Range& range, double& target) {
+    const Field f = m.take(key);
+    if (!f.present) {
+      m.missing(key, "required by " + reason);
+      ok = false;
+    } else if (const auto v = read_number(d, f, range)) {
+      target = *v;
+    } else {
+      ok = false;
+    }
+    return f;
+  };
+  required("offset", Range::any(), spec.offset);
+  required("amplitude", Range::any(), spec.amplitude);
+  const Field freq = required("frequency_hz", Range::greater_than(0.0), spec.frequency_hz);
+  if (ok && rate_hz && spec.frequency_hz > *rate_hz / 2.0) {
+    d.error(freq.key_mark, freq.path,
+            "must be <= the Nyquist frequency rate_hz/2 = " + format_number(*rate_hz / 2.0) +
+                ", got '" + freq.node.Scalar() + "'");
+    ok = false;
+  }
+  spec.phase_rad = read_number(d, m.take("phase")).value_or(0.0);
+  if (ok) out = spec;
+}
+
+void read_operator(MapReader& sim, std::optional<double> rate_hz, const std::string& base_dir,
+                   OperatorSpec& op) {
+  const Field field = sim.take("operator");
+  // Absent: the defaults of OperatorSpec stand.
+  if (!field.present) return;
+  MapReader m(sim.diag(), field, kOperatorKeys);
+  if (!m.ok()) return;
+  Diagnostics& d = m.diag();
+
+  const Field kind_field = m.take("kind");
+  Kind kind = Kind::kHand;
+  if (kind_field.present) {
+    const auto k = choice(d, kind_field, kKinds);
+    if (!k) {
+      m.finish();
+      return;
+    }
+    kind = *k;
+  }
+  op.kind = kind;
+  const std::string reason = "operator kind '" + name_of(kKinds, kind) + "'";
+
+  switch (kind) {
+    case Kind::kHand:
+      number(m, "stiffness", Range::greater_than(0.0), op.stiffness);
+      number(m, "damping", Range::at_least(0.0), op.damping);
+      read_profile(m, "setpoint", reason, op.setpoint);
+      break;
+    case Kind::kForce:
+      read_profile(m, "force", reason, op.force);
+      break;
+    case Kind::kMotion:
+      read_motion(m, reason, rate_hz, op.motion);
+      break;
+    case Kind::kReplay: {
+      const Field log = m.take("log");
+      if (!log.present) {
+        m.missing("log", "required by " + reason);
+      } else if (const auto path = read_string(d, log)) {
+        if (path->empty()) {
+          d.error(log.key_mark, log.path, "must be the path of a tick log, got nothing");
+        } else {
+          op.replay_log = resolve_path(*path, base_dir);
+        }
+      }
+      break;
+    }
+    case Kind::kNone:
+      break;
+  }
+  const std::vector<std::string> used = operator_keys_of(kind);
+  for (const std::string& key : kOperatorKeys) {
+    if (std::find(used.begin(), used.end(), key) == used.end()) m.not_used(key, reason);
+  }
+  m.finish(used);
+}
+
+struct LoopResult {
+  Field clock;
+  std::optional<double> rate_hz;  // empty when rate_hz is invalid
+};
+
+LoopResult read_loop(MapReader& top, LoopConfig& loop) {
+  MapReader m(top.diag(), top.take("loop"),
+              {"rate_hz", "clock", "rt_priority", "cpu", "overrun_fault_streak"});
+  LoopResult result;
+  const Field rate = m.take("rate_hz");
+  const auto r = read_number(m.diag(), rate, Range::interval(0.0, false, 100000.0, true));
+  if (r) loop.rate_hz = *r;
+  if (r || !rate.present) result.rate_hz = loop.rate_hz;
+  result.clock = m.take("clock");
+  if (const auto v = choice(m.diag(), result.clock, kClocks)) loop.clock = *v;
+  integer(m, "rt_priority", IntRange::between(1, 99), loop.rt_priority);
+  integer(m, "cpu", IntRange::at_least(-1, INT_MAX), loop.cpu);
+  integer(m, "overrun_fault_streak", IntRange::at_least(1, INT_MAX), loop.overrun_fault_streak);
+  m.finish();
+  return result;
+}
+
+void read_device(MapReader& top, std::optional<double> rate_hz, const std::string& base_dir,
+                 DeviceConfig& dev) {
+  MapReader m(top.diag(), top.take("device"), {"driver", "mass", "damping", "max_force", "sim"});
+  Diagnostics& d = m.diag();
+  if (const auto v = choice(d, m.take("driver"), kDrivers)) dev.driver = *v;
+  number(m, "mass", Range::greater_than(0.0), dev.mass);
+  number(m, "damping", Range::greater_than(0.0), dev.damping);
+  number(m, "max_force", Range::greater_than(0.0), dev.max_force);
+
+  MapReader sim(d, m.take("sim"),
+                {"counts_per_unit", "noise_counts", "seed", "initial_position", "initial_velocity",
+                 "operator"});
+  number(sim, "counts_per_unit", Range::at_least(0.0), dev.sim.counts_per_unit);
+  number(sim, "noise_counts", Range::at_least(0.0), dev.sim.noise_counts);
+  if (const auto v = read_integer(d, sim.take("seed"), IntRange::at_least(0, LLONG_MAX))) {
+    dev.sim.seed = static_cast<std::uint64_t>(*v);
+  }
+  number(sim, "initial_position", Range::any(), dev.sim.initial_position);
+  number(sim, "initial_velocity", Range::any(), dev.sim.initial_velocity);
+  read_operator(sim, rate_hz, base_dir, dev.sim.op);
+  sim.finish();
+  m.finish();
+}
+
+// A rational filter {numerator, denominator} in powers of z^-1. Both lists are needed; the
+// denominator's leading coefficient is what the filter is normalised by.
+std::optional<std::pair<Coefficients, Coefficients>> read_rational(MapReader& parent,
+                                                                   std::string_view key,
+                                                                   const std::string& filter,
+                                                                   bool is_coupling) {
+  const Field field = parent.take(key);
+  // A key with everything below it commented out means "not configured".
+  if (!field.present || field.node.IsNull()) return std::nullopt;
+  MapReader m(parent.diag(), field, {"numerator", "denominator"});
+  if (!m.ok()) return std::nullopt;
+  Diagnostics& d = m.diag();
+  const Field num_field = m.take("numerator");
+  const Field den_field = m.take("denominator");
+  if (!num_field.present) d.error(field.key_mark, field.path, "missing 'numerator'");
+  if (!den_field.present) d.error(field.key_mark, field.path, "missing 'denominator'");
+  const auto num = read_number_list(d, num_field);
+  const auto den = read_number_list(d, den_field);
+  m.finish();
+  if (den && den->front() == 0.0) {
+    d.error(den_field.key_mark, den_field.path,
+            "leading coefficient must be non-zero (it normalises " + filter + "), got '" +
+                den_field.node[0].Scalar() + "'");
+    return std::nullopt;
+  }
+  if (!num || !den) return std::nullopt;
+  if (is_coupling) {
+    // The controller's filter histories are fixed-size (preallocated for the RT thread).
+    for (const auto& [list, f] : {std::pair{&*num, &num_field}, std::pair{&*den, &den_field}}) {
+      if (list->size() > kMaxCouplingCoefficients) {
+        d.error(f->key_mark, f->path,
+                "at most " + std::to_string(kMaxCouplingCoefficients) + " coefficients, got " +
+                    std::to_string(list->size()));
+        return std::nullopt;
+      }
+    }
+    // The contact law solves the algebraic loop f = E(q - c0 f) in closed form; that solution
+    // is unique only for e0 c0 >= 0, and e0 >= 0 always (K, B >= 0), so c0 must be too.
+    const double c0 = num->front() / den->front();
+    if (c0 < 0.0) {
+      d.error(num_field.key_mark, num_field.path,
+              "direct feed-through numerator[0]/denominator[0] must be >= 0 for the contact "
+              "algebraic loop to have a unique solution, got " +
+                  format_number(c0));
+      return std::nullopt;
+    }
+  }
+  return std::make_pair(*num, *den);
+}
+
+void read_wall(MapReader& top, WallConfig& wall) {
+  MapReader m(top.diag(), top.take("wall"),
+              {"position", "normal", "stiffness", "damping", "discretization", "delay_samples",
+               "no_pull", "coupling"});
+  Diagnostics& d = m.diag();
+  number(m, "position", Range::any(), wall.position);
+  const Field normal = m.take("normal");
+  if (normal.present) {
+    double v = 0.0;
+    if (normal.node.IsScalar() && parse_finite(normal.node.Scalar(), v) &&
+        (v == 1.0 || v == -1.0)) {
+      wall.normal = v > 0.0 ? 1 : -1;
+    } else {
+      d.error(normal.key_mark, normal.path, "must be +1 or -1, got " + describe_value(normal.node));
+    }
+  }
+  number(m, "stiffness", Range::at_least(0.0), wall.stiffness);
+  number(m, "damping", Range::at_least(0.0), wall.damping);
+  if (const auto v = choice(d, m.take("discretization"), kDiscretizations)) {
+    wall.discretization = *v;
+  }
+  integer(m, "delay_samples", IntRange::between(0, 1000), wall.delay_samples);
+  if (const auto v = read_bool(d, m.take("no_pull"))) wall.no_pull = *v;
+  if (auto c = read_rational(m, "coupling", "C(z)", true)) {
+    wall.coupling = {true, std::move(c->first), std::move(c->second)};
+  }
+  m.finish();
+}
+
+void read_safety(MapReader& top, SafetyConfig& safety) {
+  MapReader m(top.diag(), top.take("safety"),
+              {"gate", "operator_passivity_shortage", "passivity_margin", "max_speed",
+               "stale_fault_ticks"});
+  if (const auto v = choice(m.diag(), m.take("gate"), kGates)) safety.gate = *v;
+  number(m, "operator_passivity_shortage", Range::at_least(0.0),
+         safety.operator_passivity_shortage);
+  number(m, "passivity_margin", Range::interval(0.0, true, 1.0, false), safety.passivity_margin);
+  number(m, "max_speed", Range::greater_than(0.0), safety.max_speed);
+  integer(m, "stale_fault_ticks", IntRange::at_least(1, INT_MAX), safety.stale_fault_ticks);
+  m.finish();
+}
+
+void read_analysis(MapReader& top, AnalysisConfig& analysis) {
+  MapReader m(top.diag(), top.take("analysis"), {"operator", "transparency_weight"});
+  MapReader op(m.diag(), m.take("operator"), {"stiffness", "damping"});
+  number(op, "stiffness", Range::greater_than(0.0), analysis.operator_stiffness);
+  number(op, "damping", Range::at_least(0.0), analysis.operator_damping);
+  op.finish();
+  if (auto w = read_rational(m, "transparency_weight", "W(z)", false)) {
+    analysis.transparency_weight_numerator = std::move(w->first);
+    analysis.transparency_weight_denominator = std::move(w->second);
+  }
+  m.finish();
+}
+
+void read_telemetry(MapReader& top, TelemetryConfig& telemetry) {
+  MapReader m(top.diag(), top.take("telemetry"), {"log", "ring_capacity"});
+  if (const auto v = read_string(m.diag(), m.take("log"))) telemetry.log_path = *v;
+  if (const auto v =
+          read_integer(m.diag(), m.take("ring_capacity"), IntRange::at_least(64, UINT32_MAX))) {
+    telemetry.ring_capacity = static_cast<std::uint32_t>(*v);
+  }
+  m.finish();
+}
+
+}  // namespace
+
+void read_config(Diagnostics& diag, const YAML::Node& root, const std::string& base_dir,
+                 Config& config) {
+  MapReader top(diag, {"", root, root.Mark(), true},
+                {"loop", "device", "wall", "safety", "analysis", "telemetry"});
+  const LoopResult loop = read_loop(top, config.loop);
+  read_device(top, loop.rate_hz, base_dir, config.device);
+  read_wall(top, config.wall);
+  read_safety(top, config.safety);
+  read_analysis(top, config.analysis);
+  read_telemetry(top, config.telemetry);
+  top.finish();
+
+  // Free-running ticks have no real time base, which only a simulated device tolerates.
+  if (config.loop.clock == ClockMode::kFreerun && config.device.driver != DriverKind::kSim) {
+    diag.error(loop.clock.key_mark, loop.clock.path,
+               "freerun runs only with device.driver: sim, got '" +
+                   name_of(kDrivers, config.device.driver) + "'");
+  }
+}
+
+}  // namespace hapticd::config::detail
