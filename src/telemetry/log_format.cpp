@@ -1,0 +1,82 @@
+#include "telemetry/log_format.h"
+
+#include <zlib.h>
+
+#include <cstring>
+#include <stdexcept>
+
+namespace hapticd::telemetry {
+namespace {
+
+// Field-by-field stores at explicit offsets: the layout never depends on struct padding.
+template <typename V>
+void store(std::byte* at, V value) noexcept {
+  static_assert(std::is_trivially_copyable_v<V>);
+  std::memcpy(at, &value, sizeof(V));
+}
+
+template <typename V>
+V load(const std::byte* at) noexcept {
+  V value;
+  std::memcpy(&value, at, sizeof(V));
+  return value;
+}
+
+}  // namespace
+
+std::uint32_t crc32_update(std::uint32_t crc, std::span<const std::byte> bytes) noexcept {
+  return static_cast<std::uint32_t>(
+      ::crc32_z(crc, reinterpret_cast<const Bytef*>(bytes.data()), bytes.size()));
+}
+
+std::vector<std::byte> encode_file_header(const LogHeader& header) {
+  const std::size_t config_len = header.config_text.size();
+  if (config_len > kMaxConfigBytes) {
+    throw std::invalid_argument("tick log: configuration text of " + std::to_string(config_len) +
+                                " bytes exceeds the format limit of " +
+                                std::to_string(kMaxConfigBytes));
+  }
+  std::vector<std::byte> out(file_header_size(config_len));
+  std::byte* p = out.data();
+  std::memcpy(p, kFileMagic.data(), kFileMagic.size());
+  store<std::uint32_t>(p + 8, kFormatVersion);
+  store<std::uint32_t>(p + 12, kRecordSize);
+  store<double>(p + 16, header.sample_period_s);
+  store<std::int64_t>(p + 24, header.start_unix_ns);
+  store<std::uint32_t>(p + 32, header.clock_mode);
+  store<std::uint32_t>(p + 36, static_cast<std::uint32_t>(config_len));
+  if (config_len > 0) std::memcpy(p + kFileHeaderFixedSize, header.config_text.data(), config_len);
+  const std::size_t crc_at = kFileHeaderFixedSize + config_len;
+  store<std::uint32_t>(p + crc_at, crc32_update(0, std::span(out).first(crc_at)));
+  return out;
+}
+
+std::size_t encode_block(std::span<std::byte> out, std::uint64_t first_tick,
+                         std::uint64_t dropped_before,
+                         std::span<const TickRecord> records) noexcept {
+  const std::size_t size = block_size(records.size());
+  if (records.size() > kMaxBlockRecords || out.size() < size) return 0;
+  std::byte* p = out.data();
+  std::memcpy(p, kBlockMagic.data(), kBlockMagic.size());
+  store<std::uint32_t>(p + 4, static_cast<std::uint32_t>(records.size()));
+  store<std::uint64_t>(p + 8, first_tick);
+  store<std::uint64_t>(p + 16, dropped_before);
+  if (!records.empty()) std::memcpy(p + kBlockHeaderSize, records.data(), records.size_bytes());
+  std::uint32_t crc = crc32_update(0, out.first(kBlockCrcOffset));
+  crc = crc32_update(crc, out.subspan(kBlockHeaderSize, records.size_bytes()));
+  store<std::uint32_t>(p + kBlockCrcOffset, crc);
+  return size;
+}
+
+BlockHeader decode_block_header(std::span<const std::byte> bytes) noexcept {
+  BlockHeader h;
+  if (bytes.size() < kBlockHeaderSize) return h;
+  const std::byte* p = bytes.data();
+  h.record_count = load<std::uint32_t>(p + 4);
+  h.first_tick = load<std::uint64_t>(p + 8);
+  h.dropped_before = load<std::uint64_t>(p + 16);
+  h.crc = load<std::uint32_t>(p + kBlockCrcOffset);
+  return h;
+}
+
+}  // namespace hapticd::telemetry

@@ -1,0 +1,117 @@
+// The binary tick log, format version 1. Everything is little-endian, with no padding and
+// no alignment between fields; offsets below are in bytes.
+//
+// File header (44 + config_len bytes):
+//   0   u8[8]  magic "HAPTLOG\0" (48 41 50 54 4C 4F 47 00)
+//   8   u32    version = 1
+//   12  u32    record_size = 72
+//   16  f64    sample_period_s (IEEE-754 binary64)
+//   24  i64    start_unix_ns: wall-clock time of tick 0 in ns since the Unix epoch, 0 = unknown
+//   32  u32    clock_mode: 0 = realtime, 1 = freerun
+//   36  u32    config_len (at most kMaxConfigBytes)
+//   40  u8[config_len]  the whole effective configuration as UTF-8 YAML (not NUL-terminated)
+//   40+config_len  u32  CRC-32 of bytes [0, 40+config_len)
+//
+// Then zero or more blocks, back to back until the end of the file. Block (28 + 72*n bytes):
+//   0   u8[4]  magic "HBLK" (48 42 4C 4B)
+//   4   u32    record_count n, 0..kMaxBlockRecords
+//   8   u64    first_tick: the tick of the first record. In a block with n = 0 it is the tick
+//              after the last record before the loss (0 if none); informational only.
+//   16  u64    dropped_before: records the RT ring dropped (or that failed to reach the
+//              disk) between the previous block's last record and this block's first one.
+//              A block with n = 0 and dropped_before > 0 is a pure loss marker.
+//   24  u32    CRC-32 of block bytes [0, 24) followed by the n*72 record bytes
+//   28  n records of 72 bytes:
+//        0 u64 tick, 8 i64 scheduled_ns, 16 i32 wake_latency_ns, 20 i32 compute_ns,
+//        24 f64 position, 32 f64 penetration, 40 f64 velocity, 48 f64 force_computed,
+//        56 f64 force_commanded, 64 u32 flags (TickFlag bits), 68 u32 device_status
+//
+// CRC-32 is the common one (zlib crc32, Python zlib.crc32: reflected polynomial 0xEDB88320,
+// initial value and final xor 0xFFFFFFFF). A reader accepts blocks in order and stops at the
+// first block that is incomplete or fails its checks; everything before it is valid, which
+// is what a log cut short by a crash looks like.
+#pragma once
+
+#include <array>
+#include <bit>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "telemetry/tick_record.h"
+
+namespace hapticd::telemetry {
+
+// Records are copied to and from the file as raw bytes, which is the little-endian layout
+// only on a little-endian host.
+static_assert(std::endian::native == std::endian::little, "the tick log is little-endian");
+
+inline constexpr std::array<char, 8> kFileMagic = {'H', 'A', 'P', 'T', 'L', 'O', 'G', '\0'};
+inline constexpr std::uint32_t kFormatVersion = 1;
+inline constexpr std::uint32_t kRecordSize = 72;
+inline constexpr std::size_t kFileHeaderFixedSize = 40;  // bytes before the config text
+inline constexpr std::size_t kCrcSize = 4;
+inline constexpr std::uint32_t kMaxConfigBytes = 16u << 20;  // a sanity bound, not a YAML limit
+
+inline constexpr std::array<char, 4> kBlockMagic = {'H', 'B', 'L', 'K'};
+inline constexpr std::size_t kBlockHeaderSize = 28;
+inline constexpr std::size_t kBlockCrcOffset = 24;
+inline constexpr std::uint32_t kMaxBlockRecords = 65536;
+
+inline constexpr std::uint32_t kClockModeRealtime = 0;
+inline constexpr std::uint32_t kClockModeFreerun = 1;
+
+// The record layout documented above; a change here is a new format version.
+static_assert(sizeof(TickRecord) == kRecordSize);
+static_assert(offsetof(TickRecord, scheduled_ns) == 8 &&
+              offsetof(TickRecord, wake_latency_ns) == 16 &&
+              offsetof(TickRecord, compute_ns) == 20 && offsetof(TickRecord, position) == 24 &&
+              offsetof(TickRecord, penetration) == 32 && offsetof(TickRecord, velocity) == 40 &&
+              offsetof(TickRecord, force_computed) == 48 &&
+              offsetof(TickRecord, force_commanded) == 56 && offsetof(TickRecord, flags) == 64 &&
+              offsetof(TickRecord, device_status) == 68);
+
+// What the file header carries besides the constants.
+struct LogHeader {
+  double sample_period_s = 0.0;
+  std::int64_t start_unix_ns = 0;
+  std::uint32_t clock_mode = kClockModeRealtime;
+  std::string config_text;
+};
+
+// The fields of one block header, decoded.
+struct BlockHeader {
+  std::uint32_t record_count = 0;
+  std::uint64_t first_tick = 0;
+  std::uint64_t dropped_before = 0;
+  std::uint32_t crc = 0;
+};
+
+constexpr std::size_t file_header_size(std::size_t config_len) {
+  return kFileHeaderFixedSize + config_len + kCrcSize;
+}
+constexpr std::size_t block_size(std::size_t record_count) {
+  return kBlockHeaderSize + record_count * kRecordSize;
+}
+
+// CRC-32 (zlib) of bytes, continuing from crc (start with 0).
+std::uint32_t crc32_update(std::uint32_t crc, std::span<const std::byte> bytes) noexcept;
+
+// The complete file header. Throws std::invalid_argument when the config text is longer
+// than kMaxConfigBytes.
+std::vector<std::byte> encode_file_header(const LogHeader& header);
+
+// Encodes one block (header, CRC and records) into out and returns its size. Returns 0 and
+// writes nothing when out is smaller than block_size(records.size()) or when there are more
+// than kMaxBlockRecords records. Does not allocate.
+std::size_t encode_block(std::span<std::byte> out, std::uint64_t first_tick,
+                         std::uint64_t dropped_before,
+                         std::span<const TickRecord> records) noexcept;
+
+// Decodes the 28-byte block header at the start of bytes (which must hold at least
+// kBlockHeaderSize bytes, else all fields are 0). The magic is not checked here.
+BlockHeader decode_block_header(std::span<const std::byte> bytes) noexcept;
+
+}  // namespace hapticd::telemetry

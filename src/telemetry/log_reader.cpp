@@ -1,0 +1,135 @@
+#include "telemetry/log_reader.h"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+
+namespace hapticd::telemetry {
+namespace {
+
+template <typename V>
+V load(const std::byte* at) noexcept {
+  V value;
+  std::memcpy(&value, at, sizeof(V));
+  return value;
+}
+
+// Matches the magic against however many bytes are present, so a cut inside the magic is a
+// truncation and not a foreign file.
+template <std::size_t N>
+bool magic_prefix_matches(std::span<const std::byte> bytes, const std::array<char, N>& magic) {
+  return std::memcmp(bytes.data(), magic.data(), std::min(bytes.size(), N)) == 0;
+}
+
+std::string at_byte(std::size_t offset) { return " at byte " + std::to_string(offset); }
+
+// Parses the file header into out and returns its size in bytes.
+std::size_t read_header(std::span<const std::byte> bytes, const std::string& name, LogHeader& out) {
+  const auto fail = [&](const std::string& what) { throw LogFormatError(name + ": " + what); };
+  if (!magic_prefix_matches(bytes, kFileMagic)) fail("not a hapticd tick log (bad magic)");
+  // The version decides the rest of the layout, so it is checked before anything else.
+  if (bytes.size() < 12) fail("truncated header");
+  const auto version = load<std::uint32_t>(bytes.data() + 8);
+  if (version != kFormatVersion) fail("unsupported log version " + std::to_string(version));
+  if (bytes.size() < kFileHeaderFixedSize) fail("truncated header");
+  const std::byte* p = bytes.data();
+  const auto config_len = load<std::uint32_t>(p + 36);
+  if (config_len > kMaxConfigBytes) {
+    fail("corrupt header (configuration length " + std::to_string(config_len) + ")");
+  }
+  const std::size_t crc_at = kFileHeaderFixedSize + config_len;
+  if (bytes.size() < crc_at + kCrcSize) fail("truncated header");
+  if (crc32_update(0, bytes.first(crc_at)) != load<std::uint32_t>(p + crc_at)) {
+    fail("header CRC mismatch");
+  }
+  const auto record_size = load<std::uint32_t>(p + 12);
+  if (record_size != kRecordSize) fail("unsupported record size " + std::to_string(record_size));
+  out.sample_period_s = load<double>(p + 16);
+  out.start_unix_ns = load<std::int64_t>(p + 24);
+  out.clock_mode = load<std::uint32_t>(p + 32);
+  out.config_text.assign(reinterpret_cast<const char*>(p + kFileHeaderFixedSize), config_len);
+  return crc_at + kCrcSize;
+}
+
+}  // namespace
+
+LogContents read_log_bytes(std::span<const std::byte> bytes, const std::string& name) {
+  LogContents contents;
+  std::size_t offset = read_header(bytes, name, contents.header);
+  contents.records.reserve((bytes.size() - offset) / kRecordSize);
+  while (offset < bytes.size()) {
+    const auto block = bytes.subspan(offset);
+    if (!magic_prefix_matches(block, kBlockMagic)) {
+      contents.trailing_reason = "bad block magic" + at_byte(offset);
+      break;
+    }
+    if (block.size() < kBlockHeaderSize) {
+      contents.trailing_reason = "incomplete block" + at_byte(offset) + " (log cut short)";
+      break;
+    }
+    const BlockHeader h = decode_block_header(block);
+    if (h.record_count > kMaxBlockRecords) {
+      contents.trailing_reason = "corrupt block header" + at_byte(offset) + " (record count " +
+                                 std::to_string(h.record_count) + ")";
+      break;
+    }
+    const std::size_t size = block_size(h.record_count);
+    if (block.size() < size) {
+      contents.trailing_reason = "incomplete block" + at_byte(offset) + " (log cut short)";
+      break;
+    }
+    const auto payload = block.subspan(kBlockHeaderSize, size - kBlockHeaderSize);
+    if (crc32_update(crc32_update(0, block.first(kBlockCrcOffset)), payload) != h.crc) {
+      contents.trailing_reason = "CRC mismatch in block" + at_byte(offset);
+      break;
+    }
+    const std::size_t old = contents.records.size();
+    contents.records.resize(old + h.record_count);
+    std::memcpy(contents.records.data() + old, payload.data(), payload.size());
+    contents.dropped_records += h.dropped_before;
+    ++contents.complete_blocks;
+    offset += size;
+  }
+  contents.trailing_bytes_ignored = bytes.size() - offset;
+  return contents;
+}
+
+LogContents read_log(const std::string& path) {
+  const auto fail = [&](int err) {
+    throw LogFormatError(path + ": cannot read: " + std::strerror(err));
+  };
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) fail(errno);
+  std::vector<std::byte> bytes;
+  int err = 0;
+  struct stat st {};
+  if (::fstat(fd, &st) != 0) {
+    err = errno;
+  } else {
+    // A snapshot of the current size: a log still growing is read up to here.
+    bytes.resize(static_cast<std::size_t>(std::max<off_t>(st.st_size, 0)));
+    std::size_t got = 0;
+    while (got < bytes.size()) {
+      const ssize_t r = ::read(fd, bytes.data() + got, bytes.size() - got);
+      if (r < 0 && errno == EINTR) continue;
+      if (r < 0) {
+        err = errno;
+        break;
+      }
+      if (r == 0) break;  // the file shrank since fstat
+      got += static_cast<std::size_t>(r);
+    }
+    bytes.resize(got);
+  }
+  ::close(fd);
+  if (err != 0) fail(err);
+  // A directory has no bytes to read on some filesystems instead of failing with EISDIR.
+  if (S_ISDIR(st.st_mode)) fail(EISDIR);
+  return read_log_bytes(bytes, path);
+}
+
+}  // namespace hapticd::telemetry

@@ -1,0 +1,183 @@
+#include "telemetry/log_writer.h"
+
+#include <fcntl.h>
+#include <pthread.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <stdexcept>
+
+namespace hapticd::telemetry {
+namespace {
+
+void check_block_records(std::size_t max_block_records) {
+  if (max_block_records == 0 || max_block_records > kMaxBlockRecords) {
+    throw std::invalid_argument("tick log: max_block_records must be in 1.." +
+                                std::to_string(kMaxBlockRecords));
+  }
+}
+
+int open_log(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) throw std::runtime_error(path + ": cannot open tick log: " + std::strerror(errno));
+  return fd;
+}
+
+// Writes all n bytes, resuming after short writes. Returns 0 or the errno that stopped it.
+int write_all(int fd, const std::byte* p, std::size_t n) noexcept {
+  while (n > 0) {
+    const ssize_t w = ::write(fd, p, n);
+    if (w < 0) {
+      if (errno == EINTR) continue;
+      return errno;
+    }
+    if (w == 0) return EIO;  // no progress and no error: do not spin
+    p += w;
+    n -= static_cast<std::size_t>(w);
+  }
+  return 0;
+}
+
+}  // namespace
+
+LogWriter::LogWriter(const std::string& path, const LogHeader& header, SpscRing<TickRecord>& ring,
+                     std::size_t max_block_records, std::chrono::milliseconds poll)
+    : path_(path), ring_(ring), poll_(poll) {
+  check_block_records(max_block_records);
+  if (poll.count() <= 0) throw std::invalid_argument("tick log: poll period must be positive");
+  const std::vector<std::byte> head = encode_file_header(header);  // validates before opening
+  staging_.resize(max_block_records);
+  block_bytes_.resize(block_size(max_block_records));
+  fd_ = open_log(path_);
+  if (const int err = write_all(fd_, head.data(), head.size()); err != 0) {
+    ::close(fd_);
+    fd_ = -1;
+    throw std::runtime_error(
+        path_ + ": cannot open tick log: writing the header failed: " + std::strerror(err));
+  }
+  good_end_ = static_cast<off_t>(head.size());
+}
+
+LogWriter::~LogWriter() { stop(); }
+
+void LogWriter::start() {
+  if (stopped_) throw std::logic_error(path_ + ": tick log writer started after stop()");
+  if (started_) return;
+  thread_ = std::thread([this] { run(); });
+  // Visible in top -H / ps -L; best effort.
+  pthread_setname_np(thread_.native_handle(), "hapticd-log");
+  started_ = true;
+}
+
+void LogWriter::stop() {
+  if (stopped_) return;
+  stopped_ = true;
+  if (thread_.joinable()) {
+    {
+      std::lock_guard lock(wake_mutex_);
+      stop_requested_ = true;
+    }
+    wake_.notify_all();
+    thread_.join();
+  }
+  drain();
+  // Drops after the last record pushed are not stamped on any record: mark them here.
+  const std::uint64_t trailing = ring_.take_trailing_drops();
+  if (trailing + pending_loss_ > 0) append_block({}, next_tick_, trailing);
+  // A failed write may have left a partial block after the last good one.
+  if (tail_dirty_ && ::ftruncate(fd_, good_end_) != 0) note_error("truncate failed", errno);
+  if (::fdatasync(fd_) != 0) note_error("fdatasync failed", errno);
+  if (::close(fd_) != 0) note_error("close failed", errno);
+  fd_ = -1;
+}
+
+std::uint64_t LogWriter::records_written() const noexcept {
+  return records_written_.load(std::memory_order_relaxed);
+}
+std::uint64_t LogWriter::records_dropped() const noexcept {
+  return records_dropped_.load(std::memory_order_relaxed);
+}
+std::uint64_t LogWriter::io_errors() const noexcept {
+  return io_errors_.load(std::memory_order_acquire);
+}
+std::string LogWriter::last_error() const {
+  std::lock_guard lock(error_mutex_);
+  return first_error_;
+}
+const std::string& LogWriter::path() const noexcept { return path_; }
+
+void LogWriter::run() {
+  std::unique_lock lock(wake_mutex_);
+  while (!stop_requested_) {
+    lock.unlock();
+    drain();
+    lock.lock();
+    wake_.wait_for(lock, poll_, [this] { return stop_requested_; });
+  }
+}
+
+void LogWriter::drain() {
+  std::uint64_t dropped_before = 0;
+  for (;;) {
+    const std::size_t n = ring_.pop_run(staging_.data(), staging_.size(), dropped_before);
+    if (n == 0) return;
+    append_block(std::span(staging_.data(), n), staging_[0].tick, dropped_before);
+    next_tick_ = staging_[n - 1].tick + 1;
+  }
+}
+
+void LogWriter::append_block(std::span<const TickRecord> records, std::uint64_t first_tick,
+                             std::uint64_t dropped_before) {
+  // Records that earlier failed to reach the disk are reported with the next block that does.
+  const std::uint64_t marker = pending_loss_ + dropped_before;
+  const std::size_t size = encode_block(block_bytes_, first_tick, marker, records);
+  const int err = write_all(fd_, block_bytes_.data(), size);
+  if (err == 0) {
+    good_end_ += static_cast<off_t>(size);
+    pending_loss_ = 0;
+    records_written_.fetch_add(records.size(), std::memory_order_relaxed);
+    records_dropped_.fetch_add(marker, std::memory_order_relaxed);
+    return;
+  }
+  note_error("write failed", err);
+  pending_loss_ = marker + records.size();
+  tail_dirty_ = true;
+  // Rewind so the next block overwrites the partial one and the log stays readable past it
+  // (fails harmlessly on a non-seekable file).
+  ::lseek(fd_, good_end_, SEEK_SET);
+}
+
+void LogWriter::note_error(const char* what, int err) {
+  {
+    std::lock_guard lock(error_mutex_);
+    if (first_error_.empty()) {
+      try {
+        first_error_ = path_ + ": " + what + ": " + std::strerror(err);
+      } catch (...) {
+        // Out of memory while formatting: the count below still records the error.
+      }
+    }
+  }
+  io_errors_.fetch_add(1, std::memory_order_release);
+}
+
+void write_log_file(const std::string& path, const LogHeader& header,
+                    std::span<const TickRecord> records, std::size_t max_block_records) {
+  check_block_records(max_block_records);
+  const std::vector<std::byte> head = encode_file_header(header);
+  std::vector<std::byte> block(block_size(std::min(max_block_records, records.size())));
+  const int fd = open_log(path);
+  int err = write_all(fd, head.data(), head.size());
+  for (std::size_t at = 0; err == 0 && at < records.size(); at += max_block_records) {
+    const auto chunk = records.subspan(at, std::min(max_block_records, records.size() - at));
+    const std::size_t size = encode_block(block, chunk.front().tick, 0, chunk);
+    err = write_all(fd, block.data(), size);
+  }
+  if (err == 0 && ::fdatasync(fd) != 0) err = errno;
+  if (::close(fd) != 0 && err == 0) err = errno;
+  if (err != 0) throw std::runtime_error(path + ": cannot write tick log: " + std::strerror(err));
+}
+
+}  // namespace hapticd::telemetry

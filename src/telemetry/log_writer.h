@@ -1,0 +1,104 @@
+// Appends the RT thread's tick records to a binary log (format in log_format.h) from its own
+// thread, so disk latency never reaches the RT thread: the only thing they share is the SPSC
+// ring. Nothing here is RT-safe.
+#pragma once
+
+#include <sys/types.h>
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <cstddef>
+#include <cstdint>
+#include <mutex>
+#include <span>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "telemetry/log_format.h"
+#include "telemetry/spsc_ring.h"
+#include "telemetry/tick_record.h"
+
+namespace hapticd::telemetry {
+
+class LogWriter {
+ public:
+  // Creates or truncates path and writes the file header. Throws std::runtime_error
+  // "PATH: cannot open tick log: REASON" when the file cannot be created or the header cannot
+  // be written, std::invalid_argument for max_block_records outside 1..kMaxBlockRecords or a
+  // configuration text over kMaxConfigBytes. The ring must outlive the writer; the writer is
+  // its only consumer.
+  LogWriter(const std::string& path, const LogHeader& header, SpscRing<TickRecord>& ring,
+            std::size_t max_block_records = 512,
+            std::chrono::milliseconds poll = std::chrono::milliseconds(5));
+  ~LogWriter();  // stop()
+
+  LogWriter(const LogWriter&) = delete;
+  LogWriter& operator=(const LogWriter&) = delete;
+
+  // Starts the writer thread, which every `poll` drains the ring into blocks of at most
+  // max_block_records records and appends them with write(2). A second call does nothing;
+  // calling it after stop() throws std::logic_error.
+  void start();
+
+  // Call after the producer has stopped pushing. Joins the thread, drains what is left,
+  // writes a loss marker for drops not yet in the log, then fdatasync and close. Never
+  // throws; failures are counted in io_errors(). Idempotent. start() and stop() belong to
+  // one controlling thread.
+  void stop();
+
+  // Records that are in the log (their block was written completely).
+  std::uint64_t records_written() const noexcept;
+  // Records missing from the log and marked there (the dropped_before fields written so
+  // far): the ring's drops, plus records whose block failed to write. Without I/O errors,
+  // after stop() this equals ring.dropped().
+  std::uint64_t records_dropped() const noexcept;
+  // Failed or short writes, failed fdatasync/close. Never thrown from the thread.
+  std::uint64_t io_errors() const noexcept;
+  // The first I/O error as "PATH: what failed: strerror" (later ones are usually its
+  // consequences), "" if none.
+  std::string last_error() const;
+  const std::string& path() const noexcept;
+
+ private:
+  void run();
+  void drain();
+  void append_block(std::span<const TickRecord> records, std::uint64_t first_tick,
+                    std::uint64_t dropped_before);
+  void note_error(const char* what, int err);
+
+  std::string path_;
+  SpscRing<TickRecord>& ring_;
+  std::chrono::milliseconds poll_;
+  int fd_ = -1;
+
+  // Touched only by the thread that drains (the writer thread, then stop() after the join).
+  std::vector<TickRecord> staging_;     // preallocated: max_block_records records
+  std::vector<std::byte> block_bytes_;  // preallocated: one encoded block
+  off_t good_end_ = 0;                  // file offset just after the last complete block
+  bool tail_dirty_ = false;             // a failed write may have left bytes after good_end_
+  std::uint64_t pending_loss_ = 0;      // records lost but not yet marked in the log
+  std::uint64_t next_tick_ = 0;         // tick after the last record popped
+
+  std::atomic<std::uint64_t> records_written_{0};
+  std::atomic<std::uint64_t> records_dropped_{0};
+  std::atomic<std::uint64_t> io_errors_{0};
+  mutable std::mutex error_mutex_;
+  std::string first_error_;
+
+  std::mutex wake_mutex_;
+  std::condition_variable wake_;
+  bool stop_requested_ = false;  // guarded by wake_mutex_
+  std::thread thread_;
+  bool started_ = false;
+  bool stopped_ = false;
+};
+
+// Writes a complete log of records in blocks of at most max_block_records, then fdatasync.
+// Throws std::runtime_error "PATH: cannot open tick log: REASON" or "PATH: cannot write tick
+// log: REASON", std::invalid_argument as LogWriter does.
+void write_log_file(const std::string& path, const LogHeader& header,
+                    std::span<const TickRecord> records, std::size_t max_block_records = 512);
+
+}  // namespace hapticd::telemetry

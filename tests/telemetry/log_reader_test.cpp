@@ -1,0 +1,185 @@
+// The reader on good logs, logs cut short at every byte, corrupted logs and non-logs.
+#include "telemetry/log_reader.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <string>
+#include <vector>
+
+#include "telemetry/log_writer.h"
+#include "telemetry_test_util.h"
+
+namespace hapticd::telemetry {
+namespace {
+
+using test::make_records;
+using test::records_identical;
+using test::sample_header;
+
+std::string format_error(std::span<const std::byte> bytes) {
+  try {
+    read_log_bytes(bytes, "mem.htl");
+  } catch (const LogFormatError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+// A log of 5 blocks of 3 records, laid out by hand from the documented sizes.
+struct FiveBlockLog {
+  static constexpr std::size_t kBlocks = 5, kPerBlock = 3;
+  test::TempDir dir;
+  std::string path = dir.file("five.htl");
+  LogHeader header = sample_header();
+  std::vector<TickRecord> records = make_records(1000, kBlocks* kPerBlock);
+  std::size_t header_size = 44 + header.config_text.size();
+  std::size_t block_bytes = 28 + kPerBlock * 72;
+  std::vector<std::byte> bytes;
+
+  FiveBlockLog() {
+    write_log_file(path, header, records, kPerBlock);
+    bytes = test::read_bytes(path);
+  }
+  std::vector<TickRecord> first_blocks(std::size_t k) const {
+    return {records.begin(), records.begin() + static_cast<std::ptrdiff_t>(k * kPerBlock)};
+  }
+  std::size_t block_start(std::size_t k) const { return header_size + k * block_bytes; }
+};
+
+TEST(LogReader, ReadsBackWhatWasWritten) {
+  FiveBlockLog log;
+  ASSERT_EQ(log.bytes.size(), log.block_start(5));
+  const LogContents c = read_log(log.path);
+  EXPECT_TRUE(records_identical(c.records, log.records));
+  EXPECT_EQ(c.header.config_text, log.header.config_text);
+  EXPECT_EQ(c.header.sample_period_s, log.header.sample_period_s);
+  EXPECT_EQ(c.header.start_unix_ns, log.header.start_unix_ns);
+  EXPECT_EQ(c.header.clock_mode, kClockModeFreerun);
+  EXPECT_EQ(c.complete_blocks, 5u);
+  EXPECT_EQ(c.dropped_records, 0u);
+  EXPECT_EQ(c.trailing_bytes_ignored, 0u);
+  EXPECT_EQ(c.trailing_reason, "");
+}
+
+TEST(LogReader, LogWithoutBlocksIsValidAndEmpty) {
+  test::TempDir dir;
+  LogHeader header = sample_header();
+  header.config_text.clear();
+  write_log_file(dir.file("empty.htl"), header, {});
+  const LogContents c = read_log(dir.file("empty.htl"));
+  EXPECT_TRUE(c.records.empty());
+  EXPECT_EQ(c.header.config_text, "");
+  EXPECT_EQ(c.complete_blocks, 0u);
+  EXPECT_EQ(c.trailing_reason, "");
+}
+
+TEST(LogReader, CutAtEveryByteKeepsTheCompleteBlocksBeforeIt) {
+  FiveBlockLog log;
+  for (std::size_t cut = 0; cut <= log.bytes.size(); ++cut) {
+    SCOPED_TRACE("cut at byte " + std::to_string(cut));
+    const auto prefix = std::span(log.bytes).first(cut);
+    if (cut < log.header_size) {
+      ASSERT_EQ(format_error(prefix), "mem.htl: truncated header");
+      continue;
+    }
+    const std::size_t complete = (cut - log.header_size) / log.block_bytes;
+    const std::size_t good_end = log.block_start(complete);
+    const LogContents c = read_log_bytes(prefix, "mem.htl");
+    ASSERT_TRUE(records_identical(c.records, log.first_blocks(complete)));
+    ASSERT_EQ(c.complete_blocks, complete);
+    ASSERT_EQ(c.trailing_bytes_ignored, cut - good_end);
+    if (cut == good_end) {
+      ASSERT_EQ(c.trailing_reason, "");
+    } else {
+      ASSERT_EQ(c.trailing_reason,
+                "incomplete block at byte " + std::to_string(good_end) + " (log cut short)");
+    }
+  }
+}
+
+TEST(LogReader, CutFilesOnDiskReadTheSameWay) {
+  FiveBlockLog log;
+  const std::string cut_path = log.dir.file("cut.htl");
+  // A cut inside the header, at a block boundary, inside a block header, inside records.
+  for (std::size_t cut :
+       {std::size_t{5}, log.block_start(2), log.block_start(3) + 10, log.block_start(4) + 100}) {
+    SCOPED_TRACE("cut at byte " + std::to_string(cut));
+    test::write_bytes(cut_path, std::span(log.bytes).first(cut));
+    if (cut < log.header_size) {
+      try {
+        read_log(cut_path);
+        ADD_FAILURE() << "expected LogFormatError";
+      } catch (const LogFormatError& e) {
+        EXPECT_EQ(std::string(e.what()), cut_path + ": truncated header");
+      }
+      continue;
+    }
+    const LogContents c = read_log(cut_path);
+    const std::size_t complete = (cut - log.header_size) / log.block_bytes;
+    EXPECT_TRUE(records_identical(c.records, log.first_blocks(complete)));
+    EXPECT_EQ(c.trailing_bytes_ignored, cut - log.block_start(complete));
+  }
+}
+
+TEST(LogReader, FlippedByteStopsAtTheDamagedBlock) {
+  FiveBlockLog log;
+  const std::size_t damaged = 2;
+  const std::size_t start = log.block_start(damaged);
+  const std::string where = "at byte " + std::to_string(start);
+  for (std::size_t i = 0; i < log.block_bytes; ++i) {
+    SCOPED_TRACE("flipped byte " + std::to_string(i) + " of block 2");
+    std::vector<std::byte> bytes = log.bytes;
+    bytes[start + i] ^= std::byte{0xff};
+    const LogContents c = read_log_bytes(bytes, "mem.htl");
+    ASSERT_TRUE(records_identical(c.records, log.first_blocks(damaged)));
+    ASSERT_EQ(c.complete_blocks, damaged);
+    ASSERT_EQ(c.trailing_bytes_ignored, bytes.size() - start);
+    if (i < 4) {
+      ASSERT_EQ(c.trailing_reason, "bad block magic " + where);
+    } else if (i < 6) {  // the record count grows past the end of the file
+      ASSERT_EQ(c.trailing_reason, "incomplete block " + where + " (log cut short)");
+    } else if (i < 8) {  // the record count exceeds kMaxBlockRecords
+      ASSERT_EQ(c.trailing_reason.rfind("corrupt block header " + where + " (record count ", 0), 0u)
+          << c.trailing_reason;
+    } else {
+      ASSERT_EQ(c.trailing_reason, "CRC mismatch in block " + where);
+    }
+  }
+}
+
+TEST(LogReader, RejectsFilesThatAreNotTickLogs) {
+  FiveBlockLog log;
+  auto damaged = [&](std::size_t offset, std::byte value) {
+    std::vector<std::byte> b = log.bytes;
+    b[offset] = value;
+    return format_error(b);
+  };
+  EXPECT_EQ(damaged(0, std::byte{'h'}), "mem.htl: not a hapticd tick log (bad magic)");
+  EXPECT_EQ(damaged(8, std::byte{2}), "mem.htl: unsupported log version 2");
+  EXPECT_EQ(damaged(41, std::byte{'#'}), "mem.htl: header CRC mismatch");   // config text
+  EXPECT_EQ(damaged(17, std::byte{0x11}), "mem.htl: header CRC mismatch");  // sample period
+  EXPECT_EQ(damaged(39, std::byte{0x7f}),
+            "mem.htl: corrupt header (configuration length " +
+                std::to_string(0x7f000000u + log.header.config_text.size()) + ")");
+
+  const std::string text = "position,force\n0.1,2.0\n";
+  EXPECT_EQ(format_error(std::as_bytes(std::span(text))),
+            "mem.htl: not a hapticd tick log (bad magic)");
+}
+
+TEST(LogReader, ReportsUnreadableFilesWithTheirPath) {
+  test::TempDir dir;
+  const std::string missing = dir.file("missing.htl");
+  try {
+    read_log(missing);
+    FAIL() << "expected LogFormatError";
+  } catch (const LogFormatError& e) {
+    EXPECT_EQ(std::string(e.what()), missing + ": cannot read: No such file or directory");
+  }
+  const std::string a_dir = dir.file("");
+  EXPECT_THROW(read_log(a_dir), LogFormatError);
+}
+
+}  // namespace
+}  // namespace hapticd::telemetry
