@@ -1,0 +1,43 @@
+#include "loop/loop_fault.h"
+
+#include <cstdio>
+
+namespace hapticd::loop {
+
+std::string describe(const Fault& f) {
+  char buf[160];
+  const auto tick = static_cast<unsigned long long>(f.tick);
+  switch (f.cause) {
+    case FaultCause::kNone:
+      return "";
+    case FaultCause::kDeviceRead:
+      std::snprintf(buf, sizeof buf, "device read failed at tick %llu", tick);
+      break;
+    case FaultCause::kDeviceWrite:
+      std::snprintf(buf, sizeof buf, "device write failed at tick %llu", tick);
+      break;
+    case FaultCause::kStaleData:
+      std::snprintf(buf, sizeof buf,
+                    "stale encoder data: no new position for %.0f ticks (tick %llu)", f.value,
+                    tick);
+      break;
+    case FaultCause::kNonFinitePosition:
+      std::snprintf(buf, sizeof buf, "impossible encoder data: non-finite position at tick %llu",
+                    tick);
+      break;
+    case FaultCause::kEncoderJump:
+      std::snprintf(buf, sizeof buf,
+                    "impossible encoder data: position jumped at %.6g m/s at tick %llu "
+                    "(safety.max_speed)",
+                    f.value, tick);
+      break;
+    case FaultCause::kOverrunStreak:
+      std::snprintf(buf, sizeof buf,
+                    "%.0f consecutive overruns at tick %llu (loop.overrun_fault_streak)", f.value,
+                    tick);
+      break;
+  }
+  return buf;
+}
+
+}  // namespace hapticd::loop

@@ -1,0 +1,71 @@
+#include "loop/rt_setup.h"
+
+#include <malloc.h>
+#include <pthread.h>
+#include <sched.h>
+#include <sys/mman.h>
+#include <sys/prctl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <stdexcept>
+
+namespace hapticd::loop {
+
+void lock_process_memory(RtStatus& status) {
+  if (mlockall(MCL_CURRENT | MCL_FUTURE) == 0) {
+    status.memory_locked = true;
+    mallopt(M_TRIM_THRESHOLD, -1);  // never give heap back: a later sbrk would fault pages in
+    mallopt(M_MMAP_MAX, 0);         // keep large blocks on the locked heap
+  } else {
+    status.warnings.push_back(std::string("mlockall failed (") + std::strerror(errno) +
+                              "): pages of the RT thread may fault; run as root or with "
+                              "CAP_IPC_LOCK and LimitMEMLOCK=infinity");
+  }
+}
+
+void configure_rt_thread(int priority, int cpu, RtStatus& status) {
+  if (cpu >= 0) {
+    const long cpus = sysconf(_SC_NPROCESSORS_ONLN);
+    if (cpu >= cpus) {
+      throw std::runtime_error("loop.cpu: CPU " + std::to_string(cpu) +
+                               " does not exist (this machine has " + std::to_string(cpus) + ")");
+    }
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    CPU_SET(static_cast<unsigned>(cpu), &set);
+    const int rc = pthread_setaffinity_np(pthread_self(), sizeof set, &set);
+    if (rc == 0) {
+      status.cpu = cpu;
+    } else {
+      status.warnings.push_back("pinning to CPU " + std::to_string(cpu) + " failed (" +
+                                std::strerror(rc) + ")");
+    }
+  }
+  sched_param sp{};
+  sp.sched_priority = priority;
+  const int rc = pthread_setschedparam(pthread_self(), SCHED_FIFO, &sp);
+  if (rc == 0) {
+    status.fifo = true;
+    status.priority = priority;
+  } else {
+    status.warnings.push_back(std::string("SCHED_FIFO priority ") + std::to_string(priority) +
+                              " refused (" + std::strerror(rc) +
+                              "): running SCHED_OTHER with 1 ns timer slack; wake latency will "
+                              "suffer; run as root or with CAP_SYS_NICE and LimitRTPRIO");
+  }
+  if (!status.fifo) {
+    // Under SCHED_OTHER the default 50 us timer slack would delay every wake-up.
+    status.timer_slack_1ns = prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL) == 0;
+  }
+}
+
+void prefault_stack(std::size_t bytes) noexcept {
+  // Grow the stack by `bytes` right below the current frame and write every page of it, so
+  // the deepest frames the ticks will use are already committed (and locked by mlockall).
+  auto* p = static_cast<volatile unsigned char*>(__builtin_alloca(bytes));
+  for (std::size_t i = 0; i < bytes; i += 4096) p[i] = 0;
+}
+
+}  // namespace hapticd::loop

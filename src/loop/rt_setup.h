@@ -1,0 +1,31 @@
+// Real-time set-up of the process and of the RT thread (DESIGN.md §5): mlockall, SCHED_FIFO,
+// CPU affinity, timer slack, stack prefault. Each step reports what it achieved so the daemon
+// can say which guarantees were in force; nothing here fails silently.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace hapticd::loop {
+
+struct RtStatus {
+  bool memory_locked = false;  // mlockall(MCL_CURRENT | MCL_FUTURE) succeeded
+  bool fifo = false;           // the RT thread runs SCHED_FIFO
+  int priority = 0;
+  int cpu = -1;  // CPU the RT thread is pinned to, -1 if not pinned
+  bool timer_slack_1ns = false;
+  std::vector<std::string> warnings;  // one line per guarantee that is not in force, and why
+};
+
+// Not RT-safe; call once from main() before threads start. Locks memory and stops glibc from
+// returning heap to the OS (so later frees cannot page-fault the RT thread).
+void lock_process_memory(RtStatus& status);
+
+// Not RT-safe; call on the RT thread itself before its first tick. `cpu` < 0: no pinning.
+// Throws std::runtime_error only for a CPU that does not exist (a configuration error).
+void configure_rt_thread(int priority, int cpu, RtStatus& status);
+
+// Touches `bytes` of the calling thread's stack so the first ticks do not page-fault.
+void prefault_stack(std::size_t bytes = 256 * 1024) noexcept;
+
+}  // namespace hapticd::loop

@@ -1,0 +1,68 @@
+// The fixed-rate servo loop of DESIGN.md §5: read the device, step the controller, write the
+// force, record the tick. `realtime` sleeps to an absolute CLOCK_MONOTONIC schedule;
+// `freerun` never sleeps (sim only: thousands of simulated seconds per second, and byte-
+// identical logs because no host timing enters the records).
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+
+#include "control/controller.h"
+#include "drivers/device.h"
+#include "loop/latency_histogram.h"
+#include "loop/loop_fault.h"
+#include "telemetry/spsc_ring.h"
+#include "telemetry/tick_record.h"
+
+namespace hapticd::loop {
+
+struct LoopOptions {
+  bool realtime = true;  // false: freerun
+  std::int64_t period_ns = 1'000'000;
+  int overrun_fault_streak = 10;
+  int stale_fault_ticks = 3;    // consecutive reads without new data that fault
+  double max_speed = 10.0;      // m/s; a faster jump between samples is an encoder fault
+  std::uint64_t max_ticks = 0;  // 0: until stop is requested or a fault
+};
+
+struct LoopResult {
+  std::uint64_t ticks = 0;
+  std::uint64_t overruns = 0;      // ticks that finished after the next deadline
+  std::uint64_t missed_ticks = 0;  // whole periods skipped after a long overrun
+  std::uint64_t stale_ticks = 0;
+  std::uint64_t contact_ticks = 0;
+  std::uint64_t saturated_ticks = 0;
+  double max_penetration = 0.0;
+  Fault fault;
+};
+
+class ServoLoop {
+ public:
+  // Not RT-safe: allocates the timing histograms. `ring` may be null (no tick log).
+  ServoLoop(Device& device, control::Controller& controller,
+            telemetry::SpscRing<telemetry::TickRecord>* ring, const LoopOptions& options);
+
+  // Runs on the calling thread (set up as the RT thread) until `stop`, max_ticks or a fault.
+  // RT-safe after entry: no allocation, lock, log or throw; blocks only in the device read
+  // and the absolute-time sleep. On a fault it commands zero force before returning.
+  LoopResult run(const std::atomic<bool>& stop) noexcept;
+
+  // Any thread: ticks completed so far (for the watchdog and progress).
+  std::uint64_t ticks_done() const noexcept { return ticks_done_.load(std::memory_order_relaxed); }
+
+  // Off-RT, after run(): wake latency and compute time of every tick.
+  const LatencyHistogram& wake_latency() const noexcept { return wake_latency_; }
+  const LatencyHistogram& compute_time() const noexcept { return compute_time_; }
+
+ private:
+  Device& device_;
+  control::Controller& controller_;
+  telemetry::SpscRing<telemetry::TickRecord>* ring_;
+  LoopOptions options_;
+  double max_step_ = 0.0;  // max_speed * T: cached so the tick multiplies, not divides
+  LatencyHistogram wake_latency_;
+  LatencyHistogram compute_time_;
+  std::atomic<std::uint64_t> ticks_done_{0};
+};
+
+}  // namespace hapticd::loop
