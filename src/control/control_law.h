@@ -10,7 +10,7 @@
 
 namespace hapticd::control {
 
-inline constexpr std::size_t kMaxTaps = 16;  // coefficients per polynomial (order 15)
+inline constexpr std::size_t kMaxTaps = config::kMaxCouplingCoefficients;  // per polynomial
 
 // A causal IIR filter num(z^-1)/den(z^-1) with den[0] normalised to 1.
 struct FilterCoefficients {

@@ -57,7 +57,7 @@ TEST(Gate, StiffWallFailsAndNamesTheStiffnessThatPasses) {
       r.reasons[0],
       "passivity: required damping b_req = 5.2 N s/m exceeds (1 - safety.passivity_margin) x "
       "device.damping = (1 - 0.1) x 2 = 1.8 N s/m (worst at 500 Hz, delay 0 samples); "
-      "wall.stiffness must be <= 3200 N/m to pass (now 1e+04), or device.damping >= 5.778 N s/m");
+      "wall.stiffness must be <= 3200 N/m to pass (now 10000), or device.damping >= 5.778 N s/m");
 }
 
 TEST(Gate, DriverDelayIsAddedToTheWallDelay) {

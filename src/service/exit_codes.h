@@ -1,0 +1,14 @@
+// Process exit codes (DESIGN.md §9).
+#pragma once
+
+namespace hapticd {
+
+enum ExitCode : int {
+  kExitOk = 0,
+  kExitRuntimeFault = 1,
+  kExitUsage = 2,  // usage or configuration error
+  kExitGateRefused = 3,
+  kExitDevice = 4,
+};
+
+}  // namespace hapticd

@@ -1,0 +1,99 @@
+// hapticd: the one place where the sub-commands are wired to the command line and where
+// every error class is mapped to its exit code (DESIGN.md §9).
+#include <spdlog/spdlog.h>
+
+#include <CLI/CLI.hpp>
+#include <iostream>
+#include <optional>
+
+#include "config/config_loader.h"
+#include "drivers/device.h"
+#include "service/check_command.h"
+#include "service/exit_codes.h"
+#include "service/run_command.h"
+#include "service/verify_command.h"
+
+namespace {
+
+using hapticd::service::ConfigOptions;
+
+void add_config_options(CLI::App* cmd, ConfigOptions& c) {
+  cmd->add_option("--config", c.path,
+                  "YAML configuration file (default: the embedded config/sim.yaml)");
+  cmd->add_option("--set", c.sets,
+                  "Override one key before validation, e.g. --set wall.stiffness=3000 or "
+                  "--set wall.coupling.numerator=[0.1,-0.07] (repeatable)")
+      ->take_all()
+      ->allow_extra_args(false);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "hapticd: real-time haptic servo daemon. Renders a virtual wall on a one-axis haptic "
+      "device and refuses to enable the motor unless the sampled-data loop is proven passive."};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "hapticd 0.1.0");
+
+  ConfigOptions check_cfg;
+  bool check_json = false;
+  CLI::App* check = app.add_subcommand(
+      "check",
+      "Print the startup gate's analysis (passivity bound, largest passing stiffness, oscillation "
+      "criteria, coupling check) without touching hardware. Exit 0 pass, 3 fail, 2 bad input.");
+  add_config_options(check, check_cfg);
+  check->add_flag("--json", check_json, "Print exactly one JSON object instead of the table");
+
+  hapticd::service::RunOptions run_opts;
+  std::optional<double> duration;
+  CLI::App* run = app.add_subcommand(
+      "run",
+      "Run the servo loop: gate, enable output, render the wall until --duration ends, SIGINT or "
+      "SIGTERM, or a fault; then command zero force, disable output, flush the log and print a "
+      "summary. Exit 0 clean stop, 1 fault, 2 bad input, 3 gate refused, 4 device error.");
+  add_config_options(run, run_opts.config);
+  run->add_option("--duration", duration, "Stop after this many seconds (default: until a signal)")
+      ->check(CLI::PositiveNumber);
+  run->add_option("--log", run_opts.log_path,
+                  "Write the binary tick log here (overrides telemetry.log)");
+  run->add_option("--summary-json", run_opts.summary_json_path,
+                  "Also write the run summary as one JSON object to this file");
+
+  ConfigOptions verify_cfg;
+  bool verify_json = false;
+  CLI::App* verify = app.add_subcommand(
+      "verify",
+      "Confirm the passivity bound by measurement: drive the sim loop (freerun) with an imposed "
+      "motion in contact over frequencies up to Nyquist, find the device damping below which it "
+      "delivers net energy, and compare with the analytic b_req. Exit 0 agree, 1 disagree, 2 bad "
+      "input.");
+  add_config_options(verify, verify_cfg);
+  verify->add_flag("--json", verify_json, "Print exactly one JSON object instead of the table");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int rc = app.exit(e);
+    return rc == 0 ? hapticd::kExitOk : hapticd::kExitUsage;
+  }
+
+  try {
+    if (*check) return hapticd::service::check_command(check_cfg, check_json);
+    if (*run) {
+      run_opts.duration_s = duration;
+      return hapticd::service::run_command(run_opts);
+    }
+    if (*verify) return hapticd::service::verify_command(verify_cfg, verify_json);
+  } catch (const hapticd::config::ConfigError& e) {
+    for (const std::string& m : e.messages()) std::cerr << "hapticd: " << m << "\n";
+    return hapticd::kExitUsage;
+  } catch (const hapticd::DeviceError& e) {
+    std::cerr << "hapticd: device error: " << e.what() << "\n";
+    return hapticd::kExitDevice;
+  } catch (const std::exception& e) {
+    std::cerr << "hapticd: " << e.what() << "\n";
+    return hapticd::kExitRuntimeFault;
+  }
+  return hapticd::kExitUsage;
+}

@@ -1,0 +1,92 @@
+#include "service/run_summary.h"
+
+#include <sstream>
+
+#include "gate/number_format.h"
+
+namespace hapticd::service {
+namespace {
+
+using nlohmann::json;
+
+json percentiles_us(const loop::LatencyHistogram* h) {
+  if (h == nullptr || h->count() == 0) return nullptr;
+  const auto us = [&](double q) { return static_cast<double>(h->percentile_ns(q)) / 1e3; };
+  return {{"p50", us(0.5)}, {"p99", us(0.99)}, {"p999", us(0.999)}, {"max", us(1.0)}};
+}
+
+std::string line_us(const json& p) {
+  if (p.is_null()) return "n/a (freerun: nothing waits)";
+  using gate::format_number;
+  return "p50 " + format_number(p["p50"].get<double>()) + "  p99 " +
+         format_number(p["p99"].get<double>()) + "  p99.9 " +
+         format_number(p["p999"].get<double>()) + "  max " + format_number(p["max"].get<double>()) +
+         " us";
+}
+
+}  // namespace
+
+json summary_to_json(const RunSummary& s) {
+  json j;
+  j["ticks"] = s.loop.ticks;
+  j["duration_s"] = static_cast<double>(s.loop.ticks) * s.sample_period_s;
+  j["clock"] = s.realtime ? "realtime" : "freerun";
+  j["overruns"] = s.loop.overruns;
+  j["missed_ticks"] = s.loop.missed_ticks;
+  j["stale_ticks"] = s.loop.stale_ticks;
+  j["wake_latency_us"] = s.realtime ? percentiles_us(s.wake_latency) : json(nullptr);
+  j["compute_us"] = percentiles_us(s.compute_time);
+  j["faults"] = s.faults;
+  j["stop_reason"] = s.stop_reason;
+  j["contact_ticks"] = s.loop.contact_ticks;
+  j["saturated_ticks"] = s.loop.saturated_ticks;
+  j["max_penetration"] = s.loop.max_penetration;
+  j["operator_work_j"] = s.operator_work_j ? json(*s.operator_work_j) : json(nullptr);
+  j["log_path"] = s.log_path.empty() ? json(nullptr) : json(s.log_path);
+  j["log_records_written"] = s.log_records_written;
+  j["log_records_dropped"] = s.log_records_dropped;
+  j["log_io_errors"] = s.log_io_errors;
+  j["rt"] = {{"sched_fifo", s.rt.fifo},
+             {"priority", s.rt.priority},
+             {"memory_locked", s.rt.memory_locked},
+             {"cpu", s.rt.cpu},
+             {"timer_slack_1ns", s.rt.timer_slack_1ns},
+             {"warnings", s.rt.warnings}};
+  j["gate"] = s.gate;
+  return j;
+}
+
+std::string summary_to_text(const RunSummary& s) {
+  using gate::format_number;
+  const json j = summary_to_json(s);
+  std::ostringstream os;
+  os << "hapticd run: " << s.loop.ticks << " ticks, "
+     << format_number(j["duration_s"].get<double>()) << " s at "
+     << format_number(1.0 / s.sample_period_s) << " Hz (" << j["clock"].get<std::string>()
+     << "), stopped by " << s.stop_reason << "\n";
+  if (s.realtime) {
+    os << "  RT             "
+       << (s.rt.fifo ? "SCHED_FIFO " + std::to_string(s.rt.priority) : "SCHED_OTHER")
+       << (s.rt.memory_locked ? ", memory locked" : ", memory NOT locked")
+       << (s.rt.cpu >= 0 ? ", CPU " + std::to_string(s.rt.cpu) : "") << "\n";
+    os << "  wake latency   " << line_us(j["wake_latency_us"]) << "\n";
+  }
+  os << "  compute        " << line_us(j["compute_us"]) << "\n";
+  os << "  overruns       " << s.loop.overruns << " (missed ticks " << s.loop.missed_ticks << ")\n";
+  os << "  contact        " << s.loop.contact_ticks << " ticks, max penetration "
+     << format_number(s.loop.max_penetration * 1e3) << " mm, saturated " << s.loop.saturated_ticks
+     << " ticks\n";
+  if (s.operator_work_j) {
+    os << "  operator work  " << format_number(*s.operator_work_j)
+       << " J (done by the operator on the device)\n";
+  }
+  if (!s.log_path.empty()) {
+    os << "  tick log       " << s.log_path << ": " << s.log_records_written << " records, "
+       << s.log_records_dropped << " dropped" << (s.log_io_errors ? ", WRITE ERRORS" : "") << "\n";
+  }
+  os << "  faults         " << (s.faults.empty() ? std::string("none") : "") << "\n";
+  for (const std::string& f : s.faults) os << "    " << f << "\n";
+  return os.str();
+}
+
+}  // namespace hapticd::service

@@ -1,0 +1,35 @@
+// What a `hapticd run` did: the numbers for the human summary and for --summary-json.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "loop/latency_histogram.h"
+#include "loop/rt_setup.h"
+#include "loop/servo_loop.h"
+
+namespace hapticd::service {
+
+struct RunSummary {
+  bool realtime = true;
+  double sample_period_s = 0.0;
+  loop::LoopResult loop;
+  const loop::LatencyHistogram* wake_latency = nullptr;
+  const loop::LatencyHistogram* compute_time = nullptr;
+  loop::RtStatus rt;
+  std::vector<std::string> faults;
+  std::optional<double> operator_work_j;  // sim only
+  std::string log_path;                   // "" when no log was written
+  std::uint64_t log_records_written = 0;
+  std::uint64_t log_records_dropped = 0;
+  std::uint64_t log_io_errors = 0;
+  std::string stop_reason;  // "duration", "signal SIGTERM", "fault"
+  nlohmann::json gate;
+};
+
+nlohmann::json summary_to_json(const RunSummary& s);
+std::string summary_to_text(const RunSummary& s);
+
+}  // namespace hapticd::service
