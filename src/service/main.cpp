@@ -1,5 +1,6 @@
 // hapticd: the one place where the sub-commands are wired to the command line and where
 // every error class is mapped to its exit code (DESIGN.md §9).
+#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
@@ -70,6 +71,10 @@ int main(int argc, char** argv) {
       "input.");
   add_config_options(verify, verify_cfg);
   verify->add_flag("--json", verify_json, "Print exactly one JSON object instead of the table");
+
+  // Events (gate verdict, faults, lifecycle) go to stderr; stdout carries only the results a
+  // script reads (the check table or JSON, the run summary).
+  spdlog::set_default_logger(spdlog::stderr_color_mt("hapticd"));
 
   try {
     app.parse(argc, argv);

@@ -84,7 +84,8 @@ std::string summary_to_text(const RunSummary& s) {
     os << "  tick log       " << s.log_path << ": " << s.log_records_written << " records, "
        << s.log_records_dropped << " dropped" << (s.log_io_errors ? ", WRITE ERRORS" : "") << "\n";
   }
-  os << "  faults         " << (s.faults.empty() ? std::string("none") : "") << "\n";
+  os << "  faults         "
+     << (s.faults.empty() ? std::string("none") : std::to_string(s.faults.size())) << "\n";
   for (const std::string& f : s.faults) os << "    " << f << "\n";
   return os.str();
 }

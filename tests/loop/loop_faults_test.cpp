@@ -1,0 +1,147 @@
+// Every fault the loop detects: zero force is commanded at once, the loop stops and says why.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "control/controller.h"
+#include "loop/servo_loop.h"
+#include "scripted_device.h"
+
+namespace hapticd::loop {
+namespace {
+
+using hapticd::testing::ScriptedDevice;
+
+control::Controller wall_controller() {
+  config::Config c;
+  c.wall.stiffness = 2000;
+  c.device.max_force = 10;
+  return control::Controller(control::make_control_law(c));
+}
+
+LoopResult run(ScriptedDevice& dev, LoopOptions o) {
+  control::Controller ctl = wall_controller();
+  ServoLoop loop(dev, ctl, nullptr, o);
+  const std::atomic<bool> stop{false};
+  return loop.run(stop);
+}
+
+LoopOptions freerun(std::uint64_t ticks = 100) {
+  LoopOptions o;
+  o.realtime = false;
+  o.max_ticks = ticks;
+  return o;
+}
+
+TEST(LoopFaults, DeviceReadErrorFaultsAndCommandsZero) {
+  ScriptedDevice dev;
+  dev.script = [](std::uint64_t k, PositionSample& s) {
+    s.position = 0.001;
+    return k == 5 ? IoStatus::kError : IoStatus::kOk;
+  };
+  const LoopResult r = run(dev, freerun());
+  EXPECT_EQ(r.fault.cause, FaultCause::kDeviceRead);
+  EXPECT_EQ(r.fault.tick, 5u);
+  EXPECT_EQ(r.ticks, 6u);
+  ASSERT_EQ(dev.writes.size(), 6u);
+  EXPECT_NEAR(dev.writes[4], -2.0, 1e-12);  // the wall was pushing before the fault
+  EXPECT_EQ(dev.writes.back(), 0.0);
+  EXPECT_EQ(describe(r.fault), "device read failed at tick 5");
+}
+
+TEST(LoopFaults, StaleDataFaultsAfterTheConfiguredStreak) {
+  ScriptedDevice dev;
+  dev.script = [](std::uint64_t k, PositionSample& s) {
+    s.position = 0.001;
+    return k >= 10 ? IoStatus::kNoNewData : IoStatus::kOk;
+  };
+  LoopOptions o = freerun();
+  o.stale_fault_ticks = 4;
+  const LoopResult r = run(dev, o);
+  EXPECT_EQ(r.fault.cause, FaultCause::kStaleData);
+  EXPECT_EQ(r.fault.tick, 13u);
+  EXPECT_EQ(r.stale_ticks, 4u);
+  EXPECT_EQ(dev.writes.back(), 0.0);
+  // Until the streak ran out, the held position kept the wall pushing.
+  EXPECT_NEAR(dev.writes[12], -2.0, 1e-12);
+}
+
+TEST(LoopFaults, AnIsolatedStaleReadIsCountedNotFatal) {
+  ScriptedDevice dev;
+  dev.script = [](std::uint64_t k, PositionSample& s) {
+    s.position = 0.001;
+    return k % 10 == 3 ? IoStatus::kNoNewData : IoStatus::kOk;
+  };
+  const LoopResult r = run(dev, freerun(100));
+  EXPECT_EQ(r.fault.cause, FaultCause::kNone);
+  EXPECT_EQ(r.stale_ticks, 10u);
+}
+
+TEST(LoopFaults, NonFinitePositionFaults) {
+  ScriptedDevice dev;
+  dev.script = [](std::uint64_t k, PositionSample& s) {
+    s.position = k == 7 ? std::numeric_limits<double>::quiet_NaN() : 0.001;
+    return IoStatus::kOk;
+  };
+  const LoopResult r = run(dev, freerun());
+  EXPECT_EQ(r.fault.cause, FaultCause::kNonFinitePosition);
+  EXPECT_EQ(r.fault.tick, 7u);
+  EXPECT_EQ(dev.writes.back(), 0.0);
+}
+
+TEST(LoopFaults, EncoderJumpFasterThanMaxSpeedFaults) {
+  ScriptedDevice dev;
+  dev.script = [](std::uint64_t k, PositionSample& s) {
+    s.position = k < 20 ? 0.001 : 0.031;  // 30 mm in one 1 ms period: 30 m/s
+    return IoStatus::kOk;
+  };
+  LoopOptions o = freerun();
+  o.max_speed = 10.0;
+  const LoopResult r = run(dev, o);
+  EXPECT_EQ(r.fault.cause, FaultCause::kEncoderJump);
+  EXPECT_EQ(r.fault.tick, 20u);
+  EXPECT_NEAR(r.fault.value, 30.0, 1e-9);
+  EXPECT_EQ(dev.writes.back(), 0.0);
+}
+
+TEST(LoopFaults, DeviceWriteErrorFaultsAndRetriesZero) {
+  ScriptedDevice dev;
+  dev.fail_write_at = 3;
+  const LoopResult r = run(dev, freerun());
+  EXPECT_EQ(r.fault.cause, FaultCause::kDeviceWrite);
+  EXPECT_EQ(r.fault.tick, 3u);
+  EXPECT_EQ(dev.writes.back(), 0.0);
+}
+
+TEST(LoopFaults, OverrunStreakFaults) {
+  ScriptedDevice dev;
+  dev.read_sleep_ns = 2'000'000;  // every read outlasts a 0.5 ms period, whatever the host
+  LoopOptions o;
+  o.realtime = true;
+  o.period_ns = 500'000;
+  o.overrun_fault_streak = 3;
+  o.max_ticks = 50;
+  const LoopResult r = run(dev, o);
+  EXPECT_EQ(r.fault.cause, FaultCause::kOverrunStreak);
+  EXPECT_EQ(r.fault.tick, 2u);
+  EXPECT_EQ(r.overruns, 3u);
+  EXPECT_EQ(dev.writes.back(), 0.0);
+}
+
+TEST(LoopFaults, LongOverrunsSkipWholePeriodsAndCountThem) {
+  ScriptedDevice dev;
+  dev.read_sleep_ns = 2'000'000;
+  LoopOptions o;
+  o.realtime = true;
+  o.period_ns = 500'000;
+  o.overrun_fault_streak = 1000;
+  o.max_ticks = 5;
+  const LoopResult r = run(dev, o);
+  EXPECT_EQ(r.fault.cause, FaultCause::kNone);
+  EXPECT_EQ(r.overruns, r.ticks);
+  EXPECT_GE(r.missed_ticks, 2u * r.ticks);  // each 2 ms tick spans 4 periods, 3 skipped
+}
+
+}  // namespace
+}  // namespace hapticd::loop

@@ -1,0 +1,126 @@
+// The loop with the sim device: no allocation per tick, deterministic freerun records, a
+// full ring that never blocks.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <vector>
+
+#include "alloc_counter.h"
+#include "config/config_loader.h"
+#include "control/controller.h"
+#include "loop/servo_loop.h"
+#include "sim/sim_device.h"
+
+namespace hapticd::loop {
+namespace {
+
+using telemetry::SpscRing;
+using telemetry::TickRecord;
+
+struct Rig {
+  explicit Rig(const config::Config& c)
+      : cfg(c),
+        device(cfg.device, cfg.loop.sample_period_s()),
+        controller(control::make_control_law(cfg)) {
+    device.configure();
+    device.enable_output();
+  }
+  config::Config cfg;
+  sim::SimDevice device;
+  control::Controller controller;
+};
+
+LoopOptions freerun(std::uint64_t ticks) {
+  LoopOptions o;
+  o.realtime = false;
+  o.max_ticks = ticks;
+  return o;
+}
+
+std::vector<TickRecord> drain(SpscRing<TickRecord>& ring) {
+  std::vector<TickRecord> out(ring.size_approx());
+  out.resize(ring.pop_many(out.data(), out.size()));
+  return out;
+}
+
+TEST(ServoLoop, NoHeapAllocationPerTickFreerun) {
+  Rig rig(config::load_embedded_default());  // the demo: a hand pushes into the wall
+  SpscRing<TickRecord> ring(4096);           // no consumer: it fills after 4096 ticks
+  ServoLoop loop(rig.device, rig.controller, &ring, freerun(20000));
+  const std::atomic<bool> stop{false};
+  hapticd::testing::AllocationScope scope;
+  const LoopResult r = loop.run(stop);
+  EXPECT_EQ(scope.count(), 0u) << "allocations on the RT path over " << r.ticks << " ticks";
+  EXPECT_EQ(r.ticks, 20000u);
+  EXPECT_GT(r.contact_ticks, 1000u);          // the demo really pressed into the wall
+  EXPECT_EQ(ring.dropped(), 20000u - 4096u);  // a full ring counts losses, never blocks
+}
+
+TEST(ServoLoop, NoHeapAllocationPerTickRealtime) {
+  Rig rig(config::load_embedded_default({{"loop.rate_hz", "5000", "--set loop.rate_hz=5000"}}));
+  SpscRing<TickRecord> ring(1 << 12);
+  LoopOptions o;
+  o.realtime = true;
+  o.period_ns = 200'000;
+  o.max_ticks = 2000;
+  o.overrun_fault_streak = 1 << 30;  // a noisy host must not end the test early
+  ServoLoop loop(rig.device, rig.controller, &ring, o);
+  const std::atomic<bool> stop{false};
+  hapticd::testing::AllocationScope scope;
+  const LoopResult r = loop.run(stop);
+  EXPECT_EQ(scope.count(), 0u);
+  EXPECT_EQ(r.ticks, 2000u);  // skipped periods are counted apart, never as ticks
+  EXPECT_EQ(loop.wake_latency().count(), r.ticks);
+}
+
+TEST(ServoLoop, FreerunRecordsAreByteIdenticalAcrossRuns) {
+  std::vector<TickRecord> runs[2];
+  for (auto& records : runs) {
+    Rig rig(config::load_embedded_default({{"device.sim.noise_counts", "0.7", "--set x"}}));
+    SpscRing<TickRecord> ring(4096);
+    ServoLoop loop(rig.device, rig.controller, &ring, freerun(3000));
+    const std::atomic<bool> stop{false};
+    loop.run(stop);
+    records = drain(ring);
+  }
+  ASSERT_EQ(runs[0].size(), 3000u);
+  ASSERT_EQ(runs[1].size(), 3000u);
+  EXPECT_EQ(std::memcmp(runs[0].data(), runs[1].data(), runs[0].size() * sizeof(TickRecord)), 0);
+  // Freerun keeps host timing out of the records: that is what makes them reproducible.
+  EXPECT_EQ(runs[0][2999].scheduled_ns, 2999 * 1'000'000LL);
+  EXPECT_EQ(runs[0][2999].wake_latency_ns, 0);
+  EXPECT_EQ(runs[0][2999].compute_ns, 0);
+}
+
+TEST(ServoLoop, StopFlagEndsTheLoopAtATickBoundary) {
+  Rig rig(config::load_embedded_default());
+  ServoLoop loop(rig.device, rig.controller, nullptr, freerun(0));
+  std::atomic<bool> stop{true};
+  EXPECT_EQ(loop.run(stop).ticks, 0u);
+}
+
+TEST(ServoLoop, RecordsCarryTheControllerOutput) {
+  Rig rig(config::load_embedded_default());
+  SpscRing<TickRecord> ring(4096);
+  ServoLoop loop(rig.device, rig.controller, &ring, freerun(1500));
+  const std::atomic<bool> stop{false};
+  const LoopResult r = loop.run(stop);
+  const std::vector<TickRecord> rec = drain(ring);
+  ASSERT_EQ(rec.size(), 1500u);
+  std::uint64_t contact = 0;
+  for (const TickRecord& t : rec) {
+    EXPECT_DOUBLE_EQ(t.penetration, t.position);  // wall at 0, normal +1
+    if (t.flags & telemetry::kFlagContact) {
+      ++contact;
+      EXPECT_LT(t.force_commanded, 0.0);  // pushes back toward -x
+    }
+  }
+  EXPECT_EQ(contact, r.contact_ticks);
+  EXPECT_DOUBLE_EQ(r.max_penetration,
+                   std::max_element(rec.begin(), rec.end(), [](auto& a, auto& b) {
+                     return a.penetration < b.penetration;
+                   })->penetration);
+}
+
+}  // namespace
+}  // namespace hapticd::loop

@@ -1,0 +1,146 @@
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstring>
+#include <nlohmann/json.hpp>
+#include <thread>
+
+#include "process.h"
+#include "telemetry/log_reader.h"
+
+namespace hapticd::testing {
+namespace {
+
+using nlohmann::json;
+
+json summary_of(const std::string& path) { return json::parse(read_file(path)); }
+
+TEST(CliRun, DemoRunsThePressAndWritesSummaryAndLog) {
+  const std::string log = temp_path("demo.hlog"), sum = temp_path("demo.json");
+  const ProcessResult r = run_process(
+      {hapticd_binary(), "run", "--duration", "2.5", "--log", log, "--summary-json", sum});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("hapticd run: 2500 ticks"), std::string::npos) << r.out;
+  const json s = summary_of(sum);
+  EXPECT_EQ(s["ticks"], 2500);
+  EXPECT_DOUBLE_EQ(s["duration_s"].get<double>(), 2.5);
+  EXPECT_TRUE(s["faults"].empty());
+  EXPECT_EQ(s["stop_reason"], "duration");
+  for (const char* k : {"wake_latency_us", "compute_us"})
+    for (const char* p : {"p50", "p99", "p999", "max"}) EXPECT_TRUE(s[k][p].is_number()) << k << p;
+  EXPECT_GT(s["contact_ticks"].get<int>(), 500);                    // the hand pressed and held
+  EXPECT_NEAR(s["max_penetration"].get<double>(), 1.3e-3, 0.3e-3);  // k_h x_s/(k_h + K) = 1.3 mm
+  EXPECT_TRUE(s["operator_work_j"].is_number());
+  EXPECT_EQ(s["log_path"], log);
+  EXPECT_EQ(s["log_records_dropped"], 0);
+  EXPECT_EQ(s["gate"]["verdict"], "pass");
+  const telemetry::LogContents c = telemetry::read_log(log);
+  EXPECT_EQ(c.records.size(), 2500u);
+  EXPECT_NE(c.header.config_text.find("stiffness: 2000"), std::string::npos);
+  EXPECT_DOUBLE_EQ(c.header.sample_period_s, 1e-3);
+}
+
+TEST(CliRun, SigtermStopsCleanlyWithZeroForceAndAFlushedLog) {
+  const std::string log = temp_path("term.hlog"), sum = temp_path("term.json");
+  BackgroundProcess p({hapticd_binary(), "run", "--log", log, "--summary-json", sum});
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));  // into contact: hand pressing
+  p.signal(SIGTERM);
+  const ProcessResult r = p.wait();
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json s = summary_of(sum);
+  EXPECT_EQ(s["stop_reason"], "signal SIGTERM");
+  const telemetry::LogContents c = telemetry::read_log(log);
+  EXPECT_EQ(c.records.size(), s["ticks"].get<std::size_t>());  // every tick reached the log
+  EXPECT_TRUE(c.trailing_reason.empty()) << c.trailing_reason;
+}
+
+TEST(CliRun, NotifiesSystemdReadyAndStopping) {
+  const std::string sock_path = temp_path("notify.sock");
+  const int fd = socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
+  sockaddr_un addr{};
+  addr.sun_family = AF_UNIX;
+  std::strncpy(addr.sun_path, sock_path.c_str(), sizeof addr.sun_path - 1);
+  ASSERT_EQ(bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0) << std::strerror(errno);
+  const ProcessResult r =
+      run_process({hapticd_binary(), "run", "--duration", "0.3"}, {"NOTIFY_SOCKET=" + sock_path});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::string all;
+  char buf[512];
+  for (ssize_t n; (n = recv(fd, buf, sizeof buf, 0)) > 0;)
+    all.append(buf, static_cast<std::size_t>(n)).append("\n");
+  close(fd);
+  const auto ready = all.find("READY=1"), stopping = all.find("STOPPING=1");
+  ASSERT_NE(ready, std::string::npos) << all;
+  ASSERT_NE(stopping, std::string::npos) << all;
+  EXPECT_LT(ready, stopping);
+}
+
+TEST(CliRun, FreerunLogsAreByteIdentical) {
+  std::string bytes[2];
+  for (int i = 0; i < 2; ++i) {
+    const std::string log = temp_path("det" + std::to_string(i) + ".hlog");
+    const ProcessResult r =
+        run_process({hapticd_binary(), "run", "--duration", "20", "--log", log, "--set",
+                     "loop.clock=freerun", "--set", "device.sim.noise_counts=0.5"});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    bytes[i] = read_file(log);
+  }
+  EXPECT_EQ(telemetry::read_log(temp_path("det0.hlog")).records.size(), 20000u);
+  EXPECT_TRUE(bytes[0] == bytes[1]) << "the two freerun logs differ";
+}
+
+TEST(CliRun, GateRefusalExits3WithoutEnablingOutput) {
+  const std::string sum = temp_path("refused.json");
+  const ProcessResult r = run_process({hapticd_binary(), "run", "--duration", "1", "--set",
+                                       "wall.stiffness=10000", "--summary-json", sum});
+  EXPECT_EQ(r.exit_code, 3);
+  EXPECT_NE(r.err.find("wall.stiffness must be <= 3200 N/m"), std::string::npos) << r.err;
+  EXPECT_EQ(r.out.find("hapticd run:"), std::string::npos);  // the loop never ran
+  EXPECT_TRUE(read_file(sum).empty());
+}
+
+TEST(CliRun, WarnModeRunsAFailingGateAndSaysSo) {
+  const ProcessResult r = run_process({hapticd_binary(), "run", "--duration", "0.2", "--set",
+                                       "wall.stiffness=10000", "--set", "safety.gate=warn"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("running a loop that is not proven passive"), std::string::npos) << r.err;
+}
+
+TEST(CliRun, UnavailableDriverIsADeviceError) {
+  const ProcessResult r = run_process({hapticd_binary(), "run", "--set", "device.driver=can"});
+  EXPECT_EQ(r.exit_code, 4);
+  EXPECT_NE(r.err.find("device error: device.driver: can"), std::string::npos) << r.err;
+}
+
+TEST(CliRun, UnwritableLogIsAUsageError) {
+  const ProcessResult r = run_process(
+      {hapticd_binary(), "run", "--duration", "0.1", "--log", "/nonexistent/dir/x.hlog"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("/nonexistent/dir/x.hlog: cannot open tick log"), std::string::npos)
+      << r.err;
+}
+
+TEST(CliRun, ReplayImposesALoggedTrajectory) {
+  const std::string first = temp_path("to_replay.hlog"), second = temp_path("replayed.hlog");
+  ASSERT_EQ(run_process({hapticd_binary(), "run", "--duration", "2", "--log", first, "--set",
+                         "loop.clock=freerun"})
+                .exit_code,
+            0);
+  const ProcessResult r = run_process({hapticd_binary(), "run", "--duration", "2", "--log", second,
+                                       "--set", "loop.clock=freerun", "--set",
+                                       "device.sim.operator={kind: replay, log: " + first + "}"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto a = telemetry::read_log(first).records, b = telemetry::read_log(second).records;
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    // The same positions come back, to the encoder's resolution (10 um).
+    ASSERT_NEAR(a[k].position, b[k].position, 1.01e-5) << "tick " << k;
+  }
+}
+
+}  // namespace
+}  // namespace hapticd::testing

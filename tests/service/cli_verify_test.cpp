@@ -1,0 +1,46 @@
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include "process.h"
+
+namespace hapticd::testing {
+namespace {
+
+// Done-when of the loop issue: measurement and the analytic bound agree to 1e-3 for the
+// backward-difference wall with 0..3 samples of delay.
+TEST(CliVerify, MeasuredRequiredDampingAgreesWithTheBoundForDelays0To3) {
+  for (int d = 0; d <= 3; ++d) {
+    const ProcessResult r = run_process(
+        {hapticd_binary(), "verify", "--json", "--set", "wall.delay_samples=" + std::to_string(d)});
+    ASSERT_EQ(r.exit_code, 0) << "delay " << d << ": " << r.out << r.err;
+    const nlohmann::json j = nlohmann::json::parse(r.out);
+    const double k = 2000, b = 0.2, t = 1e-3;  // config/sim.yaml; here KT >= 4B
+    const double closed = d == 0 ? k * t / 2 + b : k * t / 2 * (2 * d + 1) - b * std::cos(0.0);
+    EXPECT_NEAR(j["analytic_required_damping"].get<double>(), closed, 1e-9) << "delay " << d;
+    EXPECT_LT(j["relative_error"].get<double>(), 1e-3) << "delay " << d;
+    EXPECT_NEAR(j["measured_required_damping"].get<double>(), closed, 1e-3 * closed);
+    EXPECT_EQ(j["verdict"], "agree");
+  }
+}
+
+TEST(CliVerify, FindsAnInteriorWorstFrequency) {
+  // One sample of delay with K T < 4 B: worst at cos(wT) = K T / (4 B) = 0.5, i.e. T/6 -> 166.7 Hz.
+  const ProcessResult r =
+      run_process({hapticd_binary(), "verify", "--json", "--set", "wall.stiffness=1000", "--set",
+                   "wall.damping=0.5", "--set", "wall.delay_samples=1"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_NEAR(j["measured_required_damping"].get<double>(), 1.25, 1.25e-3);
+  EXPECT_NEAR(j["worst_frequency_hz"].get<double>(), 1000.0 / 6, 2.0);
+}
+
+TEST(CliVerify, RefusesAWallThatCannotStayInContact) {
+  const ProcessResult r = run_process(
+      {hapticd_binary(), "verify", "--config", source_dir() + "/config/seed002-example1.yaml"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("proxy left contact"), std::string::npos) << r.err;
+}
+
+}  // namespace
+}  // namespace hapticd::testing

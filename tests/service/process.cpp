@@ -1,0 +1,120 @@
+#include "process.h"
+
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+extern char** environ;
+
+namespace hapticd::testing {
+namespace {
+
+pid_t spawn(const std::vector<std::string>& args, const std::vector<std::string>& env, int& out_fd,
+            int& err_fd) {
+  int out[2], err[2];
+  if (pipe2(out, O_CLOEXEC) != 0 || pipe2(err, O_CLOEXEC) != 0) throw std::runtime_error("pipe");
+  const pid_t pid = fork();
+  if (pid < 0) throw std::runtime_error("fork");
+  if (pid == 0) {
+    dup2(out[1], 1);
+    dup2(err[1], 2);
+    for (const std::string& e : env) putenv(const_cast<char*>(e.c_str()));
+    std::vector<char*> argv;
+    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    // The test runner may block signals; the daemon must start with a clean mask.
+    sigset_t none;
+    sigemptyset(&none);
+    sigprocmask(SIG_SETMASK, &none, nullptr);
+    execv(argv[0], argv.data());
+    _exit(127);
+  }
+  close(out[1]);
+  close(err[1]);
+  out_fd = out[0];
+  err_fd = err[0];
+  return pid;
+}
+
+ProcessResult collect(pid_t pid, int out_fd, int err_fd) {
+  ProcessResult r;
+  pollfd fds[2] = {{out_fd, POLLIN, 0}, {err_fd, POLLIN, 0}};
+  int open_fds = 2;
+  char buf[4096];
+  while (open_fds > 0) {
+    if (poll(fds, 2, -1) < 0) continue;
+    for (int i = 0; i < 2; ++i) {
+      if (fds[i].fd < 0 || !(fds[i].revents & (POLLIN | POLLHUP))) continue;
+      const ssize_t n = read(fds[i].fd, buf, sizeof buf);
+      if (n > 0) {
+        (i == 0 ? r.out : r.err).append(buf, static_cast<std::size_t>(n));
+      } else {
+        close(fds[i].fd);
+        fds[i].fd = -1;
+        --open_fds;
+      }
+    }
+  }
+  int status = 0;
+  waitpid(pid, &status, 0);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+}  // namespace
+
+ProcessResult run_process(const std::vector<std::string>& args,
+                          const std::vector<std::string>& env) {
+  int out_fd = -1, err_fd = -1;
+  const pid_t pid = spawn(args, env, out_fd, err_fd);
+  return collect(pid, out_fd, err_fd);
+}
+
+BackgroundProcess::BackgroundProcess(const std::vector<std::string>& args,
+                                     const std::vector<std::string>& env) {
+  pid_ = spawn(args, env, out_fd_, err_fd_);
+}
+
+BackgroundProcess::~BackgroundProcess() {
+  if (pid_ > 0) {
+    kill(pid_, SIGKILL);
+    wait();
+  }
+}
+
+void BackgroundProcess::signal(int sig) const { kill(pid_, sig); }
+
+ProcessResult BackgroundProcess::wait() {
+  const ProcessResult r = collect(pid_, out_fd_, err_fd_);
+  pid_ = -1;
+  return r;
+}
+
+std::string hapticd_binary() { return HAPTICD_BINARY; }
+std::string source_dir() { return HAPTICD_SOURCE_DIR; }
+
+std::string temp_path(const std::string& name) {
+  const char* base = std::getenv("TMPDIR");
+  static const std::string dir = [&] {
+    std::string d = std::string(base ? base : "/tmp") + "/hapticd-test-XXXXXX";
+    if (mkdtemp(d.data()) == nullptr) throw std::runtime_error("mkdtemp");
+    return d;
+  }();
+  return dir + "/" + name;
+}
+
+std::string read_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+}  // namespace hapticd::testing

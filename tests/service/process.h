@@ -1,0 +1,40 @@
+// Runs the hapticd binary the way a user does, for end-to-end tests.
+#pragma once
+
+#include <sys/types.h>
+
+#include <string>
+#include <vector>
+
+namespace hapticd::testing {
+
+struct ProcessResult {
+  int exit_code = -1;  // -1 if killed by a signal
+  std::string out;
+  std::string err;
+};
+
+// Runs `args` (args[0] is the program) to completion; `env` entries "K=V" are added.
+ProcessResult run_process(const std::vector<std::string>& args,
+                          const std::vector<std::string>& env = {});
+
+// A process started in the background; wait() collects it like run_process.
+class BackgroundProcess {
+ public:
+  BackgroundProcess(const std::vector<std::string>& args, const std::vector<std::string>& env = {});
+  ~BackgroundProcess();
+  void signal(int sig) const;
+  ProcessResult wait();
+
+ private:
+  pid_t pid_ = -1;
+  int out_fd_ = -1;
+  int err_fd_ = -1;
+};
+
+std::string hapticd_binary();                    // path of the built daemon
+std::string source_dir();                        // the project root
+std::string temp_path(const std::string& name);  // a fresh path under the test's temp dir
+std::string read_file(const std::string& path);
+
+}  // namespace hapticd::testing
