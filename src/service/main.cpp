@@ -11,6 +11,7 @@
 #include "drivers/device.h"
 #include "service/check_command.h"
 #include "service/exit_codes.h"
+#include "service/export_command.h"
 #include "service/run_command.h"
 #include "service/verify_command.h"
 
@@ -72,6 +73,15 @@ int main(int argc, char** argv) {
   add_config_options(verify, verify_cfg);
   verify->add_flag("--json", verify_json, "Print exactly one JSON object instead of the table");
 
+  std::string export_log, export_out;
+  CLI::App* exp = app.add_subcommand(
+      "export",
+      "Write a tick log as CSV (one row per tick: times, position, penetration, velocity, forces, "
+      "flags). A log cut short exports every complete block and warns. Exit 0, or 2 for a file "
+      "that is not a tick log.");
+  exp->add_option("log", export_log, "Tick log written by `hapticd run --log`")->required();
+  exp->add_option("--out", export_out, "CSV file to write (default: stdout)");
+
   // Events (gate verdict, faults, lifecycle) go to stderr; stdout carries only the results a
   // script reads (the check table or JSON, the run summary).
   spdlog::set_default_logger(spdlog::stderr_color_mt("hapticd"));
@@ -90,6 +100,7 @@ int main(int argc, char** argv) {
       return hapticd::service::run_command(run_opts);
     }
     if (*verify) return hapticd::service::verify_command(verify_cfg, verify_json);
+    if (*exp) return hapticd::service::export_command(export_log, export_out);
   } catch (const hapticd::config::ConfigError& e) {
     for (const std::string& m : e.messages()) std::cerr << "hapticd: " << m << "\n";
     return hapticd::kExitUsage;

@@ -4,8 +4,10 @@
 #include <sys/un.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstring>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <thread>
 
@@ -140,6 +142,36 @@ TEST(CliRun, ReplayImposesALoggedTrajectory) {
     // The same positions come back, to the encoder's resolution (10 um).
     ASSERT_NEAR(a[k].position, b[k].position, 1.01e-5) << "tick " << k;
   }
+}
+
+}  // namespace
+}  // namespace hapticd::testing
+
+namespace hapticd::testing {
+namespace {
+
+TEST(CliExport, WritesOneCsvRowPerTickAndExportsWhatSurvivesOfACutLog) {
+  const std::string log = temp_path("export.hlog"), csv = temp_path("export.csv");
+  ASSERT_EQ(run_process({hapticd_binary(), "run", "--duration", "3", "--log", log, "--set",
+                         "loop.clock=freerun"})
+                .exit_code,
+            0);
+  const ProcessResult r = run_process({hapticd_binary(), "export", log, "--out", csv});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string text = read_file(csv);
+  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 3001);  // header + 3000 ticks
+  EXPECT_EQ(text.rfind("tick,scheduled_s,", 0), 0u);
+  EXPECT_NE(text.find("\n2999,2.999000000,"), std::string::npos);
+
+  // Cut the log mid-block, as a crash would: the complete blocks still export, with a warning.
+  std::string bytes = read_file(log);
+  bytes.resize(bytes.size() - 100);
+  std::ofstream(log, std::ios::binary | std::ios::trunc) << bytes;
+  const ProcessResult cut = run_process({hapticd_binary(), "export", log});
+  EXPECT_EQ(cut.exit_code, 0);
+  EXPECT_NE(cut.err.find("log cut short"), std::string::npos) << cut.err;
+  EXPECT_GT(std::count(cut.out.begin(), cut.out.end(), '\n'), 2000);
+  EXPECT_EQ(run_process({hapticd_binary(), "export", "/etc/hostname"}).exit_code, 2);
 }
 
 }  // namespace

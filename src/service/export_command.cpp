@@ -1,0 +1,58 @@
+#include "service/export_command.h"
+
+#include <spdlog/spdlog.h>
+
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+
+#include "service/exit_codes.h"
+#include "telemetry/log_reader.h"
+
+namespace hapticd::service {
+
+int export_command(const std::string& log_path, const std::string& out_path) {
+  telemetry::LogContents log;
+  try {
+    log = telemetry::read_log(log_path);
+  } catch (const telemetry::LogFormatError& e) {
+    std::cerr << "hapticd: " << e.what() << "\n";
+    return kExitUsage;
+  }
+  std::ofstream file;
+  if (!out_path.empty()) {
+    file.open(out_path);
+    if (!file) {
+      std::cerr << "hapticd: " << out_path << ": cannot write\n";
+      return kExitUsage;
+    }
+  }
+  std::ostream& out = out_path.empty() ? std::cout : file;
+  out << "tick,scheduled_s,wake_latency_us,compute_us,position,penetration,velocity,"
+         "force_computed,force_commanded,contact,saturated,fault,overrun,no_pull_clamped,stale,"
+         "device_status\n";
+  char row[512];
+  for (const telemetry::TickRecord& r : log.records) {
+    const auto bit = [&](std::uint32_t f) { return (r.flags & f) ? 1 : 0; };
+    std::snprintf(
+        row, sizeof row, "%llu,%.9f,%.3f,%.3f,%.17g,%.17g,%.17g,%.17g,%.17g,%d,%d,%d,%d,%d,%d,%u\n",
+        static_cast<unsigned long long>(r.tick), static_cast<double>(r.scheduled_ns) * 1e-9,
+        r.wake_latency_ns * 1e-3, r.compute_ns * 1e-3, r.position, r.penetration, r.velocity,
+        r.force_computed, r.force_commanded, bit(telemetry::kFlagContact),
+        bit(telemetry::kFlagSaturated), bit(telemetry::kFlagFault), bit(telemetry::kFlagOverrun),
+        bit(telemetry::kFlagNoPullClamped), bit(telemetry::kFlagStale), r.device_status);
+    out << row;
+  }
+  out.flush();
+  if (log.dropped_records > 0) {
+    spdlog::warn("{}: the RT ring dropped {} records while logging (gaps in 'tick')", log_path,
+                 log.dropped_records);
+  }
+  if (!log.trailing_reason.empty()) {
+    spdlog::warn("{}: {}; {} bytes after the last complete block ignored", log_path,
+                 log.trailing_reason, log.trailing_bytes_ignored);
+  }
+  return out ? kExitOk : kExitRuntimeFault;
+}
+
+}  // namespace hapticd::service
