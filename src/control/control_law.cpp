@@ -3,8 +3,6 @@
 #include <stdexcept>
 #include <string>
 
-#include "analysis/wall_model.h"
-
 namespace hapticd::control {
 namespace {
 
@@ -29,16 +27,25 @@ FilterCoefficients normalise(const std::vector<double>& num, const std::vector<d
 
 }  // namespace
 
+analysis::WallParams wall_params(const config::Config& cfg, double stiffness) {
+  return {stiffness, cfg.wall.damping, cfg.loop.sample_period_s(),
+          cfg.wall.discretization == config::Discretization::kTustin
+              ? analysis::WallDiscretization::kTustin
+              : analysis::WallDiscretization::kBackward};
+}
+
+std::optional<analysis::TransferFunction> coupling_filter(const config::Config& cfg) {
+  if (!cfg.wall.coupling.present) return std::nullopt;
+  return analysis::TransferFunction{cfg.wall.coupling.numerator, cfg.wall.coupling.denominator};
+}
+
 ControlLaw make_control_law(const config::Config& cfg) {
   ControlLaw law;
   const double t = cfg.loop.sample_period_s();
   law.wall_position = cfg.wall.position;
   law.normal = static_cast<double>(cfg.wall.normal);
   const analysis::TransferFunction e =
-      analysis::environment_filter({cfg.wall.stiffness, cfg.wall.damping, t,
-                                    cfg.wall.discretization == config::Discretization::kTustin
-                                        ? analysis::WallDiscretization::kTustin
-                                        : analysis::WallDiscretization::kBackward});
+      analysis::environment_filter(wall_params(cfg, cfg.wall.stiffness));
   law.environment = normalise(e.num, e.den, "wall");
   law.has_coupling = cfg.wall.coupling.present;
   if (law.has_coupling) {

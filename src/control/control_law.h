@@ -6,6 +6,10 @@
 #include <array>
 #include <cstddef>
 
+#include <optional>
+
+#include "analysis/transfer_function.h"
+#include "analysis/wall_model.h"
 #include "config/config.h"
 
 namespace hapticd::control {
@@ -36,6 +40,12 @@ struct ControlLaw {
   double c0 = 0.0;                 // C's direct feed-through
   double inv_one_plus_e0c0 = 1.0;  // 1 / (1 + e0 c0)
 };
+
+// The configured wall as the analysis sees it, at stiffness `stiffness` (the gate varies it
+// to find the largest that passes), and the configured coupling C(z), if any. The controller,
+// the gate and `verify` all build their models from these, so they analyse what runs.
+analysis::WallParams wall_params(const config::Config& cfg, double stiffness);
+std::optional<analysis::TransferFunction> coupling_filter(const config::Config& cfg);
 
 // Not RT-safe. Throws std::invalid_argument for a law the controller cannot run
 // (too many coefficients, negative feed-through).

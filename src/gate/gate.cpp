@@ -6,6 +6,7 @@
 #include "analysis/coupling.h"
 #include "analysis/oscillation.h"
 #include "analysis/wall_model.h"
+#include "control/control_law.h"
 #include "gate/number_format.h"
 
 namespace hapticd::gate {
@@ -15,18 +16,6 @@ using analysis::StiffnessLimit;
 using analysis::TransferFunction;
 
 double to_hz(double theta, double t) { return theta / (2.0 * std::numbers::pi * t); }
-
-analysis::WallParams wall_params(const config::Config& cfg, double stiffness) {
-  return {stiffness, cfg.wall.damping, cfg.loop.sample_period_s(),
-          cfg.wall.discretization == config::Discretization::kTustin
-              ? analysis::WallDiscretization::kTustin
-              : analysis::WallDiscretization::kBackward};
-}
-
-std::optional<TransferFunction> coupling_of(const config::Config& cfg) {
-  if (!cfg.wall.coupling.present) return std::nullopt;
-  return TransferFunction{cfg.wall.coupling.numerator, cfg.wall.coupling.denominator};
-}
 
 std::string passivity_reason(const config::Config& cfg, const GateReport& r) {
   const PassivityReport& p = r.passivity;
@@ -91,8 +80,9 @@ GateReport evaluate_gate(const config::Config& cfg, int device_delay_samples) {
   r.delay_samples = cfg.wall.delay_samples + device_delay_samples;
   r.device_damping = b;
 
-  const TransferFunction e = analysis::environment_filter(wall_params(cfg, cfg.wall.stiffness));
-  const std::optional<TransferFunction> c = coupling_of(cfg);
+  const TransferFunction e =
+      analysis::environment_filter(control::wall_params(cfg, cfg.wall.stiffness));
+  const std::optional<TransferFunction> c = control::coupling_filter(cfg);
   const TransferFunction h = analysis::contact_map(e, c);
   r.static_stiffness = analysis::static_stiffness(e, c);
 
@@ -107,7 +97,7 @@ GateReport evaluate_gate(const config::Config& cfg, int device_delay_samples) {
   p.note = pb.note;
   p.max_stiffness = analysis::max_stiffness(
       [&](double k) {
-        return analysis::contact_map(analysis::environment_filter(wall_params(cfg, k)), c);
+        return analysis::contact_map(analysis::environment_filter(control::wall_params(cfg, k)), c);
       },
       t, r.delay_samples, eta, p.available_damping);
 

@@ -7,7 +7,10 @@
 #include <sys/prctl.h>
 #include <unistd.h>
 
+#include <fcntl.h>
+
 #include <cerrno>
+#include <cstdint>
 #include <cstring>
 #include <stdexcept>
 
@@ -59,6 +62,23 @@ void configure_rt_thread(int priority, int cpu, RtStatus& status) {
     // Under SCHED_OTHER the default 50 us timer slack would delay every wake-up.
     status.timer_slack_1ns = prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL) == 0;
   }
+}
+
+CpuDmaLatencyRequest::CpuDmaLatencyRequest(RtStatus& status) {
+  fd_ = open("/dev/cpu_dma_latency", O_WRONLY | O_CLOEXEC);
+  const std::int32_t zero = 0;
+  if (fd_ >= 0 && write(fd_, &zero, sizeof zero) == static_cast<ssize_t>(sizeof zero)) {
+    status.cpu_dma_latency_zero = true;
+    return;
+  }
+  status.warnings.push_back(std::string("/dev/cpu_dma_latency: ") + std::strerror(errno) +
+                            ": CPUs may enter deep idle states and wake the loop late");
+  if (fd_ >= 0) close(fd_);
+  fd_ = -1;
+}
+
+CpuDmaLatencyRequest::~CpuDmaLatencyRequest() {
+  if (fd_ >= 0) close(fd_);  // closing the file withdraws the request
 }
 
 void prefault_stack(std::size_t bytes) noexcept {

@@ -14,6 +14,7 @@ struct RtStatus {
   int priority = 0;
   int cpu = -1;  // CPU the RT thread is pinned to, -1 if not pinned
   bool timer_slack_1ns = false;
+  bool cpu_dma_latency_zero = false;  // a 0 us PM QoS request holds CPUs out of deep idle
   std::vector<std::string> warnings;  // one line per guarantee that is not in force, and why
 };
 
@@ -24,6 +25,20 @@ void lock_process_memory(RtStatus& status);
 // Not RT-safe; call on the RT thread itself before its first tick. `cpu` < 0: no pinning.
 // Throws std::runtime_error only for a CPU that does not exist (a configuration error).
 void configure_rt_thread(int priority, int cpu, RtStatus& status);
+
+// Holds a 0 us request on /dev/cpu_dma_latency for its lifetime, so no CPU enters an idle
+// state whose exit latency would delay the RT thread's wake-up (what cyclictest does too).
+// Not RT-safe; construct before the loop, destroy after it.
+class CpuDmaLatencyRequest {
+ public:
+  explicit CpuDmaLatencyRequest(RtStatus& status);
+  ~CpuDmaLatencyRequest();
+  CpuDmaLatencyRequest(const CpuDmaLatencyRequest&) = delete;
+  CpuDmaLatencyRequest& operator=(const CpuDmaLatencyRequest&) = delete;
+
+ private:
+  int fd_ = -1;
+};
 
 // Touches `bytes` of the calling thread's stack so the first ticks do not page-fault.
 void prefault_stack(std::size_t bytes = 256 * 1024) noexcept;

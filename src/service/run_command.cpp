@@ -12,6 +12,7 @@
 #include <fstream>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <thread>
 
 #include "config/config_loader.h"
@@ -112,7 +113,9 @@ int run_command(const RunOptions& options) {
           log_path,
           telemetry::LogHeader{cfg.loop.sample_period_s(), realtime ? unix_now_ns() : 0,
                                realtime ? 0u : 1u, cfg.effective_yaml},
-          *ring);
+          *ring, 512, std::chrono::milliseconds(5),
+          realtime ? telemetry::LogWriter::Flush::kEveryPoll
+                   : telemetry::LogWriter::Flush::kFullBlocks);
     } catch (const std::runtime_error& e) {
       throw config::ConfigError({e.what()});
     }
@@ -126,7 +129,11 @@ int run_command(const RunOptions& options) {
                                std::to_string(std::thread::hardware_concurrency()) + ")"});
   }
   loop::RtStatus rt;
-  if (realtime) lock_process_memory(rt);
+  std::optional<loop::CpuDmaLatencyRequest> pm_qos;
+  if (realtime) {
+    lock_process_memory(rt);
+    pm_qos.emplace(rt);
+  }
 
   control::Controller controller(control::make_control_law(cfg));
   loop::LoopOptions lo;
@@ -149,25 +156,39 @@ int run_command(const RunOptions& options) {
   sd_notifyf(0, "READY=1\nSTATUS=servo running at %.0f Hz", cfg.loop.rate_hz);
 
   std::atomic<bool> stop{false};
+  std::atomic<bool> rt_ready{false};
   std::atomic<bool> finished{false};
   loop::LoopResult result;
   std::string rt_error;
   std::thread rt_thread([&] {
     try {
       if (realtime) loop::configure_rt_thread(cfg.loop.rt_priority, cfg.loop.cpu, rt);
+      rt_ready.store(true, std::memory_order_release);  // publishes `rt` to the supervisor
       result = servo.run(stop);
     } catch (const std::exception& e) {
       rt_error = e.what();  // only configure_rt_thread throws, before the first tick
     }
     finished.store(true);
   });
+  // Say which real-time guarantees are in force before the first second of running, not
+  // after the run: a service may run for weeks.
+  while (!rt_ready.load(std::memory_order_acquire) && !finished.load()) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  if (realtime && rt_ready.load(std::memory_order_acquire)) {
+    spdlog::info("rt: {}{}{}{}",
+                 rt.fifo ? "SCHED_FIFO " + std::to_string(rt.priority) : "SCHED_OTHER",
+                 rt.memory_locked ? ", memory locked" : ", memory not locked",
+                 rt.cpu_dma_latency_zero ? ", cpu_dma_latency 0" : "",
+                 rt.cpu >= 0 ? ", CPU " + std::to_string(rt.cpu) : "");
+    for (const std::string& w : rt.warnings) spdlog::warn("rt: {}", w);
+  }
   const Supervision sv = supervise(servo, stop, finished);
   rt_thread.join();
 
   device->disable_output();
   sd_notify(0, "STOPPING=1\nSTATUS=output disabled");
   if (writer) writer->stop();
-  for (const std::string& w : rt.warnings) spdlog::warn("rt: {}", w);
   if (!rt_error.empty()) throw config::ConfigError({cfg.source_name + ": " + rt_error});
 
   RunSummary s;

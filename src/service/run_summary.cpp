@@ -51,6 +51,7 @@ json summary_to_json(const RunSummary& s) {
              {"memory_locked", s.rt.memory_locked},
              {"cpu", s.rt.cpu},
              {"timer_slack_1ns", s.rt.timer_slack_1ns},
+             {"cpu_dma_latency_zero", s.rt.cpu_dma_latency_zero},
              {"warnings", s.rt.warnings}};
   j["gate"] = s.gate;
   return j;
@@ -68,6 +69,7 @@ std::string summary_to_text(const RunSummary& s) {
     os << "  RT             "
        << (s.rt.fifo ? "SCHED_FIFO " + std::to_string(s.rt.priority) : "SCHED_OTHER")
        << (s.rt.memory_locked ? ", memory locked" : ", memory NOT locked")
+       << (s.rt.cpu_dma_latency_zero ? ", cpu_dma_latency 0" : "")
        << (s.rt.cpu >= 0 ? ", CPU " + std::to_string(s.rt.cpu) : "") << "\n";
     os << "  wake latency   " << line_us(j["wake_latency_us"]) << "\n";
   }

@@ -43,8 +43,8 @@ int write_all(int fd, const std::byte* p, std::size_t n) noexcept {
 }  // namespace
 
 LogWriter::LogWriter(const std::string& path, const LogHeader& header, SpscRing<TickRecord>& ring,
-                     std::size_t max_block_records, std::chrono::milliseconds poll)
-    : path_(path), ring_(ring), poll_(poll) {
+                     std::size_t max_block_records, std::chrono::milliseconds poll, Flush flush)
+    : path_(path), ring_(ring), poll_(poll), flush_(flush) {
   check_block_records(max_block_records);
   if (poll.count() <= 0) throw std::invalid_argument("tick log: poll period must be positive");
   const std::vector<std::byte> head = encode_file_header(header);  // validates before opening
@@ -82,7 +82,7 @@ void LogWriter::stop() {
     wake_.notify_all();
     thread_.join();
   }
-  drain();
+  drain(/*final=*/true);
   // Drops after the last record pushed are not stamped on any record: mark them here.
   const std::uint64_t trailing = ring_.take_trailing_drops();
   if (trailing + pending_loss_ > 0) append_block({}, next_tick_, trailing);
@@ -112,15 +112,16 @@ void LogWriter::run() {
   std::unique_lock lock(wake_mutex_);
   while (!stop_requested_) {
     lock.unlock();
-    drain();
+    drain(/*final=*/false);
     lock.lock();
     wake_.wait_for(lock, poll_, [this] { return stop_requested_; });
   }
 }
 
-void LogWriter::drain() {
+void LogWriter::drain(bool final) {
   std::uint64_t dropped_before = 0;
   for (;;) {
+    if (!final && flush_ == Flush::kFullBlocks && ring_.size_approx() < staging_.size()) return;
     const std::size_t n = ring_.pop_run(staging_.data(), staging_.size(), dropped_before);
     if (n == 0) return;
     append_block(std::span(staging_.data(), n), staging_[0].tick, dropped_before);

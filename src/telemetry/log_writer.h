@@ -24,6 +24,11 @@ namespace hapticd::telemetry {
 
 class LogWriter {
  public:
+  // When the writer thread cuts a block. kEveryPoll bounds what a crash can lose to one poll
+  // period; kFullBlocks cuts only at max_block_records (and at stop), so the file depends on
+  // the records alone and two runs with the same records are byte-identical (freerun).
+  enum class Flush { kEveryPoll, kFullBlocks };
+
   // Creates or truncates path and writes the file header. Throws std::runtime_error
   // "PATH: cannot open tick log: REASON" when the file cannot be created or the header cannot
   // be written, std::invalid_argument for max_block_records outside 1..kMaxBlockRecords or a
@@ -31,7 +36,8 @@ class LogWriter {
   // its only consumer.
   LogWriter(const std::string& path, const LogHeader& header, SpscRing<TickRecord>& ring,
             std::size_t max_block_records = 512,
-            std::chrono::milliseconds poll = std::chrono::milliseconds(5));
+            std::chrono::milliseconds poll = std::chrono::milliseconds(5),
+            Flush flush = Flush::kEveryPoll);
   ~LogWriter();  // stop()
 
   LogWriter(const LogWriter&) = delete;
@@ -63,7 +69,8 @@ class LogWriter {
 
  private:
   void run();
-  void drain();
+  // final: also write the last partial block (kFullBlocks holds it back otherwise).
+  void drain(bool final);
   void append_block(std::span<const TickRecord> records, std::uint64_t first_tick,
                     std::uint64_t dropped_before);
   void note_error(const char* what, int err);
@@ -71,6 +78,7 @@ class LogWriter {
   std::string path_;
   SpscRing<TickRecord>& ring_;
   std::chrono::milliseconds poll_;
+  Flush flush_;
   int fd_ = -1;
 
   // Touched only by the thread that drains (the writer thread, then stop() after the join).

@@ -129,13 +129,8 @@ VerifyResult verify_passivity(const config::Config& cfg) {
   const double t = cfg.loop.sample_period_s();
   r.delay_samples = cfg.wall.delay_samples + declared_transport_delay(cfg.device.driver);
   const analysis::TransferFunction e =
-      analysis::environment_filter({cfg.wall.stiffness, cfg.wall.damping, t,
-                                    cfg.wall.discretization == config::Discretization::kTustin
-                                        ? analysis::WallDiscretization::kTustin
-                                        : analysis::WallDiscretization::kBackward});
-  std::optional<analysis::TransferFunction> c;
-  if (cfg.wall.coupling.present)
-    c = analysis::TransferFunction{cfg.wall.coupling.numerator, cfg.wall.coupling.denominator};
+      analysis::environment_filter(control::wall_params(cfg, cfg.wall.stiffness));
+  const std::optional<analysis::TransferFunction> c = control::coupling_filter(cfg);
   const analysis::PassivityBound pb =
       analysis::passivity_bound(analysis::contact_map(e, c), t, r.delay_samples, 0.0);
   if (!std::isfinite(pb.required_damping)) {

@@ -176,3 +176,24 @@ TEST(CliExport, WritesOneCsvRowPerTickAndExportsWhatSurvivesOfACutLog) {
 
 }  // namespace
 }  // namespace hapticd::testing
+
+namespace hapticd::testing {
+namespace {
+
+TEST(CliRun, WithoutRealtimePrivilegesItRunsAndSaysWhatIsMissing) {
+  std::vector<std::string> cmd{hapticd_binary(), "run", "--duration", "0.2"};
+  if (geteuid() == 0) {
+    if (run_process({"/bin/sh", "-c", "command -v setpriv"}).exit_code != 0) {
+      GTEST_SKIP() << "running as root without setpriv (util-linux): cannot drop privileges";
+    }
+    cmd.insert(cmd.begin(), {"/usr/bin/setpriv", "--reuid=65534", "--regid=65534", "--clear-groups"});
+  }
+  const ProcessResult r = run_process(cmd);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("rt: SCHED_OTHER"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("SCHED_FIFO priority 80 refused"), std::string::npos) << r.err;
+  EXPECT_NE(r.out.find("RT             SCHED_OTHER"), std::string::npos) << r.out;
+}
+
+}  // namespace
+}  // namespace hapticd::testing

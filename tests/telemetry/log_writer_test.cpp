@@ -84,6 +84,24 @@ TEST(LogWriter, WritesTheSameBytesAsWriteLogFile) {
   EXPECT_EQ(test::read_bytes(dir.file("thread.htl")), test::read_bytes(dir.file("direct.htl")));
 }
 
+TEST(LogWriter, FullBlocksFlushMakesTheFileDependOnTheRecordsAlone) {
+  // A producer that trickles records across many poll periods: with kEveryPoll the block cuts
+  // follow the timing; with kFullBlocks they fall every 7 records whatever the timing.
+  test::TempDir dir;
+  SpscRing<TickRecord> ring(64);
+  const std::vector<TickRecord> records = make_records(0, 40);
+  LogWriter writer(dir.file("full.htl"), sample_header(), ring, 7, milliseconds(1),
+                   LogWriter::Flush::kFullBlocks);
+  writer.start();
+  for (const TickRecord& r : records) {
+    ASSERT_TRUE(ring.try_push(r));
+    std::this_thread::sleep_for(milliseconds(2));  // more than one poll between records
+  }
+  writer.stop();
+  write_log_file(dir.file("direct.htl"), sample_header(), records, 7);
+  EXPECT_EQ(test::read_bytes(dir.file("full.htl")), test::read_bytes(dir.file("direct.htl")));
+}
+
 TEST(LogWriter, RingOverflowIsMarkedWhereTheTicksAreMissing) {
   test::TempDir dir;
   const std::string path = dir.file("overflow.htl");

@@ -1,0 +1,102 @@
+// Cost of one tick: the controller alone (bare wall, wall behind a third-order coupling) and
+// the whole tick through the in-process sim device (read, step, write, log record push) as
+// the servo loop runs it in freerun. Reports ns per tick, the loop's own compute-time
+// percentiles, and heap allocations per tick (replaced operator new, see tests/support).
+#include <benchmark/benchmark.h>
+
+#include <array>
+#include <cmath>
+
+#include "alloc_counter.h"
+#include "config/config_loader.h"
+#include "control/controller.h"
+#include "loop/servo_loop.h"
+#include "sim/sim_device.h"
+
+namespace {
+
+using hapticd::config::Config;
+using hapticd::config::Override;
+
+Config demo(std::vector<Override> sets = {}) { return hapticd::config::load_embedded_default(sets); }
+
+const std::vector<Override> kCoupled{
+    {"wall.coupling.numerator", "[0.1, -0.0752, 0.0016, -0.0101]", "--set"},
+    {"wall.coupling.denominator", "[1, -1.8407, 0.8444, -0.0037]", "--set"}};
+
+// Positions sweeping in and out of a wall at 0 (contact about half the time).
+std::array<double, 1024> positions() {
+  std::array<double, 1024> x{};
+  for (std::size_t i = 0; i < x.size(); ++i) x[i] = 0.002 * std::sin(0.05 * static_cast<double>(i));
+  return x;
+}
+
+void controller_step(benchmark::State& state, const Config& cfg) {
+  hapticd::control::Controller ctl(hapticd::control::make_control_law(cfg));
+  const auto x = positions();
+  std::size_t i = 0;
+  hapticd::testing::AllocationScope allocs;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(ctl.step(x[i++ & 1023]));
+  }
+  state.counters["allocs_per_tick"] = benchmark::Counter(
+      static_cast<double>(allocs.count()), benchmark::Counter::kAvgIterations);
+}
+
+void BM_ControllerStep_BareWall(benchmark::State& state) { controller_step(state, demo()); }
+void BM_ControllerStep_ThirdOrderCoupling(benchmark::State& state) {
+  controller_step(state, demo(kCoupled));
+}
+
+// The servo loop in freerun over the sim device, with the tick log ring: exactly the code
+// of a realtime tick without the sleep. Each iteration runs `range(0)` ticks.
+void BM_FullTick_SimDevice(benchmark::State& state) {
+  const Config cfg = demo();
+  const auto ticks = static_cast<std::uint64_t>(state.range(0));
+  hapticd::telemetry::SpscRing<hapticd::telemetry::TickRecord> ring(ticks + 1);
+  std::vector<hapticd::telemetry::TickRecord> drained(ticks + 1);
+  hapticd::loop::LoopOptions lo;
+  lo.realtime = false;
+  lo.max_ticks = ticks;
+  std::uint64_t allocations = 0, total = 0;
+  std::int64_t p50 = 0, p99 = 0, p999 = 0, max = 0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    hapticd::sim::SimDevice device(cfg.device, cfg.loop.sample_period_s());
+    hapticd::control::Controller ctl(hapticd::control::make_control_law(cfg));
+    device.configure();
+    device.enable_output();
+    hapticd::loop::ServoLoop loop(device, ctl, &ring, lo);
+    const std::atomic<bool> stop{false};
+    state.ResumeTiming();
+    hapticd::testing::AllocationScope allocs;
+    const auto r = loop.run(stop);
+    allocations += allocs.count();
+    state.PauseTiming();
+    total += r.ticks;
+    ring.pop_many(drained.data(), drained.size());
+    const auto& h = loop.compute_time();
+    p50 = std::max(p50, h.percentile_ns(0.5));
+    p99 = std::max(p99, h.percentile_ns(0.99));
+    p999 = std::max(p999, h.percentile_ns(0.999));
+    max = std::max(max, h.max_ns());
+    state.ResumeTiming();
+  }
+  state.counters["ns_per_tick"] =
+      benchmark::Counter(static_cast<double>(total), benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["allocs_per_tick"] =
+      static_cast<double>(allocations) / static_cast<double>(std::max<std::uint64_t>(total, 1));
+  // The loop's own per-tick compute time (read + step + write + clock reads), worst iteration.
+  state.counters["compute_p50_ns"] = static_cast<double>(p50);
+  state.counters["compute_p99_ns"] = static_cast<double>(p99);
+  state.counters["compute_p999_ns"] = static_cast<double>(p999);
+  state.counters["compute_max_ns"] = static_cast<double>(max);
+}
+
+BENCHMARK(BM_ControllerStep_BareWall);
+BENCHMARK(BM_ControllerStep_ThirdOrderCoupling);
+BENCHMARK(BM_FullTick_SimDevice)->Arg(100000)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+BENCHMARK_MAIN();
