@@ -65,7 +65,6 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
       wake = now_ns();
       rec.scheduled_ns = deadline - start;
       rec.wake_latency_ns = clamp_i32(wake - deadline);
-      wake_latency_.record(wake - deadline);
     } else {
       wake = now_ns();
       rec.scheduled_ns = static_cast<std::int64_t>(tick) * period;
@@ -115,9 +114,11 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
     }
     rec.force_commanded = command;
 
+    // Bookkeeping after the timed window: the histograms are cold memory after a sleep.
     const std::int64_t done = now_ns();
     compute_time_.record(done - wake);
     if (options_.realtime) {
+      wake_latency_.record(wake - deadline);
       rec.compute_ns = clamp_i32(done - wake);
       if (done > deadline + period) {
         rec.flags |= telemetry::kFlagOverrun;
