@@ -28,6 +28,22 @@ void lock_process_memory(RtStatus& status) {
   }
 }
 
+void keep_off_cpu(int cpu, RtStatus& status) {
+  const long cpus = sysconf(_SC_NPROCESSORS_ONLN);
+  if (cpu < 0 || cpus < 2 || cpu >= cpus) return;
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  for (long c = 0; c < cpus; ++c)
+    if (c != cpu) CPU_SET(static_cast<unsigned>(c), &set);
+  const int rc = pthread_setaffinity_np(pthread_self(), sizeof set, &set);
+  if (rc == 0) {
+    status.others_off_rt_cpu = true;
+  } else {
+    status.warnings.push_back("keeping the non-RT threads off CPU " + std::to_string(cpu) +
+                              " failed (" + std::strerror(rc) + ")");
+  }
+}
+
 void configure_rt_thread(int priority, int cpu, RtStatus& status) {
   if (cpu >= 0) {
     const long cpus = sysconf(_SC_NPROCESSORS_ONLN);

@@ -102,6 +102,20 @@ int run_command(const RunOptions& options) {
   }
   for (const std::string& w : report.warnings) spdlog::warn("gate: {}", w);
 
+  if (realtime && cfg.loop.cpu >= 0 &&
+      cfg.loop.cpu >= static_cast<int>(std::thread::hardware_concurrency())) {
+    throw config::ConfigError({cfg.source_name + ": loop.cpu: CPU " + std::to_string(cfg.loop.cpu) +
+                               " does not exist (this machine has " +
+                               std::to_string(std::thread::hardware_concurrency()) + ")"});
+  }
+  loop::RtStatus rt;
+  std::optional<loop::CpuDmaLatencyRequest> pm_qos;
+  if (realtime) {
+    lock_process_memory(rt);
+    pm_qos.emplace(rt);
+    keep_off_cpu(cfg.loop.cpu, rt);  // before any other thread exists, so they inherit it
+  }
+
   // Tick log: the ring is sized and touched now, never on the RT thread.
   const std::string log_path = options.log_path.empty() ? cfg.telemetry.log_path : options.log_path;
   std::unique_ptr<SpscRing<TickRecord>> ring;
@@ -120,19 +134,6 @@ int run_command(const RunOptions& options) {
       throw config::ConfigError({e.what()});
     }
     writer->start();
-  }
-
-  if (realtime && cfg.loop.cpu >= 0 &&
-      cfg.loop.cpu >= static_cast<int>(std::thread::hardware_concurrency())) {
-    throw config::ConfigError({cfg.source_name + ": loop.cpu: CPU " + std::to_string(cfg.loop.cpu) +
-                               " does not exist (this machine has " +
-                               std::to_string(std::thread::hardware_concurrency()) + ")"});
-  }
-  loop::RtStatus rt;
-  std::optional<loop::CpuDmaLatencyRequest> pm_qos;
-  if (realtime) {
-    lock_process_memory(rt);
-    pm_qos.emplace(rt);
   }
 
   control::Controller controller(control::make_control_law(cfg));
@@ -176,11 +177,12 @@ int run_command(const RunOptions& options) {
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
   if (realtime && rt_ready.load(std::memory_order_acquire)) {
-    spdlog::info("rt: {}{}{}{}",
+    spdlog::info("rt: {}{}{}{}{}",
                  rt.fifo ? "SCHED_FIFO " + std::to_string(rt.priority) : "SCHED_OTHER",
                  rt.memory_locked ? ", memory locked" : ", memory not locked",
                  rt.cpu_dma_latency_zero ? ", cpu_dma_latency 0" : "",
-                 rt.cpu >= 0 ? ", CPU " + std::to_string(rt.cpu) : "");
+                 rt.cpu >= 0 ? ", CPU " + std::to_string(rt.cpu) : "",
+                 rt.others_off_rt_cpu ? " (other threads kept off it)" : "");
     for (const std::string& w : rt.warnings) spdlog::warn("rt: {}", w);
   }
   const Supervision sv = supervise(servo, stop, finished);

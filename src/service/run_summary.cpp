@@ -52,6 +52,7 @@ json summary_to_json(const RunSummary& s) {
              {"cpu", s.rt.cpu},
              {"timer_slack_1ns", s.rt.timer_slack_1ns},
              {"cpu_dma_latency_zero", s.rt.cpu_dma_latency_zero},
+             {"others_off_rt_cpu", s.rt.others_off_rt_cpu},
              {"warnings", s.rt.warnings}};
   j["gate"] = s.gate;
   return j;

@@ -186,13 +186,39 @@ TEST(CliRun, WithoutRealtimePrivilegesItRunsAndSaysWhatIsMissing) {
     if (run_process({"/bin/sh", "-c", "command -v setpriv"}).exit_code != 0) {
       GTEST_SKIP() << "running as root without setpriv (util-linux): cannot drop privileges";
     }
-    cmd.insert(cmd.begin(), {"/usr/bin/setpriv", "--reuid=65534", "--regid=65534", "--clear-groups"});
+    cmd.insert(cmd.begin(),
+               {"/usr/bin/setpriv", "--reuid=65534", "--regid=65534", "--clear-groups"});
   }
   const ProcessResult r = run_process(cmd);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("rt: SCHED_OTHER"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("SCHED_FIFO priority 80 refused"), std::string::npos) << r.err;
   EXPECT_NE(r.out.find("RT             SCHED_OTHER"), std::string::npos) << r.out;
+}
+
+}  // namespace
+}  // namespace hapticd::testing
+
+namespace hapticd::testing {
+namespace {
+
+TEST(CliRun, PinnedLoopKeepsTheOtherThreadsOffItsCpu) {
+  if (sysconf(_SC_NPROCESSORS_ONLN) < 2) GTEST_SKIP() << "one CPU: nothing to keep apart";
+  const std::string sum = temp_path("pinned.json");
+  const ProcessResult r =
+      run_process({hapticd_binary(), "run", "--duration", "0.2", "--set", "loop.cpu=1", "--log",
+                   temp_path("pinned.hlog"), "--summary-json", sum});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json s = nlohmann::json::parse(read_file(sum));
+  EXPECT_EQ(s["rt"]["cpu"], 1);
+  EXPECT_TRUE(s["rt"]["others_off_rt_cpu"].get<bool>());
+  EXPECT_NE(r.err.find("CPU 1 (other threads kept off it)"), std::string::npos) << r.err;
+}
+
+TEST(CliRun, NonexistentCpuIsAConfigurationError) {
+  const ProcessResult r = run_process({hapticd_binary(), "run", "--set", "loop.cpu=4096"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("loop.cpu: CPU 4096 does not exist"), std::string::npos) << r.err;
 }
 
 }  // namespace
