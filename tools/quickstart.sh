@@ -13,7 +13,7 @@ packages=(
   libsystemd-dev systemd                         # sd_notify; systemd-analyze checks the unit
   libhidapi-dev libusb-1.0-0-dev libgpiod-dev    # the hardware transports
   libgtest-dev libgmock-dev libbenchmark-dev     # tests and benchmarks
-  rt-tests                                       # cyclictest, for tools/jitter_bench.sh
+  rt-tests python3 util-linux                    # cyclictest and tools/jitter_bench.py; prlimit
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -45,7 +45,7 @@ OscillationCheck oscillation_check(const TransferFunction& loop) {
       return r;
     }
   }
-  if (!pole_at_nyquist && dc_gain(loop) < 0.0) {
+  if (dc_gain(loop) < 0.0) {
     r.note = "L(1) < 0: the loop's DC gain is negative";
     return r;
   }

@@ -32,6 +32,10 @@ struct ControlLaw {
   FilterCoefficients coupling;  // C(z)
   int delay_samples = 0;        // d: f_{k-d} is commanded at tick k
   bool no_pull = false;
+  // The wall acts only once the device has been seen outside it: a device that starts inside
+  // gets zero force (not K p0 + B p0 / T at once) until it leaves. `verify` turns this off to
+  // measure the linear law from an imposed motion that starts in contact.
+  bool require_outside_start = true;
   double max_force = 0.0;
   double sample_period = 0.0;
   // Cached derived constants.

@@ -16,6 +16,7 @@ void Controller::reset() noexcept {
   for (double& v : delay_line_) v = 0.0;
   delay_head_ = 0;
   have_last_position_ = false;
+  armed_ = false;
 }
 
 ControlOutput Controller::step(double position) noexcept {
@@ -24,6 +25,13 @@ ControlOutput Controller::step(double position) noexcept {
   out.velocity = have_last_position_ ? (position - last_position_) * law_.inv_sample_period : 0.0;
   last_position_ = position;
   have_last_position_ = true;
+  if (!armed_) {
+    if (law_.require_outside_start && out.penetration > 0.0) {
+      out.flags |= telemetry::kFlagUnarmed;  // every filter stays at rest: nothing to kick
+      return out;
+    }
+    armed_ = true;
+  }
 
   // C(z)[f]_k = c0 f_k + c_past; the proxy penetration without c0 f_k is q = p - c_past.
   double c_past = 0.0;

@@ -16,7 +16,8 @@ struct ControlOutput {
   double velocity = 0.0;         // (x_k - x_{k-1}) / T
   double force_computed = 0.0;   // f_k, wall force along n (positive pushes out of the wall)
   double force_commanded = 0.0;  // u = -n f_{k-d}, after no_pull and saturation
-  std::uint32_t flags = 0;       // telemetry::TickFlag bits: contact, saturated, no-pull clamped
+  std::uint32_t flags =
+      0;  // telemetry::TickFlag bits: contact, saturated, no-pull clamped, unarmed
 };
 
 class Controller {
@@ -27,7 +28,7 @@ class Controller {
   // RT-safe: called every tick. Never allocates, locks or throws; `position` must be finite.
   ControlOutput step(double position) noexcept;
 
-  // RT-safe. Clears every filter state and the delay line (as at construction).
+  // RT-safe. Clears every filter state and the delay line, and disarms (as at construction).
   void reset() noexcept;
 
   const ControlLaw& law() const noexcept { return law_; }
@@ -57,6 +58,7 @@ class Controller {
   std::size_t delay_head_ = 0;
   double last_position_ = 0.0;
   bool have_last_position_ = false;
+  bool armed_ = false;
 };
 
 }  // namespace hapticd::control

@@ -144,6 +144,12 @@ GateReport evaluate_gate(const config::Config& cfg, int device_delay_samples) {
         "wall.discretization tustin: E(z) has a pole at z = -1, so after each release the "
         "damping term leaves a force alternating at the Nyquist frequency that never decays");
   }
+  if (cfg.wall.stiffness > 0.0) {
+    r.warnings.push_back("device.max_force = " + format_number(cfg.device.max_force) +
+                         " N saturates the wall beyond " +
+                         format_number(cfg.device.max_force / cfg.wall.stiffness * 1e3) +
+                         " mm of penetration at rest: saturation is outside the theorems");
+  }
   if (cfg.wall.no_pull) {
     r.warnings.push_back(
         "wall.no_pull clamps f >= 0: outside the theorems, which cover the linear wall only "

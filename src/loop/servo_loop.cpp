@@ -1,5 +1,6 @@
 #include "loop/servo_loop.h"
 
+#include <sched.h>
 #include <time.h>
 
 #include <algorithm>
@@ -42,6 +43,46 @@ ServoLoop::ServoLoop(Device& device, control::Controller& controller,
       options_(options),
       max_step_(options.max_speed * static_cast<double>(options.period_ns) / kNsPerS) {}
 
+bool ServoLoop::sense(std::uint64_t tick, PositionSample& sample, SenseState& st,
+                      telemetry::TickRecord& rec, LoopResult& res) noexcept {
+  const IoStatus rs = device_.read(sample);
+  rec.device_status = sample.device_status;
+  if (rs == IoStatus::kError) {
+    res.fault = {FaultCause::kDeviceRead, tick, 0.0};
+    return false;
+  }
+  if (rs == IoStatus::kNoNewData) {
+    // Hold the last position (a ZOH on the measurement) and count the staleness; with no
+    // position yet there is nothing to hold, and nothing is commanded.
+    ++res.stale_ticks;
+    ++st.periods_since_x;
+    rec.flags |= telemetry::kFlagStale;
+    sample.position = st.last_x;
+    if (++st.stale_streak >= options_.stale_fault_ticks) {
+      res.fault = {FaultCause::kStaleData, tick, static_cast<double>(st.stale_streak)};
+    }
+    return st.have_x && res.fault.cause == FaultCause::kNone;
+  }
+  st.stale_streak = 0;
+  if (!std::isfinite(sample.position)) {
+    res.fault = {FaultCause::kNonFinitePosition, tick, sample.position};
+    return false;
+  }
+  // A new sample may span several periods (stale reads, skipped periods): judge its speed
+  // over the time that really passed.
+  const double jump = std::abs(sample.position - st.last_x);
+  const auto spanned = static_cast<double>(st.periods_since_x);
+  if (st.have_x && jump > max_step_ * spanned) {
+    res.fault = {FaultCause::kEncoderJump, tick,
+                 jump * kNsPerS / (spanned * static_cast<double>(options_.period_ns))};
+    return false;
+  }
+  st.last_x = sample.position;
+  st.have_x = true;
+  st.periods_since_x = 1;
+  return true;
+}
+
 LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
   prefault_stack();
   LoopResult res;
@@ -49,9 +90,7 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
   const std::int64_t start = now_ns();
   std::int64_t deadline = start;  // the first tick is due at once
   int overrun_streak = 0;
-  int stale_streak = 0;
-  double last_x = 0.0;
-  bool have_x = false;
+  SenseState st;
 
   for (std::uint64_t tick = 0;; ++tick) {
     if (stop.load(std::memory_order_relaxed)) break;
@@ -71,30 +110,8 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
     }
 
     PositionSample sample;
-    const IoStatus rs = device_.read(sample);
-    rec.device_status = sample.device_status;
-    if (rs == IoStatus::kError) {
-      res.fault = {FaultCause::kDeviceRead, tick, 0.0};
-    } else if (rs == IoStatus::kNoNewData) {
-      // Hold the last position (a ZOH on the measurement) and count the staleness.
-      ++res.stale_ticks;
-      rec.flags |= telemetry::kFlagStale;
-      sample.position = last_x;
-      if (++stale_streak >= options_.stale_fault_ticks) {
-        res.fault = {FaultCause::kStaleData, tick, static_cast<double>(stale_streak)};
-      }
-    } else {
-      stale_streak = 0;
-      if (!std::isfinite(sample.position)) {
-        res.fault = {FaultCause::kNonFinitePosition, tick, sample.position};
-      } else if (have_x && std::abs(sample.position - last_x) > max_step_) {
-        res.fault = {FaultCause::kEncoderJump, tick,
-                     std::abs(sample.position - last_x) * kNsPerS / static_cast<double>(period)};
-      }
-    }
-
     double command = 0.0;
-    if (res.fault.cause == FaultCause::kNone) {
+    if (sense(tick, sample, st, rec, res)) {
       const control::ControlOutput out = controller_.step(sample.position);
       command = out.force_commanded;
       rec.position = sample.position;
@@ -102,10 +119,9 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
       rec.velocity = out.velocity;
       rec.force_computed = out.force_computed;
       rec.flags |= out.flags;
-      last_x = sample.position;
-      have_x = true;
-      if (device_.write(command) == IoStatus::kError)
-        res.fault = {FaultCause::kDeviceWrite, tick, 0.0};
+    }
+    if (res.fault.cause == FaultCause::kNone && device_.write(command) == IoStatus::kError) {
+      res.fault = {FaultCause::kDeviceWrite, tick, 0.0};
     }
     if (res.fault.cause != FaultCause::kNone) {
       command = 0.0;
@@ -137,8 +153,15 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
 
     if (rec.flags & telemetry::kFlagContact) ++res.contact_ticks;
     if (rec.flags & telemetry::kFlagSaturated) ++res.saturated_ticks;
+    if (rec.flags & telemetry::kFlagUnarmed) ++res.unarmed_ticks;
     res.max_penetration = std::max(res.max_penetration, rec.penetration);
-    if (ring_ != nullptr) ring_->try_push(rec);  // a full ring counts the loss, never blocks
+    if (ring_ != nullptr) {
+      while (options_.wait_for_ring && ring_->size_approx() >= ring_->capacity() &&
+             !stop.load(std::memory_order_relaxed)) {
+        sched_yield();
+      }
+      ring_->try_push(rec);  // realtime: a full ring counts the loss, never blocks
+    }
     ++res.ticks;
     ticks_done_.store(res.ticks, std::memory_order_relaxed);
     if (res.fault.cause != FaultCause::kNone) break;
@@ -150,10 +173,12 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
       if (late > period) {
         const std::int64_t skip = late / period;
         res.missed_ticks += static_cast<std::uint64_t>(skip);
+        st.periods_since_x += skip;
         deadline += skip * period;
       }
     }
   }
+  device_.write(0.0);  // the last command must not outlive the loop that was servoing it
   return res;
 }
 

@@ -23,6 +23,9 @@ struct LoopOptions {
   int stale_fault_ticks = 3;    // consecutive reads without new data that fault
   double max_speed = 10.0;      // m/s; a faster jump between samples is an encoder fault
   std::uint64_t max_ticks = 0;  // 0: until stop is requested or a fault
+  // Freerun only: wait for room in the ring instead of dropping (a simulation is not real
+  // time, and a complete log is what makes it reproducible). Needs a consumer.
+  bool wait_for_ring = false;
 };
 
 struct LoopResult {
@@ -32,6 +35,7 @@ struct LoopResult {
   std::uint64_t stale_ticks = 0;
   std::uint64_t contact_ticks = 0;
   std::uint64_t saturated_ticks = 0;
+  std::uint64_t unarmed_ticks = 0;  // inside the wall before it was first left (zero force)
   double max_penetration = 0.0;
   Fault fault;
 };
@@ -44,7 +48,7 @@ class ServoLoop {
 
   // Runs on the calling thread (set up as the RT thread) until `stop`, max_ticks or a fault.
   // RT-safe after entry: no allocation, lock, log or throw; blocks only in the device read
-  // and the absolute-time sleep. On a fault it commands zero force before returning.
+  // and the absolute-time sleep. Whatever ends it, it commands zero force before returning.
   LoopResult run(const std::atomic<bool>& stop) noexcept;
 
   // Any thread: ticks completed so far (for the watchdog and progress).
@@ -60,6 +64,17 @@ class ServoLoop {
   telemetry::SpscRing<telemetry::TickRecord>* ring_;
   LoopOptions options_;
   double max_step_ = 0.0;  // max_speed * T: cached so the tick multiplies, not divides
+  // Reads the device and checks the sample; false when there is no position to act on
+  // (none yet, or a fault, which it records). RT-safe.
+  struct SenseState {
+    double last_x = 0.0;
+    bool have_x = false;
+    int stale_streak = 0;
+    std::int64_t periods_since_x = 1;  // periods the next new sample spans
+  };
+  bool sense(std::uint64_t tick, PositionSample& sample, SenseState& st, telemetry::TickRecord& rec,
+             LoopResult& res) noexcept;
+
   LatencyHistogram wake_latency_;
   LatencyHistogram compute_time_;
   std::atomic<std::uint64_t> ticks_done_{0};

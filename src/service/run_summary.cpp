@@ -40,6 +40,7 @@ json summary_to_json(const RunSummary& s) {
   j["stop_reason"] = s.stop_reason;
   j["contact_ticks"] = s.loop.contact_ticks;
   j["saturated_ticks"] = s.loop.saturated_ticks;
+  j["unarmed_ticks"] = s.loop.unarmed_ticks;
   j["max_penetration"] = s.loop.max_penetration;
   j["operator_work_j"] = s.operator_work_j ? json(*s.operator_work_j) : json(nullptr);
   j["log_path"] = s.log_path.empty() ? json(nullptr) : json(s.log_path);

@@ -119,10 +119,14 @@ void LogWriter::run() {
 }
 
 void LogWriter::drain(bool final) {
+  // kFullBlocks cuts every block at the same count, which a ring smaller than a block must
+  // be able to reach.
+  const std::size_t full = std::min(staging_.size(), ring_.capacity());
+  const std::size_t want = flush_ == Flush::kFullBlocks ? full : staging_.size();
   std::uint64_t dropped_before = 0;
   for (;;) {
-    if (!final && flush_ == Flush::kFullBlocks && ring_.size_approx() < staging_.size()) return;
-    const std::size_t n = ring_.pop_run(staging_.data(), staging_.size(), dropped_before);
+    if (!final && flush_ == Flush::kFullBlocks && ring_.size_approx() < full) return;
+    const std::size_t n = ring_.pop_run(staging_.data(), want, dropped_before);
     if (n == 0) return;
     append_block(std::span(staging_.data(), n), staging_[0].tick, dropped_before);
     next_tick_ = staging_[n - 1].tick + 1;

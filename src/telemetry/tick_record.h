@@ -9,13 +9,13 @@
 namespace hapticd::telemetry {
 
 enum TickFlag : std::uint32_t {
-  kFlagContact = 1u << 0,         // penetration > 0 at this sample
-  kFlagSaturated = 1u << 1,       // |command| was limited to device.max_force
-  kFlagFault = 1u << 2,           // the loop faulted on this tick (zero force commanded)
-  kFlagOverrun = 1u << 3,         // this tick finished after the next deadline
-  kFlagNoPullClamped = 1u << 4,   // wall.no_pull turned a pulling force into zero
-  kFlagStale = 1u << 5,           // the device had no new position this tick
-  kFlagOutputDisabled = 1u << 6,  // output not enabled (zero force regardless of the law)
+  kFlagContact = 1u << 0,        // penetration > 0 at this sample
+  kFlagSaturated = 1u << 1,      // |command| was limited to device.max_force
+  kFlagFault = 1u << 2,          // the loop faulted on this tick (zero force commanded)
+  kFlagOverrun = 1u << 3,        // this tick finished after the next deadline
+  kFlagNoPullClamped = 1u << 4,  // wall.no_pull turned a pulling force into zero
+  kFlagStale = 1u << 5,          // the device had no new position this tick
+  kFlagUnarmed = 1u << 6,  // started inside the wall: zero force until the device first leaves
 };
 
 struct TickRecord {

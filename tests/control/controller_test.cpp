@@ -15,6 +15,14 @@ using telemetry::kFlagContact;
 using telemetry::kFlagNoPullClamped;
 using telemetry::kFlagSaturated;
 
+// DESIGN.md §3's law as written: these tests start inside the wall on purpose, so the
+// start-up arming (tested on its own below) is off.
+ControlLaw pure_law(const config::Config& c) {
+  ControlLaw law = make_control_law(c);
+  law.require_outside_start = false;
+  return law;
+}
+
 config::Config wall(double k, double b,
                     config::Discretization disc = config::Discretization::kBackward) {
   config::Config c;
@@ -27,7 +35,7 @@ config::Config wall(double k, double b,
 }
 
 TEST(Controller, BackwardWallIsKXiPlusBDifferenceOfXi) {
-  Controller ctl(make_control_law(wall(1000, 0.5)));
+  Controller ctl(pure_law(wall(1000, 0.5)));
   // x: outside, enters 1 mm, 3 mm, back to 2 mm, leaves.
   const std::vector<double> x{-0.001, 0.001, 0.003, 0.002, -0.0005, -0.001};
   const std::vector<double> xi{0, 0.001, 0.003, 0.002, 0, 0};
@@ -46,14 +54,14 @@ TEST(Controller, BackwardWallIsKXiPlusBDifferenceOfXi) {
 TEST(Controller, ReleaseStepPullsUnlessNoPull) {
   // Leaving contact, the damping term -B xi_{k-1}/T pulls toward the wall; no_pull clamps it.
   config::Config c = wall(1000, 0.5);
-  Controller pulls(make_control_law(c));
+  Controller pulls(pure_law(c));
   pulls.step(0.002);
   const ControlOutput released = pulls.step(-0.001);
   EXPECT_NEAR(released.force_computed, -0.5 * 0.002 / 1e-3, 1e-12);
   EXPECT_NEAR(released.force_commanded, 1.0, 1e-12);
 
   c.wall.no_pull = true;
-  Controller clamped(make_control_law(c));
+  Controller clamped(pure_law(c));
   clamped.step(0.002);
   const ControlOutput o = clamped.step(-0.001);
   EXPECT_NEAR(o.force_computed, -1.0, 1e-12);  // the law is unchanged...
@@ -62,7 +70,7 @@ TEST(Controller, ReleaseStepPullsUnlessNoPull) {
 }
 
 TEST(Controller, TustinWallIsTheBilinearRecursion) {
-  Controller ctl(make_control_law(wall(1000, 0.5, config::Discretization::kTustin)));
+  Controller ctl(pure_law(wall(1000, 0.5, config::Discretization::kTustin)));
   const std::vector<double> x{0.0, 0.001, 0.0025, 0.002, -0.001, -0.002};
   double f_prev = 0.0, xi_prev = 0.0;
   const double a = 1000 + 2 * 0.5 / 1e-3, b = 1000 - 2 * 0.5 / 1e-3;
@@ -78,7 +86,7 @@ TEST(Controller, TustinWallIsTheBilinearRecursion) {
 TEST(Controller, DelayCommandsTheForceComputedDSamplesEarlier) {
   config::Config c = wall(1000, 0.0);
   c.wall.delay_samples = 2;
-  Controller ctl(make_control_law(c));
+  Controller ctl(pure_law(c));
   const std::vector<double> x{0.001, 0.002, 0.003, 0.004, 0.005};
   for (std::size_t k = 0; k < x.size(); ++k) {
     const ControlOutput o = ctl.step(x[k]);
@@ -91,7 +99,7 @@ TEST(Controller, NormalAndWallPositionSetPenetrationAndForceDirection) {
   config::Config c = wall(1000, 0.0);
   c.wall.position = 0.05;
   c.wall.normal = -1;  // wall occupies x < 0.05
-  Controller ctl(make_control_law(c));
+  Controller ctl(pure_law(c));
   const ControlOutput out = ctl.step(0.06);  // 10 mm on the free side
   EXPECT_NEAR(out.penetration, -0.01, 1e-15);
   EXPECT_EQ(out.force_commanded, 0.0);
@@ -103,7 +111,7 @@ TEST(Controller, NormalAndWallPositionSetPenetrationAndForceDirection) {
 TEST(Controller, SaturatesToMaxForceKeepingTheSign) {
   config::Config c = wall(1000, 0.0);
   c.device.max_force = 1.5;
-  Controller ctl(make_control_law(c));
+  Controller ctl(pure_law(c));
   const ControlOutput o = ctl.step(0.004);
   EXPECT_NEAR(o.force_computed, 4.0, 1e-12);
   EXPECT_EQ(o.force_commanded, -1.5);
@@ -112,13 +120,13 @@ TEST(Controller, SaturatesToMaxForceKeepingTheSign) {
 }
 
 TEST(Controller, VelocityIsTheBackwardDifference) {
-  Controller ctl(make_control_law(wall(0, 0)));
+  Controller ctl(pure_law(wall(0, 0)));
   EXPECT_EQ(ctl.step(0.010).velocity, 0.0);  // no previous sample yet
   EXPECT_NEAR(ctl.step(0.012).velocity, 2.0, 1e-12);
 }
 
 TEST(Controller, ResetForgetsHistory) {
-  Controller ctl(make_control_law(wall(1000, 0.5)));
+  Controller ctl(pure_law(wall(1000, 0.5)));
   ctl.step(0.003);
   ctl.reset();
   EXPECT_NEAR(ctl.step(0.001).force_computed, 1000 * 0.001 + 0.5 * 0.001 / 1e-3, 1e-12);
@@ -128,12 +136,33 @@ TEST(Controller, StepDoesNotAllocate) {
   config::Config c = wall(2000, 0.2);
   c.wall.delay_samples = 3;
   c.wall.coupling = {true, {0.1, -0.0752, 0.0016, -0.0101}, {1, -1.8407, 0.8444, -0.0037}};
-  Controller ctl(make_control_law(c));
+  Controller ctl(pure_law(c));
   testing::AllocationScope scope;
   double sink = 0.0;
   for (int k = 0; k < 20000; ++k) sink += ctl.step(0.001 * ((k % 7) - 3)).force_commanded;
   EXPECT_EQ(scope.count(), 0u);
   EXPECT_TRUE(std::isfinite(sink));
+}
+
+TEST(Controller, StartingInsideTheWallIsUnarmedUntilTheDeviceLeaves) {
+  Controller ctl(make_control_law(wall(1000, 0.5)));
+  for (double x : {0.003, 0.002}) {  // started 3 mm inside: no K p0 + B p0/T kick
+    const ControlOutput o = ctl.step(x);
+    EXPECT_EQ(o.force_commanded, 0.0);
+    EXPECT_TRUE(o.flags & telemetry::kFlagUnarmed);
+    EXPECT_FALSE(o.flags & kFlagContact);
+  }
+  const ControlOutput left = ctl.step(-0.001);
+  EXPECT_EQ(left.force_commanded, 0.0);
+  EXPECT_FALSE(left.flags & telemetry::kFlagUnarmed);
+  // Back in: the law runs from a history that was outside the wall.
+  EXPECT_NEAR(ctl.step(0.001).force_computed, 1000 * 0.001 + 0.5 * 0.001 / 1e-3, 1e-12);
+}
+
+TEST(Controller, ArmsAtOnceWhenStartingOutside) {
+  Controller ctl(make_control_law(wall(1000, 0.0)));
+  ctl.step(-0.001);
+  EXPECT_NEAR(ctl.step(0.002).force_commanded, -2.0, 1e-12);
 }
 
 TEST(ControlLaw, RejectsNegativeCouplingFeedThrough) {

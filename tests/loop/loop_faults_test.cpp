@@ -17,7 +17,9 @@ control::Controller wall_controller() {
   config::Config c;
   c.wall.stiffness = 2000;
   c.device.max_force = 10;
-  return control::Controller(control::make_control_law(c));
+  control::ControlLaw law = control::make_control_law(c);
+  law.require_outside_start = false;  // the scripted device starts 1 mm inside on purpose
+  return control::Controller(law);
 }
 
 LoopResult run(ScriptedDevice& dev, LoopOptions o) {
@@ -44,8 +46,9 @@ TEST(LoopFaults, DeviceReadErrorFaultsAndCommandsZero) {
   EXPECT_EQ(r.fault.cause, FaultCause::kDeviceRead);
   EXPECT_EQ(r.fault.tick, 5u);
   EXPECT_EQ(r.ticks, 6u);
-  ASSERT_EQ(dev.writes.size(), 6u);
+  ASSERT_GE(dev.writes.size(), 6u);
   EXPECT_NEAR(dev.writes[4], -2.0, 1e-12);  // the wall was pushing before the fault
+  EXPECT_EQ(dev.writes[5], 0.0);            // the faulted tick itself commands zero
   EXPECT_EQ(dev.writes.back(), 0.0);
   EXPECT_EQ(describe(r.fault), "device read failed at tick 5");
 }
@@ -141,6 +144,47 @@ TEST(LoopFaults, LongOverrunsSkipWholePeriodsAndCountThem) {
   EXPECT_EQ(r.fault.cause, FaultCause::kNone);
   EXPECT_EQ(r.overruns, r.ticks);
   EXPECT_GE(r.missed_ticks, 2u * r.ticks);  // each 2 ms tick spans 4 periods, 3 skipped
+}
+
+TEST(LoopFaults, ANormalEndAlsoLeavesZeroForce) {
+  ScriptedDevice dev;  // 1 mm inside the wall: the last command pushed
+  const LoopResult r = run(dev, freerun(10));
+  EXPECT_EQ(r.fault.cause, FaultCause::kNone);
+  ASSERT_EQ(dev.writes.size(), 11u);
+  EXPECT_NEAR(dev.writes[9], -2.0, 1e-12);
+  EXPECT_EQ(dev.writes[10], 0.0);  // written after the last tick, before run() returns
+}
+
+TEST(LoopFaults, NothingIsCommandedBeforeTheFirstPosition) {
+  // Wall at -10 mm, device at -20 mm: outside. A stale first read must not be taken as x = 0
+  // (10 mm inside) and pushed on.
+  config::Config c;
+  c.wall.position = -0.010;
+  c.wall.stiffness = 2000;
+  c.device.max_force = 100;
+  control::Controller ctl(control::make_control_law(c));
+  ScriptedDevice dev;
+  dev.script = [](std::uint64_t k, PositionSample& s) {
+    s.position = -0.020;
+    return k < 2 ? IoStatus::kNoNewData : IoStatus::kOk;
+  };
+  ServoLoop loop(dev, ctl, nullptr, freerun(5));
+  const std::atomic<bool> stop{false};
+  const LoopResult r = loop.run(stop);
+  EXPECT_EQ(r.fault.cause, FaultCause::kNone);
+  EXPECT_EQ(r.contact_ticks, 0u);
+  for (double f : dev.writes) EXPECT_EQ(f, 0.0);
+}
+
+TEST(LoopFaults, AJumpAfterStaleReadsIsJudgedOverTheTimeThatPassed) {
+  ScriptedDevice dev;
+  dev.script = [](std::uint64_t k, PositionSample& s) {
+    s.position = k < 7 ? 0.0 : 0.025;  // 25 mm, arriving after two stale reads: 3 periods
+    return (k == 5 || k == 6) ? IoStatus::kNoNewData : IoStatus::kOk;
+  };
+  LoopOptions o = freerun(10);
+  o.max_speed = 10.0;  // 25 mm / 3 ms = 8.3 m/s: plausible
+  EXPECT_EQ(run(dev, o).fault.cause, FaultCause::kNone);
 }
 
 }  // namespace

@@ -223,3 +223,75 @@ TEST(CliRun, NonexistentCpuIsAConfigurationError) {
 
 }  // namespace
 }  // namespace hapticd::testing
+
+namespace hapticd::testing {
+namespace {
+
+TEST(CliRun, ADurationShorterThanOnePeriodStillEnds) {
+  const ProcessResult r = run_process({hapticd_binary(), "run", "--duration", "0.0004"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("hapticd run: 1 ticks"), std::string::npos) << r.out;
+}
+
+TEST(CliRun, AnExistingLogIsKeptAsDotOne) {
+  const std::string log = temp_path("twice.hlog");
+  for (const char* d : {"1", "2"}) {
+    ASSERT_EQ(run_process({hapticd_binary(), "run", "--duration", d, "--log", log, "--set",
+                           "loop.clock=freerun"})
+                  .exit_code,
+              0);
+  }
+  EXPECT_EQ(telemetry::read_log(log).records.size(), 2000u);
+  EXPECT_EQ(telemetry::read_log(log + ".1").records.size(), 1000u);
+}
+
+TEST(CliRun, FreerunWithASmallRingLogsEveryTickIdentically) {
+  std::string bytes[2];
+  for (int i = 0; i < 2; ++i) {
+    const std::string log = temp_path("small" + std::to_string(i) + ".hlog");
+    const std::string sum = temp_path("small" + std::to_string(i) + ".json");
+    ASSERT_EQ(
+        run_process({hapticd_binary(), "run", "--duration", "20", "--log", log, "--summary-json",
+                     sum, "--set", "loop.clock=freerun", "--set", "telemetry.ring_capacity=64"})
+            .exit_code,
+        0);
+    const nlohmann::json s = nlohmann::json::parse(read_file(sum));
+    EXPECT_EQ(s["log_records_written"], 20000);  // a simulation waits for the writer
+    EXPECT_EQ(s["log_records_dropped"], 0);
+    bytes[i] = read_file(log);
+  }
+  EXPECT_TRUE(bytes[0] == bytes[1]);
+}
+
+TEST(CliRun, ALogThatCannotBeWrittenIsAFaultNotACrash) {
+  if (run_process({"/bin/sh", "-c", "command -v prlimit"}).exit_code != 0) {
+    GTEST_SKIP() << "prlimit (util-linux) not installed: cannot limit the file size";
+  }
+  // 20 kB holds the header and a few blocks; then every write fails with EFBIG.
+  const std::string log = temp_path("full.hlog");
+  const ProcessResult r = run_process({"/usr/bin/prlimit", "--fsize=20000", hapticd_binary(), "run",
+                                       "--duration", "2", "--log", log});
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("tick log:"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("write errors"), std::string::npos) << r.err;
+  const telemetry::LogContents c = telemetry::read_log(log);  // what reached the disk is intact
+  EXPECT_GT(c.records.size(), 0u);
+  EXPECT_GT(c.dropped_records + 0, 0u);
+}
+
+TEST(CliRun, StartingInsideTheWallHoldsTheWallOffUntilTheDeviceLeaves) {
+  const std::string log = temp_path("inside.hlog"), sum = temp_path("inside.json");
+  const ProcessResult r = run_process(
+      {hapticd_binary(), "run", "--duration", "2", "--log", log, "--summary-json", sum, "--set",
+       "loop.clock=freerun", "--set", "device.sim.initial_position=0.005"});  // 5 mm inside
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("the device started inside the wall"), std::string::npos) << r.err;
+  const nlohmann::json s = nlohmann::json::parse(read_file(sum));
+  EXPECT_GT(s["unarmed_ticks"].get<int>(), 0);
+  const auto rec = telemetry::read_log(log).records;
+  EXPECT_EQ(rec[0].force_commanded, 0.0);       // not K p0 = 10 N in the user's hand at enable
+  EXPECT_GT(s["contact_ticks"].get<int>(), 0);  // the hand came back and the wall worked
+}
+
+}  // namespace
+}  // namespace hapticd::testing

@@ -1,0 +1,63 @@
+// The threads of `hapticd run`: the RT thread that owns the servo loop, and the supervisor
+// (the calling thread) that turns SIGINT/SIGTERM into a stop request, feeds the systemd
+// watchdog while ticks advance, and wakes the moment the loop ends.
+#pragma once
+
+#include <atomic>
+#include <string>
+#include <thread>
+
+#include "drivers/device.h"
+#include "loop/rt_setup.h"
+#include "loop/servo_loop.h"
+
+namespace hapticd::service {
+
+// Blocks SIGINT, SIGTERM and the loop's end-of-run signal in the calling thread. Call first,
+// before any thread exists: every thread inherits the mask, so the signals are only ever
+// taken synchronously by the supervisor and can never kill the process with output enabled.
+// Also ignores SIGXFSZ, so a tick log at its size limit fails a write instead.
+void block_run_signals();
+
+// Disables the device's output when it goes out of scope, whatever the path (exceptions
+// included): output is never left enabled behind the loop's back.
+class OutputGuard {
+ public:
+  explicit OutputGuard(Device& device) : device_(device) {}
+  ~OutputGuard() { device_.disable_output(); }
+  OutputGuard(const OutputGuard&) = delete;
+  OutputGuard& operator=(const OutputGuard&) = delete;
+
+ private:
+  Device& device_;
+};
+
+class RtThread {
+ public:
+  // Starts the RT thread: it configures itself (SCHED_FIFO, CPU) when `realtime`, publishes
+  // `rt`, runs the loop, then wakes the supervisor.
+  RtThread(loop::ServoLoop& loop, int priority, int cpu, bool realtime, loop::RtStatus& rt);
+  // Requests a stop and joins: the loop never outlives its owner.
+  ~RtThread();
+  RtThread(const RtThread&) = delete;
+  RtThread& operator=(const RtThread&) = delete;
+
+  // Blocks until the RT thread has configured itself; returns why it could not ("" if it did).
+  std::string wait_ready();
+  // Supervises until the loop ends; returns what stopped it ("duration", "signal SIGTERM").
+  std::string supervise();
+  // After supervise(): what the loop did.
+  const loop::LoopResult& result() const { return result_; }
+
+ private:
+  loop::ServoLoop& loop_;
+  pthread_t supervisor_;
+  std::atomic<bool> stop_{false};
+  std::atomic<bool> ready_{false};
+  std::atomic<bool> finished_{false};
+  std::string error_;
+  loop::LoopResult result_;
+  std::thread thread_;
+};
+
+}  // namespace hapticd::service
