@@ -18,7 +18,9 @@ namespace {
 using hapticd::config::Config;
 using hapticd::config::Override;
 
-Config demo(std::vector<Override> sets = {}) { return hapticd::config::load_embedded_default(sets); }
+Config demo(std::vector<Override> sets = {}) {
+  return hapticd::config::load_embedded_default(sets);
+}
 
 const std::vector<Override> kCoupled{
     {"wall.coupling.numerator", "[0.1, -0.0752, 0.0016, -0.0101]", "--set"},
@@ -39,8 +41,8 @@ void controller_step(benchmark::State& state, const Config& cfg) {
   for (auto _ : state) {
     benchmark::DoNotOptimize(ctl.step(x[i++ & 1023]));
   }
-  state.counters["allocs_per_tick"] = benchmark::Counter(
-      static_cast<double>(allocs.count()), benchmark::Counter::kAvgIterations);
+  state.counters["allocs_per_tick"] =
+      benchmark::Counter(static_cast<double>(allocs.count()), benchmark::Counter::kAvgIterations);
 }
 
 void BM_ControllerStep_BareWall(benchmark::State& state) { controller_step(state, demo()); }
@@ -82,8 +84,8 @@ void BM_FullTick_SimDevice(benchmark::State& state) {
     max = std::max(max, h.max_ns());
     state.ResumeTiming();
   }
-  state.counters["ns_per_tick"] =
-      benchmark::Counter(static_cast<double>(total), benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["ns_per_tick"] = benchmark::Counter(
+      static_cast<double>(total), benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
   state.counters["allocs_per_tick"] =
       static_cast<double>(allocations) / static_cast<double>(std::max<std::uint64_t>(total, 1));
   // The loop's own per-tick compute time (read + step + write + clock reads), worst iteration.
