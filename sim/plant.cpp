@@ -41,6 +41,7 @@ Plant::Plant(double mass, double damping, const config::OperatorSpec& op, double
       mass_(mass),
       damping_(damping),
       period_(sample_period_s),
+      inv_period_(1.0 / sample_period_s),
       motion_(op.motion),
       replay_(std::move(replay_positions)) {
   require(std::isfinite(period_) && period_ > 0.0, "sample period must be finite and > 0");
@@ -169,7 +170,7 @@ void Plant::reset() noexcept {
   if (imposed()) {
     // Already moving along the trajectory at t = 0: no impulse at the first instant.
     x_ = imposed_position(0);
-    v_ = (imposed_position(1) - x_) / period_;
+    v_ = (imposed_position(1) - x_) * inv_period_;
     return;
   }
   z_ = z0_;
@@ -248,7 +249,7 @@ void Plant::step_linear(double u) noexcept {
 
 void Plant::step_imposed(double u) noexcept {
   const double x_next = imposed_position(k_ + 1);
-  const double v_next = (x_next - x_) / period_;
+  const double v_next = (x_next - x_) * inv_period_;
   // The operator's impulse at the instant changes KE by the velocity jump; inside the period
   // the velocity is constant, so v^2 integrates to v^2 T.
   const double dissipated = damping_ * v_next * v_next * period_;

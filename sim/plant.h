@@ -87,6 +87,7 @@ class Plant {
   double mass_;
   double damping_;
   double period_;
+  double inv_period_;  // 1 / T, so the step multiplies
   double hand_stiffness_ = 0.0;
   double hand_damping_ = 0.0;
   config::MotionSpec motion_;

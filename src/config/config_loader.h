@@ -48,4 +48,7 @@ Config load_config_text(std::string_view yaml, const std::string& source_name,
 Config load_embedded_default(const std::vector<Override>& overrides = {});
 std::string_view embedded_default_yaml() noexcept;
 
+// The YAML name of a driver ("sim", "hid", ...), for messages.
+const std::string& driver_name(DriverKind driver);
+
 }  // namespace hapticd::config

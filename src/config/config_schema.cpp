@@ -353,3 +353,9 @@ void read_config(Diagnostics& diag, const YAML::Node& root, const std::string& b
 }
 
 }  // namespace hapticd::config::detail
+
+namespace hapticd::config {
+const std::string& driver_name(DriverKind driver) {
+  return detail::name_of(detail::kDrivers, driver);
+}
+}  // namespace hapticd::config

@@ -49,10 +49,7 @@ std::unique_ptr<Device> make_device(const config::Config& cfg) {
     case config::DriverKind::kGpio:
       break;
   }
-  const char* name = cfg.device.driver == config::DriverKind::kHid   ? "hid"
-                     : cfg.device.driver == config::DriverKind::kCan ? "can"
-                                                                     : "gpio";
-  throw DeviceError(std::string("device.driver: ") + name +
+  throw DeviceError("device.driver: " + config::driver_name(cfg.device.driver) +
                     ": this build has no such driver yet (only 'sim'); `hapticd check` analyses "
                     "it with its declared transport delay, but `run` cannot open it");
 }

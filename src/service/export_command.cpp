@@ -30,17 +30,20 @@ int export_command(const std::string& log_path, const std::string& out_path) {
   std::ostream& out = out_path.empty() ? std::cout : file;
   out << "tick,scheduled_s,wake_latency_us,compute_us,position,penetration,velocity,"
          "force_computed,force_commanded,contact,saturated,fault,overrun,no_pull_clamped,stale,"
+         "unarmed,"
          "device_status\n";
   char row[512];
   for (const telemetry::TickRecord& r : log.records) {
     const auto bit = [&](std::uint32_t f) { return (r.flags & f) ? 1 : 0; };
-    std::snprintf(
-        row, sizeof row, "%llu,%.9f,%.3f,%.3f,%.17g,%.17g,%.17g,%.17g,%.17g,%d,%d,%d,%d,%d,%d,%u\n",
-        static_cast<unsigned long long>(r.tick), static_cast<double>(r.scheduled_ns) * 1e-9,
-        r.wake_latency_ns * 1e-3, r.compute_ns * 1e-3, r.position, r.penetration, r.velocity,
-        r.force_computed, r.force_commanded, bit(telemetry::kFlagContact),
-        bit(telemetry::kFlagSaturated), bit(telemetry::kFlagFault), bit(telemetry::kFlagOverrun),
-        bit(telemetry::kFlagNoPullClamped), bit(telemetry::kFlagStale), r.device_status);
+    std::snprintf(row, sizeof row,
+                  "%llu,%.9f,%.3f,%.3f,%.17g,%.17g,%.17g,%.17g,%.17g,%d,%d,%d,%d,%d,%d,%d,%u\n",
+                  static_cast<unsigned long long>(r.tick),
+                  static_cast<double>(r.scheduled_ns) * 1e-9, r.wake_latency_ns * 1e-3,
+                  r.compute_ns * 1e-3, r.position, r.penetration, r.velocity, r.force_computed,
+                  r.force_commanded, bit(telemetry::kFlagContact), bit(telemetry::kFlagSaturated),
+                  bit(telemetry::kFlagFault), bit(telemetry::kFlagOverrun),
+                  bit(telemetry::kFlagNoPullClamped), bit(telemetry::kFlagStale),
+                  bit(telemetry::kFlagUnarmed), r.device_status);
     out << row;
   }
   out.flush();
