@@ -49,6 +49,11 @@ class Device {
   virtual std::string_view name() const noexcept = 0;
   // Not RT-safe. A sentence describing the last kError, for the fault message.
   virtual std::string describe_error() const = 0;
+
+  // Any thread, once the loop has stopped: the force the driver last handed to the hardware
+  // and whether the amplifier is enabled, as the run summary reports them.
+  virtual double last_command() const noexcept = 0;
+  virtual bool output_enabled() const noexcept = 0;
 };
 
 }  // namespace hapticd

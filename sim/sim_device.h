@@ -50,8 +50,10 @@ class SimDevice final : public hapticd::Device {
   std::string_view name() const noexcept override { return "sim"; }
   std::string describe_error() const override;
 
+  double last_command() const noexcept override { return force_; }
+  bool output_enabled() const noexcept override { return enabled_; }
+
   const Plant& plant() const noexcept { return plant_; }
-  bool output_enabled() const noexcept { return enabled_; }
 
  private:
   enum class Error : std::uint8_t { kNone, kNotConfigured, kNonFiniteForce };

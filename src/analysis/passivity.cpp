@@ -85,8 +85,10 @@ StiffnessLimit max_stiffness(const std::function<TransferFunction(double)>& make
                              double sample_period, int delay_samples, double passivity_shortage,
                              double available_damping) {
   const auto passes = [&](double k) {
-    return passivity_bound(make_h(k), sample_period, delay_samples, passivity_shortage)
-               .required_damping <= available_damping;
+    const double b_req =
+        passivity_bound(make_h(k), sample_period, delay_samples, passivity_shortage)
+            .required_damping;
+    return std::isfinite(b_req) && b_req <= available_damping;  // an overflow never passes
   };
   // 2^-30 .. 2^60 N/m covers every physical wall; the pass set is an interval for the walls
   // of DESIGN.md §3 (b_req is convex in K without coupling), and the scan finds the last

@@ -5,7 +5,9 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <map>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace hapticd::config {
@@ -21,9 +23,13 @@ using Coefficients = std::vector<double>;
 // Longest coupling numerator/denominator: the controller's filter histories are fixed-size so
 // the RT thread never allocates (a power of two: the histories index with a mask).
 inline constexpr std::size_t kMaxCouplingCoefficients = 16;
+// wall.delay_samples: the gate analyses the delayed loop in well under a second up to here.
+inline constexpr int kMaxDelaySamples = 100;
+// telemetry.ring_capacity: records preallocated and locked between the loop and the writer.
+inline constexpr long long kMaxRingCapacity = 1LL << 22;
 
 struct LoopConfig {
-  double rate_hz = 1000.0;  // sample rate 1/T (Hz), in (0, 100000]
+  double rate_hz = 1000.0;  // sample rate 1/T (Hz), in [1, 100000]
   ClockMode clock = ClockMode::kRealtime;
   int rt_priority = 80;           // SCHED_FIFO priority, 1..99
   int cpu = -1;                   // CPU the RT thread is pinned to; -1 = not pinned
@@ -99,7 +105,7 @@ struct WallConfig {
   double stiffness = 1000.0;  // K (N/m), >= 0
   double damping = 0.0;       // B (N s/m), >= 0
   Discretization discretization = Discretization::kBackward;
-  int delay_samples = 0;  // computation delay d beyond the driver's own, 0..1000
+  int delay_samples = 0;  // computation delay d beyond the driver's own, 0..kMaxDelaySamples
   bool no_pull = false;   // clamp f >= 0 (outside the theorems)
   CouplingConfig coupling;
 };
@@ -121,18 +127,26 @@ struct AnalysisConfig {
 
 struct TelemetryConfig {
   std::string log_path;                 // empty: no tick log unless --log is given
-  std::uint32_t ring_capacity = 65536;  // records between RT thread and writer, >= 64
+  std::uint32_t ring_capacity = 65536;  // records between RT thread and writer, 64..2^22
 };
 
 struct Config {
   std::string source_name;     // file name shown in messages ("config/sim.yaml")
   std::string effective_yaml;  // the configuration after --set, as recorded in tick logs
+  // Where each key present in the document came from, by key path: "sim.yaml:12" or
+  // "--set wall.damping=1e306". Lets checks made after loading (derived quantities, the
+  // drivers) name the place a person must edit.
+  std::map<std::string, std::string, std::less<>> key_locations;
   LoopConfig loop;
   DeviceConfig device;
   WallConfig wall;
   SafetyConfig safety;
   AnalysisConfig analysis;
   TelemetryConfig telemetry;
+
+  // The location of `key_path`, or of the nearest enclosing key the document has, or
+  // source_name when the value is a default: the prefix of a "WHERE: key: what" message.
+  std::string locate(std::string_view key_path) const;
 };
 
 }  // namespace hapticd::config

@@ -58,7 +58,12 @@ void apply_overrides(YAML::Node& root, const std::vector<Override>& overrides,
     }
     YAML::Node value;
     try {
-      value = YAML::Load(o.value);
+      const std::vector<YAML::Node> docs = YAML::LoadAll(o.value);
+      if (docs.size() > 1) {
+        diag.set_error(text, i, o.key_path, "value holds more than one YAML document ('---')");
+        continue;
+      }
+      if (!docs.empty()) value = docs.front();
     } catch (const YAML::Exception& e) {
       diag.set_error(text, i, o.key_path, "value is not valid YAML: " + e.msg);
       continue;
@@ -123,6 +128,15 @@ std::string read_file(const std::string& path) {
 
 }  // namespace
 
+std::string Config::locate(std::string_view key_path) const {
+  for (std::string_view p = key_path; !p.empty();) {
+    if (const auto it = key_locations.find(p); it != key_locations.end()) return it->second;
+    const std::size_t dot = p.rfind('.');
+    p = dot == std::string_view::npos ? std::string_view() : p.substr(0, dot);
+  }
+  return source_name;
+}
+
 ConfigError::ConfigError(std::vector<std::string> messages)
     : std::runtime_error(join_lines(messages)), messages_(std::move(messages)) {}
 
@@ -136,16 +150,24 @@ Override parse_override(std::string_view arg) {
 
 Config load_config_text(std::string_view yaml, const std::string& source_name,
                         const std::vector<Override>& overrides, const std::string& base_dir) {
-  YAML::Node root;
+  std::vector<YAML::Node> documents;
   try {
-    root = YAML::Load(std::string(yaml));
+    documents = YAML::LoadAll(std::string(yaml));
   } catch (const YAML::Exception& e) {
     std::string where = source_name;
     if (e.mark.line >= 0) {
       where += ":" + std::to_string(e.mark.line + 1) + ":" + std::to_string(e.mark.column + 1);
     }
-    throw ConfigError({where + ": YAML syntax error: " + e.msg});
+    throw ConfigError({detail::printable(where + ": YAML syntax error: " + e.msg)});
   }
+  if (documents.size() > 1) {
+    // Reading only the first would silently ignore whatever the second one sets.
+    const YAML::Mark m = documents[1].Mark();
+    throw ConfigError({detail::printable(
+        source_name + (m.line >= 0 ? ":" + std::to_string(m.line + 1) : std::string()) +
+        ": a second YAML document ('---') follows the first; a configuration is one document")});
+  }
+  YAML::Node root = documents.empty() ? YAML::Node() : documents.front();
   // An empty document (or one that is all comments) is a configuration of defaults.
   if (root.IsNull()) root.reset(YAML::Node(YAML::NodeType::Map));
 
@@ -163,6 +185,7 @@ Config load_config_text(std::string_view yaml, const std::string& source_name,
   }
   config.source_name = source_name;
   config.effective_yaml = emit(root);
+  config.key_locations = diag.locations();
   return config;
 }
 

@@ -20,6 +20,10 @@ struct Override {
   std::string text;
 };
 
+// A failed load reports at most this many messages, then one line counting the rest: a
+// person fixes the first ones and reloads.
+inline constexpr std::size_t kMaxMessages = 100;
+
 // Every message of one failed load; what() is the messages joined with '\n'.
 class ConfigError : public std::runtime_error {
  public:

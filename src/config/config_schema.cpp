@@ -179,7 +179,8 @@ LoopResult read_loop(MapReader& top, LoopConfig& loop) {
               {"rate_hz", "clock", "rt_priority", "cpu", "overrun_fault_streak"});
   LoopResult result;
   const Field rate = m.take("rate_hz");
-  const auto r = read_number(m.diag(), rate, Range::interval(0.0, false, 100000.0, true));
+  // Below 1 Hz nothing is haptic, and T = 1/rate_hz must stay a finite, ordinary number.
+  const auto r = read_number(m.diag(), rate, Range::interval(1.0, true, 100000.0, true));
   if (r) loop.rate_hz = *r;
   if (r || !rate.present) result.rate_hz = loop.rate_hz;
   result.clock = m.take("clock");
@@ -286,7 +287,9 @@ void read_wall(MapReader& top, WallConfig& wall) {
   if (const auto v = choice(d, m.take("discretization"), kDiscretizations)) {
     wall.discretization = *v;
   }
-  integer(m, "delay_samples", IntRange::between(0, 1000), wall.delay_samples);
+  // Beyond 100 samples no useful wall is passive (b_req grows like K T d), and the analysis
+  // of the delayed loop must stay well under a second.
+  integer(m, "delay_samples", IntRange::between(0, kMaxDelaySamples), wall.delay_samples);
   if (const auto v = read_bool(d, m.take("no_pull"))) wall.no_pull = *v;
   if (auto c = read_rational(m, "coupling", "C(z)", true)) {
     wall.coupling = {true, std::move(c->first), std::move(c->second)};
@@ -323,8 +326,9 @@ void read_analysis(MapReader& top, AnalysisConfig& analysis) {
 void read_telemetry(MapReader& top, TelemetryConfig& telemetry) {
   MapReader m(top.diag(), top.take("telemetry"), {"log", "ring_capacity"});
   if (const auto v = read_string(m.diag(), m.take("log"))) telemetry.log_path = *v;
-  if (const auto v =
-          read_integer(m.diag(), m.take("ring_capacity"), IntRange::at_least(64, UINT32_MAX))) {
+  // The ring is allocated, prefaulted and locked in memory: 2^22 records are 300 MB.
+  if (const auto v = read_integer(m.diag(), m.take("ring_capacity"),
+                                  IntRange::between(64, kMaxRingCapacity))) {
     telemetry.ring_capacity = static_cast<std::uint32_t>(*v);
   }
   m.finish();

@@ -40,7 +40,7 @@ std::size_t edit_distance(std::string_view a, std::string_view b) {
   return d[a.size() * w + b.size()];
 }
 
-enum class Parsed { kOk, kNotNumber, kNotFinite };
+enum class Parsed { kOk, kNotNumber, kNotFinite, kUnderflow };
 
 // YAML 1.2 core-schema reals plus the special values, which are recognised so they can be
 // refused with a precise message.
@@ -59,8 +59,10 @@ Parsed parse_number(const std::string& text, double& out) {
   const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
   if (ptr != s.data() + s.size()) return Parsed::kNotNumber;
   if (ec == std::errc::result_out_of_range) {
-    // from_chars does not say whether it overflowed or underflowed; strtod does.
+    // from_chars does not say whether it overflowed or underflowed; strtod does. An underflow
+    // would silently become 0 (or lose its precision as a subnormal): refuse it instead.
     v = std::strtod(std::string(s).c_str(), nullptr);
+    if (std::isfinite(v)) return Parsed::kUnderflow;
   } else if (ec != std::errc()) {
     return Parsed::kNotNumber;
   }
@@ -80,6 +82,23 @@ std::string describe_int_range(const IntRange& r, bool below) {
 }
 
 }  // namespace
+
+std::string printable(std::string_view text) {
+  std::string out;
+  out.reserve(text.size());
+  for (const char c : text) {
+    const auto u = static_cast<unsigned char>(c);
+    if (u < 0x20 || u == 0x7f) {
+      static constexpr char kHex[] = "0123456789abcdef";
+      out += "\\x";
+      out += kHex[u >> 4];
+      out += kHex[u & 0xf];
+    } else {
+      out += c;
+    }
+  }
+  return out;
+}
 
 std::string child_path(const std::string& parent, std::string_view key) {
   if (parent.empty()) return std::string(key);
@@ -137,7 +156,21 @@ const Diagnostics::Origin* Diagnostics::origin_of(const std::string& path) const
   return best;
 }
 
-void Diagnostics::add(Entry entry) { entries_.push_back(std::move(entry)); }
+void Diagnostics::add(Entry entry) {
+  entry.text = printable(entry.text);
+  entries_.push_back(std::move(entry));
+}
+
+std::string Diagnostics::where(const YAML::Mark& mark, const std::string& path) const {
+  if (const Origin* o = origin_of(path)) return "--set " + o->text;
+  std::string prefix = source_;
+  if (mark.line >= 0) prefix += ":" + std::to_string(mark.line + 1);
+  return prefix;
+}
+
+void Diagnostics::note_location(const YAML::Mark& mark, const std::string& path) {
+  locations_[path] = where(mark, path);
+}
 
 void Diagnostics::error(const YAML::Mark& mark, const std::string& path, const std::string& what) {
   const std::string body = path.empty() ? what : path + ": " + what;
@@ -145,9 +178,7 @@ void Diagnostics::error(const YAML::Mark& mark, const std::string& path, const s
     add({true, o->order, 0, 0, "--set " + o->text + ": " + body});
     return;
   }
-  std::string prefix = source_;
-  if (mark.line >= 0) prefix += ":" + std::to_string(mark.line + 1);
-  add({false, 0, mark.line, mark.column, prefix + ": " + body});
+  add({false, 0, mark.line, mark.column, where(mark, path) + ": " + body});
 }
 
 void Diagnostics::set_error(const std::string& text, std::size_t order, const std::string& path,
@@ -165,7 +196,14 @@ std::vector<std::string> Diagnostics::messages() const {
     return a->column < b->column;
   });
   std::vector<std::string> out;
-  for (const Entry* e : order) out.push_back(e->text);
+  for (const Entry* e : order) {
+    if (out.size() == kMaxMessages) {
+      out.push_back("... and " + std::to_string(order.size() - kMaxMessages) +
+                    " more problems not shown");
+      break;
+    }
+    out.push_back(e->text);
+  }
   return out;
 }
 
@@ -192,21 +230,22 @@ MapReader::MapReader(Diagnostics& diag, const Field& field, std::vector<std::str
                   "duplicate key (first at line " + std::to_string(first->mark.line + 1) + ")");
       continue;
     }
+    index_.emplace(name, entries_.size());
     entries_.push_back({std::move(name), key.Mark(), value, false});
   }
 }
 
 MapReader::Entry* MapReader::find(std::string_view key) {
-  for (Entry& e : entries_) {
-    if (e.key == key) return &e;
-  }
-  return nullptr;
+  const auto it = index_.find(std::string(key));
+  return it == index_.end() ? nullptr : &entries_[it->second];
 }
 
 Field MapReader::take(std::string_view key) {
   if (Entry* e = find(key)) {
     e->consumed = true;
-    return {child_path(path_, key), e->value, e->mark, true};
+    std::string path = child_path(path_, key);
+    diag_.note_location(e->mark, path);
+    return {std::move(path), e->value, e->mark, true};
   }
   return {child_path(path_, key), YAML::Node(), mark_, false};
 }
@@ -285,6 +324,10 @@ std::optional<double> read_number(Diagnostics& diag, const Field& field, const R
       return std::nullopt;
     case Parsed::kNotFinite:
       diag.error(field.key_mark, field.path, "must be a finite number, got " + quoted(text));
+      return std::nullopt;
+    case Parsed::kUnderflow:
+      diag.error(field.key_mark, field.path,
+                 "is too close to zero to be represented (it would become 0), got " + quoted(text));
       return std::nullopt;
     case Parsed::kOk:
       break;

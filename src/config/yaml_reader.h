@@ -6,14 +6,22 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "config/config_loader.h"
+
 #include <cstddef>
 #include <limits>
+#include <map>
 #include <optional>
 #include <string>
 #include <string_view>
+#include <unordered_map>
 #include <vector>
 
 namespace hapticd::config::detail {
+
+// `text` safe to print on a terminal: control bytes (and DEL) become \xNN escapes, so a
+// value echoed in a message cannot move the cursor, clear the screen or forge a line.
+std::string printable(std::string_view text);
 
 // "a.b" + "c" -> "a.b.c"; "" + "c" -> "c".
 std::string child_path(const std::string& parent, std::string_view key);
@@ -42,8 +50,13 @@ class Diagnostics {
   void set_error(const std::string& text, std::size_t order, const std::string& path,
                  const std::string& what);
 
+  // Records where the key at `path` is, for Config::key_locations.
+  void note_location(const YAML::Mark& mark, const std::string& path);
+  const std::map<std::string, std::string, std::less<>>& locations() const { return locations_; }
+
   bool empty() const { return entries_.empty(); }
-  // File messages in document order, then --set messages in command-line order.
+  // File messages in document order, then --set messages in command-line order; past
+  // config::kMaxMessages, one last line says how many more there are.
   std::vector<std::string> messages() const;
 
  private:
@@ -60,11 +73,13 @@ class Diagnostics {
     std::string text;
   };
   const Origin* origin_of(const std::string& path) const;
+  std::string where(const YAML::Mark& mark, const std::string& path) const;
   void add(Entry entry);
 
   std::string source_;
   std::vector<Origin> origins_;
   std::vector<Entry> entries_;
+  std::map<std::string, std::string, std::less<>> locations_;
 };
 
 // A key looked up in a mapping. Errors about its value are reported at the key's line.
@@ -106,6 +121,7 @@ class MapReader {
   Entry* find(std::string_view key);
 
   Diagnostics& diag_;
+  std::unordered_map<std::string, std::size_t> index_;  // key -> entries_ position
   std::string path_;
   YAML::Mark mark_;
   std::vector<std::string> schema_;

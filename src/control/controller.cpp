@@ -72,7 +72,11 @@ ControlOutput Controller::step(double position) noexcept {
     out.flags |= telemetry::kFlagNoPullClamped;
   }
   double u = -law_.normal * applied;
-  if (std::abs(u) > law_.max_force) {
+  if (!std::isfinite(f) || !std::isfinite(u)) {
+    // Never saturate a NaN into +-max_force: command nothing and let the loop fault.
+    u = 0.0;
+    out.flags |= telemetry::kFlagNonFinite;
+  } else if (std::abs(u) > law_.max_force) {
     u = std::copysign(law_.max_force, u);
     out.flags |= telemetry::kFlagSaturated;
   }

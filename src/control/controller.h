@@ -16,8 +16,8 @@ struct ControlOutput {
   double velocity = 0.0;         // (x_k - x_{k-1}) / T
   double force_computed = 0.0;   // f_k, wall force along n (positive pushes out of the wall)
   double force_commanded = 0.0;  // u = -n f_{k-d}, after no_pull and saturation
-  std::uint32_t flags =
-      0;  // telemetry::TickFlag bits: contact, saturated, no-pull clamped, unarmed
+  // telemetry::TickFlag bits: contact, saturated, no-pull clamped, unarmed, non-finite
+  std::uint32_t flags = 0;
 };
 
 class Controller {
@@ -26,6 +26,8 @@ class Controller {
   explicit Controller(const ControlLaw& law);
 
   // RT-safe: called every tick. Never allocates, locks or throws; `position` must be finite.
+  // A non-finite force (an overflow the configuration checks missed) is never commanded:
+  // force_commanded is 0 and kFlagNonFinite is set, for the loop to fault on.
   ControlOutput step(double position) noexcept;
 
   // RT-safe. Clears every filter state and the delay line, and disarms (as at construction).

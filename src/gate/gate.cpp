@@ -93,8 +93,14 @@ GateReport evaluate_gate(const config::Config& cfg, int device_delay_samples) {
   p.available_damping = (1.0 - cfg.safety.passivity_margin) * b;
   p.margin = (b - pb.required_damping) / b;
   p.worst_frequency_hz = pb.worst_frequency_hz;
-  p.passive = pb.required_damping <= p.available_damping;
+  // A pass needs a finite bound: -inf or NaN from an overflow must never read as "passive".
+  p.passive = std::isfinite(pb.required_damping) && std::isfinite(p.available_damping) &&
+              pb.required_damping <= p.available_damping;
   p.note = pb.note;
+  if (!std::isfinite(pb.required_damping) && p.note.empty()) {
+    p.note = "the bound is not a finite number (" + format_number(pb.required_damping) +
+             "): the analysis overflowed, so passivity is not proven";
+  }
   p.max_stiffness = analysis::max_stiffness(
       [&](double k) {
         return analysis::contact_map(analysis::environment_filter(control::wall_params(cfg, k)), c);

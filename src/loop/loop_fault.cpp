@@ -36,6 +36,12 @@ std::string describe(const Fault& f) {
                     "%.0f consecutive overruns at tick %llu (loop.overrun_fault_streak)", f.value,
                     tick);
       break;
+    case FaultCause::kNonFiniteForce:
+      std::snprintf(buf, sizeof buf,
+                    "the controller computed a non-finite force (%g) at tick %llu; zero was "
+                    "commanded instead",
+                    f.value, tick);
+      break;
   }
   return buf;
 }

@@ -13,8 +13,9 @@ enum class FaultCause : std::uint8_t {
   kDeviceWrite,  // Device::write returned kError
   kStaleData,    // no new position for safety.stale_fault_ticks ticks in a row
   kNonFinitePosition,
-  kEncoderJump,    // |x_k - x_{k-1}| / T above safety.max_speed
-  kOverrunStreak,  // loop.overrun_fault_streak consecutive overruns
+  kEncoderJump,     // |x_k - x_{k-1}| / T above safety.max_speed
+  kOverrunStreak,   // loop.overrun_fault_streak consecutive overruns
+  kNonFiniteForce,  // the controller computed a NaN or infinite force (zero was commanded)
 };
 
 struct Fault {

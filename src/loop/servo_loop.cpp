@@ -119,6 +119,9 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
       rec.velocity = out.velocity;
       rec.force_computed = out.force_computed;
       rec.flags |= out.flags;
+      if (out.flags & telemetry::kFlagNonFinite) {
+        res.fault = {FaultCause::kNonFiniteForce, tick, out.force_computed};
+      }
     }
     if (res.fault.cause == FaultCause::kNone && device_.write(command) == IoStatus::kError) {
       res.fault = {FaultCause::kDeviceWrite, tick, 0.0};

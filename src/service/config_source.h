@@ -13,6 +13,7 @@ struct ConfigOptions {
   std::vector<std::string> sets;  // raw --set arguments, "key.path=value"
 };
 
+// Loads and validates, derived quantities included (control::check_derived_quantities).
 // Throws config::ConfigError (exit code 2) with every problem found.
 config::Config load_config(const ConfigOptions& options);
 

@@ -2,11 +2,14 @@
 
 #include <spdlog/spdlog.h>
 
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <iostream>
 
 #include "service/exit_codes.h"
+#include "service/result_output.h"
 #include "telemetry/log_reader.h"
 
 namespace hapticd::service {
@@ -21,41 +24,52 @@ int export_command(const std::string& log_path, const std::string& out_path) {
   }
   std::ofstream file;
   if (!out_path.empty()) {
+    errno = 0;
     file.open(out_path);
     if (!file) {
-      std::cerr << "hapticd: " << out_path << ": cannot write\n";
+      std::cerr << "hapticd: " << out_path
+                << ": cannot open for writing: " << (errno != 0 ? std::strerror(errno) : "failed")
+                << "\n";
       return kExitUsage;
     }
   }
   std::ostream& out = out_path.empty() ? std::cout : file;
+  errno = 0;  // finish_output reports the error of the write that failed
   out << "tick,scheduled_s,wake_latency_us,compute_us,position,penetration,velocity,"
          "force_computed,force_commanded,contact,saturated,fault,overrun,no_pull_clamped,stale,"
-         "unarmed,"
-         "device_status\n";
+         "unarmed,non_finite,device_status\n";
   char row[512];
   for (const telemetry::TickRecord& r : log.records) {
     const auto bit = [&](std::uint32_t f) { return (r.flags & f) ? 1 : 0; };
     std::snprintf(row, sizeof row,
-                  "%llu,%.9f,%.3f,%.3f,%.17g,%.17g,%.17g,%.17g,%.17g,%d,%d,%d,%d,%d,%d,%d,%u\n",
+                  "%llu,%.9f,%.3f,%.3f,%.17g,%.17g,%.17g,%.17g,%.17g,%d,%d,%d,%d,%d,%d,%d,%d,%u\n",
                   static_cast<unsigned long long>(r.tick),
                   static_cast<double>(r.scheduled_ns) * 1e-9, r.wake_latency_ns * 1e-3,
                   r.compute_ns * 1e-3, r.position, r.penetration, r.velocity, r.force_computed,
                   r.force_commanded, bit(telemetry::kFlagContact), bit(telemetry::kFlagSaturated),
                   bit(telemetry::kFlagFault), bit(telemetry::kFlagOverrun),
                   bit(telemetry::kFlagNoPullClamped), bit(telemetry::kFlagStale),
-                  bit(telemetry::kFlagUnarmed), r.device_status);
+                  bit(telemetry::kFlagUnarmed), bit(telemetry::kFlagNonFinite), r.device_status);
     out << row;
   }
-  out.flush();
+  if (!finish_output(out, out_path.empty() ? "standard output" : out_path)) {
+    return kExitRuntimeFault;
+  }
   if (log.dropped_records > 0) {
-    spdlog::warn("{}: the RT ring dropped {} records while logging (gaps in 'tick')", log_path,
-                 log.dropped_records);
+    spdlog::warn(
+        "{}: {} records are missing, marked by the writer (dropped by a full ring or lost to "
+        "write errors; gaps in 'tick')",
+        log_path, log.dropped_records);
+  }
+  for (const telemetry::SkippedRegion& r : log.skipped) {
+    spdlog::warn("{}: {}; skipped {} damaged bytes to the next intact block (gap in 'tick')",
+                 log_path, r.reason, r.bytes);
   }
   if (!log.trailing_reason.empty()) {
     spdlog::warn("{}: {}; {} bytes after the last complete block ignored", log_path,
                  log.trailing_reason, log.trailing_bytes_ignored);
   }
-  return out ? kExitOk : kExitRuntimeFault;
+  return kExitOk;
 }
 
 }  // namespace hapticd::service

@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
+#include <cmath>
 #include <iostream>
 #include <optional>
 
@@ -12,7 +13,9 @@
 #include "service/check_command.h"
 #include "service/exit_codes.h"
 #include "service/export_command.h"
+#include "service/result_output.h"
 #include "service/run_command.h"
+#include "service/stop_signals.h"
 #include "service/verify_command.h"
 
 namespace {
@@ -29,9 +32,28 @@ void add_config_options(CLI::App* cmd, ConfigOptions& c) {
       ->allow_extra_args(false);
 }
 
+// A run that ends by itself: finite, positive, and short enough that its tick count fits.
+std::string check_duration(const std::string& text) {
+  double v = 0.0;
+  try {
+    std::size_t used = 0;
+    v = std::stod(text, &used);
+    if (used != text.size()) return "must be a number of seconds, got '" + text + "'";
+  } catch (const std::exception&) {
+    return "must be a number of seconds, got '" + text + "'";
+  }
+  if (!std::isfinite(v) || v <= 0.0)
+    return "must be a finite number of seconds > 0, got '" + text + "'";
+  if (v > 1e9) return "must be at most 1e9 s (about 31 years), got '" + text + "'";
+  return "";
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  // Before anything else, and before any thread exists: no signal may end the process while
+  // output could be enabled (see stop_signals.h).
+  hapticd::service::install_signal_policy();
   CLI::App app{
       "hapticd: real-time haptic servo daemon. Renders a virtual wall on a one-axis haptic "
       "device and refuses to enable the motor unless the sampled-data loop is proven passive."};
@@ -56,7 +78,7 @@ int main(int argc, char** argv) {
       "summary. Exit 0 clean stop, 1 fault, 2 bad input, 3 gate refused, 4 device error.");
   add_config_options(run, run_opts.config);
   run->add_option("--duration", duration, "Stop after this many seconds (default: until a signal)")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Validator(check_duration, "SECONDS"));
   run->add_option("--log", run_opts.log_path,
                   "Write the binary tick log here (overrides telemetry.log)");
   run->add_option("--summary-json", run_opts.summary_json_path,
@@ -93,11 +115,14 @@ int main(int argc, char** argv) {
     return rc == 0 ? hapticd::kExitOk : hapticd::kExitUsage;
   }
 
+  // Only `run` enables output and supervises the stop signals; the others die of them.
+  if (!*run) hapticd::service::release_stop_signals();
   try {
     if (*check) return hapticd::service::check_command(check_cfg, check_json);
     if (*run) {
       run_opts.duration_s = duration;
-      return hapticd::service::run_command(run_opts);
+      hapticd::service::SignalWatch signals;
+      return hapticd::service::run_command(run_opts, signals);
     }
     if (*verify) return hapticd::service::verify_command(verify_cfg, verify_json);
     if (*exp) return hapticd::service::export_command(export_log, export_out);

@@ -3,11 +3,8 @@
 #include <spdlog/spdlog.h>
 #include <systemd/sd-daemon.h>
 
-#include <atomic>
 #include <chrono>
 #include <cmath>
-#include <ctime>
-#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <memory>
@@ -21,9 +18,11 @@
 #include "loop/servo_loop.h"
 #include "service/device_factory.h"
 #include "service/exit_codes.h"
+#include "service/result_output.h"
 #include "service/run_summary.h"
 #include "service/run_threads.h"
 #include "sim/sim_device.h"
+#include "telemetry/log_path.h"
 #include "telemetry/log_writer.h"
 
 namespace hapticd::service {
@@ -67,43 +66,140 @@ void announce_rt(const loop::RtStatus& rt) {
   for (const std::string& w : rt.warnings) spdlog::warn("rt: {}", w);
 }
 
-// Opens the tick log; an existing file at the path is kept as PATH.1 rather than truncated
-// (the log of a run that faulted is what a person reads next).
-std::unique_ptr<telemetry::LogWriter> open_log(const std::string& path, const config::Config& cfg,
-                                               bool realtime, SpscRing<TickRecord>& ring) {
-  std::error_code ec;
-  if (std::filesystem::exists(path, ec)) std::filesystem::rename(path, path + ".1", ec);
+// The tick log and its ring: sized, touched and opened before output is enabled, never on
+// the RT thread. A file already at the path is kept (see keep_previous_log); anything that
+// is not a regular file is refused as a configuration error.
+struct TickLog {
+  std::unique_ptr<SpscRing<TickRecord>> ring;
+  std::unique_ptr<telemetry::LogWriter> writer;
+  std::string previous;
+};
+
+TickLog open_tick_log(const RunOptions& options, const config::Config& cfg, bool realtime) {
+  TickLog log;
+  const bool from_cli = !options.log_path.empty();
+  const std::string path = from_cli ? options.log_path : cfg.telemetry.log_path;
+  if (path.empty()) return log;
+  const std::string where =
+      from_cli ? "--log " + path : cfg.locate("telemetry.log") + ": telemetry.log";
   try {
-    auto writer = std::make_unique<telemetry::LogWriter>(
+    log.previous = telemetry::keep_previous_log(path);
+    log.ring = std::make_unique<SpscRing<TickRecord>>(cfg.telemetry.ring_capacity);
+    log.writer = std::make_unique<telemetry::LogWriter>(
         path,
         telemetry::LogHeader{cfg.loop.sample_period_s(), realtime ? unix_now_ns() : 0,
                              realtime ? 0u : 1u, cfg.effective_yaml},
-        ring, 512, std::chrono::milliseconds(5),
+        *log.ring, 512, std::chrono::milliseconds(5),
         realtime ? telemetry::LogWriter::Flush::kEveryPoll
                  : telemetry::LogWriter::Flush::kFullBlocks);
-    writer->start();
-    return writer;
+    log.writer->start();
   } catch (const std::exception& e) {
-    throw config::ConfigError({e.what()});
+    throw config::ConfigError({where + ": " + e.what()});
   }
+  if (!log.previous.empty()) spdlog::info("tick log: the previous log is now {}", log.previous);
+  return log;
+}
+
+loop::LoopOptions loop_options(const RunOptions& options, const config::Config& cfg, bool realtime,
+                               bool logging) {
+  loop::LoopOptions lo;
+  lo.realtime = realtime;
+  lo.period_ns = std::llround(1e9 / cfg.loop.rate_hz);
+  lo.overrun_fault_streak = cfg.loop.overrun_fault_streak;
+  lo.stale_fault_ticks = cfg.safety.stale_fault_ticks;
+  lo.max_speed = cfg.safety.max_speed;
+  lo.wait_for_ring = !realtime && logging;  // a simulation logs every tick
+  if (options.duration_s) {
+    lo.max_ticks = std::max<std::uint64_t>(
+        1, static_cast<std::uint64_t>(std::llround(*options.duration_s * cfg.loop.rate_hz)));
+  }
+  return lo;
+}
+
+void summarise_fault(const loop::LoopResult& result, const Device& device, RunSummary& s) {
+  if (result.fault.cause == loop::FaultCause::kNone) return;
+  std::string f = loop::describe(result.fault);
+  if (result.fault.cause == loop::FaultCause::kDeviceRead ||
+      result.fault.cause == loop::FaultCause::kDeviceWrite) {
+    f += ": " + device.describe_error();
+  }
+  spdlog::error("fault: {}; zero force commanded, output disabled", f);
+  s.faults.push_back(f);
+}
+
+void summarise_log(const TickLog& log, RunSummary& s) {
+  if (!log.writer) return;
+  const telemetry::LogWriter& w = *log.writer;
+  s.log_path = w.path();
+  s.previous_log = log.previous;
+  s.log_records_written = w.records_written();
+  s.log_records_dropped = w.records_dropped();
+  s.log_records_lost = w.records_lost();
+  s.log_io_errors = w.io_errors();
+  if (s.log_records_dropped > 0) {
+    spdlog::warn("tick log: the RT ring was full and dropped {} records (marked in the log)",
+                 s.log_records_dropped);
+  }
+  if (s.log_io_errors > 0) {
+    // The servo kept running, but the record of the run is incomplete: that is a failure.
+    s.faults.push_back("tick log: " + std::to_string(s.log_io_errors) + " write errors lost " +
+                       std::to_string(s.log_records_lost) + " records, first: " + w.last_error());
+    spdlog::error("{}", s.faults.back());
+  }
+}
+
+// Prints the summary (and writes --summary-json); the exit code of the run.
+int report(const RunOptions& options, RunSummary& s) {
+  if (s.final_output_enabled || s.final_command != 0.0) {
+    s.faults.push_back("the device reports output still enabled or a non-zero last command");
+  }
+  const bool printed = write_stdout(summary_to_text(s));
+  if (!options.summary_json_path.empty()) {
+    std::ofstream out(options.summary_json_path);
+    out << summary_to_json(s).dump(2) << "\n";
+    if (!finish_output(out, options.summary_json_path)) return kExitRuntimeFault;
+  }
+  if (!printed) return kExitRuntimeFault;
+  return s.faults.empty() ? kExitOk : kExitRuntimeFault;
+}
+
+// Whether a stop was requested; logs it and records it in the summary.
+bool stop_requested(SignalWatch& signals, RunSummary& s, const char* when) {
+  const std::optional<int> sig = signals.take_pending();
+  if (!sig) return false;
+  s.stop_reason = "signal " + signal_name(*sig);
+  spdlog::info("{} received {}: output stays disabled", signal_name(*sig), when);
+  return true;
 }
 
 }  // namespace
 
-int run_command(const RunOptions& options) {
-  block_run_signals();  // before any thread exists; see run_threads.h
+int run_command(const RunOptions& options, SignalWatch& signals) {
   const config::Config cfg = load_config(options.config);
   const bool realtime = cfg.loop.clock == config::ClockMode::kRealtime;
+  RunSummary s;
+  s.realtime = realtime;
+  s.sample_period_s = cfg.loop.sample_period_s();
+  s.stop_reason = "duration";
 
   std::unique_ptr<Device> device = make_device(cfg);
+  s.device_name = std::string(device->name());
+  const auto finish_device = [&] {
+    s.final_command = device->last_command();
+    s.final_output_enabled = device->output_enabled();
+  };
+  if (stop_requested(signals, s, "during start-up")) return finish_device(), report(options, s);
   device->configure();
-  const gate::GateReport report = gate::evaluate_gate(cfg, device->transport_delay_samples());
-  if (!announce_gate(report, cfg)) return kExitGateRefused;
+  const gate::GateReport gate_report = gate::evaluate_gate(cfg, device->transport_delay_samples());
+  s.gate = gate::gate_to_json(gate_report);
+  if (!announce_gate(gate_report, cfg)) return kExitGateRefused;
+  if (stop_requested(signals, s, "during start-up")) return finish_device(), report(options, s);
 
   const int cpus = static_cast<int>(std::thread::hardware_concurrency());
   if (realtime && cfg.loop.cpu >= cpus) {
-    throw config::ConfigError({cfg.source_name + ": loop.cpu: CPU " + std::to_string(cfg.loop.cpu) +
-                               " does not exist (this machine has " + std::to_string(cpus) + ")"});
+    throw config::ConfigError({cfg.locate("loop.cpu") + ": loop.cpu: CPU " +
+                               std::to_string(cfg.loop.cpu) + " does not exist (this machine has " +
+                               std::to_string(cpus) + ")"});
   }
   loop::RtStatus rt;
   std::optional<loop::CpuDmaLatencyRequest> pm_qos;
@@ -112,67 +208,41 @@ int run_command(const RunOptions& options) {
     pm_qos.emplace(rt);
     keep_off_cpu(cfg.loop.cpu, rt);  // before any other thread exists, so they inherit it
   }
-
-  // Tick log: the ring is sized and touched now, never on the RT thread.
-  const std::string log_path = options.log_path.empty() ? cfg.telemetry.log_path : options.log_path;
-  std::unique_ptr<SpscRing<TickRecord>> ring;
-  std::unique_ptr<telemetry::LogWriter> writer;
-  if (!log_path.empty()) {
-    ring = std::make_unique<SpscRing<TickRecord>>(cfg.telemetry.ring_capacity);
-    writer = open_log(log_path, cfg, realtime, *ring);
-  }
-
+  TickLog log = open_tick_log(options, cfg, realtime);
   control::Controller controller(control::make_control_law(cfg));
-  loop::LoopOptions lo;
-  lo.realtime = realtime;
-  lo.period_ns = std::llround(1e9 / cfg.loop.rate_hz);
-  lo.overrun_fault_streak = cfg.loop.overrun_fault_streak;
-  lo.stale_fault_ticks = cfg.safety.stale_fault_ticks;
-  lo.max_speed = cfg.safety.max_speed;
-  lo.wait_for_ring = !realtime && writer != nullptr;  // a simulation logs every tick
-  if (options.duration_s) {
-    lo.max_ticks = std::max<std::uint64_t>(
-        1, static_cast<std::uint64_t>(std::llround(*options.duration_s * cfg.loop.rate_hz)));
-  }
-  loop::ServoLoop servo(*device, controller, ring.get(), lo);
-
-  device->enable_output();
-  std::string stop_reason;
-  loop::LoopResult result;
-  {
-    const OutputGuard output_off(*device);  // on every path out of here, exceptions included
-    RtThread rt_thread(servo, cfg.loop.rt_priority, cfg.loop.cpu, realtime, rt);
-    if (const std::string error = rt_thread.wait_ready(); !error.empty()) {
-      throw config::ConfigError({cfg.source_name + ": " + error});
-    }
-    spdlog::info("output enabled: {} at {} Hz ({}), wall K {} N/m B {} N s/m", device->name(),
-                 cfg.loop.rate_hz, realtime ? "realtime" : "freerun", cfg.wall.stiffness,
-                 cfg.wall.damping);
-    if (realtime) announce_rt(rt);
-    sd_notifyf(0, "READY=1\nSTATUS=servo running at %.0f Hz", cfg.loop.rate_hz);
-    stop_reason = rt_thread.supervise();
-    result = rt_thread.result();
-  }
-  sd_notify(0, "STOPPING=1\nSTATUS=output disabled");
-  if (writer) writer->stop();
-
-  RunSummary s;
-  s.realtime = realtime;
-  s.sample_period_s = cfg.loop.sample_period_s();
-  s.loop = result;
+  loop::ServoLoop servo(*device, controller, log.ring.get(),
+                        loop_options(options, cfg, realtime, log.writer != nullptr));
   s.wake_latency = &servo.wake_latency();
   s.compute_time = &servo.compute_time();
-  s.rt = rt;
-  s.stop_reason = result.fault.cause != loop::FaultCause::kNone ? "fault" : stop_reason;
-  if (result.fault.cause != loop::FaultCause::kNone) {
-    std::string f = loop::describe(result.fault);
-    if (result.fault.cause == loop::FaultCause::kDeviceRead ||
-        result.fault.cause == loop::FaultCause::kDeviceWrite) {
-      f += ": " + device->describe_error();
+
+  loop::LoopResult result;
+  {
+    // The guard exists before enable is called: an enable that throws halfway is undone.
+    const OutputGuard output_off(*device);
+    if (!stop_requested(signals, s, "before output was enabled")) {
+      device->enable_output();
+      s.output_was_enabled = true;
+      RtThread rt_thread(servo, cfg.loop.rt_priority, cfg.loop.cpu, realtime, rt);
+      if (const std::string error = rt_thread.wait_ready(); !error.empty()) {
+        throw config::ConfigError({cfg.locate("loop.cpu") + ": " + error});
+      }
+      spdlog::info("output enabled: {} at {} Hz ({}), wall K {} N/m B {} N s/m", device->name(),
+                   cfg.loop.rate_hz, realtime ? "realtime" : "freerun", cfg.wall.stiffness,
+                   cfg.wall.damping);
+      if (realtime) announce_rt(rt);
+      sd_notifyf(0, "READY=1\nSTATUS=servo running at %.0f Hz", cfg.loop.rate_hz);
+      s.stop_reason = rt_thread.supervise(signals);
+      result = rt_thread.result();
     }
-    spdlog::error("fault: {}; zero force commanded, output disabled", f);
-    s.faults.push_back(f);
   }
+  finish_device();
+  sd_notify(0, "STOPPING=1\nSTATUS=output disabled");
+  if (log.writer) log.writer->stop();
+
+  s.rt = rt;
+  s.loop = result;
+  if (result.fault.cause != loop::FaultCause::kNone) s.stop_reason = "fault";
+  summarise_fault(result, *device, s);
   if (result.unarmed_ticks > 0) {
     spdlog::warn(
         "the device started inside the wall: the wall stayed off for {} ticks until it "
@@ -182,33 +252,8 @@ int run_command(const RunOptions& options) {
   if (const auto* simdev = dynamic_cast<const sim::SimDevice*>(device.get())) {
     s.operator_work_j = simdev->plant().operator_work_j();
   }
-  if (writer) {
-    s.log_path = writer->path();
-    s.log_records_written = writer->records_written();
-    s.log_records_dropped = writer->records_dropped();
-    s.log_io_errors = writer->io_errors();
-    if (s.log_records_dropped > 0) {
-      spdlog::warn("tick log: the ring dropped {} records (marked in the log)",
-                   s.log_records_dropped);
-    }
-    if (s.log_io_errors > 0) {
-      // The servo kept running, but the record of the run is incomplete: that is a failure.
-      s.faults.push_back("tick log: " + std::to_string(s.log_io_errors) +
-                         " write errors, first: " + writer->last_error());
-      spdlog::error("{}", s.faults.back());
-    }
-  }
-  s.gate = gate::gate_to_json(report);
-  std::cout << summary_to_text(s);
-  if (!options.summary_json_path.empty()) {
-    std::ofstream out(options.summary_json_path);
-    out << summary_to_json(s).dump(2) << "\n";
-    if (!out) {
-      spdlog::error("{}: cannot write the summary", options.summary_json_path);
-      return kExitRuntimeFault;
-    }
-  }
-  return s.faults.empty() ? kExitOk : kExitRuntimeFault;
+  summarise_log(log, s);
+  return report(options, s);
 }
 
 }  // namespace hapticd::service

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "service/config_source.h"
+#include "service/stop_signals.h"
 
 namespace hapticd::service {
 
@@ -16,7 +17,8 @@ struct RunOptions {
   std::string summary_json_path;
 };
 
-// Returns the process exit code (DESIGN.md §9).
-int run_command(const RunOptions& options);
+// Returns the process exit code (DESIGN.md §9). A stop signal taken from `signals` at any
+// moment before output is enabled means output is never enabled (exit 0, 0 ticks).
+int run_command(const RunOptions& options, SignalWatch& signals);
 
 }  // namespace hapticd::service

@@ -46,7 +46,13 @@ json summary_to_json(const RunSummary& s) {
   j["log_path"] = s.log_path.empty() ? json(nullptr) : json(s.log_path);
   j["log_records_written"] = s.log_records_written;
   j["log_records_dropped"] = s.log_records_dropped;
+  j["log_records_lost"] = s.log_records_lost;
   j["log_io_errors"] = s.log_io_errors;
+  j["previous_log"] = s.previous_log.empty() ? json(nullptr) : json(s.previous_log);
+  j["output_was_enabled"] = s.output_was_enabled;
+  j["device"] = {{"name", s.device_name},
+                 {"final_command", s.final_command},
+                 {"output_enabled", s.final_output_enabled}};
   j["rt"] = {{"sched_fifo", s.rt.fifo},
              {"priority", s.rt.priority},
              {"memory_locked", s.rt.memory_locked},
@@ -66,7 +72,8 @@ std::string summary_to_text(const RunSummary& s) {
   os << "hapticd run: " << s.loop.ticks << " ticks, "
      << format_number(j["duration_s"].get<double>()) << " s at "
      << format_number(1.0 / s.sample_period_s) << " Hz (" << j["clock"].get<std::string>()
-     << "), stopped by " << s.stop_reason << "\n";
+     << "), stopped by " << s.stop_reason
+     << (s.output_was_enabled ? "" : " before output was enabled") << "\n";
   if (s.realtime) {
     os << "  RT             "
        << (s.rt.fifo ? "SCHED_FIFO " + std::to_string(s.rt.priority) : "SCHED_OTHER")
@@ -86,8 +93,15 @@ std::string summary_to_text(const RunSummary& s) {
   }
   if (!s.log_path.empty()) {
     os << "  tick log       " << s.log_path << ": " << s.log_records_written << " records, "
-       << s.log_records_dropped << " dropped" << (s.log_io_errors ? ", WRITE ERRORS" : "") << "\n";
+       << s.log_records_dropped << " dropped";
+    if (s.log_io_errors) os << ", " << s.log_records_lost << " lost to WRITE ERRORS";
+    os << "\n";
+    if (!s.previous_log.empty())
+      os << "                 (the previous log is now " << s.previous_log << ")\n";
   }
+  os << "  output         " << s.device_name << ": "
+     << (s.final_output_enabled ? "STILL ENABLED" : "disabled") << ", last command "
+     << format_number(s.final_command) << " N\n";
   os << "  faults         "
      << (s.faults.empty() ? std::string("none") : std::to_string(s.faults.size())) << "\n";
   for (const std::string& f : s.faults) os << "    " << f << "\n";

@@ -23,9 +23,15 @@ struct RunSummary {
   std::optional<double> operator_work_j;  // sim only
   std::string log_path;                   // "" when no log was written
   std::uint64_t log_records_written = 0;
-  std::uint64_t log_records_dropped = 0;
+  std::uint64_t log_records_dropped = 0;  // by the full RT ring
+  std::uint64_t log_records_lost = 0;     // to write errors (disk full, size limit)
   std::uint64_t log_io_errors = 0;
-  std::string stop_reason;  // "duration", "signal SIGTERM", "fault"
+  std::string previous_log;         // where a log already at log_path was kept, "" if none
+  std::string stop_reason;          // "duration", "signal SIGTERM", "fault"
+  bool output_was_enabled = false;  // false: stopped before output was ever enabled
+  std::string device_name;
+  double final_command = 0.0;         // Device::last_command() once output was disabled
+  bool final_output_enabled = false;  // Device::output_enabled() then
   nlohmann::json gate;
 };
 

@@ -1,38 +1,21 @@
 #include "service/run_threads.h"
 
-#include <signal.h>
+#include <poll.h>
 #include <spdlog/spdlog.h>
+#include <sys/eventfd.h>
 #include <systemd/sd-daemon.h>
+#include <unistd.h>
 
+#include <cerrno>
 #include <chrono>
+#include <cstdint>
+#include <system_error>
 
 namespace hapticd::service {
-namespace {
-
-// SIGUSR1 is how the RT thread says "the loop has ended" to a supervisor in sigtimedwait.
-constexpr int kLoopEnded = SIGUSR1;
-
-sigset_t run_signals() {
-  sigset_t s;
-  sigemptyset(&s);
-  sigaddset(&s, SIGINT);
-  sigaddset(&s, SIGTERM);
-  sigaddset(&s, kLoopEnded);
-  return s;
-}
-
-}  // namespace
-
-void block_run_signals() {
-  const sigset_t s = run_signals();
-  pthread_sigmask(SIG_BLOCK, &s, nullptr);
-  // A tick log reaching a file-size limit must fail its write (counted, reported), not kill
-  // the process with the motor enabled.
-  signal(SIGXFSZ, SIG_IGN);
-}
 
 RtThread::RtThread(loop::ServoLoop& loop, int priority, int cpu, bool realtime, loop::RtStatus& rt)
-    : loop_(loop), supervisor_(pthread_self()) {
+    : loop_(loop), ended_fd_(eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK)) {
+  if (ended_fd_ < 0) throw std::system_error(errno, std::system_category(), "eventfd");
   thread_ = std::thread([this, priority, cpu, realtime, &rt] {
     try {
       if (realtime) loop::configure_rt_thread(priority, cpu, rt);
@@ -42,13 +25,16 @@ RtThread::RtThread(loop::ServoLoop& loop, int priority, int cpu, bool realtime, 
     ready_.store(true, std::memory_order_release);  // publishes rt and error_
     if (error_.empty()) result_ = loop_.run(stop_);
     finished_.store(true, std::memory_order_release);
-    pthread_kill(supervisor_, kLoopEnded);
+    const std::uint64_t one = 1;
+    // Cannot fail short of a bad descriptor; the supervisor's poll time-out is the fallback.
+    [[maybe_unused]] const ssize_t n = write(ended_fd_, &one, sizeof one);
   });
 }
 
 RtThread::~RtThread() {
   stop_.store(true);
   if (thread_.joinable()) thread_.join();
+  close(ended_fd_);
 }
 
 std::string RtThread::wait_ready() {
@@ -58,18 +44,17 @@ std::string RtThread::wait_ready() {
   return error_;
 }
 
-std::string RtThread::supervise() {
+std::string RtThread::supervise(SignalWatch& signals) {
   std::string reason = "duration";
-  const sigset_t sigs = run_signals();
   std::uint64_t watchdog_usec = 0;
   const bool watchdog = sd_watchdog_enabled(0, &watchdog_usec) > 0;
   std::uint64_t last_ticks = 0;
+  pollfd fds[2] = {{signals.fd(), POLLIN, 0}, {ended_fd_, POLLIN, 0}};
   while (!finished_.load(std::memory_order_acquire)) {
-    const timespec wait{0, 50'000'000};
-    const int sig = sigtimedwait(&sigs, nullptr, &wait);
-    if ((sig == SIGINT || sig == SIGTERM) && !stop_.load()) {
-      reason = sig == SIGINT ? "signal SIGINT" : "signal SIGTERM";
-      spdlog::info("{} received: stopping", sig == SIGINT ? "SIGINT" : "SIGTERM");
+    poll(fds, 2, 50);  // the time-out paces the watchdog
+    if (const auto sig = signals.take_pending(); sig && !stop_.load()) {
+      reason = "signal " + signal_name(*sig);
+      spdlog::info("{} received: stopping", signal_name(*sig));
       sd_notify(0, "STOPPING=1");
       stop_.store(true);
     }

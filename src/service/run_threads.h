@@ -1,5 +1,5 @@
 // The threads of `hapticd run`: the RT thread that owns the servo loop, and the supervisor
-// (the calling thread) that turns SIGINT/SIGTERM into a stop request, feeds the systemd
+// (the calling thread) that turns a stop signal into a stop request, feeds the systemd
 // watchdog while ticks advance, and wakes the moment the loop ends.
 #pragma once
 
@@ -10,14 +10,9 @@
 #include "drivers/device.h"
 #include "loop/rt_setup.h"
 #include "loop/servo_loop.h"
+#include "service/stop_signals.h"
 
 namespace hapticd::service {
-
-// Blocks SIGINT, SIGTERM and the loop's end-of-run signal in the calling thread. Call first,
-// before any thread exists: every thread inherits the mask, so the signals are only ever
-// taken synchronously by the supervisor and can never kill the process with output enabled.
-// Also ignores SIGXFSZ, so a tick log at its size limit fails a write instead.
-void block_run_signals();
 
 // Disables the device's output when it goes out of scope, whatever the path (exceptions
 // included): output is never left enabled behind the loop's back.
@@ -35,7 +30,8 @@ class OutputGuard {
 class RtThread {
  public:
   // Starts the RT thread: it configures itself (SCHED_FIFO, CPU) when `realtime`, publishes
-  // `rt`, runs the loop, then wakes the supervisor.
+  // `rt`, runs the loop, then wakes the supervisor. Throws std::system_error when the wake-up
+  // channel cannot be created.
   RtThread(loop::ServoLoop& loop, int priority, int cpu, bool realtime, loop::RtStatus& rt);
   // Requests a stop and joins: the loop never outlives its owner.
   ~RtThread();
@@ -45,13 +41,13 @@ class RtThread {
   // Blocks until the RT thread has configured itself; returns why it could not ("" if it did).
   std::string wait_ready();
   // Supervises until the loop ends; returns what stopped it ("duration", "signal SIGTERM").
-  std::string supervise();
+  std::string supervise(SignalWatch& signals);
   // After supervise(): what the loop did.
   const loop::LoopResult& result() const { return result_; }
 
  private:
   loop::ServoLoop& loop_;
-  pthread_t supervisor_;
+  int ended_fd_ = -1;  // eventfd the RT thread writes once the loop has returned
   std::atomic<bool> stop_{false};
   std::atomic<bool> ready_{false};
   std::atomic<bool> finished_{false};

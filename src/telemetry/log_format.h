@@ -27,9 +27,10 @@
 //        56 f64 force_commanded, 64 u32 flags (TickFlag bits), 68 u32 device_status
 //
 // CRC-32 is the common one (zlib crc32, Python zlib.crc32: reflected polynomial 0xEDB88320,
-// initial value and final xor 0xFFFFFFFF). A reader accepts blocks in order and stops at the
-// first block that is incomplete or fails its checks; everything before it is valid, which
-// is what a log cut short by a crash looks like.
+// initial value and final xor 0xFFFFFFFF). A reader accepts blocks in order; a block that is
+// incomplete or fails its checks is skipped up to the next "HBLK" whose block is complete and
+// CRC-valid (a damaged stretch in the middle), and when none follows, reading ends there
+// (what a log cut short by a crash looks like).
 #pragma once
 
 #include <array>

@@ -22,7 +22,8 @@ V load(const std::byte* at) noexcept {
 // truncation and not a foreign file.
 template <std::size_t N>
 bool magic_prefix_matches(std::span<const std::byte> bytes, const std::array<char, N>& magic) {
-  return std::memcmp(bytes.data(), magic.data(), std::min(bytes.size(), N)) == 0;
+  const std::size_t n = std::min(bytes.size(), N);
+  return n == 0 || std::memcmp(bytes.data(), magic.data(), n) == 0;  // no memcmp on nullptr
 }
 
 std::string at_byte(std::size_t offset) { return " at byte " + std::to_string(offset); }
@@ -55,6 +56,61 @@ std::size_t read_header(std::span<const std::byte> bytes, const std::string& nam
   return crc_at + kCrcSize;
 }
 
+// One block at the start of `block`: its size when it is complete and intact, else 0 with
+// the reason (offset is for the message).
+std::size_t check_block(std::span<const std::byte> block, std::size_t offset, std::string& why) {
+  if (!magic_prefix_matches(block, kBlockMagic)) {
+    why = "bad block magic" + at_byte(offset);
+    return 0;
+  }
+  if (block.size() < kBlockHeaderSize) {
+    why = "incomplete block" + at_byte(offset) + " (log cut short)";
+    return 0;
+  }
+  const BlockHeader h = decode_block_header(block);
+  if (h.record_count > kMaxBlockRecords) {
+    why = "corrupt block header" + at_byte(offset) + " (record count " +
+          std::to_string(h.record_count) + ")";
+    return 0;
+  }
+  const std::size_t size = block_size(h.record_count);
+  if (block.size() < size) {
+    why = "incomplete block" + at_byte(offset) + " (log cut short)";
+    return 0;
+  }
+  const auto payload = block.subspan(kBlockHeaderSize, size - kBlockHeaderSize);
+  if (crc32_update(crc32_update(0, block.first(kBlockCrcOffset)), payload) != h.crc) {
+    why = "CRC mismatch in block" + at_byte(offset);
+    return 0;
+  }
+  return size;
+}
+
+// The offset of the next intact block after a bad one at `from`, or bytes.size() if none:
+// one flipped bit must not cost every later block of the log.
+std::size_t resynchronise(std::span<const std::byte> bytes, std::size_t from) {
+  std::string ignored;
+  for (std::size_t at = from + 1; at + kBlockHeaderSize <= bytes.size(); ++at) {
+    if (std::memcmp(bytes.data() + at, kBlockMagic.data(), kBlockMagic.size()) == 0 &&
+        check_block(bytes.subspan(at), at, ignored) != 0) {
+      return at;
+    }
+  }
+  return bytes.size();
+}
+
+void accept_block(std::span<const std::byte> block, std::size_t size, LogContents& contents) {
+  const BlockHeader h = decode_block_header(block);
+  if (h.record_count > 0) {  // a loss marker has no records: no memcpy into a null vector
+    const std::size_t old = contents.records.size();
+    contents.records.resize(old + h.record_count);
+    std::memcpy(contents.records.data() + old, block.data() + kBlockHeaderSize,
+                size - kBlockHeaderSize);
+  }
+  contents.dropped_records += h.dropped_before;
+  ++contents.complete_blocks;
+}
+
 }  // namespace
 
 LogContents read_log_bytes(std::span<const std::byte> bytes, const std::string& name) {
@@ -62,37 +118,19 @@ LogContents read_log_bytes(std::span<const std::byte> bytes, const std::string& 
   std::size_t offset = read_header(bytes, name, contents.header);
   contents.records.reserve((bytes.size() - offset) / kRecordSize);
   while (offset < bytes.size()) {
-    const auto block = bytes.subspan(offset);
-    if (!magic_prefix_matches(block, kBlockMagic)) {
-      contents.trailing_reason = "bad block magic" + at_byte(offset);
+    std::string why;
+    if (const std::size_t size = check_block(bytes.subspan(offset), offset, why); size != 0) {
+      accept_block(bytes.subspan(offset), size, contents);
+      offset += size;
+      continue;
+    }
+    const std::size_t next = resynchronise(bytes, offset);
+    if (next == bytes.size()) {
+      contents.trailing_reason = why;
       break;
     }
-    if (block.size() < kBlockHeaderSize) {
-      contents.trailing_reason = "incomplete block" + at_byte(offset) + " (log cut short)";
-      break;
-    }
-    const BlockHeader h = decode_block_header(block);
-    if (h.record_count > kMaxBlockRecords) {
-      contents.trailing_reason = "corrupt block header" + at_byte(offset) + " (record count " +
-                                 std::to_string(h.record_count) + ")";
-      break;
-    }
-    const std::size_t size = block_size(h.record_count);
-    if (block.size() < size) {
-      contents.trailing_reason = "incomplete block" + at_byte(offset) + " (log cut short)";
-      break;
-    }
-    const auto payload = block.subspan(kBlockHeaderSize, size - kBlockHeaderSize);
-    if (crc32_update(crc32_update(0, block.first(kBlockCrcOffset)), payload) != h.crc) {
-      contents.trailing_reason = "CRC mismatch in block" + at_byte(offset);
-      break;
-    }
-    const std::size_t old = contents.records.size();
-    contents.records.resize(old + h.record_count);
-    std::memcpy(contents.records.data() + old, payload.data(), payload.size());
-    contents.dropped_records += h.dropped_before;
-    ++contents.complete_blocks;
-    offset += size;
+    contents.skipped.push_back({offset, next - offset, why});
+    offset = next;
   }
   contents.trailing_bytes_ignored = bytes.size() - offset;
   return contents;

@@ -1,6 +1,7 @@
 // Reads a binary tick log (format in log_format.h), including one cut short by a crash or
-// a full disk: every complete, CRC-valid block is returned, and the first block that is not
-// ends the read with the reason and the number of bytes ignored. Not RT-safe.
+// a full disk, or damaged in the middle: every complete, CRC-valid block is returned; a bad
+// block is skipped up to the next intact block header (reported in `skipped`), and when no
+// intact block follows, the read ends with the reason and the bytes ignored. Not RT-safe.
 #pragma once
 
 #include <cstddef>
@@ -15,12 +16,23 @@
 
 namespace hapticd::telemetry {
 
+// A stretch of a log that did not parse as intact blocks but was followed by one that did.
+struct SkippedRegion {
+  std::size_t offset = 0;  // first byte skipped
+  std::size_t bytes = 0;
+  std::string
+      reason;  // why the block at `offset` was refused, e.g. "CRC mismatch in block at byte 4242"
+};
+
 struct LogContents {
   LogHeader header;
   std::vector<TickRecord> records;           // every record of every accepted block, in file order
   std::size_t complete_blocks = 0;           // blocks accepted, loss markers included
   std::uint64_t dropped_records = 0;         // sum of dropped_before: ticks missing from the log
   std::uint64_t trailing_bytes_ignored = 0;  // bytes after the last accepted block
+  // Corrupt stretches passed over to reach later intact blocks (the reader resynchronises on
+  // the next block header whose CRC holds); the ticks they held are missing from `records`.
+  std::vector<SkippedRegion> skipped;
   // "" when the whole file was read, else why reading stopped, e.g.
   // "incomplete block at byte 4242 (log cut short)", "CRC mismatch in block at byte 4242",
   // "bad block magic at byte 4242", "corrupt block header at byte 4242 (record count 9999999)".

@@ -20,7 +20,7 @@ void check_block_records(std::size_t max_block_records) {
 }
 
 int open_log(const std::string& path) {
-  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
   if (fd < 0) throw std::runtime_error(path + ": cannot open tick log: " + std::strerror(errno));
   return fd;
 }
@@ -97,7 +97,10 @@ std::uint64_t LogWriter::records_written() const noexcept {
   return records_written_.load(std::memory_order_relaxed);
 }
 std::uint64_t LogWriter::records_dropped() const noexcept {
-  return records_dropped_.load(std::memory_order_relaxed);
+  return ring_dropped_.load(std::memory_order_relaxed);
+}
+std::uint64_t LogWriter::records_lost() const noexcept {
+  return io_lost_.load(std::memory_order_relaxed);
 }
 std::uint64_t LogWriter::io_errors() const noexcept {
   return io_errors_.load(std::memory_order_acquire);
@@ -135,7 +138,9 @@ void LogWriter::drain(bool final) {
 
 void LogWriter::append_block(std::span<const TickRecord> records, std::uint64_t first_tick,
                              std::uint64_t dropped_before) {
-  // Records that earlier failed to reach the disk are reported with the next block that does.
+  // The ring's loss is known now, whether or not its marker reaches the disk.
+  ring_dropped_.fetch_add(dropped_before, std::memory_order_relaxed);
+  // Records that earlier failed to reach the disk are marked with the next block that does.
   const std::uint64_t marker = pending_loss_ + dropped_before;
   const std::size_t size = encode_block(block_bytes_, first_tick, marker, records);
   const int err = write_all(fd_, block_bytes_.data(), size);
@@ -143,10 +148,10 @@ void LogWriter::append_block(std::span<const TickRecord> records, std::uint64_t 
     good_end_ += static_cast<off_t>(size);
     pending_loss_ = 0;
     records_written_.fetch_add(records.size(), std::memory_order_relaxed);
-    records_dropped_.fetch_add(marker, std::memory_order_relaxed);
     return;
   }
   note_error("write failed", err);
+  io_lost_.fetch_add(records.size(), std::memory_order_relaxed);
   pending_loss_ = marker + records.size();
   tail_dirty_ = true;
   // Rewind so the next block overwrites the partial one and the log stays readable past it

@@ -29,7 +29,9 @@ class LogWriter {
   // the records alone and two runs with the same records are byte-identical (freerun).
   enum class Flush { kEveryPoll, kFullBlocks };
 
-  // Creates or truncates path and writes the file header. Throws std::runtime_error
+  // Creates path, which must not exist yet (keep_previous_log() makes it free; a symlink or
+  // anything else planted there meanwhile is refused, never followed or truncated), and writes
+  // the file header. Throws std::runtime_error
   // "PATH: cannot open tick log: REASON" when the file cannot be created or the header cannot
   // be written, std::invalid_argument for max_block_records outside 1..kMaxBlockRecords or a
   // configuration text over kMaxConfigBytes. The ring must outlive the writer; the writer is
@@ -56,10 +58,12 @@ class LogWriter {
 
   // Records that are in the log (their block was written completely).
   std::uint64_t records_written() const noexcept;
-  // Records missing from the log and marked there (the dropped_before fields written so
-  // far): the ring's drops, plus records whose block failed to write. Without I/O errors,
-  // after stop() this equals ring.dropped().
+  // Records the RT ring dropped because it was full, as reported to the writer so far; after
+  // stop() this equals ring.dropped(). They are marked in the log (dropped_before).
   std::uint64_t records_dropped() const noexcept;
+  // Records that left the ring but never reached the disk (their block failed to write:
+  // disk full, file-size limit). Marked in the log like drops when a later write succeeds.
+  std::uint64_t records_lost() const noexcept;
   // Failed or short writes, failed fdatasync/close. Never thrown from the thread.
   std::uint64_t io_errors() const noexcept;
   // The first I/O error as "PATH: what failed: strerror" (later ones are usually its
@@ -90,7 +94,8 @@ class LogWriter {
   std::uint64_t next_tick_ = 0;         // tick after the last record popped
 
   std::atomic<std::uint64_t> records_written_{0};
-  std::atomic<std::uint64_t> records_dropped_{0};
+  std::atomic<std::uint64_t> ring_dropped_{0};
+  std::atomic<std::uint64_t> io_lost_{0};
   std::atomic<std::uint64_t> io_errors_{0};
   mutable std::mutex error_mutex_;
   std::string first_error_;
@@ -103,7 +108,8 @@ class LogWriter {
   bool stopped_ = false;
 };
 
-// Writes a complete log of records in blocks of at most max_block_records, then fdatasync.
+// Writes a complete log of records to a new file (path must not exist) in blocks of at most
+// max_block_records, then fdatasync.
 // Throws std::runtime_error "PATH: cannot open tick log: REASON" or "PATH: cannot write tick
 // log: REASON", std::invalid_argument as LogWriter does.
 void write_log_file(const std::string& path, const LogHeader& header,

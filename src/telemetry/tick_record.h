@@ -15,7 +15,8 @@ enum TickFlag : std::uint32_t {
   kFlagOverrun = 1u << 3,        // this tick finished after the next deadline
   kFlagNoPullClamped = 1u << 4,  // wall.no_pull turned a pulling force into zero
   kFlagStale = 1u << 5,          // the device had no new position this tick
-  kFlagUnarmed = 1u << 6,  // started inside the wall: zero force until the device first leaves
+  kFlagUnarmed = 1u << 6,    // started inside the wall: zero force until the device first leaves
+  kFlagNonFinite = 1u << 7,  // the controller computed a non-finite force: zero commanded, fault
 };
 
 struct TickRecord {

@@ -83,14 +83,20 @@ TEST(ConfigErrors, RangesSayWhatIsAllowed) {
   EXPECT_EQ(errors_of("loop:\n  rt_priority: 0\n"),
             Lines{"t.yaml:2: loop.rt_priority: must be in 1..99, got '0'"});
   EXPECT_EQ(errors_of("loop:\n  rate_hz: 2e6\n"),
-            Lines{"t.yaml:2: loop.rate_hz: must be in (0, 100000], got '2e6'"});
+            Lines{"t.yaml:2: loop.rate_hz: must be in [1, 100000], got '2e6'"});
   EXPECT_EQ(errors_of("loop:\n  cpu: -2\n"), Lines{"t.yaml:2: loop.cpu: must be >= -1, got '-2'"});
   EXPECT_EQ(errors_of("loop:\n  overrun_fault_streak: 0\n"),
             Lines{"t.yaml:2: loop.overrun_fault_streak: must be >= 1, got '0'"});
-  EXPECT_EQ(errors_of("wall:\n  delay_samples: 1001\n"),
-            Lines{"t.yaml:2: wall.delay_samples: must be in 0..1000, got '1001'"});
+  EXPECT_EQ(errors_of("wall:\n  delay_samples: 101\n"),
+            Lines{"t.yaml:2: wall.delay_samples: must be in 0..100, got '101'"});
   EXPECT_EQ(errors_of("telemetry:\n  ring_capacity: 10\n"),
-            Lines{"t.yaml:2: telemetry.ring_capacity: must be >= 64, got '10'"});
+            Lines{"t.yaml:2: telemetry.ring_capacity: must be in 64..4194304, got '10'"});
+  // Issue 7: no upper bound meant bad_alloc (exit 1) instead of a configuration error.
+  EXPECT_EQ(errors_of("telemetry:\n  ring_capacity: 4294967295\n"),
+            Lines{"t.yaml:2: telemetry.ring_capacity: must be in 64..4194304, got '4294967295'"});
+  // Issue 7: 1e-320 Hz made T infinite, and the gate passed.
+  EXPECT_EQ(errors_of("loop:\n  rate_hz: 0.5\n"),
+            Lines{"t.yaml:2: loop.rate_hz: must be in [1, 100000], got '0.5'"});
   EXPECT_EQ(errors_of("device:\n  sim:\n    seed: -1\n"),
             Lines{"t.yaml:3: device.sim.seed: must be >= 0, got '-1'"});
 }
@@ -98,7 +104,7 @@ TEST(ConfigErrors, RangesSayWhatIsAllowed) {
 TEST(ConfigErrors, BoundaryValuesAreAccepted) {
   const Config c = load_config_text(
       "loop:\n  rate_hz: 100000\n  rt_priority: 99\n  cpu: -1\n"
-      "wall:\n  normal: -1\n  stiffness: 0\n  delay_samples: 1000\n"
+      "wall:\n  normal: -1\n  stiffness: 0\n  delay_samples: 100\n"
       "safety:\n  passivity_margin: 0\n"
       "telemetry:\n  ring_capacity: 64\n",
       "t.yaml");
@@ -106,7 +112,7 @@ TEST(ConfigErrors, BoundaryValuesAreAccepted) {
   EXPECT_EQ(c.loop.rt_priority, 99);
   EXPECT_EQ(c.wall.normal, -1);
   EXPECT_EQ(c.wall.stiffness, 0.0);
-  EXPECT_EQ(c.wall.delay_samples, 1000);
+  EXPECT_EQ(c.wall.delay_samples, 100);
   EXPECT_EQ(c.safety.passivity_margin, 0.0);
   EXPECT_EQ(c.telemetry.ring_capacity, 64u);
 }
@@ -177,11 +183,11 @@ TEST(ConfigErrors, AllErrorsOfADocumentInDocumentOrder) {
       "  rate_hz: 0\n"    // 7
       "  clock: fast\n";  // 8
   EXPECT_EQ(errors_of(yaml),
-            (Lines{"t.yaml:2: telemetry.ring_capacity: must be >= 64, got '1'",
+            (Lines{"t.yaml:2: telemetry.ring_capacity: must be in 64..4194304, got '1'",
                    "t.yaml:4: wall.stiffness: must be >= 0, got '-1'",
                    "t.yaml:5: wall.colour: unknown key; expected one of: position, normal, "
                    "stiffness, damping, discretization, delay_samples, no_pull, coupling",
-                   "t.yaml:7: loop.rate_hz: must be in (0, 100000], got '0'",
+                   "t.yaml:7: loop.rate_hz: must be in [1, 100000], got '0'",
                    "t.yaml:8: loop.clock: must be one of realtime, freerun; got 'fast'"}));
 }
 

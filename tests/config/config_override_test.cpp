@@ -99,7 +99,7 @@ TEST(Set, FileErrorsFirstThenSetErrorsInCommandLineOrder) {
   EXPECT_EQ(errors_of("wall:\n  damping: -1\n",
                       sets({"loop.rate_hz=0", "wall.stiffness=-2", "loop.cpu=-3"})),
             (Lines{"t.yaml:2: wall.damping: must be >= 0, got '-1'",
-                   "--set loop.rate_hz=0: loop.rate_hz: must be in (0, 100000], got '0'",
+                   "--set loop.rate_hz=0: loop.rate_hz: must be in [1, 100000], got '0'",
                    "--set wall.stiffness=-2: wall.stiffness: must be >= 0, got '-2'",
                    "--set loop.cpu=-3: loop.cpu: must be >= -1, got '-3'"}));
 }

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "alloc_counter.h"
@@ -48,6 +49,23 @@ TEST(Controller, BackwardWallIsKXiPlusBDifferenceOfXi) {
     EXPECT_NEAR(o.force_commanded, -f, 1e-12) << "k=" << k;  // n = +1: u = -f
     EXPECT_EQ((o.flags & kFlagContact) != 0, xi[k] > 0) << "k=" << k;
     EXPECT_DOUBLE_EQ(o.penetration, x[k]);
+  }
+}
+
+// Issue 7: `std::abs(u) > max_force` let a NaN through, and copysign would have turned it
+// into full force. A non-finite force must command nothing and say so.
+TEST(Controller, ANonFiniteForceIsNeverCommanded) {
+  for (const double bad :
+       {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::quiet_NaN()}) {
+    ControlLaw law = pure_law(wall(1000, 0.5));
+    law.environment.num[0] = bad;
+    law.e0 = bad;
+    Controller ctl(law);
+    const ControlOutput o = ctl.step(0.001);
+    EXPECT_FALSE(std::isfinite(o.force_computed));
+    EXPECT_EQ(o.force_commanded, 0.0);
+    EXPECT_TRUE(o.flags & telemetry::kFlagNonFinite);
+    EXPECT_FALSE(o.flags & kFlagSaturated);
   }
 }
 
@@ -169,6 +187,45 @@ TEST(ControlLaw, RejectsNegativeCouplingFeedThrough) {
   config::Config c = wall(1000, 0.0);
   c.wall.coupling = {true, {-0.1}, {1.0}};
   EXPECT_THROW(make_control_law(c), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace hapticd::control
+
+#include "config/config_loader.h"
+#include "control/derived_check.h"
+
+namespace hapticd::control {
+namespace {
+
+std::vector<std::string> derived_errors(const config::Config& c) {
+  try {
+    check_derived_quantities(c);
+  } catch (const config::ConfigError& e) {
+    return e.messages();
+  }
+  return {};
+}
+
+// Issue 7: each key was in range, but what the controller and the gate derive from them was
+// not a finite number, and the gate passed.
+TEST(DerivedQuantities, OverflowsAreNamedAtTheKeyToChange) {
+  config::Config c = wall(2000, 0.2);
+  c.source_name = "t.yaml";
+  EXPECT_TRUE(derived_errors(c).empty());
+
+  c.wall.damping = 1e306;
+  EXPECT_EQ(derived_errors(c),
+            std::vector<std::string>{"t.yaml: wall.damping: makes the wall filter E(z) overflow "
+                                     "(B/T is not a finite number at T = 0.001 s)"});
+  c.wall.damping = 0.2;
+  c.wall.coupling = {true, {1e200}, {1e-200}};
+  EXPECT_EQ(derived_errors(c),
+            std::vector<std::string>{"t.yaml: wall.coupling: coefficients divided by "
+                                     "denominator[0] overflow: C(z) is not a finite filter"});
+  c.wall.coupling = {true, {1e306, 1.0}, {1.0, 0.5}};  // finite C, but 1 + E C overflows
+  ASSERT_EQ(derived_errors(c).size(), 1u);
+  EXPECT_NE(derived_errors(c)[0].find("wall.coupling: the contact map"), std::string::npos);
 }
 
 }  // namespace

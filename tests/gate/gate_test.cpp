@@ -137,3 +137,22 @@ TEST(GateJson, HasTheDocumentedKeysAndNulls) {
 
 }  // namespace
 }  // namespace hapticd::gate
+
+namespace hapticd::gate {
+namespace {
+
+// Issue 7: B/T overflowed to make b_req = -inf, and "-inf <= allowed" passed the gate. The
+// configuration check refuses such numbers now, but the gate must not rely on it.
+TEST(GateOverflow, ANonFiniteBoundNeverPasses) {
+  config::Config c = demo();
+  c.wall.damping = 1e306;
+  const GateReport r = evaluate_gate(c, 0);
+  EXPECT_FALSE(std::isfinite(r.passivity.required_damping));
+  EXPECT_FALSE(r.passivity.passive);
+  EXPECT_FALSE(r.pass);
+  ASSERT_FALSE(r.reasons.empty());
+  EXPECT_NE(r.reasons.front().find("passivity"), std::string::npos) << r.reasons.front();
+}
+
+}  // namespace
+}  // namespace hapticd::gate

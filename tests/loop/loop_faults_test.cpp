@@ -36,6 +36,30 @@ LoopOptions freerun(std::uint64_t ticks = 100) {
   return o;
 }
 
+// Issue 7: only the sim device's own finiteness check stopped a NaN force; the loop must fault
+// and command zero whatever the device does with it.
+TEST(LoopFaults, NonFiniteForceFaultsAndCommandsZero) {
+  ScriptedDevice dev;
+  config::Config c;
+  c.wall.stiffness = 2000;
+  c.device.max_force = 10;
+  control::ControlLaw law = control::make_control_law(c);
+  law.require_outside_start = false;
+  law.environment.num[0] = std::numeric_limits<double>::quiet_NaN();
+  law.e0 = law.environment.num[0];
+  law.delay_samples = 0;
+  control::Controller ctl(law);
+  ServoLoop loop(dev, ctl, nullptr, freerun());
+  const std::atomic<bool> stop{false};
+  const LoopResult r = loop.run(stop);
+  EXPECT_EQ(r.fault.cause, FaultCause::kNonFiniteForce);
+  EXPECT_EQ(r.fault.tick, 0u);
+  EXPECT_EQ(r.ticks, 1u);
+  ASSERT_FALSE(dev.writes.empty());
+  for (double w : dev.writes) EXPECT_EQ(w, 0.0);
+  EXPECT_NE(describe(r.fault).find("non-finite force"), std::string::npos);
+}
+
 TEST(LoopFaults, DeviceReadErrorFaultsAndCommandsZero) {
   ScriptedDevice dev;
   dev.script = [](std::uint64_t k, PositionSample& s) {

@@ -42,6 +42,8 @@ class ScriptedDevice final : public Device {
   int transport_delay_samples() const noexcept override { return 0; }
   std::string_view name() const noexcept override { return "scripted"; }
   std::string describe_error() const override { return "scripted failure"; }
+  double last_command() const noexcept override { return writes.empty() ? 0.0 : writes.back(); }
+  bool output_enabled() const noexcept override { return false; }
 
  private:
   std::uint64_t reads_ = 0;

@@ -161,7 +161,8 @@ TEST(CliExport, WritesOneCsvRowPerTickAndExportsWhatSurvivesOfACutLog) {
   const std::string text = read_file(csv);
   EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 3001);  // header + 3000 ticks
   EXPECT_EQ(text.rfind("tick,scheduled_s,", 0), 0u);
-  EXPECT_NE(text.find(",stale,unarmed,device_status\n"), std::string::npos);  // every flag
+  EXPECT_NE(text.find(",stale,unarmed,non_finite,device_status\n"),
+            std::string::npos);  // every flag
   EXPECT_NE(text.find("\n2999,2.999000000,"), std::string::npos);
 
   // Cut the log mid-block, as a crash would: the complete blocks still export, with a warning.

@@ -17,13 +17,13 @@ namespace hapticd::testing {
 namespace {
 
 pid_t spawn(const std::vector<std::string>& args, const std::vector<std::string>& env, int& out_fd,
-            int& err_fd) {
+            int& err_fd, int stdout_fd = -1) {
   int out[2], err[2];
   if (pipe2(out, O_CLOEXEC) != 0 || pipe2(err, O_CLOEXEC) != 0) throw std::runtime_error("pipe");
   const pid_t pid = fork();
   if (pid < 0) throw std::runtime_error("fork");
   if (pid == 0) {
-    dup2(out[1], 1);
+    dup2(stdout_fd >= 0 ? stdout_fd : out[1], 1);
     dup2(err[1], 2);
     for (const std::string& e : env) putenv(const_cast<char*>(e.c_str()));
     std::vector<char*> argv;
@@ -46,7 +46,8 @@ pid_t spawn(const std::vector<std::string>& args, const std::vector<std::string>
 ProcessResult collect(pid_t pid, int out_fd, int err_fd) {
   ProcessResult r;
   pollfd fds[2] = {{out_fd, POLLIN, 0}, {err_fd, POLLIN, 0}};
-  int open_fds = 2;
+  int open_fds = 0;
+  for (const pollfd& f : fds) open_fds += f.fd >= 0 ? 1 : 0;
   char buf[4096];
   while (open_fds > 0) {
     if (poll(fds, 2, -1) < 0) continue;
@@ -77,6 +78,16 @@ ProcessResult run_process(const std::vector<std::string>& args,
   return collect(pid, out_fd, err_fd);
 }
 
+ProcessResult run_process_with_stdout(const std::vector<std::string>& args,
+                                      const std::string& stdout_path) {
+  const int fd = open(stdout_path.c_str(), O_WRONLY | O_CLOEXEC);
+  if (fd < 0) throw std::runtime_error("open " + stdout_path);
+  int out_fd = -1, err_fd = -1;
+  const pid_t pid = spawn(args, {}, out_fd, err_fd, fd);
+  close(fd);
+  return collect(pid, out_fd, err_fd);
+}
+
 BackgroundProcess::BackgroundProcess(const std::vector<std::string>& args,
                                      const std::vector<std::string>& env) {
   pid_ = spawn(args, env, out_fd_, err_fd_);
@@ -90,6 +101,29 @@ BackgroundProcess::~BackgroundProcess() {
 }
 
 void BackgroundProcess::signal(int sig) const { kill(pid_, sig); }
+
+bool BackgroundProcess::wait_until_blocked(int sig, int timeout_ms) const {
+  const std::string status_path = "/proc/" + std::to_string(pid_) + "/status";
+  for (int waited = 0; waited < timeout_ms; ++waited) {
+    std::ifstream in(status_path);
+    std::string line;
+    while (std::getline(in, line)) {
+      if (line.rfind("SigBlk:", 0) != 0) continue;
+      const unsigned long long mask = std::stoull(line.substr(7), nullptr, 16);
+      if (mask & (1ULL << (sig - 1))) return true;
+    }
+    if (!in.is_open() && waited > 0) return false;  // the process is gone
+    usleep(1000);
+  }
+  return false;
+}
+
+void BackgroundProcess::close_output() {
+  for (int* fd : {&out_fd_, &err_fd_}) {
+    if (*fd >= 0) close(*fd);
+    *fd = -1;
+  }
+}
 
 ProcessResult BackgroundProcess::wait() {
   const ProcessResult r = collect(pid_, out_fd_, err_fd_);

@@ -18,6 +18,11 @@ struct ProcessResult {
 ProcessResult run_process(const std::vector<std::string>& args,
                           const std::vector<std::string>& env = {});
 
+// The same with standard output opened on `stdout_path` (e.g. /dev/full) instead of a pipe;
+// ProcessResult::out stays empty.
+ProcessResult run_process_with_stdout(const std::vector<std::string>& args,
+                                      const std::string& stdout_path);
+
 // A process started in the background; wait() collects it like run_process.
 class BackgroundProcess {
  public:
@@ -25,6 +30,12 @@ class BackgroundProcess {
   ~BackgroundProcess();
   void signal(int sig) const;
   ProcessResult wait();
+  pid_t pid() const { return pid_; }
+  // Waits (up to `timeout_ms`) until the process blocks `sig`: from then on a signal cannot
+  // kill it, which is when a test may send one. False on time-out or exit.
+  bool wait_until_blocked(int sig, int timeout_ms = 5000) const;
+  // Closes the read ends of its stdout and stderr pipes, as `| head` does when it is done.
+  void close_output();
 
  private:
   pid_t pid_ = -1;

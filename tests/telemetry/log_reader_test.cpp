@@ -122,30 +122,72 @@ TEST(LogReader, CutFilesOnDiskReadTheSameWay) {
   }
 }
 
-TEST(LogReader, FlippedByteStopsAtTheDamagedBlock) {
+// Issue 7: one flipped bit in a block used to cost every later intact block of the log.
+TEST(LogReader, FlippedByteSkipsOnlyTheDamagedBlock) {
   FiveBlockLog log;
   const std::size_t damaged = 2;
   const std::size_t start = log.block_start(damaged);
   const std::string where = "at byte " + std::to_string(start);
+  std::vector<TickRecord> survivors = log.first_blocks(damaged);
+  survivors.insert(survivors.end(), log.records.begin() + (damaged + 1) * FiveBlockLog::kPerBlock,
+                   log.records.end());
   for (std::size_t i = 0; i < log.block_bytes; ++i) {
     SCOPED_TRACE("flipped byte " + std::to_string(i) + " of block 2");
     std::vector<std::byte> bytes = log.bytes;
     bytes[start + i] ^= std::byte{0xff};
     const LogContents c = read_log_bytes(bytes, "mem.htl");
-    ASSERT_TRUE(records_identical(c.records, log.first_blocks(damaged)));
-    ASSERT_EQ(c.complete_blocks, damaged);
-    ASSERT_EQ(c.trailing_bytes_ignored, bytes.size() - start);
+    ASSERT_TRUE(records_identical(c.records, survivors));
+    ASSERT_EQ(c.complete_blocks, FiveBlockLog::kBlocks - 1);
+    ASSERT_EQ(c.trailing_reason, "");
+    ASSERT_EQ(c.trailing_bytes_ignored, 0u);
+    ASSERT_EQ(c.skipped.size(), 1u);
+    ASSERT_EQ(c.skipped[0].offset, start);
+    ASSERT_EQ(c.skipped[0].bytes, log.block_bytes);
+    const std::string& why = c.skipped[0].reason;
     if (i < 4) {
-      ASSERT_EQ(c.trailing_reason, "bad block magic " + where);
+      ASSERT_EQ(why, "bad block magic " + where);
     } else if (i < 6) {  // the record count grows past the end of the file
-      ASSERT_EQ(c.trailing_reason, "incomplete block " + where + " (log cut short)");
+      ASSERT_EQ(why, "incomplete block " + where + " (log cut short)");
     } else if (i < 8) {  // the record count exceeds kMaxBlockRecords
-      ASSERT_EQ(c.trailing_reason.rfind("corrupt block header " + where + " (record count ", 0), 0u)
-          << c.trailing_reason;
+      ASSERT_EQ(why.rfind("corrupt block header " + where + " (record count ", 0), 0u) << why;
     } else {
-      ASSERT_EQ(c.trailing_reason, "CRC mismatch in block " + where);
+      ASSERT_EQ(why, "CRC mismatch in block " + where);
     }
   }
+}
+
+TEST(LogReader, DamageInTheLastBlockEndsTheReadThere) {
+  FiveBlockLog log;
+  const std::size_t last = FiveBlockLog::kBlocks - 1;
+  std::vector<std::byte> bytes = log.bytes;
+  bytes[log.block_start(last) + 40] ^= std::byte{0x01};
+  const LogContents c = read_log_bytes(bytes, "mem.htl");
+  EXPECT_TRUE(records_identical(c.records, log.first_blocks(last)));
+  EXPECT_TRUE(c.skipped.empty());
+  EXPECT_EQ(c.trailing_reason,
+            "CRC mismatch in block at byte " + std::to_string(log.block_start(last)));
+  EXPECT_EQ(c.trailing_bytes_ignored, log.block_bytes);
+}
+
+// Issue 7 (UB under the sanitizers): memcmp(nullptr, magic, 0) on an empty file.
+TEST(LogReader, EmptyInputIsATruncatedHeader) {
+  const std::vector<std::byte> none;
+  EXPECT_EQ(format_error(none), "mem.htl: truncated header");
+}
+
+// Issue 7 (UB under the sanitizers): memcpy(nullptr, ..., 0) when the first block is a loss
+// marker, which the daemon writes itself when the disk fills right after the header.
+TEST(LogReader, ALogWhoseFirstBlockIsALossMarkerReads) {
+  const LogHeader header = sample_header();
+  std::vector<std::byte> bytes = encode_file_header(header);
+  std::vector<std::byte> marker(block_size(0));
+  ASSERT_EQ(encode_block(marker, 0, 42, {}), block_size(0));
+  bytes.insert(bytes.end(), marker.begin(), marker.end());
+  const LogContents c = read_log_bytes(bytes, "mem.htl");
+  EXPECT_TRUE(c.records.empty());
+  EXPECT_EQ(c.complete_blocks, 1u);
+  EXPECT_EQ(c.dropped_records, 42u);
+  EXPECT_EQ(c.trailing_reason, "");
 }
 
 TEST(LogReader, RejectsFilesThatAreNotTickLogs) {
