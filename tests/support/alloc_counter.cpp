@@ -10,14 +10,15 @@ thread_local std::uint64_t t_allocations = 0;
 
 namespace hapticd::testing {
 std::uint64_t thread_allocations() noexcept { return t_allocations; }
-#if defined(__SANITIZE_ADDRESS__)
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
 bool malloc_is_counted() noexcept { return false; }
 #else
 bool malloc_is_counted() noexcept { return true; }
 #endif
 }  // namespace hapticd::testing
 
-#if !defined(__SANITIZE_ADDRESS__)
+#if !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
+// Under ASan and TSan the sanitizer owns malloc: only operator new is counted there.
 extern "C" {
 void* __libc_malloc(std::size_t);
 void* __libc_calloc(std::size_t, std::size_t);
