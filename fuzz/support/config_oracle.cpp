@@ -1,0 +1,113 @@
+#include "support/config_oracle.h"
+
+#include <cmath>
+#include <cstddef>
+#include <cstdio>
+#include <string>
+#include <unordered_set>
+
+#include "control/control_law.h"
+#include "drivers/transport_delay.h"
+#include "gate/gate.h"
+#include "gate/gate_report_format.h"
+#include "support/check.h"
+
+namespace hapticd::fuzz {
+namespace {
+
+std::string show(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+void require_finite(double v, std::string_view what) { require(std::isfinite(v), what, show(v)); }
+
+// The coefficients the RT thread will multiply by every tick.
+void require_finite_taps(const control::FilterCoefficients& f, std::string_view what) {
+  for (std::size_t i = 0; i < f.num_taps; ++i) require_finite(f.num[i], what);
+  for (std::size_t i = 0; i < f.den_taps; ++i) require_finite(f.den[i], what);
+}
+
+// A pass enables the motor: everything the verdict compared, and everything the controller
+// will compute with, must be a real number.
+void check_pass(const config::Config& cfg, const gate::GateReport& r) {
+  const double t = r.sample_period_s;
+  require(std::isfinite(t) && t > 0.0, "pass with a sample period that is not finite and > 0",
+          show(t));
+  require(r.device_damping > 0.0 && std::isfinite(r.device_damping),
+          "pass with a device damping that is not finite and > 0", show(r.device_damping));
+  require(r.delay_samples >= 0 && r.delay_samples == r.wall_delay_samples + r.device_delay_samples,
+          "pass with an inconsistent delay", std::to_string(r.delay_samples));
+
+  const gate::PassivityReport& p = r.passivity;
+  require(p.passive, "pass while the passivity check failed");
+  require_finite(p.required_damping, "pass on a non-finite required damping b_req");
+  require_finite(p.available_damping, "pass on a non-finite available damping");
+  require(p.required_damping <= p.available_damping, "pass with b_req above the available damping",
+          show(p.required_damping) + " > " + show(p.available_damping));
+  require_finite(p.margin, "pass with a non-finite margin");
+  const double nyquist_hz = 0.5 / t;
+  require(p.worst_frequency_hz >= 0.0 && p.worst_frequency_hz <= nyquist_hz * (1.0 + 1e-9),
+          "pass with a worst frequency outside [0, Nyquist]", show(p.worst_frequency_hz));
+  require(!std::isnan(r.static_stiffness), "pass with a NaN static stiffness");
+  if (r.coupling.present) {
+    require(r.coupling.admissible, "pass with an inadmissible coupling");
+    require(!std::isnan(r.coupling.dspr_min_real), "pass with a NaN DSPR margin");
+  }
+
+  // make_control_law throwing here would be a pass that `run` cannot start: it escapes.
+  const control::ControlLaw law = control::make_control_law(cfg);
+  require(law.sample_period > 0.0 && std::isfinite(law.inv_sample_period),
+          "pass with a control law whose 1/T is not finite", show(law.inv_sample_period));
+  require_finite_taps(law.environment, "pass with a non-finite E(z) coefficient");
+  if (law.has_coupling)
+    require_finite_taps(law.coupling, "pass with a non-finite C(z) coefficient");
+  require_finite(law.e0, "pass with a non-finite feed-through e0");
+  require_finite(law.c0, "pass with a non-finite feed-through c0");
+  require(std::isfinite(law.inv_one_plus_e0c0) && law.inv_one_plus_e0c0 > 0.0,
+          "pass with 1/(1 + e0 c0) not finite and > 0", show(law.inv_one_plus_e0c0));
+  require(law.max_force > 0.0 && std::isfinite(law.max_force),
+          "pass with a saturation that is not finite and > 0", show(law.max_force));
+}
+
+// evaluate_gate is a pure function of the Config, and the loader determines a Config by its
+// source name and effective document. Most mutants load to a configuration already seen (a
+// broken line skipped, a comment changed) and the gate costs tens of milliseconds, so one
+// already checked in this process is not checked again: ten times the executions per second.
+// An input replayed alone is always evaluated. Bounded, so a long run cannot grow it forever.
+bool first_time(const config::Config& cfg) {
+  static std::unordered_set<std::string> seen;
+  if (seen.size() >= 4096) seen.clear();
+  return seen.insert(cfg.source_name + '\n' + cfg.effective_yaml).second;
+}
+
+}  // namespace
+
+void check_config_error(const config::ConfigError& e,
+                        std::initializer_list<std::string_view> prefixes) {
+  require(!e.messages().empty(), "ConfigError without messages");
+  for (const std::string& m : e.messages()) {
+    bool named = false;
+    for (std::string_view prefix : prefixes) {
+      named = named || (m.size() > prefix.size() && m.starts_with(prefix));
+    }
+    require(named, "ConfigError message that names no source", m);
+  }
+}
+
+void check_gate(const config::Config& cfg) {
+  if (!first_time(cfg)) return;
+  // Issue 8 moves the declared delay into the driver registry; this line follows it there.
+  const int device_delay = declared_transport_delay(cfg.device.driver);
+  const gate::GateReport r = gate::evaluate_gate(cfg, device_delay);
+  // `check` renders every verdict, passing or not.
+  require(!gate::gate_to_json(r).dump().empty(), "empty JSON gate report");
+  require(!gate::gate_to_text(r, cfg).empty(), "empty text gate report");
+
+  require(r.pass == r.reasons.empty(), "a verdict must fail exactly when it gives reasons");
+  for (const std::string& reason : r.reasons) require(!reason.empty(), "empty gate reason");
+  if (r.pass) check_pass(cfg, r);
+}
+
+}  // namespace hapticd::fuzz
