@@ -30,29 +30,59 @@ std::uint32_t crc_of(std::span<const std::uint8_t> bytes) {
   return crc32_update(0, std::as_bytes(bytes));
 }
 
-// Walks the blocks the reader accepted, from the input itself, and compares.
-void check_accepted_blocks(std::span<const std::uint8_t> input, const LogContents& c,
-                           std::size_t offset) {
+// Checks the accepted block at `offset`: present, intact (its CRC recomputed here), and
+// returned as exactly its record bytes from c.records[records...]. Returns its size.
+std::size_t check_block_at(std::span<const std::uint8_t> input, std::size_t offset,
+                           const LogContents& c, std::size_t& records, std::uint64_t& dropped) {
+  const std::string at = std::to_string(offset);
+  require(offset <= input.size() && input.size() - offset >= kBlockHeaderSize,
+          "accepted block past the end of the input", at);
+  const auto block = std::as_bytes(input.subspan(offset));
+  const BlockHeader h = decode_block_header(block);
+  require(std::memcmp(block.data(), kBlockMagic.data(), kBlockMagic.size()) == 0 &&
+              h.record_count <= kMaxBlockRecords && block.size() >= block_size(h.record_count),
+          "accepted block without its magic, or with more records than it holds", at);
+  const auto payload = block.subspan(kBlockHeaderSize, std::size_t{h.record_count} * kRecordSize);
+  require(crc32_update(crc32_update(0, block.first(kBlockCrcOffset)), payload) == h.crc,
+          "accepted block whose CRC does not match", at);
+  require(records + h.record_count <= c.records.size() &&
+              (payload.empty() ||
+               std::memcmp(c.records.data() + records, payload.data(), payload.size()) == 0),
+          "returned records differ from the bytes of their block", at);
+  records += h.record_count;
+  dropped += h.dropped_before;
+  return block_size(h.record_count);
+}
+
+// Walks the input in file order as the reader reports it: accepted blocks, with the skipped
+// stretches between them, each skipped stretch followed by a block. Returns where it ends.
+std::size_t check_file_order(std::span<const std::uint8_t> input, const LogContents& c,
+                             std::size_t offset) {
   std::size_t records = 0;
+  std::size_t blocks = 0;
+  std::size_t next_skip = 0;
   std::uint64_t dropped = 0;
-  for (std::size_t b = 0; b < c.complete_blocks; ++b) {
-    const auto block = std::as_bytes(input.subspan(offset));
-    require(block.size() >= kBlockHeaderSize &&
-                std::memcmp(block.data(), kBlockMagic.data(), kBlockMagic.size()) == 0,
-            "accepted block without its magic", std::to_string(offset));
-    const BlockHeader h = decode_block_header(block);
-    require(h.record_count <= kMaxBlockRecords && records + h.record_count <= c.records.size(),
-            "accepted block with more records than returned", std::to_string(offset));
-    const std::size_t payload = std::size_t{h.record_count} * kRecordSize;
-    require(payload == 0 || std::memcmp(c.records.data() + records, block.data() + kBlockHeaderSize,
-                                        payload) == 0,
-            "returned records differ from the bytes of their block", std::to_string(offset));
-    records += h.record_count;
-    dropped += h.dropped_before;
-    offset += block_size(h.record_count);
+  bool after_skip = false;
+  while (blocks < c.complete_blocks || next_skip < c.skipped.size()) {
+    if (next_skip < c.skipped.size() && c.skipped[next_skip].offset == offset) {
+      const SkippedRegion& s = c.skipped[next_skip++];
+      require(!after_skip && s.bytes > 0 && !s.reason.empty() && s.bytes <= input.size() - offset,
+              "skipped stretch that is empty, unexplained, past the end or after another",
+              std::to_string(offset));
+      offset += s.bytes;
+      after_skip = true;
+      continue;
+    }
+    require(blocks < c.complete_blocks, "skipped stretch away from the end of the previous block",
+            std::to_string(offset));
+    offset += check_block_at(input, offset, c, records, dropped);
+    ++blocks;
+    after_skip = false;
   }
+  require(!after_skip, "a skipped stretch must be followed by an accepted block");
   require(records == c.records.size(), "records returned outside accepted blocks");
   require(dropped == c.dropped_records, "dropped_records is not the sum of dropped_before");
+  return offset;
 }
 
 }  // namespace
@@ -70,17 +100,12 @@ void check_log_read(std::span<const std::uint8_t> input) {
             "LogFormatError that does not name the file", what);
     return;
   }
-  const std::size_t header = file_header_size(c.header.config_text.size());
   require(c.trailing_bytes_ignored <= input.size(), "more bytes ignored than read");
-  require(c.records.size() <= c.complete_blocks * std::size_t{kMaxBlockRecords},
-          "more records than the accepted blocks can hold");
-  require(header + c.complete_blocks * kBlockHeaderSize + c.records.size() * kRecordSize +
-                  c.trailing_bytes_ignored ==
-              input.size(),
-          "header, accepted blocks and ignored tail do not add up to the input");
   require(c.trailing_reason.empty() == (c.trailing_bytes_ignored == 0),
           "a reason must be given exactly when bytes are ignored", c.trailing_reason);
-  check_accepted_blocks(input, c, header);
+  const std::size_t end = check_file_order(input, c, file_header_size(c.header.config_text.size()));
+  require(end + c.trailing_bytes_ignored == input.size(),
+          "header, blocks, skipped stretches and ignored tail do not add up to the input");
 }
 
 std::size_t fix_log_crcs(std::span<std::uint8_t> bytes) {

@@ -10,8 +10,9 @@ namespace hapticd::fuzz {
 
 // Reads input with telemetry::read_log_bytes as read_log does (from a std::vector, so an empty
 // input has no storage, like an empty file). A LogFormatError must name the file; anything
-// else thrown escapes. A successful read must account for every input byte (header, accepted
-// blocks, ignored tail) and return exactly the record bytes of the blocks it accepted.
+// else thrown escapes. A successful read must account for every input byte in file order
+// (header, accepted blocks, the stretches it skipped to resynchronise, the ignored tail),
+// accept only blocks whose CRC holds, and return exactly the record bytes of those blocks.
 void check_log_read(std::span<const std::uint8_t> input);
 
 // Walks bytes as a tick log as far as its lengths allow and rewrites the header CRC and each
