@@ -40,7 +40,13 @@ case "${1:-}" in
   demo)
     exec "$build/src/service/hapticd" run --duration 3 --log "$build/demo.hlog" ;;
   test)
-    cd "$build" && exec ctest --output-on-failure -j "$(nproc)" ;;
+    # --- fuzz step (fuzz/README.md): clang build in build-fuzz/, every fuzz regression
+    # replayed, then 5 s of fuzzing per target; HAPTICD_FUZZ=0 skips it. ---
+    fuzz_status=0
+    [[ ${HAPTICD_FUZZ:-1} == 0 ]] || tools/fuzz.sh test || fuzz_status=$?
+    # --- end fuzz step ---
+    cd "$build" && ctest --output-on-failure -j "$(nproc)"
+    exit "$fuzz_status" ;;
   *)
     echo "usage: tools/quickstart.sh demo|test" >&2
     exit 2 ;;

@@ -1,0 +1,85 @@
+#!/usr/bin/env bash
+# The libFuzzer targets of fuzz/ (fuzz/README.md), built with clang in their own directory.
+#   tools/fuzz.sh build                  configure (first time) and build the targets
+#   tools/fuzz.sh test                   build, then the ctest tests labelled fuzz: every seed
+#                                        and regression input replayed once, then a few seconds
+#                                        of fuzzing per target (what tools/quickstart.sh test runs)
+#   tools/fuzz.sh long [SECONDS] [TARGET...]
+#                                        fuzz each target (default: all) for SECONDS (default
+#                                        3600), one after another at nice 10, carrying on past
+#                                        crashes; the corpus grows in BUILD/long/TARGET/corpus
+#                                        across runs, crash inputs land in BUILD/long/TARGET/findings
+#   tools/fuzz.sh minimize TARGET INPUT NAME
+#                                        shrinks a crash input into fuzz/regressions/TARGET/NAME,
+#                                        replayed by every test run from then on
+# HAPTICD_FUZZ_BUILD overrides the build directory (default build-fuzz).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+build=${HAPTICD_FUZZ_BUILD:-build-fuzz}
+targets=(config_gate set_override log_reader log_reader_crc)
+declare -A dict=([config_gate]=config [set_override]=set_override [log_reader]=log
+                 [log_reader_crc]=log)
+
+# clang, libFuzzer's runtime and llvm-symbolizer (for readable stacks): Debian 12 packages.
+install_missing() {
+  local p missing=()
+  for p in clang libclang-rt-14-dev llvm; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+  done
+  ((${#missing[@]})) || return 0
+  echo "fuzz: installing ${missing[*]}"
+  local sudo=""
+  [[ $(id -u) -ne 0 ]] && sudo=sudo
+  $sudo apt-get update -q
+  $sudo env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends "${missing[@]}"
+}
+
+build_targets() {
+  install_missing
+  [[ -f $build/CMakeCache.txt ]] ||
+    CC=clang CXX=clang++ cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+      -DHAPTICD_FUZZ=ON -DHAPTICD_BUILD_TESTS=OFF -DHAPTICD_BUILD_BENCHMARKS=OFF
+  cmake --build "$build" --target fuzz_targets
+}
+
+# Fuzzes one target; -fork=1 with -ignore_* keeps going after a crash, so one known defect
+# does not end the run before the others are found.
+long_run() {
+  local t=$1 seconds=$2 work=$build/long/$1
+  mkdir -p "$work/corpus" "$work/findings"
+  "$build/fuzz/fuzz_make_log_seeds" "$build/fuzz/seeds/log" >/dev/null
+  local seeds=(fuzz/corpus/"$t" fuzz/regressions/"$t")
+  [[ $t == config_gate ]] && seeds+=(config)
+  [[ $t == log_reader* ]] && seeds+=("$build/fuzz/seeds/log")
+  local dirs=() d
+  for d in "${seeds[@]}"; do [[ -d $d ]] && dirs+=("$d"); done
+  echo "fuzz: $t for $seconds s, log in $work/fuzz.log"
+  nice -n 10 "$build/fuzz/${t}_fuzzer" -fork=1 -ignore_crashes=1 -ignore_timeouts=1 \
+    -ignore_ooms=1 -timeout=5 -rss_limit_mb=2048 -max_total_time="$seconds" \
+    -dict="fuzz/dict/${dict[$t]}.dict" -artifact_prefix="$work/findings/" -print_final_stats=1 \
+    "$work/corpus" "${dirs[@]}" >"$work/fuzz.log" 2>&1 || true
+  tail -n 3 "$work/fuzz.log"
+  echo "fuzz: $t: $(find "$work/findings" -type f | wc -l) crash inputs in $work/findings"
+}
+
+case "${1:-}" in
+  build)
+    build_targets ;;
+  test)
+    build_targets
+    cd "$build" && exec ctest -L fuzz --output-on-failure -j "$(nproc)" ;;
+  long)
+    seconds=${2:-3600}
+    (($# > 2)) && targets=("${@:3}")
+    build_targets
+    for t in "${targets[@]}"; do long_run "$t" "$seconds"; done ;;
+  minimize)
+    (($# == 4)) || { echo "usage: tools/fuzz.sh minimize TARGET INPUT NAME" >&2; exit 2; }
+    build_targets
+    mkdir -p "fuzz/regressions/$2"
+    "$build/fuzz/$2_fuzzer" -minimize_crash=1 -runs=20000 -timeout=5 \
+      -exact_artifact_path="fuzz/regressions/$2/$4" "$3" ;;
+  *)
+    echo "usage: tools/fuzz.sh build|test|long [SECONDS] [TARGET...]|minimize TARGET INPUT NAME" >&2
+    exit 2 ;;
+esac
