@@ -113,6 +113,7 @@ fs::path write_seed(const fs::path& dir, const std::string& name, const std::str
   header.start_unix_ns = clock == tel::kClockModeFreerun ? 0 : 1700000000000000000;
   header.config_text = config;
   const fs::path path = dir / (name + ".hlog");
+  fs::remove(path);  // regenerated on every run; the writer refuses to replace a file
   tel::write_log_file(path, header, records(n), per_block);
   check_fixer(name, read_bytes(path));
   return path;

@@ -8,7 +8,8 @@
 #                                        fuzz each target (default: all) for SECONDS (default
 #                                        3600), one after another at nice 10, carrying on past
 #                                        crashes; the corpus grows in BUILD/long/TARGET/corpus
-#                                        across runs, crash inputs land in BUILD/long/TARGET/findings
+#                                        across runs, crash inputs land in BUILD/long/TARGET/findings,
+#                                        the summary gives executions and coverage
 #   tools/fuzz.sh minimize TARGET INPUT NAME
 #                                        shrinks a crash input into fuzz/regressions/TARGET/NAME,
 #                                        replayed by every test run from then on
@@ -42,23 +43,34 @@ build_targets() {
   cmake --build "$build" --target fuzz_targets
 }
 
-# Fuzzes one target; -fork=1 with -ignore_* keeps going after a crash, so one known defect
-# does not end the run before the others are found.
+# Fuzzes one target in one process, so what it learns (and the gate memo of
+# fuzz/support/config_oracle.cpp) lasts the whole run; after a crash it saves the input and
+# starts again on the grown corpus until the time is up. The regressions are not seeds here:
+# one that still crashes would end every restart at once (tools/fuzz.sh test replays them).
 long_run() {
   local t=$1 seconds=$2 work=$build/long/$1
   mkdir -p "$work/corpus" "$work/findings"
   "$build/fuzz/fuzz_make_log_seeds" "$build/fuzz/seeds/log" >/dev/null
-  local seeds=(fuzz/corpus/"$t" fuzz/regressions/"$t")
+  local seeds=(fuzz/corpus/"$t") dirs=() d
   [[ $t == config_gate ]] && seeds+=(config)
   [[ $t == log_reader* ]] && seeds+=("$build/fuzz/seeds/log")
-  local dirs=() d
   for d in "${seeds[@]}"; do [[ -d $d ]] && dirs+=("$d"); done
   echo "fuzz: $t for $seconds s, log in $work/fuzz.log"
-  nice -n 10 "$build/fuzz/${t}_fuzzer" -fork=1 -ignore_crashes=1 -ignore_timeouts=1 \
-    -ignore_ooms=1 -timeout=5 -rss_limit_mb=2048 -max_total_time="$seconds" \
-    -dict="fuzz/dict/${dict[$t]}.dict" -artifact_prefix="$work/findings/" -print_final_stats=1 \
-    "$work/corpus" "${dirs[@]}" >"$work/fuzz.log" 2>&1 || true
-  tail -n 3 "$work/fuzz.log"
+  : >"$work/fuzz.log"
+  local end=$((SECONDS + seconds)) found
+  while ((SECONDS < end)); do
+    found=$(find "$work/findings" -type f | wc -l)
+    nice -n 10 "$build/fuzz/${t}_fuzzer" -timeout=5 -rss_limit_mb=2048 -print_funcs=0 \
+      -max_total_time=$((end - SECONDS)) -dict="fuzz/dict/${dict[$t]}.dict" \
+      -artifact_prefix="$work/findings/" -print_final_stats=1 "$work/corpus" "${dirs[@]}" \
+      >>"$work/fuzz.log" 2>&1 && break
+    # No new crash input: it failed to start, or crashed again on one it already saved.
+    (($(find "$work/findings" -type f | wc -l) > found)) ||
+      { echo "fuzz: $t stopped without a new finding, see $work/fuzz.log" >&2; break; }
+  done
+  local execs
+  execs=$(awk -F: '/^stat::number_of_executed_units/ { n += $2 } END { print n + 0 }' "$work/fuzz.log")
+  echo "fuzz: $t: $execs executions; last status: $(grep -E '^#[0-9]+' "$work/fuzz.log" | tail -n 1)"
   echo "fuzz: $t: $(find "$work/findings" -type f | wc -l) crash inputs in $work/findings"
 }
 
