@@ -1,0 +1,43 @@
+# shellcheck shell=bash
+# Shared by tools/kernel-vm/setup and tools/kernel-vm/run (sourced, not run).
+
+# The cache lives outside the repository: a fresh clone, `git clean` and other checkouts share
+# it, and it is keyed on the kernel's version, which Debian moves with security updates.
+vm_cache_root() {
+  echo "${HAPTICD_VM_CACHE:-${XDG_CACHE_HOME:-${HOME:-/tmp}/.cache}/hapticd/kernel-vm}"
+}
+
+say() { echo "kernel-vm: $*" >&2; }
+# 125: the machine could not be made or booted (the command's own status is never 125 here
+# unless the command itself returned it).
+die() {
+  echo "kernel-vm: $*" >&2
+  exit 125
+}
+
+check_flavour() {
+  case $1 in
+    amd64 | rt-amd64) ;;
+    *) die "unknown flavour '$1' (amd64 or rt-amd64)" ;;
+  esac
+}
+
+# Sets the array qemu_cmd to boot VMLINUX with INITRAMFS under ACCEL (kvm or tcg), with the
+# kernel console on the first serial port written to CONSOLE_LOG. The caller appends shares
+# and further serial ports.
+# -nodefaults drops the VGA card and the NIC (and the iPXE ROM the firmware would run for it).
+# quiet: the console is a log, read on failure. panic=-1 with -no-reboot makes a panic end qemu
+# at once instead of hanging until the time-out.
+qemu_command() {  # ACCEL VMLINUX INITRAMFS CONSOLE_LOG MEMORY_MB CPUS EXTRA_KERNEL_ARGS
+  local accel=$1 vmlinux=$2 initramfs=$3 console=$4 memory=$5 cpus=$6 extra=$7
+  qemu_cmd=(qemu-system-x86_64 -machine pc -nodefaults -no-user-config -display none
+    -no-reboot -rtc base=utc -m "$memory" -smp "$cpus"
+    -kernel "$vmlinux" -initrd "$initramfs"
+    -append "console=ttyS0 quiet loglevel=4 panic=-1 mitigations=off $extra"
+    -chardev "file,id=console,path=$console" -serial chardev:console)
+  case $accel in
+    kvm) qemu_cmd+=(-accel kvm -cpu host) ;;
+    tcg) qemu_cmd+=(-accel tcg,thread=multi -cpu max) ;;
+    *) die "unknown accelerator '$accel' (kvm or tcg)" ;;
+  esac
+}
