@@ -1,0 +1,130 @@
+// The host side of one kernel test in ctest. gtest_discover_tests treats this program as the
+// test binaries' CROSSCOMPILING_EMULATOR: it lists tests as `report BINARY --gtest_list_tests`
+// and runs each as `report BINARY --gtest_filter=Suite.Name`. Listing needs no kernel
+// facility, so that runs BINARY on the host; a test is answered from the gtest JSON that the
+// single boot of the "kernel.vm" test wrote for BINARY in HAPTICD_KERNEL_RESULTS, so every
+// kernel test is its own ctest result while the guest boots once for all of them.
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+const std::string kResults = HAPTICD_KERNEL_RESULTS;
+
+std::string read_file(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+bool exists(const std::string& path, struct stat* st = nullptr) {
+  struct stat local {};
+  return ::stat(path.c_str(), st != nullptr ? st : &local) == 0;
+}
+
+std::string last_lines(const std::string& text, std::size_t count) {
+  std::size_t pos = text.size();
+  for (std::size_t n = 0; pos > 0 && n <= count; ++n) pos = text.rfind('\n', pos - 1);
+  return pos == std::string::npos ? text : text.substr(pos + 1);
+}
+
+// Why there is no JSON for BINARY: it crashed or hung in the guest, or the guest never ran it.
+int report_missing(const std::string& name) {
+  const std::string base = kResults + "/" + name;
+  if (exists(base + ".status")) {
+    std::cout << "FAILED: " << name << " ended with status " << read_file(base + ".status")
+              << "in the kernel test machine before writing its results. Its output (" << base
+              << ".log) ends:\n"
+              << last_lines(read_file(base + ".log"), 30) << "\n";
+  } else {
+    std::cout << "FAILED: no results for " << name << " in " << kResults
+              << ": the kernel.vm test, which boots the guest once for every kernel test, did "
+                 "not run it (run the tests labelled kernel: `ctest -L kernel`).\n";
+  }
+  return 1;
+}
+
+int report_test(const nlohmann::json& test, const std::string& full_name, const std::string& log) {
+  if (test.value("status", "") == "NOTRUN" || test.value("result", "") == "SKIPPED") {
+    std::cout << "[  SKIPPED ] " << full_name << " (in the kernel test machine)\n";
+    return 0;
+  }
+  const auto failures = test.value("failures", nlohmann::json::array());
+  if (failures.empty()) {
+    std::cout << "[       OK ] " << full_name << " (" << test.value("time", "?")
+              << " in the kernel test machine)\n";
+    return 0;
+  }
+  for (const auto& failure : failures) std::cout << failure.value("failure", "") << "\n\n";
+  std::cout << "[  FAILED  ] " << full_name << " in the kernel test machine; the binary's "
+            << "whole output is in " << log << "\n";
+  return 1;
+}
+
+int report(const std::string& binary, const std::string& filter) {
+  if (const char* on = std::getenv("HAPTICD_KERNEL_TESTS");
+      on != nullptr && !std::strcmp(on, "0")) {
+    std::cout << "[  SKIPPED ] " << filter << ": kernel tests are off (HAPTICD_KERNEL_TESTS=0)\n";
+    return 0;
+  }
+  const std::string name = binary.substr(binary.rfind('/') + 1);
+  const std::string json_path = kResults + "/" + name + ".json";
+  struct stat json_stat {
+  }, binary_stat{};
+  if (!exists(json_path, &json_stat)) return report_missing(name);
+  if (exists(binary, &binary_stat) && binary_stat.st_mtime > json_stat.st_mtime) {
+    std::cout << "FAILED: " << json_path << " is older than " << binary
+              << ": the results are from another build (run `ctest -L kernel`).\n";
+    return 1;
+  }
+  const auto results = nlohmann::json::parse(read_file(json_path));
+  for (const auto& suite : results.at("testsuites")) {
+    for (const auto& test : suite.at("testsuite")) {
+      const std::string full_name =
+          suite.at("name").get<std::string>() + "." + test.at("name").get<std::string>();
+      if (full_name == filter) return report_test(test, full_name, kResults + "/" + name + ".log");
+    }
+  }
+  std::cout << "FAILED: " << filter << " is not in " << json_path << "\n";
+  return 1;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 3) {
+    std::cerr << "usage: " << argv[0] << " TEST_BINARY --gtest_list_tests|--gtest_filter=NAME\n";
+    return 2;
+  }
+  const std::string binary = argv[1];
+  std::string filter;
+  for (int i = 2; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--gtest_list_tests")) {
+      ::execv(binary.c_str(), argv + 1);
+      std::cerr << "cannot run " << binary << ": " << std::strerror(errno) << "\n";
+      return 127;
+    }
+    if (!std::strncmp(argv[i], "--gtest_filter=", 15)) filter = argv[i] + 15;
+  }
+  if (filter.empty()) {
+    std::cerr << argv[0] << ": no --gtest_filter=Suite.Name\n";
+    return 2;
+  }
+  try {
+    return report(binary, filter);
+  } catch (const std::exception& e) {
+    std::cout << "FAILED: cannot read the results for " << filter << ": " << e.what() << "\n";
+    return 1;
+  }
+}
