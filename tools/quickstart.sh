@@ -14,6 +14,7 @@ packages=(
   libhidapi-dev libusb-1.0-0-dev libgpiod-dev    # the hardware transports
   libgtest-dev libgmock-dev libbenchmark-dev     # tests and benchmarks
   rt-tests python3 util-linux                    # cyclictest and tools/jitter_bench.py; prlimit
+  qemu-system-x86 busybox-static cpio kmod xz-utils  # tools/kernel-vm, the kernel test machine
 )
 missing=()
 for p in "${packages[@]}"; do
