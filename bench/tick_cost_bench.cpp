@@ -67,7 +67,7 @@ void BM_FullTick_SimDevice(benchmark::State& state) {
     hapticd::sim::SimDevice device(cfg.device, cfg.loop.sample_period_s());
     hapticd::control::Controller ctl(hapticd::control::make_control_law(cfg));
     device.configure();
-    device.enable_output();
+    device.enable();
     hapticd::loop::ServoLoop loop(device, ctl, &ring, lo);
     const std::atomic<bool> stop{false};
     state.ResumeTiming();

@@ -1,8 +1,22 @@
-// The one seam between control and hardware. The controller never sees a transport; a driver
-// never sees the controller. Lifecycle calls run off the RT thread and may throw DeviceError;
-// read/write run on the RT thread every tick and never throw, allocate, lock or log.
+// The one seam between control and hardware (DESIGN.md §6). The controller never sees a
+// transport; a driver never sees the controller. The lifecycle is an explicit state machine,
+// enforced here for every driver (ros2_control's lifecycle, PX4's self-checking drivers):
+//
+//   UNCONFIGURED --configure()--> CONFIGURED --enable()--> ACTIVE --disable()--> CONFIGURED
+//         ^                           |  ^                   |  fault (transport or device)
+//         +-------- close() ----------+  +-- clear_fault() --+--> FAULTED (zero force, latched)
+//
+// configure() opens the transport and identifies the device with output disabled, so the gate
+// can run against what the device declares before anything is enabled; a refused gate leaves
+// it CONFIGURED and safe. An enable() that fails halfway is undone. close() is allowed from
+// every state and disables output first. Illegal transitions throw DeviceError.
+//
+// A driver implements the protected on_*() hooks; this class owns the state, refuses what the
+// state does not allow, latches faults and keeps the last command. On the RT thread, read()
+// and write() never block, allocate, lock, log or throw.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <stdexcept>
 #include <string>
@@ -10,16 +24,49 @@
 
 namespace hapticd {
 
+enum class DeviceState : std::uint8_t { kUnconfigured, kConfigured, kActive, kFaulted };
+
+// "unconfigured", "configured", "active", "faulted".
+std::string_view to_string(DeviceState state) noexcept;
+
 // What an RT-side device call achieved. Counting and fault policy belong to the loop.
 enum class IoStatus : std::uint8_t {
-  kOk,         // read: a fresh position; write: command accepted by the transport
-  kNoNewData,  // read: nothing new since the last tick (the loop counts stale ticks)
-  kError,      // the transport or the device failed; describe_error() says how
+  kOk,              // read: a fresh sample; write: command accepted by the transport
+  kNoNewData,       // read: nothing new since the last tick (the loop counts stale ticks)
+  kTransportFault,  // the transport failed: I/O error, bus-off, device gone, queue full
+  kDeviceFault,     // the device reported a fault: status bit, EMCY, axis error
+};
+
+enum class FaultClass : std::uint8_t { kNone, kTransport, kDevice };
+
+// A latched fault: its class and a driver-specific code (an errno, a CiA 402 EMCY error code,
+// an ODrive axis error, HID status bits), recorded in the tick log and the run summary.
+struct DeviceFault {
+  FaultClass fault_class = FaultClass::kNone;
+  std::uint32_t code = 0;
+};
+
+// Bits of PositionSample::flags: which optional fields the transport filled in.
+enum SampleFlag : std::uint8_t {
+  kSampleHasTime = 1u << 0,      // time_ns is when the device or kernel measured it
+  kSampleHasSequence = 1u << 1,  // sequence is the device's own counter
+  kSampleHasVelocity = 1u << 2,  // velocity is the device's own estimate
 };
 
 struct PositionSample {
-  double position = 0.0;            // axis coordinate (m or rad), device frame
-  std::uint32_t device_status = 0;  // driver-specific status bits, recorded in the tick log
+  double position = 0.0;       // axis coordinate (m or rad), device frame
+  std::int64_t time_ns = 0;    // CLOCK_MONOTONIC ns of the measurement (kSampleHasTime)
+  std::uint64_t sequence = 0;  // the device's sample counter (kSampleHasSequence)
+  double velocity = 0.0;       // the device's own velocity estimate (kSampleHasVelocity)
+  std::uint32_t status = 0;    // driver-specific status bits, recorded in the tick log
+  std::uint8_t flags = 0;      // SampleFlag bits
+};
+
+// What configure() learned about the device: the numbers the gate analyses.
+struct DeviceInfo {
+  std::string description;             // "sim", "hid 1209:ffb0 serial 42", "cia402 node 3 on can0"
+  int transport_delay_samples = 0;     // whole samples between write() and the force acting
+  std::uint64_t sequence_modulus = 0;  // where the device's sequence wraps (2^8, 2^16...); 0: none
 };
 
 // Thrown by the non-RT lifecycle calls. The service maps it to exit code 4.
@@ -31,29 +78,79 @@ class DeviceError : public std::runtime_error {
 class Device {
  public:
   virtual ~Device() = default;
+  Device(const Device&) = delete;
+  Device& operator=(const Device&) = delete;
 
-  // Not RT-safe. Opens and configures the transport; output stays disabled.
-  virtual void configure() = 0;
-  // Not RT-safe. Enables the amplifier; the gate has passed before this is called.
-  virtual void enable_output() = 0;
-  // Not RT-safe, never throws. Commands zero force and disables the amplifier.
-  virtual void disable_output() noexcept = 0;
+  // Not RT-safe. UNCONFIGURED -> CONFIGURED: opens the transport and identifies the device,
+  // output disabled. On failure the transport is closed again and the state stays UNCONFIGURED.
+  void configure();
+  // Not RT-safe. CONFIGURED -> ACTIVE. On failure the driver's disable runs and the state
+  // stays CONFIGURED: an enable is never left half done.
+  void enable();
+  // Not RT-safe, never throws. ACTIVE -> CONFIGURED: zero force, output off. In FAULTED it
+  // makes sure output is off and the fault stays latched; elsewhere it does nothing.
+  void disable() noexcept;
+  // Not RT-safe. FAULTED -> CONFIGURED (CiA 402 fault reset, clearing ODrive errors...).
+  void clear_fault();
+  // Not RT-safe, never throws. Any state -> UNCONFIGURED: output off, transport closed.
+  void close() noexcept;
 
-  // RT-safe: called every tick. Newest position; drains whatever the transport queued.
-  virtual IoStatus read(PositionSample& out) noexcept = 0;
-  // RT-safe: called every tick. Force command (N or N m) in the device frame.
-  virtual IoStatus write(double force) noexcept = 0;
+  // Any thread.
+  DeviceState state() const noexcept { return state_.load(std::memory_order_acquire); }
+  bool output_enabled() const noexcept { return state() == DeviceState::kActive; }
+  // Valid from CONFIGURED on.
+  const DeviceInfo& info() const noexcept { return info_; }
+  // The latched fault (class kNone unless FAULTED).
+  DeviceFault fault() const noexcept { return fault_; }
+  // The force last handed to the transport (0 after disable, close or a fault).
+  double last_command() const noexcept { return last_command_.load(std::memory_order_relaxed); }
+  // Not RT-safe. One sentence about the latched fault, naming its cause and code.
+  std::string describe_fault() const;
+  virtual std::string_view driver_name() const noexcept = 0;
 
-  // Whole samples between write() and the force acting on the device; the gate adds it.
-  virtual int transport_delay_samples() const noexcept = 0;
-  virtual std::string_view name() const noexcept = 0;
-  // Not RT-safe. A sentence describing the last kError, for the fault message.
-  virtual std::string describe_error() const = 0;
+  // RT-safe: called every tick. The newest sample, draining whatever the transport queued.
+  // Allowed in CONFIGURED (output off) and ACTIVE; a fault latches FAULTED and commands zero.
+  IoStatus read(PositionSample& out) noexcept;
+  // RT-safe: called every tick. Force command (N or N m) in the device frame. Only ACTIVE
+  // passes a force on; in FAULTED only zero is passed (returns the latched fault's status);
+  // in any other state it is refused as a transport fault without touching the transport.
+  // A non-finite force is never passed on: zero is written and the device faults.
+  IoStatus write(double force) noexcept;
 
-  // Any thread, once the loop has stopped: the force the driver last handed to the hardware
-  // and whether the amplifier is enabled, as the run summary reports them.
-  virtual double last_command() const noexcept = 0;
-  virtual bool output_enabled() const noexcept = 0;
+  // Async-signal-safe: called from a crash handler, where nothing else can run. Only write(2)
+  // of prebuilt zero-force and disable messages on already-open descriptors. Default: nothing
+  // (an in-process device has nothing to stop once the process is gone).
+  virtual void emergency_stop() noexcept {}
+
+ protected:
+  Device() = default;
+
+  // Hooks, called only in the states above. on_configure returns what it learned.
+  virtual DeviceInfo on_configure() = 0;
+  virtual void on_enable() = 0;
+  virtual void on_disable() noexcept = 0;  // zero force, output off; also after a fault
+  virtual void on_clear_fault() {}         // device-side reset, then state CONFIGURED
+  virtual void on_close() noexcept = 0;
+  virtual IoStatus on_read(PositionSample& out) noexcept = 0;
+  virtual IoStatus on_write(double force) noexcept = 0;
+  // Not RT-safe. The sentence for a fault this driver latched (its code decoded).
+  virtual std::string describe(const DeviceFault& fault) const = 0;
+
+  // RT-safe. For a driver that learns of a fault outside read/write (e.g. while configuring
+  // a drive during enable): latch it. read/write returning a fault status latch it themselves
+  // with the code set here beforehand (or 0).
+  void set_fault_code(std::uint32_t code) noexcept { pending_code_ = code; }
+
+ private:
+  IoStatus latch(IoStatus status) noexcept;
+  void require(DeviceState expected, const char* call) const;
+
+  std::atomic<DeviceState> state_{DeviceState::kUnconfigured};
+  DeviceInfo info_;
+  DeviceFault fault_;
+  std::uint32_t pending_code_ = 0;
+  bool non_finite_command_ = false;  // the latched fault is a refused NaN/inf command
+  std::atomic<double> last_command_{0.0};
 };
 
 }  // namespace hapticd

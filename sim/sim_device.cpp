@@ -1,102 +1,98 @@
 #include "sim/sim_device.h"
 
-#include <cmath>
-#include <stdexcept>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
 #include <utility>
 
 namespace hapticd::sim {
 
-namespace {
-
-const config::DeviceConfig& validated(const config::DeviceConfig& c) {
-  if (!std::isfinite(c.sim.counts_per_unit) || c.sim.counts_per_unit < 0.0) {
-    throw std::invalid_argument("sim device: counts_per_unit must be finite and >= 0 (0 = ideal)");
+std::string_view to_string(PeerFault fault) noexcept {
+  switch (fault) {
+    case PeerFault::kStopAnswering:
+      return "stop answering";
+    case PeerFault::kSkipSequence:
+      return "skip sequence numbers";
+    case PeerFault::kDeviceFault:
+      return "report a device fault";
+    case PeerFault::kTransportFault:
+      return "fail the transport";
   }
-  if (!std::isfinite(c.sim.noise_counts) || c.sim.noise_counts < 0.0) {
-    throw std::invalid_argument("sim device: noise_counts must be finite and >= 0");
-  }
-  return c;
+  return "unknown fault";
 }
-
-}  // namespace
 
 SimDevice::SimDevice(const config::DeviceConfig& config, double sample_period_s,
                      std::vector<double> replay_positions)
-    : plant_(validated(config).mass, config.damping, config.sim.op, sample_period_s,
-             config.sim.initial_position, config.sim.initial_velocity, std::move(replay_positions)),
-      counts_per_unit_(config.sim.counts_per_unit),
-      noise_counts_(config.sim.noise_counts),
-      seed_(config.sim.seed),
-      rng_(config.sim.seed) {}
+    : axis_(config, sample_period_s, std::move(replay_positions)) {}
 
-void SimDevice::configure() {
-  plant_.reset();
-  rng_.seed(seed_);
-  noise_.reset();  // drop a cached second normal so the sequence restarts identically
-  configured_ = true;
-  first_read_ = true;
-  enabled_ = false;
-  force_ = 0.0;
-  error_ = Error::kNone;
-}
-
-void SimDevice::enable_output() {
-  if (!configured_) throw DeviceError("sim: enable_output() called before configure()");
-  force_ = 0.0;
-  enabled_ = true;
-}
-
-void SimDevice::disable_output() noexcept {
-  force_ = 0.0;
-  enabled_ = false;
-}
-
-IoStatus SimDevice::read(PositionSample& out) noexcept {
-  if (!configured_) {
-    error_ = Error::kNotConfigured;
-    return IoStatus::kError;
+bool SimDevice::inject(PeerFault fault) noexcept {
+  switch (fault) {
+    case PeerFault::kStopAnswering:
+      stop_answering_.store(true);
+      return true;
+    case PeerFault::kSkipSequence:
+      skip_sequence_.store(true);
+      return true;
+    case PeerFault::kDeviceFault:
+      device_fault_.store(true);
+      return true;
+    case PeerFault::kTransportFault:
+      transport_fault_.store(true);
+      return true;
   }
+  return false;
+}
+
+DeviceInfo SimDevice::on_configure() {
+  axis_.reset();
+  first_read_ = true;
+  sequence_ = 0;
+  return {"sim (exact plant, in-process)", 0, 0};
+}
+
+void SimDevice::on_enable() { axis_.set_output(true); }
+
+void SimDevice::on_disable() noexcept { axis_.set_output(false); }
+
+IoStatus SimDevice::on_read(PositionSample& out) noexcept {
+  if (transport_fault_.load(std::memory_order_relaxed)) {
+    set_fault_code(ENODEV);
+    return IoStatus::kTransportFault;
+  }
+  if (stop_answering_.load(std::memory_order_relaxed)) return IoStatus::kNoNewData;
   if (first_read_) {
     first_read_ = false;
   } else {
-    plant_.step(enabled_ ? force_ : 0.0);
+    axis_.step();
   }
-  out.position = encode(plant_.position());
-  out.device_status = enabled_ ? kStatusOutputEnabled : 0u;
+  if (skip_sequence_.exchange(false, std::memory_order_relaxed)) sequence_ += 3;
+  out.position = axis_.encoder_position();
+  out.sequence = sequence_++;
+  out.status = axis_.output_on() ? kStatusOutputEnabled : 0u;
+  out.flags = kSampleHasSequence;
+  if (device_fault_.load(std::memory_order_relaxed)) {
+    out.status |= kStatusFault;
+    set_fault_code(kStatusFault);
+    return IoStatus::kDeviceFault;
+  }
   return IoStatus::kOk;
 }
 
-IoStatus SimDevice::write(double force) noexcept {
-  if (!configured_) {
-    error_ = Error::kNotConfigured;
-    return IoStatus::kError;
-  }
-  if (!std::isfinite(force)) {
-    force_ = 0.0;
-    error_ = Error::kNonFiniteForce;
-    return IoStatus::kError;
-  }
-  force_ = force;
+IoStatus SimDevice::on_write(double force) noexcept {
+  axis_.hold_force(force);
   return IoStatus::kOk;
 }
 
-double SimDevice::encode(double x) noexcept {
-  if (counts_per_unit_ == 0.0) return x;  // ideal encoder
-  double counts = x * counts_per_unit_;
-  if (seed_ != 0 && noise_counts_ > 0.0) counts += noise_counts_ * noise_(rng_);
-  return std::floor(counts) / counts_per_unit_;
-}
-
-std::string SimDevice::describe_error() const {
-  switch (error_) {
-    case Error::kNotConfigured:
-      return "sim: read() or write() called before configure()";
-    case Error::kNonFiniteForce:
-      return "sim: write() got a non-finite force command (NaN or infinity); zero applied";
-    case Error::kNone:
-      break;
+std::string SimDevice::describe(const DeviceFault& fault) const {
+  char buf[128];
+  if (fault.fault_class == FaultClass::kDevice) {
+    std::snprintf(buf, sizeof buf, "sim: the simulated device reported a fault (status 0x%x)",
+                  fault.code);
+  } else {
+    std::snprintf(buf, sizeof buf, "sim: the simulated transport failed (%s)",
+                  std::strerror(static_cast<int>(fault.code)));
   }
-  return "sim: no error";
+  return buf;
 }
 
 }  // namespace hapticd::sim

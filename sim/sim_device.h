@@ -1,76 +1,76 @@
-// The simulated device behind the Device seam: the exact plant (sim/plant.h) plus an encoder
-// with floor quantisation and optional Gaussian count noise. One read() per tick advances the
-// simulation by exactly one sample period with the force last written (zero while output is
-// disabled, like an amplifier that is off). In-process, so no transport delay.
+// The simulated device in-process, behind the Device seam: a SimAxis advanced one sample
+// period per read() with the force last written (zero while output is disabled, like an
+// amplifier that is off). No transport, so no transport delay; the sample carries the
+// plant's step count as its sequence number. It is its own loopback peer (SimSelfPeer), so
+// the conformance suite can inject each fault class into it like into any other peer.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
-#include <random>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "config/config.h"
 #include "drivers/device.h"
-#include "drivers/transport_delay.h"
-#include "sim/plant.h"
+#include "sim/peers/loopback_peer.h"
+#include "sim/sim_axis.h"
 
 namespace hapticd::sim {
 
 class SimDevice final : public hapticd::Device {
  public:
-  // device_status bit set while output is enabled.
+  // PositionSample::status bit set while output is enabled.
   static constexpr std::uint32_t kStatusOutputEnabled = 1u << 0;
+  // ... and set with a device fault (the injected kDeviceFault); also its fault code.
+  static constexpr std::uint32_t kStatusFault = 1u << 1;
 
-  // Throws std::invalid_argument on a bad configuration (see Plant, plus encoder numbers).
-  // replay_positions: the imposed positions for OperatorSpec::Kind::kReplay.
+  // Throws std::invalid_argument on a bad configuration (see SimAxis).
   SimDevice(const config::DeviceConfig& config, double sample_period_s,
             std::vector<double> replay_positions = {});
 
-  // Not RT-safe. Back to the configured initial state at t = 0, noise generator re-seeded,
-  // output disabled, command zero. Must be called before read()/write().
-  void configure() override;
-  // Not RT-safe. Output on; the stored command restarts from zero so no stale force appears.
-  void enable_output() override;
-  // Not RT-safe, never throws. Output off and command zero.
-  void disable_output() noexcept override;
+  std::string_view driver_name() const noexcept override { return "sim"; }
+  const SimAxis& axis() const noexcept { return axis_; }
+  // Any thread: make the next reads or writes fail the way `fault` says.
+  bool inject(PeerFault fault) noexcept;
 
+ protected:
+  // Back to the configured initial state at t = 0, output disabled, command zero.
+  DeviceInfo on_configure() override;
+  void on_enable() override;
+  void on_disable() noexcept override;
+  void on_close() noexcept override {}
   // RT-safe: called every tick. The first call after configure() samples the initial state;
-  // each later call first advances the plant one period with the last written force (zero if
-  // output is disabled), then samples the encoder.
-  IoStatus read(PositionSample& out) noexcept override;
-  // RT-safe: called every tick. Stores the command for the next period, unclamped (saturation
-  // is the controller's job). A non-finite force is refused with kError and zero is stored.
-  IoStatus write(double force) noexcept override;
-
-  // RT-safe: called every tick.
-  int transport_delay_samples() const noexcept override {
-    return declared_transport_delay(config::DriverKind::kSim);
-  }
-  std::string_view name() const noexcept override { return "sim"; }
-  std::string describe_error() const override;
-
-  double last_command() const noexcept override { return force_; }
-  bool output_enabled() const noexcept override { return enabled_; }
-
-  const Plant& plant() const noexcept { return plant_; }
+  // each later one first advances the plant one period with the force last written.
+  IoStatus on_read(PositionSample& out) noexcept override;
+  // RT-safe: called every tick. Stores the command for the next period, unclamped
+  // (saturation is the controller's job).
+  IoStatus on_write(double force) noexcept override;
+  std::string describe(const DeviceFault& fault) const override;
 
  private:
-  enum class Error : std::uint8_t { kNone, kNotConfigured, kNonFiniteForce };
-
-  double encode(double x) noexcept;
-
-  Plant plant_;
-  double counts_per_unit_;
-  double noise_counts_;
-  std::uint64_t seed_;
-  std::mt19937_64 rng_;
-  std::normal_distribution<double> noise_{0.0, 1.0};
-  bool configured_ = false;
+  SimAxis axis_;
   bool first_read_ = true;
-  bool enabled_ = false;
-  double force_ = 0.0;
-  Error error_ = Error::kNone;
+  std::uint64_t sequence_ = 0;
+  std::atomic<bool> stop_answering_{false};
+  std::atomic<bool> skip_sequence_{false};
+  std::atomic<bool> device_fault_{false};
+  std::atomic<bool> transport_fault_{false};
+};
+
+// The sim device seen as its own peer: what the plant feels, and fault injection.
+class SimSelfPeer final : public LoopbackPeer {
+ public:
+  explicit SimSelfPeer(SimDevice& device) : device_(device) {}
+  void service() override {}
+  int fd() const noexcept override { return -1; }
+  double applied_force() const noexcept override { return device_.axis().held_force(); }
+  bool output_on() const noexcept override { return device_.axis().output_on(); }
+  const Plant& plant() const noexcept override { return device_.axis().plant(); }
+  bool inject(PeerFault fault) noexcept override { return device_.inject(fault); }
+
+ private:
+  SimDevice& device_;
 };
 
 }  // namespace hapticd::sim

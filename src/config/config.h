@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -13,7 +14,6 @@
 namespace hapticd::config {
 
 enum class ClockMode { kRealtime, kFreerun };
-enum class DriverKind { kSim, kHid, kCan, kGpio };
 enum class Discretization { kBackward, kTustin };
 enum class GateMode { kEnforce, kWarn };
 
@@ -85,12 +85,20 @@ struct SimDeviceConfig {
   OperatorSpec op;
 };
 
+// A driver's own settings, the section device.<driver>: parsed and validated by the driver's
+// code (config/driver_schema.h), carried here without the config library knowing them.
+struct DriverSettings {
+  virtual ~DriverSettings() = default;
+};
+
 struct DeviceConfig {
-  DriverKind driver = DriverKind::kSim;
-  double mass = 0.1;        // m (kg), > 0
-  double damping = 2.0;     // b (N s/m), > 0: the device's own physical damping
-  double max_force = 10.0;  // |u| saturation (N), > 0
-  SimDeviceConfig sim;
+  std::string driver = "sim";  // a registered driver's name
+  double mass = 0.1;           // m (kg), > 0
+  double damping = 2.0;        // b (N s/m), > 0: the device's own physical damping
+  double max_force = 10.0;     // |u| saturation (N), > 0
+  SimDeviceConfig sim;         // the simulated plant: the sim driver, and every loopback peer
+  // device.<driver>; null for a driver without a section of its own (sim).
+  std::shared_ptr<const DriverSettings> settings;
 };
 
 struct CouplingConfig {
@@ -116,6 +124,9 @@ struct SafetyConfig {
   double passivity_margin = 0.1;             // pass needs b_req <= (1 - margin) b; in [0, 1)
   double max_speed = 10.0;    // |dx/dt| between samples above this is an encoder fault (m/s)
   int stale_fault_ticks = 3;  // consecutive reads with no new position that fault the loop
+  // A gap of this many samples or more in the device's own sequence counter faults the loop
+  // (the loop ran on data older than it knew); 0: gaps are counted and logged only.
+  std::uint32_t sequence_gap_fault = 1;
 };
 
 struct AnalysisConfig {

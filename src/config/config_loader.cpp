@@ -2,16 +2,10 @@
 // against the schema, and record the merged document as Config::effective_yaml.
 #include "config/config_loader.h"
 
-#include <fcntl.h>
-#include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
-#include <cerrno>
-#include <filesystem>
-#include <system_error>
-
 #include "config/config_schema.h"
-#include "config/yaml_reader.h"
+#include "config/schema_reader.h"
 
 namespace hapticd::config {
 namespace {
@@ -47,7 +41,7 @@ std::string override_text(const Override& o) {
 // Writes each --set into the tree, creating missing intermediate mappings, and tells `diag`
 // which paths came from which argument (their yaml-cpp marks point into the value string).
 void apply_overrides(YAML::Node& root, const std::vector<Override>& overrides,
-                     detail::Diagnostics& diag) {
+                     schema::Diagnostics& diag) {
   for (std::size_t i = 0; i < overrides.size(); ++i) {
     const Override& o = overrides[i];
     const std::string text = override_text(o);
@@ -75,7 +69,7 @@ void apply_overrides(YAML::Node& root, const std::vector<Override>& overrides,
     std::string created;  // the outermost mapping this --set had to create
     bool blocked = false;
     for (std::size_t s = 0; s + 1 < segments.size(); ++s) {
-      path = detail::child_path(path, segments[s]);
+      path = schema::child_path(path, segments[s]);
       YAML::Node next = cur[segments[s]];
       if (!next.IsDefined() || next.IsNull()) {
         if (!next.IsDefined() && created.empty()) created = path;
@@ -103,29 +97,6 @@ std::string emit(const YAML::Node& root) {
   return text;
 }
 
-std::string read_file(const std::string& path) {
-  auto fail = [&](int err) {
-    return ConfigError({path + ": cannot read: " + std::system_category().message(err)});
-  };
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) throw fail(errno);
-  std::string text;
-  char buf[16384];
-  while (true) {
-    const ssize_t n = ::read(fd, buf, sizeof buf);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      const int err = errno;
-      ::close(fd);
-      throw fail(err);
-    }
-    if (n == 0) break;
-    text.append(buf, static_cast<std::size_t>(n));
-  }
-  ::close(fd);
-  return text;
-}
-
 }  // namespace
 
 std::string Config::locate(std::string_view key_path) const {
@@ -148,8 +119,14 @@ Override parse_override(std::string_view arg) {
   return {std::string(arg.substr(0, eq)), std::string(arg.substr(eq + 1)), std::string(arg)};
 }
 
+const DriverSchemas& sim_driver_only() {
+  static const DriverSchemas kSim{{"sim", {}}};  // the plant section device.sim is the loader's
+  return kSim;
+}
+
 Config load_config_text(std::string_view yaml, const std::string& source_name,
-                        const std::vector<Override>& overrides, const std::string& base_dir) {
+                        const std::vector<Override>& overrides, const std::string& base_dir,
+                        const DriverSchemas& drivers) {
   std::vector<YAML::Node> documents;
   try {
     documents = YAML::LoadAll(std::string(yaml));
@@ -158,12 +135,12 @@ Config load_config_text(std::string_view yaml, const std::string& source_name,
     if (e.mark.line >= 0) {
       where += ":" + std::to_string(e.mark.line + 1) + ":" + std::to_string(e.mark.column + 1);
     }
-    throw ConfigError({detail::printable(where + ": YAML syntax error: " + e.msg)});
+    throw ConfigError({schema::printable(where + ": YAML syntax error: " + e.msg)});
   }
   if (documents.size() > 1) {
     // Reading only the first would silently ignore whatever the second one sets.
     const YAML::Mark m = documents[1].Mark();
-    throw ConfigError({detail::printable(
+    throw ConfigError({schema::printable(
         source_name + (m.line >= 0 ? ":" + std::to_string(m.line + 1) : std::string()) +
         ": a second YAML document ('---') follows the first; a configuration is one document")});
   }
@@ -171,10 +148,10 @@ Config load_config_text(std::string_view yaml, const std::string& source_name,
   // An empty document (or one that is all comments) is a configuration of defaults.
   if (root.IsNull()) root.reset(YAML::Node(YAML::NodeType::Map));
 
-  detail::Diagnostics diag(source_name);
+  schema::Diagnostics diag(source_name);
   if (root.IsMap()) apply_overrides(root, overrides, diag);
   Config config;
-  detail::read_config(diag, root, base_dir, config);
+  schema::read_config(diag, root, base_dir, drivers, config);
   if (!diag.empty()) throw ConfigError(diag.messages());
 
   if (config.device.sim.op.kind == OperatorSpec::Kind::kReplay) {
@@ -189,15 +166,9 @@ Config load_config_text(std::string_view yaml, const std::string& source_name,
   return config;
 }
 
-Config load_config_file(const std::string& path, const std::vector<Override>& overrides) {
-  const std::string text = read_file(path);
-  std::string base_dir = std::filesystem::path(path).parent_path().string();
-  if (base_dir.empty()) base_dir = ".";
-  return load_config_text(text, path, overrides, base_dir);
-}
-
-Config load_embedded_default(const std::vector<Override>& overrides) {
-  return load_config_text(embedded_default_yaml(), "config/sim.yaml (embedded)", overrides, ".");
+Config load_embedded_default(const std::vector<Override>& overrides, const DriverSchemas& drivers) {
+  return load_config_text(embedded_default_yaml(), "config/sim.yaml (embedded)", overrides, ".",
+                          drivers);
 }
 
 }  // namespace hapticd::config

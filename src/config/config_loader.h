@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "config/config.h"
+#include "config/driver_schema.h"
 
 namespace hapticd::config {
 
@@ -38,21 +39,18 @@ class ConfigError : public std::runtime_error {
 // "--set ARG: expected key.path=value" when there is no '=' or a key segment is empty.
 Override parse_override(std::string_view arg);
 
-// Reads and validates a file; relative paths inside it (device.sim.operator.log) resolve
-// against the file's directory. Messages are prefixed with `path` as given.
-Config load_config_file(const std::string& path, const std::vector<Override>& overrides = {});
-
-// Same for text already in memory; `source_name` prefixes messages and `base_dir` resolves
-// relative paths.
+// Parses and validates a configuration held in memory (the config library does no file
+// I/O: the service reads files). `source_name` prefixes messages ("sim.yaml:12: ..."),
+// `base_dir` resolves relative paths inside it (device.sim.operator.log), and device.driver
+// must name one of `drivers`, whose own section device.<driver> that driver's code reads.
 Config load_config_text(std::string_view yaml, const std::string& source_name,
                         const std::vector<Override>& overrides = {},
-                        const std::string& base_dir = ".");
+                        const std::string& base_dir = ".",
+                        const DriverSchemas& drivers = sim_driver_only());
 
 // config/sim.yaml as compiled into the binary (source name "config/sim.yaml (embedded)").
-Config load_embedded_default(const std::vector<Override>& overrides = {});
+Config load_embedded_default(const std::vector<Override>& overrides = {},
+                             const DriverSchemas& drivers = sim_driver_only());
 std::string_view embedded_default_yaml() noexcept;
-
-// The YAML name of a driver ("sim", "hid", ...), for messages.
-const std::string& driver_name(DriverKind driver);
 
 }  // namespace hapticd::config

@@ -8,7 +8,7 @@
 #include <filesystem>
 #include <utility>
 
-namespace hapticd::config::detail {
+namespace hapticd::config::schema {
 namespace {
 
 template <typename E>
@@ -39,10 +39,6 @@ void integer(MapReader& m, std::string_view key, const IntRange& range, int& out
 
 const Options<ClockMode> kClocks{{"realtime", ClockMode::kRealtime},
                                  {"freerun", ClockMode::kFreerun}};
-const Options<DriverKind> kDrivers{{"sim", DriverKind::kSim},
-                                   {"hid", DriverKind::kHid},
-                                   {"can", DriverKind::kCan},
-                                   {"gpio", DriverKind::kGpio}};
 const Options<Discretization> kDiscretizations{{"backward", Discretization::kBackward},
                                                {"tustin", Discretization::kTustin}};
 const Options<GateMode> kGates{{"enforce", GateMode::kEnforce}, {"warn", GateMode::kWarn}};
@@ -117,7 +113,7 @@ void read_operator(MapReader& sim, std::optional<double> rate_hz, const std::str
   const Field field = sim.take("operator");
   // Absent: the defaults of OperatorSpec stand.
   if (!field.present) return;
-  MapReader m(sim.diag(), field, kOperatorKeys);
+  MapReader m(sim.diag(), field);
   if (!m.ok()) return;
   Diagnostics& d = m.diag();
 
@@ -126,7 +122,7 @@ void read_operator(MapReader& sim, std::optional<double> rate_hz, const std::str
   if (kind_field.present) {
     const auto k = choice(d, kind_field, kKinds);
     if (!k) {
-      m.finish();
+      m.skip_rest();  // which keys apply depends on the kind just reported as wrong
       return;
     }
     kind = *k;
@@ -166,25 +162,22 @@ void read_operator(MapReader& sim, std::optional<double> rate_hz, const std::str
   for (const std::string& key : kOperatorKeys) {
     if (std::find(used.begin(), used.end(), key) == used.end()) m.not_used(key, reason);
   }
-  m.finish(used);
+  m.finish();
 }
 
 struct LoopResult {
-  Field clock;
   std::optional<double> rate_hz;  // empty when rate_hz is invalid
 };
 
 LoopResult read_loop(MapReader& top, LoopConfig& loop) {
-  MapReader m(top.diag(), top.take("loop"),
-              {"rate_hz", "clock", "rt_priority", "cpu", "overrun_fault_streak"});
+  MapReader m(top.diag(), top.take("loop"));
   LoopResult result;
   const Field rate = m.take("rate_hz");
   // Below 1 Hz nothing is haptic, and T = 1/rate_hz must stay a finite, ordinary number.
   const auto r = read_number(m.diag(), rate, Range::interval(1.0, true, 100000.0, true));
   if (r) loop.rate_hz = *r;
   if (r || !rate.present) result.rate_hz = loop.rate_hz;
-  result.clock = m.take("clock");
-  if (const auto v = choice(m.diag(), result.clock, kClocks)) loop.clock = *v;
+  if (const auto v = choice(m.diag(), m.take("clock"), kClocks)) loop.clock = *v;
   integer(m, "rt_priority", IntRange::between(1, 99), loop.rt_priority);
   integer(m, "cpu", IntRange::at_least(-1, INT_MAX), loop.cpu);
   integer(m, "overrun_fault_streak", IntRange::at_least(1, INT_MAX), loop.overrun_fault_streak);
@@ -192,27 +185,56 @@ LoopResult read_loop(MapReader& top, LoopConfig& loop) {
   return result;
 }
 
-void read_device(MapReader& top, std::optional<double> rate_hz, const std::string& base_dir,
-                 DeviceConfig& dev) {
-  MapReader m(top.diag(), top.take("device"), {"driver", "mass", "damping", "max_force", "sim"});
-  Diagnostics& d = m.diag();
-  if (const auto v = choice(d, m.take("driver"), kDrivers)) dev.driver = *v;
-  number(m, "mass", Range::greater_than(0.0), dev.mass);
-  number(m, "damping", Range::greater_than(0.0), dev.damping);
-  number(m, "max_force", Range::greater_than(0.0), dev.max_force);
-
-  MapReader sim(d, m.take("sim"),
-                {"counts_per_unit", "noise_counts", "seed", "initial_position", "initial_velocity",
-                 "operator"});
-  number(sim, "counts_per_unit", Range::at_least(0.0), dev.sim.counts_per_unit);
-  number(sim, "noise_counts", Range::at_least(0.0), dev.sim.noise_counts);
+void read_plant(MapReader& device, std::optional<double> rate_hz, const std::string& base_dir,
+                SimDeviceConfig& sim_cfg) {
+  MapReader sim(device.diag(), device.take("sim"));
+  Diagnostics& d = sim.diag();
+  number(sim, "counts_per_unit", Range::at_least(0.0), sim_cfg.counts_per_unit);
+  number(sim, "noise_counts", Range::at_least(0.0), sim_cfg.noise_counts);
   if (const auto v = read_integer(d, sim.take("seed"), IntRange::at_least(0, LLONG_MAX))) {
-    dev.sim.seed = static_cast<std::uint64_t>(*v);
+    sim_cfg.seed = static_cast<std::uint64_t>(*v);
   }
-  number(sim, "initial_position", Range::any(), dev.sim.initial_position);
-  number(sim, "initial_velocity", Range::any(), dev.sim.initial_velocity);
-  read_operator(sim, rate_hz, base_dir, dev.sim.op);
+  number(sim, "initial_position", Range::any(), sim_cfg.initial_position);
+  number(sim, "initial_velocity", Range::any(), sim_cfg.initial_velocity);
+  read_operator(sim, rate_hz, base_dir, sim_cfg.op);
   sim.finish();
+}
+
+// device.driver selects one schema; its section device.<driver> is read by the driver's own
+// code, and the sections of the other drivers are refused rather than ignored.
+void read_driver_section(MapReader& m, const DriverSchemas& drivers, bool driver_ok, Config& cfg) {
+  const DriverSchema* selected = nullptr;
+  for (const DriverSchema& s : drivers) {
+    if (!s.read_section) continue;
+    if (driver_ok && s.name == cfg.device.driver) {
+      selected = &s;
+    } else if (driver_ok) {
+      m.not_used(s.name, "device.driver '" + cfg.device.driver + "'");
+    } else {
+      m.take(s.name);  // the driver is wrong: which section applies is unknown
+    }
+  }
+  if (selected == nullptr) return;
+  MapReader section(m.diag(), m.take(selected->name));
+  if (!section.ok()) return;
+  cfg.device.settings = selected->read_section(section, cfg);
+  section.finish();
+}
+
+void read_device(MapReader& top, std::optional<double> rate_hz, const std::string& base_dir,
+                 const DriverSchemas& drivers, Config& cfg) {
+  MapReader m(top.diag(), top.take("device"));
+  Diagnostics& d = m.diag();
+  std::vector<std::string> names;
+  for (const DriverSchema& s : drivers) names.push_back(s.name);
+  const Field driver = m.take("driver");
+  const auto index = read_choice(d, driver, names);
+  if (index) cfg.device.driver = names[*index];
+  number(m, "mass", Range::greater_than(0.0), cfg.device.mass);
+  number(m, "damping", Range::greater_than(0.0), cfg.device.damping);
+  number(m, "max_force", Range::greater_than(0.0), cfg.device.max_force);
+  read_plant(m, rate_hz, base_dir, cfg.device.sim);
+  read_driver_section(m, drivers, index.has_value() || !driver.present, cfg);
   m.finish();
 }
 
@@ -225,7 +247,7 @@ std::optional<std::pair<Coefficients, Coefficients>> read_rational(MapReader& pa
   const Field field = parent.take(key);
   // A key with everything below it commented out means "not configured".
   if (!field.present || field.node.IsNull()) return std::nullopt;
-  MapReader m(parent.diag(), field, {"numerator", "denominator"});
+  MapReader m(parent.diag(), field);
   if (!m.ok()) return std::nullopt;
   Diagnostics& d = m.diag();
   const Field num_field = m.take("numerator");
@@ -267,9 +289,7 @@ std::optional<std::pair<Coefficients, Coefficients>> read_rational(MapReader& pa
 }
 
 void read_wall(MapReader& top, WallConfig& wall) {
-  MapReader m(top.diag(), top.take("wall"),
-              {"position", "normal", "stiffness", "damping", "discretization", "delay_samples",
-               "no_pull", "coupling"});
+  MapReader m(top.diag(), top.take("wall"));
   Diagnostics& d = m.diag();
   number(m, "position", Range::any(), wall.position);
   const Field normal = m.take("normal");
@@ -298,21 +318,23 @@ void read_wall(MapReader& top, WallConfig& wall) {
 }
 
 void read_safety(MapReader& top, SafetyConfig& safety) {
-  MapReader m(top.diag(), top.take("safety"),
-              {"gate", "operator_passivity_shortage", "passivity_margin", "max_speed",
-               "stale_fault_ticks"});
+  MapReader m(top.diag(), top.take("safety"));
   if (const auto v = choice(m.diag(), m.take("gate"), kGates)) safety.gate = *v;
   number(m, "operator_passivity_shortage", Range::at_least(0.0),
          safety.operator_passivity_shortage);
   number(m, "passivity_margin", Range::interval(0.0, true, 1.0, false), safety.passivity_margin);
   number(m, "max_speed", Range::greater_than(0.0), safety.max_speed);
   integer(m, "stale_fault_ticks", IntRange::at_least(1, INT_MAX), safety.stale_fault_ticks);
+  if (const auto v =
+          read_integer(m.diag(), m.take("sequence_gap_fault"), IntRange::between(0, 65535))) {
+    safety.sequence_gap_fault = static_cast<std::uint32_t>(*v);
+  }
   m.finish();
 }
 
 void read_analysis(MapReader& top, AnalysisConfig& analysis) {
-  MapReader m(top.diag(), top.take("analysis"), {"operator", "transparency_weight"});
-  MapReader op(m.diag(), m.take("operator"), {"stiffness", "damping"});
+  MapReader m(top.diag(), top.take("analysis"));
+  MapReader op(m.diag(), m.take("operator"));
   number(op, "stiffness", Range::greater_than(0.0), analysis.operator_stiffness);
   number(op, "damping", Range::at_least(0.0), analysis.operator_damping);
   op.finish();
@@ -324,7 +346,7 @@ void read_analysis(MapReader& top, AnalysisConfig& analysis) {
 }
 
 void read_telemetry(MapReader& top, TelemetryConfig& telemetry) {
-  MapReader m(top.diag(), top.take("telemetry"), {"log", "ring_capacity"});
+  MapReader m(top.diag(), top.take("telemetry"));
   if (const auto v = read_string(m.diag(), m.take("log"))) telemetry.log_path = *v;
   // The ring is allocated, prefaulted and locked in memory: 2^22 records are 300 MB.
   if (const auto v = read_integer(m.diag(), m.take("ring_capacity"),
@@ -337,29 +359,15 @@ void read_telemetry(MapReader& top, TelemetryConfig& telemetry) {
 }  // namespace
 
 void read_config(Diagnostics& diag, const YAML::Node& root, const std::string& base_dir,
-                 Config& config) {
-  MapReader top(diag, {"", root, root.Mark(), true},
-                {"loop", "device", "wall", "safety", "analysis", "telemetry"});
+                 const DriverSchemas& drivers, Config& config) {
+  MapReader top(diag, {"", root, root.Mark(), true});
   const LoopResult loop = read_loop(top, config.loop);
-  read_device(top, loop.rate_hz, base_dir, config.device);
+  read_device(top, loop.rate_hz, base_dir, drivers, config);
   read_wall(top, config.wall);
   read_safety(top, config.safety);
   read_analysis(top, config.analysis);
   read_telemetry(top, config.telemetry);
   top.finish();
-
-  // Free-running ticks have no real time base, which only a simulated device tolerates.
-  if (config.loop.clock == ClockMode::kFreerun && config.device.driver != DriverKind::kSim) {
-    diag.error(loop.clock.key_mark, loop.clock.path,
-               "freerun runs only with device.driver: sim, got '" +
-                   name_of(kDrivers, config.device.driver) + "'");
-  }
 }
 
-}  // namespace hapticd::config::detail
-
-namespace hapticd::config {
-const std::string& driver_name(DriverKind driver) {
-  return detail::name_of(detail::kDrivers, driver);
-}
-}  // namespace hapticd::config
+}  // namespace hapticd::config::schema

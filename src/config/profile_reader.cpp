@@ -6,7 +6,7 @@
 
 #include "config/config_schema.h"
 
-namespace hapticd::config::detail {
+namespace hapticd::config::schema {
 namespace {
 
 using Shape = ProfileSpec::Shape;
@@ -116,21 +116,20 @@ void read_profile(MapReader& parent, std::string_view key,
     if (required_by) parent.missing(key, "required by " + *required_by);
     return;
   }
-  MapReader map(parent.diag(), field, kAllKeys);
+  MapReader map(parent.diag(), field);
   if (!map.ok()) return;
 
   const Field shape_field = map.take("shape");
   if (!shape_field.present) {
     map.diag().error(field.key_mark, child_path(field.path, "shape"),
                      "missing; must be one of constant, step, ramp, sine, press");
-    map.finish(kAllKeys);
+    map.skip_rest();  // which keys apply depends on the shape
     return;
   }
   const auto index = read_choice(map.diag(), shape_field, kShapeNames);
   if (!index) {
-    // Without a valid shape nothing says which keys apply; only outright unknown keys are
-    // worth reporting.
-    map.finish(kAllKeys);
+    // Without a valid shape nothing says which keys apply.
+    map.skip_rest();
     return;
   }
 
@@ -142,8 +141,8 @@ void read_profile(MapReader& parent, std::string_view key,
       map.not_used(k, "shape '" + kShapeNames[*index] + "'");
     }
   }
-  map.finish(keys);
+  map.finish();
   if (reader.ok()) out = std::move(spec);
 }
 
-}  // namespace hapticd::config::detail
+}  // namespace hapticd::config::schema

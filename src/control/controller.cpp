@@ -2,8 +2,6 @@
 
 #include <cmath>
 
-#include "telemetry/tick_record.h"
-
 namespace hapticd::control {
 
 Controller::Controller(const ControlLaw& law)
@@ -27,7 +25,7 @@ ControlOutput Controller::step(double position) noexcept {
   have_last_position_ = true;
   if (!armed_) {
     if (law_.require_outside_start && out.penetration > 0.0) {
-      out.flags |= telemetry::kFlagUnarmed;  // every filter stays at rest: nothing to kick
+      out.flags |= kControlUnarmed;  // every filter stays at rest: nothing to kick
       return out;
     }
     armed_ = true;
@@ -54,7 +52,7 @@ ControlOutput Controller::step(double position) noexcept {
   if (q - law_.c0 * r > 0.0) {
     f = (r + law_.e0 * q) * law_.inv_one_plus_e0c0;
     xi = q - law_.c0 * f;
-    out.flags |= telemetry::kFlagContact;
+    out.flags |= kControlContact;
   }
   xi_.push(xi);
   force_.push(f);
@@ -69,16 +67,16 @@ ControlOutput Controller::step(double position) noexcept {
 
   if (law_.no_pull && applied < 0.0) {
     applied = 0.0;
-    out.flags |= telemetry::kFlagNoPullClamped;
+    out.flags |= kControlNoPullClamped;
   }
   double u = -law_.normal * applied;
   if (!std::isfinite(f) || !std::isfinite(u)) {
     // Never saturate a NaN into +-max_force: command nothing and let the loop fault.
     u = 0.0;
-    out.flags |= telemetry::kFlagNonFinite;
+    out.flags |= kControlNonFinite;
   } else if (std::abs(u) > law_.max_force) {
     u = std::copysign(law_.max_force, u);
-    out.flags |= telemetry::kFlagSaturated;
+    out.flags |= kControlSaturated;
   }
   out.force_commanded = u;
   return out;

@@ -11,13 +11,22 @@
 
 namespace hapticd::control {
 
+// What a step did, as bits. The loop copies them into the tick record unchanged: each has the
+// value of the telemetry::TickFlag of the same meaning (the loop checks that at compile time).
+enum ControlFlag : std::uint32_t {
+  kControlContact = 1u << 0,        // penetration > 0: the wall acts
+  kControlSaturated = 1u << 1,      // |u| was limited to device.max_force
+  kControlNoPullClamped = 1u << 4,  // wall.no_pull turned a pulling force into zero
+  kControlUnarmed = 1u << 6,        // inside the wall before it was first left: zero force
+  kControlNonFinite = 1u << 7,      // f was not finite: zero commanded, the loop faults
+};
+
 struct ControlOutput {
   double penetration = 0.0;      // p = n (x - x0)
   double velocity = 0.0;         // (x_k - x_{k-1}) / T
   double force_computed = 0.0;   // f_k, wall force along n (positive pushes out of the wall)
   double force_commanded = 0.0;  // u = -n f_{k-d}, after no_pull and saturation
-  // telemetry::TickFlag bits: contact, saturated, no-pull clamped, unarmed, non-finite
-  std::uint32_t flags = 0;
+  std::uint32_t flags = 0;       // ControlFlag bits
 };
 
 class Controller {
@@ -27,7 +36,7 @@ class Controller {
 
   // RT-safe: called every tick. Never allocates, locks or throws; `position` must be finite.
   // A non-finite force (an overflow the configuration checks missed) is never commanded:
-  // force_commanded is 0 and kFlagNonFinite is set, for the loop to fault on.
+  // force_commanded is 0 and kControlNonFinite is set, for the loop to fault on.
   ControlOutput step(double position) noexcept;
 
   // RT-safe. Clears every filter state and the delay line, and disarms (as at construction).

@@ -10,16 +10,26 @@ std::string describe(const Fault& f) {
   switch (f.cause) {
     case FaultCause::kNone:
       return "";
-    case FaultCause::kDeviceRead:
-      std::snprintf(buf, sizeof buf, "device read failed at tick %llu", tick);
+    case FaultCause::kTransportRead:
+      std::snprintf(buf, sizeof buf, "transport fault reading the device at tick %llu", tick);
       break;
-    case FaultCause::kDeviceWrite:
-      std::snprintf(buf, sizeof buf, "device write failed at tick %llu", tick);
+    case FaultCause::kTransportWrite:
+      std::snprintf(buf, sizeof buf, "transport fault writing the device at tick %llu", tick);
+      break;
+    case FaultCause::kDeviceReported:
+      std::snprintf(buf, sizeof buf, "the device reported a fault at tick %llu", tick);
       break;
     case FaultCause::kStaleData:
       std::snprintf(buf, sizeof buf,
-                    "stale encoder data: no new position for %.0f ticks (tick %llu)", f.value,
-                    tick);
+                    "stale encoder data: no new position for %.0f ticks (tick %llu; "
+                    "safety.stale_fault_ticks)",
+                    f.value, tick);
+      break;
+    case FaultCause::kSequenceGap:
+      std::snprintf(buf, sizeof buf,
+                    "the device's sequence skipped %.0f samples before tick %llu "
+                    "(safety.sequence_gap_fault)",
+                    f.value, tick);
       break;
     case FaultCause::kNonFinitePosition:
       std::snprintf(buf, sizeof buf, "impossible encoder data: non-finite position at tick %llu",

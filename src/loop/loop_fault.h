@@ -9,22 +9,25 @@ namespace hapticd::loop {
 
 enum class FaultCause : std::uint8_t {
   kNone,
-  kDeviceRead,   // Device::read returned kError
-  kDeviceWrite,  // Device::write returned kError
-  kStaleData,    // no new position for safety.stale_fault_ticks ticks in a row
+  kTransportRead,   // Device::read: the transport failed (I/O error, bus-off, device gone)
+  kTransportWrite,  // Device::write: the transport failed (or refused the command)
+  kDeviceReported,  // the device reported a fault (status bit, EMCY, axis error)
+  kStaleData,       // no new position for safety.stale_fault_ticks ticks, or one that old
   kNonFinitePosition,
-  kEncoderJump,     // |x_k - x_{k-1}| / T above safety.max_speed
+  kEncoderJump,     // |x_k - x_{k-1}| / dt above safety.max_speed
   kOverrunStreak,   // loop.overrun_fault_streak consecutive overruns
   kNonFiniteForce,  // the controller computed a NaN or infinite force (zero was commanded)
+  kSequenceGap,     // the device's sequence skipped safety.sequence_gap_fault samples or more
 };
 
 struct Fault {
   FaultCause cause = FaultCause::kNone;
   std::uint64_t tick = 0;
-  double value = 0.0;  // the offending number (speed, streak length, ...), cause-specific
+  double value = 0.0;  // the offending number (speed, streak length, gap...), cause-specific
 };
 
-// Not RT-safe. One sentence naming the cause, the tick and the number.
+// Not RT-safe. One sentence naming the cause, the tick and the number. For a device or
+// transport fault the device's own description follows it (Device::describe_fault()).
 std::string describe(const Fault& f);
 
 }  // namespace hapticd::loop

@@ -1,3 +1,8 @@
+// The tick, and everything it touches. The RT working set is kept small and listed here, so a
+// change that adds to it is seen: the Device (its state, the driver's buffers), the
+// Controller (ControlLaw and three 16-tap histories, the delay line), this ServoLoop (options,
+// two 4 KB LatencyHistograms, counters), the SenseState and TickRecord on the stack, and one
+// slot of the SPSC ring. Nothing else: no allocation, no lock, no log, no throw.
 #include "loop/servo_loop.h"
 
 #include <sched.h>
@@ -11,6 +16,16 @@
 
 namespace hapticd::loop {
 namespace {
+
+// The controller's flags are copied into the tick record unchanged.
+constexpr bool same_bit(control::ControlFlag c, telemetry::TickFlag t) {
+  return static_cast<std::uint32_t>(c) == static_cast<std::uint32_t>(t);
+}
+static_assert(same_bit(control::kControlContact, telemetry::kFlagContact));
+static_assert(same_bit(control::kControlSaturated, telemetry::kFlagSaturated));
+static_assert(same_bit(control::kControlNoPullClamped, telemetry::kFlagNoPullClamped));
+static_assert(same_bit(control::kControlUnarmed, telemetry::kFlagUnarmed));
+static_assert(same_bit(control::kControlNonFinite, telemetry::kFlagNonFinite));
 
 constexpr std::int64_t kNsPerS = 1'000'000'000;
 
@@ -43,15 +58,54 @@ ServoLoop::ServoLoop(Device& device, control::Controller& controller,
       options_(options),
       max_step_(options.max_speed * static_cast<double>(options.period_ns) / kNsPerS) {}
 
-bool ServoLoop::sense(std::uint64_t tick, PositionSample& sample, SenseState& st,
-                      telemetry::TickRecord& rec, LoopResult& res) noexcept {
+void ServoLoop::set_fault(Fault f, telemetry::TickRecord& rec, LoopResult& res) const noexcept {
+  res.fault = f;
+  rec.flags |= telemetry::kFlagFault;
+  rec.fault_cause = static_cast<std::uint8_t>(f.cause);
+  if (f.cause == FaultCause::kTransportRead || f.cause == FaultCause::kTransportWrite ||
+      f.cause == FaultCause::kDeviceReported) {
+    const DeviceFault df = device_.fault();
+    rec.fault_class = static_cast<std::uint8_t>(df.fault_class);
+    rec.fault_code = df.code;
+  }
+}
+
+bool ServoLoop::check_sequence(std::uint64_t tick, const PositionSample& sample, SenseState& st,
+                               telemetry::TickRecord& rec, LoopResult& res) noexcept {
+  rec.sequence = static_cast<std::uint32_t>(sample.sequence);
+  if (st.have_sequence) {
+    std::uint64_t gap = sample.sequence - st.last_sequence - 1;  // wraps like the counter
+    if (options_.sequence_modulus != 0) gap %= options_.sequence_modulus;
+    if (gap > 0) {
+      rec.flags |= telemetry::kFlagSequenceGap;
+      rec.sequence_gap = static_cast<std::uint16_t>(std::min<std::uint64_t>(gap, 65535));
+      ++res.sequence_gaps;
+      res.samples_missed += gap;
+      if (options_.sequence_gap_fault != 0 && gap >= options_.sequence_gap_fault) {
+        set_fault({FaultCause::kSequenceGap, tick, static_cast<double>(gap)}, rec, res);
+        return false;
+      }
+    }
+  }
+  st.last_sequence = sample.sequence;
+  st.have_sequence = true;
+  return true;
+}
+
+bool ServoLoop::sense(std::uint64_t tick, std::int64_t wake_ns, PositionSample& sample,
+                      SenseState& st, telemetry::TickRecord& rec, LoopResult& res) noexcept {
   const IoStatus rs = device_.read(sample);
-  rec.device_status = sample.device_status;
-  if (rs == IoStatus::kError) {
-    res.fault = {FaultCause::kDeviceRead, tick, 0.0};
+  rec.device_status = sample.status;
+  if (rs == IoStatus::kTransportFault || rs == IoStatus::kDeviceFault) {
+    set_fault(
+        {rs == IoStatus::kDeviceFault ? FaultCause::kDeviceReported : FaultCause::kTransportRead,
+         tick, 0.0},
+        rec, res);
     return false;
   }
-  if (rs == IoStatus::kNoNewData) {
+  const bool has_seq = (sample.flags & kSampleHasSequence) != 0;
+  // The same sample handed over again is no new data, whatever the status said.
+  if (rs != IoStatus::kOk || (has_seq && st.have_sequence && sample.sequence == st.last_sequence)) {
     // Hold the last position (a ZOH on the measurement) and count the staleness; with no
     // position yet there is nothing to hold, and nothing is commanded.
     ++res.stale_ticks;
@@ -59,27 +113,45 @@ bool ServoLoop::sense(std::uint64_t tick, PositionSample& sample, SenseState& st
     rec.flags |= telemetry::kFlagStale;
     sample.position = st.last_x;
     if (++st.stale_streak >= options_.stale_fault_ticks) {
-      res.fault = {FaultCause::kStaleData, tick, static_cast<double>(st.stale_streak)};
+      set_fault({FaultCause::kStaleData, tick, static_cast<double>(st.stale_streak)}, rec, res);
     }
     return st.have_x && res.fault.cause == FaultCause::kNone;
   }
   st.stale_streak = 0;
-  if (!std::isfinite(sample.position)) {
-    res.fault = {FaultCause::kNonFinitePosition, tick, sample.position};
+  const bool has_time = (sample.flags & kSampleHasTime) != 0 && sample.time_ns > 0;
+  if (has_time) rec.sample_time_ns = sample.time_ns;
+  // A sample measured long ago is as stale as none (realtime: freerun has no real clock).
+  if (options_.realtime && has_time &&
+      wake_ns - sample.time_ns >= options_.stale_fault_ticks * options_.period_ns) {
+    set_fault({FaultCause::kStaleData, tick,
+               std::floor(static_cast<double>(wake_ns - sample.time_ns) /
+                          static_cast<double>(options_.period_ns))},
+              rec, res);
     return false;
   }
-  // A new sample may span several periods (stale reads, skipped periods): judge its speed
-  // over the time that really passed.
+  if (has_seq && !check_sequence(tick, sample, st, rec, res)) return false;
+  if (!std::isfinite(sample.position)) {
+    set_fault({FaultCause::kNonFinitePosition, tick, sample.position}, rec, res);
+    return false;
+  }
+  // Judge the speed over the time that really passed: the samples' own times when both have
+  // one, else the periods since the last new sample (stale reads, skipped periods).
   const double jump = std::abs(sample.position - st.last_x);
-  const auto spanned = static_cast<double>(st.periods_since_x);
+  double spanned = static_cast<double>(st.periods_since_x);
+  if (options_.realtime && has_time && st.last_time_ns > 0 && sample.time_ns > st.last_time_ns) {
+    spanned = static_cast<double>(sample.time_ns - st.last_time_ns) /
+              static_cast<double>(options_.period_ns);
+  }
   if (st.have_x && jump > max_step_ * spanned) {
-    res.fault = {FaultCause::kEncoderJump, tick,
-                 jump * kNsPerS / (spanned * static_cast<double>(options_.period_ns))};
+    set_fault({FaultCause::kEncoderJump, tick,
+               jump * kNsPerS / (spanned * static_cast<double>(options_.period_ns))},
+              rec, res);
     return false;
   }
   st.last_x = sample.position;
   st.have_x = true;
   st.periods_since_x = 1;
+  st.last_time_ns = has_time ? sample.time_ns : 0;
   return true;
 }
 
@@ -111,7 +183,7 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
 
     PositionSample sample;
     double command = 0.0;
-    if (sense(tick, sample, st, rec, res)) {
+    if (sense(tick, wake, sample, st, rec, res)) {
       const control::ControlOutput out = controller_.step(sample.position);
       command = out.force_commanded;
       rec.position = sample.position;
@@ -119,21 +191,26 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
       rec.velocity = out.velocity;
       rec.force_computed = out.force_computed;
       rec.flags |= out.flags;
-      if (out.flags & telemetry::kFlagNonFinite) {
-        res.fault = {FaultCause::kNonFiniteForce, tick, out.force_computed};
+      if (out.flags & control::kControlNonFinite) {
+        set_fault({FaultCause::kNonFiniteForce, tick, out.force_computed}, rec, res);
       }
     }
-    if (res.fault.cause == FaultCause::kNone && device_.write(command) == IoStatus::kError) {
-      res.fault = {FaultCause::kDeviceWrite, tick, 0.0};
+    if (res.fault.cause == FaultCause::kNone) {
+      const IoStatus ws = device_.write(command);
+      if (ws == IoStatus::kTransportFault || ws == IoStatus::kDeviceFault) {
+        set_fault({ws == IoStatus::kDeviceFault ? FaultCause::kDeviceReported
+                                                : FaultCause::kTransportWrite,
+                   tick, 0.0},
+                  rec, res);
+      }
     }
     if (res.fault.cause != FaultCause::kNone) {
       command = 0.0;
       device_.write(0.0);  // zero force at once; the service then disables output
-      rec.flags |= telemetry::kFlagFault;
     }
     rec.force_commanded = command;
 
-    // Bookkeeping after the timed window: the histograms are cold memory after a sleep.
+    // Bookkeeping after the timed window.
     const std::int64_t done = now_ns();
     compute_time_.record(done - wake);
     if (options_.realtime) {
@@ -144,9 +221,9 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
         ++res.overruns;
         if (++overrun_streak >= options_.overrun_fault_streak &&
             res.fault.cause == FaultCause::kNone) {
-          res.fault = {FaultCause::kOverrunStreak, tick, static_cast<double>(overrun_streak)};
+          set_fault({FaultCause::kOverrunStreak, tick, static_cast<double>(overrun_streak)}, rec,
+                    res);
           device_.write(0.0);
-          rec.flags |= telemetry::kFlagFault;
           rec.force_commanded = 0.0;
         }
       } else {

@@ -20,9 +20,13 @@ struct LoopOptions {
   bool realtime = true;  // false: freerun
   std::int64_t period_ns = 1'000'000;
   int overrun_fault_streak = 10;
-  int stale_fault_ticks = 3;    // consecutive reads without new data that fault
-  double max_speed = 10.0;      // m/s; a faster jump between samples is an encoder fault
-  std::uint64_t max_ticks = 0;  // 0: until stop is requested or a fault
+  int stale_fault_ticks = 3;  // ticks without new data (or a sample that old) that fault
+  double max_speed = 10.0;    // m/s; a faster jump between samples is an encoder fault
+  // A gap of this many samples or more in the device's sequence faults; 0: gaps are counted
+  // and logged, never a fault.
+  std::uint32_t sequence_gap_fault = 1;
+  std::uint64_t sequence_modulus = 0;  // DeviceInfo::sequence_modulus: 0 for a 64-bit counter
+  std::uint64_t max_ticks = 0;         // 0: until stop is requested or a fault
   // Freerun only: wait for room in the ring instead of dropping (a simulation is not real
   // time, and a complete log is what makes it reproducible). Needs a consumer.
   bool wait_for_ring = false;
@@ -35,14 +39,16 @@ struct LoopResult {
   std::uint64_t stale_ticks = 0;
   std::uint64_t contact_ticks = 0;
   std::uint64_t saturated_ticks = 0;
-  std::uint64_t unarmed_ticks = 0;  // inside the wall before it was first left (zero force)
+  std::uint64_t unarmed_ticks = 0;   // inside the wall before it was first left (zero force)
+  std::uint64_t sequence_gaps = 0;   // times the device's sequence skipped
+  std::uint64_t samples_missed = 0;  // samples those gaps skipped in all
   double max_penetration = 0.0;
   Fault fault;
 };
 
 class ServoLoop {
  public:
-  // Not RT-safe: allocates the timing histograms. `ring` may be null (no tick log).
+  // Not RT-safe. `ring` may be null (no tick log).
   ServoLoop(Device& device, control::Controller& controller,
             telemetry::SpscRing<telemetry::TickRecord>* ring, const LoopOptions& options);
 
@@ -71,9 +77,17 @@ class ServoLoop {
     bool have_x = false;
     int stale_streak = 0;
     std::int64_t periods_since_x = 1;  // periods the next new sample spans
+    std::int64_t last_time_ns = 0;     // the last sample's own time (0: it had none)
+    std::uint64_t last_sequence = 0;
+    bool have_sequence = false;
   };
-  bool sense(std::uint64_t tick, PositionSample& sample, SenseState& st, telemetry::TickRecord& rec,
-             LoopResult& res) noexcept;
+  bool sense(std::uint64_t tick, std::int64_t wake_ns, PositionSample& sample, SenseState& st,
+             telemetry::TickRecord& rec, LoopResult& res) noexcept;
+  // A new sample's sequence number against the last one: counts a gap, false if it faults.
+  bool check_sequence(std::uint64_t tick, const PositionSample& sample, SenseState& st,
+                      telemetry::TickRecord& rec, LoopResult& res) noexcept;
+  // Records a fault on this tick (the device's class and code for device and transport ones).
+  void set_fault(Fault f, telemetry::TickRecord& rec, LoopResult& res) const noexcept;
 
   LatencyHistogram wake_latency_;
   LatencyHistogram compute_time_;

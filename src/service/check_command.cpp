@@ -1,6 +1,6 @@
 #include "service/check_command.h"
 
-#include "drivers/transport_delay.h"
+#include "drivers/registry.h"
 #include "gate/gate.h"
 #include "gate/gate_report_format.h"
 #include "service/exit_codes.h"
@@ -10,8 +10,17 @@ namespace hapticd::service {
 
 int check_command(const ConfigOptions& options, bool json) {
   const config::Config cfg = load_config(options);
-  const gate::GateReport r = gate::evaluate_gate(cfg, declared_transport_delay(cfg.device.driver));
-  const std::string text = json ? gate::gate_to_json(r).dump(2) + "\n" : gate::gate_to_text(r, cfg);
+  // The delay the driver declares from its own settings: the one `run` and `verify` use.
+  const int delay = drivers::find_driver(cfg.device.driver).declared_delay(cfg);
+  const gate::GateReport r = gate::evaluate_gate(cfg, delay);
+  std::string text;
+  if (json) {
+    nlohmann::json j = gate::gate_to_json(r);
+    j["driver"] = cfg.device.driver;
+    text = j.dump(2) + "\n";
+  } else {
+    text = gate::gate_to_text(r, cfg);
+  }
   if (!write_stdout(text)) return kExitRuntimeFault;  // a verdict nobody can read is no verdict
   return r.pass ? kExitOk : kExitGateRefused;
 }

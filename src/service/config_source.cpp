@@ -1,16 +1,59 @@
 #include "service/config_source.h"
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <filesystem>
+#include <system_error>
+
 #include "config/config_loader.h"
 #include "control/derived_check.h"
+#include "drivers/registry.h"
 
 namespace hapticd::service {
+namespace {
+
+// The config library parses text; reading the file is the service's (it owns all I/O).
+std::string read_config_file(const std::string& path) {
+  const auto fail = [&](int err) {
+    return config::ConfigError({path + ": cannot read: " + std::system_category().message(err)});
+  };
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw fail(errno);
+  std::string text;
+  char buf[16384];
+  while (true) {
+    const ssize_t n = ::read(fd, buf, sizeof buf);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      const int err = errno;
+      ::close(fd);
+      throw fail(err);
+    }
+    if (n == 0) break;
+    text.append(buf, static_cast<std::size_t>(n));
+  }
+  ::close(fd);
+  return text;
+}
+
+}  // namespace
 
 config::Config load_config(const ConfigOptions& options) {
   std::vector<config::Override> overrides;
   overrides.reserve(options.sets.size());
   for (const std::string& s : options.sets) overrides.push_back(config::parse_override(s));
-  config::Config cfg = options.path.empty() ? config::load_embedded_default(overrides)
-                                            : config::load_config_file(options.path, overrides);
+  const config::DriverSchemas& drivers = drivers::driver_schemas();
+  config::Config cfg;
+  if (options.path.empty()) {
+    cfg = config::load_embedded_default(overrides, drivers);
+  } else {
+    std::string base_dir = std::filesystem::path(options.path).parent_path().string();
+    if (base_dir.empty()) base_dir = ".";
+    cfg = config::load_config_text(read_config_file(options.path), options.path, overrides,
+                                   base_dir, drivers);
+  }
   control::check_derived_quantities(cfg);
   return cfg;
 }

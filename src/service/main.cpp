@@ -83,6 +83,10 @@ int main(int argc, char** argv) {
                   "Write the binary tick log here (overrides telemetry.log)");
   run->add_option("--summary-json", run_opts.summary_json_path,
                   "Also write the run summary as one JSON object to this file");
+  run->add_flag("--loopback", run_opts.loopback,
+                "Drive the configured driver's own protocol code against its simulated peer "
+                "(the plant of device.sim) instead of hardware: try a hardware configuration "
+                "with no hardware");
 
   ConfigOptions verify_cfg;
   bool verify_json = false;

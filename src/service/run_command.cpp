@@ -16,12 +16,11 @@
 #include "gate/gate.h"
 #include "gate/gate_report_format.h"
 #include "loop/servo_loop.h"
-#include "service/device_factory.h"
+#include "service/device_session.h"
 #include "service/exit_codes.h"
 #include "service/result_output.h"
 #include "service/run_summary.h"
 #include "service/run_threads.h"
-#include "sim/sim_device.h"
 #include "telemetry/log_path.h"
 #include "telemetry/log_writer.h"
 
@@ -100,9 +99,11 @@ TickLog open_tick_log(const RunOptions& options, const config::Config& cfg, bool
   return log;
 }
 
-loop::LoopOptions loop_options(const RunOptions& options, const config::Config& cfg, bool realtime,
-                               bool logging) {
+loop::LoopOptions loop_options(const RunOptions& options, const config::Config& cfg,
+                               const DeviceInfo& info, bool realtime, bool logging) {
   loop::LoopOptions lo;
+  lo.sequence_gap_fault = cfg.safety.sequence_gap_fault;
+  lo.sequence_modulus = info.sequence_modulus;
   lo.realtime = realtime;
   lo.period_ns = std::llround(1e9 / cfg.loop.rate_hz);
   lo.overrun_fault_streak = cfg.loop.overrun_fault_streak;
@@ -119,10 +120,7 @@ loop::LoopOptions loop_options(const RunOptions& options, const config::Config& 
 void summarise_fault(const loop::LoopResult& result, const Device& device, RunSummary& s) {
   if (result.fault.cause == loop::FaultCause::kNone) return;
   std::string f = loop::describe(result.fault);
-  if (result.fault.cause == loop::FaultCause::kDeviceRead ||
-      result.fault.cause == loop::FaultCause::kDeviceWrite) {
-    f += ": " + device.describe_error();
-  }
+  if (device.fault().fault_class != FaultClass::kNone) f += ": " + device.describe_fault();
   spdlog::error("fault: {}; zero force commanded, output disabled", f);
   s.faults.push_back(f);
 }
@@ -172,6 +170,80 @@ bool stop_requested(SignalWatch& signals, RunSummary& s, const char* when) {
   return true;
 }
 
+// The device's end state, read after the loop and before the device is closed.
+void summarise_device(DeviceSession& session, RunSummary& s) {
+  const Device& d = session.device();
+  s.device_state = std::string(to_string(d.state()));
+  s.final_command = d.last_command();
+  s.final_output_enabled = d.output_enabled();
+}
+
+void summarise_peer(DeviceSession& session, RunSummary& s) {
+  sim::LoopbackPeer* peer = session.peer();
+  if (peer == nullptr) return;
+  s.loopback = true;
+  s.peer_applied_force = peer->applied_force();
+  s.peer_output_on = peer->output_on();
+  s.operator_work_j = peer->plant().operator_work_j();
+  if (const std::string e = session.peer_error(); !e.empty()) {
+    s.faults.push_back("loopback peer: " + e);
+  }
+}
+
+// Free-running ticks have no real time base, which only a simulated device tolerates.
+void check_clock(const config::Config& cfg, bool simulated) {
+  if (cfg.loop.clock == config::ClockMode::kFreerun && !simulated) {
+    throw config::ConfigError({cfg.locate("loop.clock") +
+                               ": loop.clock: freerun needs a simulated device (device.driver "
+                               "sim, or --loopback), got device.driver '" +
+                               cfg.device.driver + "'"});
+  }
+}
+
+// Configures the device and runs the gate on what it declares; false when the gate refuses.
+bool configure_and_gate(const config::Config& cfg, DeviceSession& session, RunSummary& s,
+                        gate::GateReport& report) {
+  Device& device = session.device();
+  device.configure();
+  s.device_description = device.info().description;
+  const int declared = session.driver().declared_delay(cfg);
+  if (device.info().transport_delay_samples != declared) {
+    throw DeviceError(std::string(device.driver_name()) + ": the device declares " +
+                      std::to_string(device.info().transport_delay_samples) +
+                      " samples of transport delay but its configuration gives " +
+                      std::to_string(declared) + "; `hapticd check` would analyse another loop");
+  }
+  report = gate::evaluate_gate(cfg, declared);
+  s.gate = gate::gate_to_json(report);
+  return announce_gate(report, cfg);
+}
+
+// The servo: enable (the session's close exists before it, so a half-done enable is undone),
+// run the RT thread, supervise, disable.
+loop::LoopResult servo(const config::Config& cfg, bool realtime, Device& device,
+                       loop::ServoLoop& servo_loop, loop::RtStatus& rt, SignalWatch& signals,
+                       RunSummary& s) {
+  loop::LoopResult result;
+  if (stop_requested(signals, s, "before output was enabled")) return result;
+  device.enable();
+  s.output_was_enabled = true;
+  {
+    RtThread rt_thread(servo_loop, cfg.loop.rt_priority, cfg.loop.cpu, realtime, rt);
+    if (const std::string error = rt_thread.wait_ready(); !error.empty()) {
+      throw config::ConfigError({cfg.locate("loop.cpu") + ": " + error});
+    }
+    spdlog::info("output enabled: {} at {} Hz ({}), wall K {} N/m B {} N s/m",
+                 device.info().description, cfg.loop.rate_hz, realtime ? "realtime" : "freerun",
+                 cfg.wall.stiffness, cfg.wall.damping);
+    if (realtime) announce_rt(rt);
+    sd_notifyf(0, "READY=1\nSTATUS=servo running at %.0f Hz", cfg.loop.rate_hz);
+    s.stop_reason = rt_thread.supervise(signals);
+    result = rt_thread.result();
+  }
+  device.disable();
+  return result;
+}
+
 }  // namespace
 
 int run_command(const RunOptions& options, SignalWatch& signals) {
@@ -181,19 +253,20 @@ int run_command(const RunOptions& options, SignalWatch& signals) {
   s.realtime = realtime;
   s.sample_period_s = cfg.loop.sample_period_s();
   s.stop_reason = "duration";
+  s.device_name = cfg.device.driver;
 
-  std::unique_ptr<Device> device = make_device(cfg);
-  s.device_name = std::string(device->name());
-  const auto finish_device = [&] {
-    s.final_command = device->last_command();
-    s.final_output_enabled = device->output_enabled();
+  DeviceSession session(cfg, options.loopback, realtime);
+  check_clock(cfg, session.peer() != nullptr);
+  const auto finish = [&] {
+    summarise_device(session, s);
+    session.shut_down();
+    summarise_peer(session, s);
+    return report(options, s);
   };
-  if (stop_requested(signals, s, "during start-up")) return finish_device(), report(options, s);
-  device->configure();
-  const gate::GateReport gate_report = gate::evaluate_gate(cfg, device->transport_delay_samples());
-  s.gate = gate::gate_to_json(gate_report);
-  if (!announce_gate(gate_report, cfg)) return kExitGateRefused;
-  if (stop_requested(signals, s, "during start-up")) return finish_device(), report(options, s);
+  if (stop_requested(signals, s, "during start-up")) return finish();
+  gate::GateReport gate_report;
+  if (!configure_and_gate(cfg, session, s, gate_report)) return kExitGateRefused;
+  if (stop_requested(signals, s, "during start-up")) return finish();
 
   const int cpus = static_cast<int>(std::thread::hardware_concurrency());
   if (realtime && cfg.loop.cpu >= cpus) {
@@ -206,54 +279,32 @@ int run_command(const RunOptions& options, SignalWatch& signals) {
   if (realtime) {
     lock_process_memory(rt);
     pm_qos.emplace(rt);
-    keep_off_cpu(cfg.loop.cpu, rt);  // before any other thread exists, so they inherit it
+    keep_off_cpu(cfg.loop.cpu, rt);  // before the RT and log threads exist, so they inherit it
   }
   TickLog log = open_tick_log(options, cfg, realtime);
   control::Controller controller(control::make_control_law(cfg));
-  loop::ServoLoop servo(*device, controller, log.ring.get(),
-                        loop_options(options, cfg, realtime, log.writer != nullptr));
-  s.wake_latency = &servo.wake_latency();
-  s.compute_time = &servo.compute_time();
-
-  loop::LoopResult result;
-  {
-    // The guard exists before enable is called: an enable that throws halfway is undone.
-    const OutputGuard output_off(*device);
-    if (!stop_requested(signals, s, "before output was enabled")) {
-      device->enable_output();
-      s.output_was_enabled = true;
-      RtThread rt_thread(servo, cfg.loop.rt_priority, cfg.loop.cpu, realtime, rt);
-      if (const std::string error = rt_thread.wait_ready(); !error.empty()) {
-        throw config::ConfigError({cfg.locate("loop.cpu") + ": " + error});
-      }
-      spdlog::info("output enabled: {} at {} Hz ({}), wall K {} N/m B {} N s/m", device->name(),
-                   cfg.loop.rate_hz, realtime ? "realtime" : "freerun", cfg.wall.stiffness,
-                   cfg.wall.damping);
-      if (realtime) announce_rt(rt);
-      sd_notifyf(0, "READY=1\nSTATUS=servo running at %.0f Hz", cfg.loop.rate_hz);
-      s.stop_reason = rt_thread.supervise(signals);
-      result = rt_thread.result();
-    }
-  }
-  finish_device();
+  loop::ServoLoop servo_loop(
+      session.device(), controller, log.ring.get(),
+      loop_options(options, cfg, session.device().info(), realtime, log.writer != nullptr));
+  s.wake_latency = &servo_loop.wake_latency();
+  s.compute_time = &servo_loop.compute_time();
+  const loop::LoopResult result =
+      servo(cfg, realtime, session.device(), servo_loop, rt, signals, s);
   sd_notify(0, "STOPPING=1\nSTATUS=output disabled");
   if (log.writer) log.writer->stop();
 
   s.rt = rt;
   s.loop = result;
   if (result.fault.cause != loop::FaultCause::kNone) s.stop_reason = "fault";
-  summarise_fault(result, *device, s);
+  summarise_fault(result, session.device(), s);
   if (result.unarmed_ticks > 0) {
     spdlog::warn(
         "the device started inside the wall: the wall stayed off for {} ticks until it "
         "was first left",
         result.unarmed_ticks);
   }
-  if (const auto* simdev = dynamic_cast<const sim::SimDevice*>(device.get())) {
-    s.operator_work_j = simdev->plant().operator_work_j();
-  }
   summarise_log(log, s);
-  return report(options, s);
+  return finish();
 }
 
 }  // namespace hapticd::service

@@ -15,6 +15,7 @@ struct RunOptions {
   std::optional<double> duration_s;  // none: until SIGINT/SIGTERM
   std::string log_path;              // overrides telemetry.log
   std::string summary_json_path;
+  bool loopback = false;  // drive the configured driver against its simulated peer
 };
 
 // Returns the process exit code (DESIGN.md §9). A stop signal taken from `signals` at any

@@ -51,8 +51,15 @@ json summary_to_json(const RunSummary& s) {
   j["previous_log"] = s.previous_log.empty() ? json(nullptr) : json(s.previous_log);
   j["output_was_enabled"] = s.output_was_enabled;
   j["device"] = {{"name", s.device_name},
+                 {"description", s.device_description},
+                 {"state", s.device_state},
                  {"final_command", s.final_command},
                  {"output_enabled", s.final_output_enabled}};
+  j["loopback"] =
+      s.loopback ? json{{"applied_force", s.peer_applied_force}, {"output_on", s.peer_output_on}}
+                 : json(nullptr);
+  j["sequence_gaps"] = s.loop.sequence_gaps;
+  j["samples_missed"] = s.loop.samples_missed;
   j["rt"] = {{"sched_fifo", s.rt.fifo},
              {"priority", s.rt.priority},
              {"memory_locked", s.rt.memory_locked},
@@ -99,9 +106,18 @@ std::string summary_to_text(const RunSummary& s) {
     if (!s.previous_log.empty())
       os << "                 (the previous log is now " << s.previous_log << ")\n";
   }
-  os << "  output         " << s.device_name << ": "
+  os << "  output         " << s.device_name << " " << s.device_state << ", "
      << (s.final_output_enabled ? "STILL ENABLED" : "disabled") << ", last command "
-     << format_number(s.final_command) << " N\n";
+     << format_number(s.final_command) << " N";
+  if (s.loopback) {
+    os << " (peer: " << (s.peer_output_on ? "AMPLIFIER ON" : "amplifier off") << ", force "
+       << format_number(s.peer_applied_force) << " N)";
+  }
+  os << "\n";
+  if (s.loop.sequence_gaps > 0) {
+    os << "  sequence gaps  " << s.loop.sequence_gaps << " (" << s.loop.samples_missed
+       << " samples missed)\n";
+  }
   os << "  faults         "
      << (s.faults.empty() ? std::string("none") : std::to_string(s.faults.size())) << "\n";
   for (const std::string& f : s.faults) os << "    " << f << "\n";

@@ -26,12 +26,17 @@ struct RunSummary {
   std::uint64_t log_records_dropped = 0;  // by the full RT ring
   std::uint64_t log_records_lost = 0;     // to write errors (disk full, size limit)
   std::uint64_t log_io_errors = 0;
-  std::string previous_log;         // where a log already at log_path was kept, "" if none
-  std::string stop_reason;          // "duration", "signal SIGTERM", "fault"
-  bool output_was_enabled = false;  // false: stopped before output was ever enabled
-  std::string device_name;
+  std::string previous_log;           // where a log already at log_path was kept, "" if none
+  std::string stop_reason;            // "duration", "signal SIGTERM", "fault"
+  bool output_was_enabled = false;    // false: stopped before output was ever enabled
+  std::string device_name;            // the driver
+  std::string device_description;     // DeviceInfo::description
+  std::string device_state;           // after the run, before close: "configured", "faulted"
   double final_command = 0.0;         // Device::last_command() once output was disabled
   bool final_output_enabled = false;  // Device::output_enabled() then
+  bool loopback = false;              // a simulated peer stood in for the device
+  double peer_applied_force = 0.0;    // what the peer's plant felt last (loopback)
+  bool peer_output_on = false;
   nlohmann::json gate;
 };
 

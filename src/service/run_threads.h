@@ -14,19 +14,6 @@
 
 namespace hapticd::service {
 
-// Disables the device's output when it goes out of scope, whatever the path (exceptions
-// included): output is never left enabled behind the loop's back.
-class OutputGuard {
- public:
-  explicit OutputGuard(Device& device) : device_(device) {}
-  ~OutputGuard() { device_.disable_output(); }
-  OutputGuard(const OutputGuard&) = delete;
-  OutputGuard& operator=(const OutputGuard&) = delete;
-
- private:
-  Device& device_;
-};
-
 class RtThread {
  public:
   // Starts the RT thread: it configures itself (SCHED_FIFO, CPU) when `realtime`, publishes

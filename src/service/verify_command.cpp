@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "config/config_loader.h"
+#include "drivers/registry.h"
 #include "gate/number_format.h"
 #include "service/exit_codes.h"
 #include "service/result_output.h"
@@ -15,7 +16,7 @@ int verify_command(const ConfigOptions& options, bool json) {
   const config::Config cfg = load_config(options);
   verify::VerifyResult r;
   try {
-    r = verify::verify_passivity(cfg);
+    r = verify::verify_passivity(cfg, drivers::find_driver(cfg.device.driver).declared_delay(cfg));
   } catch (const std::invalid_argument& e) {
     throw config::ConfigError({cfg.source_name + ": " + e.what()});
   }

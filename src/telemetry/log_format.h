@@ -1,10 +1,11 @@
-// The binary tick log, format version 1. Everything is little-endian, with no padding and
-// no alignment between fields; offsets below are in bytes.
+// The binary tick log, format version 2. Everything is little-endian, with no padding and
+// no alignment between fields; offsets below are in bytes. Version 1 differs only in its
+// record: 72 bytes, the first 72 of version 2's (record_size says which).
 //
 // File header (44 + config_len bytes):
 //   0   u8[8]  magic "HAPTLOG\0" (48 41 50 54 4C 4F 47 00)
-//   8   u32    version = 1
-//   12  u32    record_size = 72
+//   8   u32    version = 2 (1 is still read)
+//   12  u32    record_size = 96 (72 in version 1)
 //   16  f64    sample_period_s (IEEE-754 binary64)
 //   24  i64    start_unix_ns: wall-clock time of tick 0 in ns since the Unix epoch, 0 = unknown
 //   32  u32    clock_mode: 0 = realtime, 1 = freerun
@@ -12,7 +13,7 @@
 //   40  u8[config_len]  the whole effective configuration as UTF-8 YAML (not NUL-terminated)
 //   40+config_len  u32  CRC-32 of bytes [0, 40+config_len)
 //
-// Then zero or more blocks, back to back until the end of the file. Block (28 + 72*n bytes):
+// Then zero or more blocks, back to back until the end of the file. Block (28 + 96*n bytes):
 //   0   u8[4]  magic "HBLK" (48 42 4C 4B)
 //   4   u32    record_count n, 0..kMaxBlockRecords
 //   8   u64    first_tick: the tick of the first record. In a block with n = 0 it is the tick
@@ -20,11 +21,13 @@
 //   16  u64    dropped_before: records the RT ring dropped (or that failed to reach the
 //              disk) between the previous block's last record and this block's first one.
 //              A block with n = 0 and dropped_before > 0 is a pure loss marker.
-//   24  u32    CRC-32 of block bytes [0, 24) followed by the n*72 record bytes
-//   28  n records of 72 bytes:
+//   24  u32    CRC-32 of block bytes [0, 24) followed by the n*96 record bytes
+//   28  n records of 96 bytes:
 //        0 u64 tick, 8 i64 scheduled_ns, 16 i32 wake_latency_ns, 20 i32 compute_ns,
 //        24 f64 position, 32 f64 penetration, 40 f64 velocity, 48 f64 force_computed,
-//        56 f64 force_commanded, 64 u32 flags (TickFlag bits), 68 u32 device_status
+//        56 f64 force_commanded, 64 u32 flags (TickFlag bits), 68 u32 device_status,
+//        72 i64 sample_time_ns, 80 u32 sequence, 84 u8 fault_cause, 85 u8 fault_class,
+//        86 u16 sequence_gap, 88 u32 fault_code, 92 u32 reserved (0)
 //
 // CRC-32 is the common one (zlib crc32, Python zlib.crc32: reflected polynomial 0xEDB88320,
 // initial value and final xor 0xFFFFFFFF). A reader accepts blocks in order; a block that is
@@ -50,8 +53,9 @@ namespace hapticd::telemetry {
 static_assert(std::endian::native == std::endian::little, "the tick log is little-endian");
 
 inline constexpr std::array<char, 8> kFileMagic = {'H', 'A', 'P', 'T', 'L', 'O', 'G', '\0'};
-inline constexpr std::uint32_t kFormatVersion = 1;
-inline constexpr std::uint32_t kRecordSize = 72;
+inline constexpr std::uint32_t kFormatVersion = 2;
+inline constexpr std::uint32_t kRecordSize = 96;
+inline constexpr std::uint32_t kRecordSizeV1 = 72;       // version 1: the first 72 bytes
 inline constexpr std::size_t kFileHeaderFixedSize = 40;  // bytes before the config text
 inline constexpr std::size_t kCrcSize = 4;
 inline constexpr std::uint32_t kMaxConfigBytes = 16u << 20;  // a sanity bound, not a YAML limit
@@ -72,7 +76,11 @@ static_assert(offsetof(TickRecord, scheduled_ns) == 8 &&
               offsetof(TickRecord, penetration) == 32 && offsetof(TickRecord, velocity) == 40 &&
               offsetof(TickRecord, force_computed) == 48 &&
               offsetof(TickRecord, force_commanded) == 56 && offsetof(TickRecord, flags) == 64 &&
-              offsetof(TickRecord, device_status) == 68);
+              offsetof(TickRecord, device_status) == 68 &&
+              offsetof(TickRecord, sample_time_ns) == 72 && offsetof(TickRecord, sequence) == 80 &&
+              offsetof(TickRecord, fault_cause) == 84 && offsetof(TickRecord, fault_class) == 85 &&
+              offsetof(TickRecord, sequence_gap) == 86 && offsetof(TickRecord, fault_code) == 88 &&
+              offsetof(TickRecord, reserved) == 92);
 
 // What the file header carries besides the constants.
 struct LogHeader {
@@ -93,8 +101,8 @@ struct BlockHeader {
 constexpr std::size_t file_header_size(std::size_t config_len) {
   return kFileHeaderFixedSize + config_len + kCrcSize;
 }
-constexpr std::size_t block_size(std::size_t record_count) {
-  return kBlockHeaderSize + record_count * kRecordSize;
+constexpr std::size_t block_size(std::size_t record_count, std::size_t record_size = kRecordSize) {
+  return kBlockHeaderSize + record_count * record_size;
 }
 
 // CRC-32 (zlib) of bytes, continuing from crc (start with 0).

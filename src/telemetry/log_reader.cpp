@@ -28,14 +28,22 @@ bool magic_prefix_matches(std::span<const std::byte> bytes, const std::array<cha
 
 std::string at_byte(std::size_t offset) { return " at byte " + std::to_string(offset); }
 
+std::size_t record_size_of(std::uint32_t version) {
+  return version == 1 ? kRecordSizeV1 : kRecordSize;
+}
+
 // Parses the file header into out and returns its size in bytes.
-std::size_t read_header(std::span<const std::byte> bytes, const std::string& name, LogHeader& out) {
+std::size_t read_header(std::span<const std::byte> bytes, const std::string& name, LogHeader& out,
+                        std::uint32_t& version_out) {
   const auto fail = [&](const std::string& what) { throw LogFormatError(name + ": " + what); };
   if (!magic_prefix_matches(bytes, kFileMagic)) fail("not a hapticd tick log (bad magic)");
   // The version decides the rest of the layout, so it is checked before anything else.
   if (bytes.size() < 12) fail("truncated header");
   const auto version = load<std::uint32_t>(bytes.data() + 8);
-  if (version != kFormatVersion) fail("unsupported log version " + std::to_string(version));
+  if (version != 1 && version != kFormatVersion) {
+    fail("unsupported log version " + std::to_string(version));
+  }
+  version_out = version;
   if (bytes.size() < kFileHeaderFixedSize) fail("truncated header");
   const std::byte* p = bytes.data();
   const auto config_len = load<std::uint32_t>(p + 36);
@@ -48,7 +56,9 @@ std::size_t read_header(std::span<const std::byte> bytes, const std::string& nam
     fail("header CRC mismatch");
   }
   const auto record_size = load<std::uint32_t>(p + 12);
-  if (record_size != kRecordSize) fail("unsupported record size " + std::to_string(record_size));
+  if (record_size != record_size_of(version)) {
+    fail("unsupported record size " + std::to_string(record_size));
+  }
   out.sample_period_s = load<double>(p + 16);
   out.start_unix_ns = load<std::int64_t>(p + 24);
   out.clock_mode = load<std::uint32_t>(p + 32);
@@ -58,7 +68,8 @@ std::size_t read_header(std::span<const std::byte> bytes, const std::string& nam
 
 // One block at the start of `block`: its size when it is complete and intact, else 0 with
 // the reason (offset is for the message).
-std::size_t check_block(std::span<const std::byte> block, std::size_t offset, std::string& why) {
+std::size_t check_block(std::span<const std::byte> block, std::size_t offset, std::size_t rsize,
+                        std::string& why) {
   if (!magic_prefix_matches(block, kBlockMagic)) {
     why = "bad block magic" + at_byte(offset);
     return 0;
@@ -73,7 +84,7 @@ std::size_t check_block(std::span<const std::byte> block, std::size_t offset, st
           std::to_string(h.record_count) + ")";
     return 0;
   }
-  const std::size_t size = block_size(h.record_count);
+  const std::size_t size = block_size(h.record_count, rsize);
   if (block.size() < size) {
     why = "incomplete block" + at_byte(offset) + " (log cut short)";
     return 0;
@@ -88,24 +99,25 @@ std::size_t check_block(std::span<const std::byte> block, std::size_t offset, st
 
 // The offset of the next intact block after a bad one at `from`, or bytes.size() if none:
 // one flipped bit must not cost every later block of the log.
-std::size_t resynchronise(std::span<const std::byte> bytes, std::size_t from) {
+std::size_t resynchronise(std::span<const std::byte> bytes, std::size_t from, std::size_t rsize) {
   std::string ignored;
   for (std::size_t at = from + 1; at + kBlockHeaderSize <= bytes.size(); ++at) {
     if (std::memcmp(bytes.data() + at, kBlockMagic.data(), kBlockMagic.size()) == 0 &&
-        check_block(bytes.subspan(at), at, ignored) != 0) {
+        check_block(bytes.subspan(at), at, rsize, ignored) != 0) {
       return at;
     }
   }
   return bytes.size();
 }
 
-void accept_block(std::span<const std::byte> block, std::size_t size, LogContents& contents) {
+void accept_block(std::span<const std::byte> block, std::size_t rsize, LogContents& contents) {
   const BlockHeader h = decode_block_header(block);
-  if (h.record_count > 0) {  // a loss marker has no records: no memcpy into a null vector
-    const std::size_t old = contents.records.size();
-    contents.records.resize(old + h.record_count);
-    std::memcpy(contents.records.data() + old, block.data() + kBlockHeaderSize,
-                size - kBlockHeaderSize);
+  // A loss marker has no records: nothing is copied (no memcpy into a null vector).
+  const std::byte* p = block.data() + kBlockHeaderSize;
+  for (std::uint32_t i = 0; i < h.record_count; ++i, p += rsize) {
+    TickRecord r{};  // version 1: the fields after its 72 bytes stay zero
+    std::memcpy(&r, p, rsize);
+    contents.records.push_back(r);
   }
   contents.dropped_records += h.dropped_before;
   ++contents.complete_blocks;
@@ -115,16 +127,18 @@ void accept_block(std::span<const std::byte> block, std::size_t size, LogContent
 
 LogContents read_log_bytes(std::span<const std::byte> bytes, const std::string& name) {
   LogContents contents;
-  std::size_t offset = read_header(bytes, name, contents.header);
-  contents.records.reserve((bytes.size() - offset) / kRecordSize);
+  std::size_t offset = read_header(bytes, name, contents.header, contents.version);
+  const std::size_t rsize = record_size_of(contents.version);
+  contents.records.reserve((bytes.size() - offset) / rsize);
   while (offset < bytes.size()) {
     std::string why;
-    if (const std::size_t size = check_block(bytes.subspan(offset), offset, why); size != 0) {
-      accept_block(bytes.subspan(offset), size, contents);
+    if (const std::size_t size = check_block(bytes.subspan(offset), offset, rsize, why);
+        size != 0) {
+      accept_block(bytes.subspan(offset), rsize, contents);
       offset += size;
       continue;
     }
-    const std::size_t next = resynchronise(bytes, offset);
+    const std::size_t next = resynchronise(bytes, offset, rsize);
     if (next == bytes.size()) {
       contents.trailing_reason = why;
       break;

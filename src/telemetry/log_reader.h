@@ -26,6 +26,7 @@ struct SkippedRegion {
 
 struct LogContents {
   LogHeader header;
+  std::uint32_t version = kFormatVersion;    // of the file; version 1 records read with zeros
   std::vector<TickRecord> records;           // every record of every accepted block, in file order
   std::size_t complete_blocks = 0;           // blocks accepted, loss markers included
   std::uint64_t dropped_records = 0;         // sum of dropped_before: ticks missing from the log
@@ -42,6 +43,7 @@ struct LogContents {
 // The file is not a readable tick log at all. what() starts with the file name, e.g.
 // "PATH: not a hapticd tick log (bad magic)", "PATH: truncated header",
 // "PATH: header CRC mismatch", "PATH: unsupported log version N", "PATH: cannot read: REASON".
+// Versions 1 and 2 are read.
 class LogFormatError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;

@@ -1,6 +1,7 @@
 // One fixed-size record per tick, written by the RT thread into the SPSC ring and appended
-// to the binary log by the writer thread. The layout is part of the log format (version 1):
-// little-endian, no padding, 72 bytes.
+// to the binary log by the writer thread. The layout is part of the log format (version 2):
+// little-endian, no padding, 96 bytes. Version 1 logs (72-byte records, the first 72 bytes of
+// this layout) are still read, with the later fields zero.
 #pragma once
 
 #include <cstdint>
@@ -15,8 +16,9 @@ enum TickFlag : std::uint32_t {
   kFlagOverrun = 1u << 3,        // this tick finished after the next deadline
   kFlagNoPullClamped = 1u << 4,  // wall.no_pull turned a pulling force into zero
   kFlagStale = 1u << 5,          // the device had no new position this tick
-  kFlagUnarmed = 1u << 6,    // started inside the wall: zero force until the device first leaves
-  kFlagNonFinite = 1u << 7,  // the controller computed a non-finite force: zero commanded, fault
+  kFlagUnarmed = 1u << 6,      // started inside the wall: zero force until the device first leaves
+  kFlagNonFinite = 1u << 7,    // the controller computed a non-finite force: zero commanded, fault
+  kFlagSequenceGap = 1u << 8,  // the device's sequence skipped samples before this one
 };
 
 struct TickRecord {
@@ -30,10 +32,18 @@ struct TickRecord {
   double force_computed = 0.0;       // f_k = E(z)[xi(p_ve)]_k, before delay and limits
   double force_commanded = 0.0;      // u written to the device: -n f_{k-d}, clamped, saturated
   std::uint32_t flags = 0;           // TickFlag bits
-  std::uint32_t device_status = 0;   // PositionSample::device_status
+  std::uint32_t device_status = 0;   // PositionSample::status
+  // Version 2.
+  std::int64_t sample_time_ns = 0;  // when the device measured x (CLOCK_MONOTONIC), 0: unknown
+  std::uint32_t sequence = 0;       // the device's sample counter (low 32 bits), 0: none
+  std::uint8_t fault_cause = 0;     // loop::FaultCause of the fault on this tick, 0: none
+  std::uint8_t fault_class = 0;     // FaultClass of a device fault: 1 transport, 2 device
+  std::uint16_t sequence_gap = 0;   // samples missing before this one (saturates at 65535)
+  std::uint32_t fault_code = 0;     // the driver's code of that fault (errno, EMCY, axis error)
+  std::uint32_t reserved = 0;       // zero: keeps the record a multiple of 8 bytes
 };
 
 static_assert(std::is_trivially_copyable_v<TickRecord>);
-static_assert(sizeof(TickRecord) == 72, "TickRecord is part of the log format");
+static_assert(sizeof(TickRecord) == 96, "TickRecord is part of the log format");
 
 }  // namespace hapticd::telemetry

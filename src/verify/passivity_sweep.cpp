@@ -11,10 +11,8 @@
 #include "analysis/passivity.h"
 #include "analysis/wall_model.h"
 #include "control/controller.h"
-#include "drivers/transport_delay.h"
 #include "loop/servo_loop.h"
 #include "sim/sim_device.h"
-#include "telemetry/tick_record.h"
 
 namespace hapticd::verify {
 namespace {
@@ -26,7 +24,8 @@ constexpr double kPi = std::numbers::pi;
 config::Config measurement_config(const config::Config& base, int total_delay) {
   config::Config c = base;
   c.loop.clock = config::ClockMode::kFreerun;
-  c.device.driver = config::DriverKind::kSim;
+  c.device.driver = "sim";
+  c.device.settings = nullptr;
   c.device.max_force = std::numeric_limits<double>::max();
   c.device.sim.counts_per_unit = 0.0;
   c.device.sim.noise_counts = 0.0;
@@ -107,11 +106,11 @@ class Sweep {
     lo.max_speed = std::numeric_limits<double>::infinity();
     lo.max_ticks = static_cast<std::uint64_t>(ticks);
     device.configure();
-    device.enable_output();
+    device.enable();
     const std::atomic<bool> stop{false};
     loop::ServoLoop loop(device, controller, nullptr, lo);
     check(loop.run(stop));
-    return device.plant().operator_work_j();
+    return device.axis().plant().operator_work_j();
   }
 
   void check(const loop::LoopResult& r) {
@@ -133,10 +132,10 @@ class Sweep {
 
 }  // namespace
 
-VerifyResult verify_passivity(const config::Config& cfg) {
+VerifyResult verify_passivity(const config::Config& cfg, int device_delay_samples) {
   VerifyResult r;
   const double t = cfg.loop.sample_period_s();
-  r.delay_samples = cfg.wall.delay_samples + declared_transport_delay(cfg.device.driver);
+  r.delay_samples = cfg.wall.delay_samples + device_delay_samples;
   const analysis::TransferFunction e =
       analysis::environment_filter(control::wall_params(cfg, cfg.wall.stiffness));
   const std::optional<analysis::TransferFunction> c = control::coupling_filter(cfg);

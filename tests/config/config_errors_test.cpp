@@ -1,6 +1,7 @@
 // Every class of bad configuration produces one exact, located message a person can act on.
 #include <gtest/gtest.h>
 
+#include "config/driver_schema.h"
 #include "config_test_util.h"
 
 namespace hapticd::config::testing {
@@ -24,7 +25,8 @@ TEST(ConfigErrors, UnknownKeyMatchesCaseInsensitively) {
 TEST(ConfigErrors, UnknownKeyWithoutNeighbourListsTheAllowedKeys) {
   EXPECT_EQ(errors_of("safety:\n  colour: red\n"),
             Lines{"t.yaml:2: safety.colour: unknown key; expected one of: gate, "
-                  "operator_passivity_shortage, passivity_margin, max_speed, stale_fault_ticks"});
+                  "operator_passivity_shortage, passivity_margin, max_speed, stale_fault_ticks, "
+                  "sequence_gap_fault"});
   EXPECT_EQ(errors_of("plugins: []\n"),
             Lines{"t.yaml:1: plugins: unknown key; expected one of: loop, device, wall, safety, "
                   "analysis, telemetry"});
@@ -62,7 +64,7 @@ TEST(ConfigErrors, EnumerationsListTheAllowedValues) {
   EXPECT_EQ(errors_of("wall:\n  discretization: foo\n"),
             Lines{"t.yaml:2: wall.discretization: must be one of backward, tustin; got 'foo'"});
   EXPECT_EQ(errors_of("device:\n  driver: usb\n"),
-            Lines{"t.yaml:2: device.driver: must be one of sim, hid, can, gpio; got 'usb'"});
+            Lines{"t.yaml:2: device.driver: must be one of sim; got 'usb'"});
   EXPECT_EQ(errors_of("safety:\n  gate: off\n"),
             Lines{"t.yaml:2: safety.gate: must be one of enforce, warn; got 'off'"});
 }
@@ -158,11 +160,49 @@ TEST(ConfigErrors, CouplingFeedThroughMustBeNonNegative) {
   EXPECT_TRUE(c.wall.coupling.present);
 }
 
-TEST(ConfigErrors, FreerunNeedsTheSimDriver) {
-  EXPECT_EQ(errors_of("loop:\n  clock: freerun\ndevice:\n  driver: hid\n"),
-            Lines{"t.yaml:2: loop.clock: freerun runs only with device.driver: sim, got 'hid'"});
-  EXPECT_EQ(load_config_text("loop:\n  clock: freerun\n", "t.yaml").loop.clock,
-            ClockMode::kFreerun);
+// A driver's section is read by the driver's own code through the same reader: FILE:LINE
+// errors, unknown keys refused, and the sections of the drivers not selected refused too.
+struct FakeSettings : DriverSettings {
+  double gain = 0.0;
+};
+
+DriverSchemas fake_drivers() {
+  const auto read_fake = [](schema::MapReader& m,
+                            const Config& cfg) -> std::shared_ptr<const DriverSettings> {
+    auto s = std::make_shared<FakeSettings>();
+    const auto gain = schema::read_number(m.diag(), m.take("gain"), schema::Range::greater_than(0));
+    if (!gain) return nullptr;
+    s->gain = *gain * cfg.device.max_force;  // a driver sees what was read before its section
+    return s;
+  };
+  return {{"sim", {}}, {"fake", read_fake}, {"other", read_fake}};
+}
+
+TEST(DriverSections, TheSelectedDriverReadsItsOwnSection) {
+  const Config c =
+      load_config_text("device:\n  driver: fake\n  max_force: 4\n  fake:\n    gain: 2\n", "t.yaml",
+                       {}, ".", fake_drivers());
+  ASSERT_NE(c.device.settings, nullptr);
+  EXPECT_EQ(dynamic_cast<const FakeSettings&>(*c.device.settings).gain, 8.0);
+  EXPECT_EQ(c.locate("device.fake.gain"), "t.yaml:5");
+}
+
+TEST(DriverSections, ErrorsInADriversSectionNameFileAndLine) {
+  const auto errors = [](std::string_view yaml) {
+    try {
+      load_config_text(yaml, "t.yaml", {}, ".", fake_drivers());
+    } catch (const ConfigError& e) {
+      return e.messages();
+    }
+    return Lines{};
+  };
+  EXPECT_EQ(errors("device:\n  driver: fake\n  fake:\n    gain: -1\n    gian: 3\n"),
+            (Lines{"t.yaml:4: device.fake.gain: must be > 0, got '-1'",
+                   "t.yaml:5: device.fake.gian: unknown key (did you mean 'gain'?)"}));
+  EXPECT_EQ(errors("device:\n  driver: fake\n  fake: {gain: 1}\n  other: {gain: 1}\n"),
+            Lines{"t.yaml:4: device.other: not used by device.driver 'fake'"});
+  EXPECT_EQ(errors("device:\n  driver: usb\n"),
+            Lines{"t.yaml:2: device.driver: must be one of sim, fake, other; got 'usb'"});
 }
 
 TEST(ConfigErrors, DuplicateKeysAreReported) {

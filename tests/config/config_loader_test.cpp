@@ -1,8 +1,7 @@
-// Loading from files, text and the compiled-in default; the defaults; effective_yaml.
+// Loading text and the compiled-in default; the defaults; effective_yaml. (Reading files is
+// the service's: tests/service.)
 #include <gtest/gtest.h>
-#include <unistd.h>
 
-#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -11,8 +10,6 @@
 namespace hapticd::config::testing {
 namespace {
 
-namespace fs = std::filesystem;
-
 std::string read_text(const std::string& path) {
   std::ifstream in(path);
   std::ostringstream out;
@@ -20,32 +17,13 @@ std::string read_text(const std::string& path) {
   return out.str();
 }
 
-// A fresh directory under the system temp dir, removed with the fixture.
-class ConfigFile : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("hapticd_config_test_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string write(const std::string& name, const std::string& text) {
-    const fs::path p = dir_ / name;
-    std::ofstream(p) << text;
-    return p.string();
-  }
-  fs::path dir_;
-};
-
 TEST(EmbeddedDefault, IsTheFileOnDisk) {
   const std::string on_disk = read_text(HAPTICD_SIM_YAML_PATH);
   ASSERT_FALSE(on_disk.empty()) << HAPTICD_SIM_YAML_PATH;
   EXPECT_EQ(embedded_default_yaml(), on_disk);
 
   const Config embedded = load_embedded_default();
-  const Config file = load_config_file(HAPTICD_SIM_YAML_PATH);
+  const Config file = load_config_text(on_disk, HAPTICD_SIM_YAML_PATH);
   expect_same_values(embedded, file);
   EXPECT_EQ(embedded.effective_yaml, file.effective_yaml);
   EXPECT_EQ(embedded.source_name, "config/sim.yaml (embedded)");
@@ -59,7 +37,8 @@ TEST(EmbeddedDefault, IsTheHandPressDemo) {
   EXPECT_EQ(c.loop.rt_priority, 80);
   EXPECT_EQ(c.loop.cpu, -1);
   EXPECT_EQ(c.loop.overrun_fault_streak, 10);
-  EXPECT_EQ(c.device.driver, DriverKind::kSim);
+  EXPECT_EQ(c.device.driver, "sim");
+  EXPECT_EQ(c.device.settings, nullptr);
   EXPECT_EQ(c.device.mass, 0.1);
   EXPECT_EQ(c.device.damping, 2.0);
   EXPECT_EQ(c.device.max_force, 10.0);
@@ -159,32 +138,6 @@ TEST(Values, CouplingAndWeightLists) {
   EXPECT_EQ(c.wall.coupling.numerator, (Coefficients{0.1, -0.0752, 0.0016, -0.0101}));
   EXPECT_EQ(c.wall.coupling.denominator, (Coefficients{1, -1.8407, 0.8444, -0.0037}));
   EXPECT_EQ(c.analysis.transparency_weight_numerator, (Coefficients{0.5, 0.5}));
-}
-
-TEST_F(ConfigFile, FileErrorsNameThePathAsGiven) {
-  const std::string path = write("bad.yaml", "wall:\n  stiffness: -3\n");
-  try {
-    load_config_file(path);
-    FAIL() << "expected a ConfigError";
-  } catch (const ConfigError& e) {
-    EXPECT_EQ(e.messages(), Lines{path + ":2: wall.stiffness: must be >= 0, got '-3'"});
-  }
-}
-
-TEST_F(ConfigFile, UnreadableFileSaysWhy) {
-  const std::string missing = (dir_ / "nope.yaml").string();
-  try {
-    load_config_file(missing);
-    FAIL() << "expected a ConfigError";
-  } catch (const ConfigError& e) {
-    EXPECT_EQ(e.messages(), Lines{missing + ": cannot read: No such file or directory"});
-  }
-  try {
-    load_config_file(dir_.string());
-    FAIL() << "expected a ConfigError";
-  } catch (const ConfigError& e) {
-    EXPECT_EQ(e.messages(), Lines{dir_.string() + ": cannot read: Is a directory"});
-  }
 }
 
 TEST(EffectiveYaml, ReloadsToTheSameConfiguration) {

@@ -7,7 +7,6 @@
 
 #include "analysis/wall_model.h"
 #include "control/controller.h"
-#include "telemetry/tick_record.h"
 
 namespace hapticd::control {
 namespace {
@@ -54,7 +53,7 @@ TEST(ControllerCoupling, InContactTheLoopIsEOverOnePlusEC) {
     const std::vector<double> expected = analysis::simulate(h, x);
     for (std::size_t k = 0; k < x.size(); ++k) {
       const ControlOutput o = ctl.step(x[k]);
-      ASSERT_TRUE(o.flags & telemetry::kFlagContact) << "k=" << k;
+      ASSERT_TRUE(o.flags & kControlContact) << "k=" << k;
       EXPECT_NEAR(o.force_computed, expected[k], 1e-9 * (1 + std::abs(expected[k]))) << "k=" << k;
     }
   }
@@ -103,7 +102,7 @@ TEST(ControllerCoupling, AlgebraicLoopMatchesAnIndependentSolverInAndOutOfContac
     const ControlOutput o = ctl.step(x[k]);
     const double f = ref.step(x[k]);
     EXPECT_NEAR(o.force_computed, f, 1e-6 * (1 + std::abs(f))) << "k=" << k;
-    const bool in = o.flags & telemetry::kFlagContact;
+    const bool in = o.flags & kControlContact;
     transitions += in != was_in;
     was_in = in;
   }

@@ -7,14 +7,9 @@
 
 #include "alloc_counter.h"
 #include "control/controller.h"
-#include "telemetry/tick_record.h"
 
 namespace hapticd::control {
 namespace {
-
-using telemetry::kFlagContact;
-using telemetry::kFlagNoPullClamped;
-using telemetry::kFlagSaturated;
 
 // DESIGN.md §3's law as written: these tests start inside the wall on purpose, so the
 // start-up arming (tested on its own below) is off.
@@ -47,7 +42,7 @@ TEST(Controller, BackwardWallIsKXiPlusBDifferenceOfXi) {
     prev = xi[k];
     EXPECT_NEAR(o.force_computed, f, 1e-12) << "k=" << k;
     EXPECT_NEAR(o.force_commanded, -f, 1e-12) << "k=" << k;  // n = +1: u = -f
-    EXPECT_EQ((o.flags & kFlagContact) != 0, xi[k] > 0) << "k=" << k;
+    EXPECT_EQ((o.flags & kControlContact) != 0, xi[k] > 0) << "k=" << k;
     EXPECT_DOUBLE_EQ(o.penetration, x[k]);
   }
 }
@@ -64,8 +59,8 @@ TEST(Controller, ANonFiniteForceIsNeverCommanded) {
     const ControlOutput o = ctl.step(0.001);
     EXPECT_FALSE(std::isfinite(o.force_computed));
     EXPECT_EQ(o.force_commanded, 0.0);
-    EXPECT_TRUE(o.flags & telemetry::kFlagNonFinite);
-    EXPECT_FALSE(o.flags & kFlagSaturated);
+    EXPECT_TRUE(o.flags & kControlNonFinite);
+    EXPECT_FALSE(o.flags & kControlSaturated);
   }
 }
 
@@ -84,7 +79,7 @@ TEST(Controller, ReleaseStepPullsUnlessNoPull) {
   const ControlOutput o = clamped.step(-0.001);
   EXPECT_NEAR(o.force_computed, -1.0, 1e-12);  // the law is unchanged...
   EXPECT_EQ(o.force_commanded, 0.0);           // ...only the command is clamped
-  EXPECT_TRUE(o.flags & kFlagNoPullClamped);
+  EXPECT_TRUE(o.flags & kControlNoPullClamped);
 }
 
 TEST(Controller, TustinWallIsTheBilinearRecursion) {
@@ -133,8 +128,8 @@ TEST(Controller, SaturatesToMaxForceKeepingTheSign) {
   const ControlOutput o = ctl.step(0.004);
   EXPECT_NEAR(o.force_computed, 4.0, 1e-12);
   EXPECT_EQ(o.force_commanded, -1.5);
-  EXPECT_TRUE(o.flags & kFlagSaturated);
-  EXPECT_FALSE(ctl.step(0.001).flags & kFlagSaturated);
+  EXPECT_TRUE(o.flags & kControlSaturated);
+  EXPECT_FALSE(ctl.step(0.001).flags & kControlSaturated);
 }
 
 TEST(Controller, VelocityIsTheBackwardDifference) {
@@ -167,12 +162,12 @@ TEST(Controller, StartingInsideTheWallIsUnarmedUntilTheDeviceLeaves) {
   for (double x : {0.003, 0.002}) {  // started 3 mm inside: no K p0 + B p0/T kick
     const ControlOutput o = ctl.step(x);
     EXPECT_EQ(o.force_commanded, 0.0);
-    EXPECT_TRUE(o.flags & telemetry::kFlagUnarmed);
-    EXPECT_FALSE(o.flags & kFlagContact);
+    EXPECT_TRUE(o.flags & kControlUnarmed);
+    EXPECT_FALSE(o.flags & kControlContact);
   }
   const ControlOutput left = ctl.step(-0.001);
   EXPECT_EQ(left.force_commanded, 0.0);
-  EXPECT_FALSE(left.flags & telemetry::kFlagUnarmed);
+  EXPECT_FALSE(left.flags & kControlUnarmed);
   // Back in: the law runs from a history that was outside the wall.
   EXPECT_NEAR(ctl.step(0.001).force_computed, 1000 * 0.001 + 0.5 * 0.001 / 1e-3, 1e-12);
 }

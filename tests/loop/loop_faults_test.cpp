@@ -64,17 +64,17 @@ TEST(LoopFaults, DeviceReadErrorFaultsAndCommandsZero) {
   ScriptedDevice dev;
   dev.script = [](std::uint64_t k, PositionSample& s) {
     s.position = 0.001;
-    return k == 5 ? IoStatus::kError : IoStatus::kOk;
+    return k == 5 ? IoStatus::kTransportFault : IoStatus::kOk;
   };
   const LoopResult r = run(dev, freerun());
-  EXPECT_EQ(r.fault.cause, FaultCause::kDeviceRead);
+  EXPECT_EQ(r.fault.cause, FaultCause::kTransportRead);
   EXPECT_EQ(r.fault.tick, 5u);
   EXPECT_EQ(r.ticks, 6u);
   ASSERT_GE(dev.writes.size(), 6u);
   EXPECT_NEAR(dev.writes[4], -2.0, 1e-12);  // the wall was pushing before the fault
   EXPECT_EQ(dev.writes[5], 0.0);            // the faulted tick itself commands zero
   EXPECT_EQ(dev.writes.back(), 0.0);
-  EXPECT_EQ(describe(r.fault), "device read failed at tick 5");
+  EXPECT_EQ(describe(r.fault), "transport fault reading the device at tick 5");
 }
 
 TEST(LoopFaults, StaleDataFaultsAfterTheConfiguredStreak) {
@@ -136,7 +136,7 @@ TEST(LoopFaults, DeviceWriteErrorFaultsAndRetriesZero) {
   ScriptedDevice dev;
   dev.fail_write_at = 3;
   const LoopResult r = run(dev, freerun());
-  EXPECT_EQ(r.fault.cause, FaultCause::kDeviceWrite);
+  EXPECT_EQ(r.fault.cause, FaultCause::kTransportWrite);
   EXPECT_EQ(r.fault.tick, 3u);
   EXPECT_EQ(dev.writes.back(), 0.0);
 }

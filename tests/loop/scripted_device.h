@@ -1,5 +1,5 @@
 // A Device whose every read/write outcome is scripted by the test, to drive the loop's fault
-// paths deterministically. Records every force written.
+// paths deterministically. Records every force written. Configured and enabled on creation.
 #pragma once
 
 #include <time.h>
@@ -21,29 +21,41 @@ class ScriptedDevice final : public Device {
     return IoStatus::kOk;
   };
   std::uint64_t fail_write_at = UINT64_MAX;
+  IoStatus write_failure = IoStatus::kTransportFault;
   long read_sleep_ns = 0;  // makes every read this slow (overrun tests)
-  std::vector<double> writes;
+  std::uint32_t fault_code = 0;
+  std::vector<double> writes;  // every force that reached the "transport"
 
-  ScriptedDevice() { writes.reserve(1 << 16); }
-  void configure() override {}
-  void enable_output() override {}
-  void disable_output() noexcept override {}
-  IoStatus read(PositionSample& out) noexcept override {
+  ScriptedDevice() {
+    writes.reserve(1 << 16);
+    configure();
+    enable();
+  }
+  std::string_view driver_name() const noexcept override { return "scripted"; }
+
+ protected:
+  DeviceInfo on_configure() override { return {"scripted", 0, 0}; }
+  void on_enable() override {}
+  void on_disable() noexcept override {}
+  void on_close() noexcept override {}
+  IoStatus on_read(PositionSample& out) noexcept override {
     if (read_sleep_ns > 0) {
       const timespec ts{0, read_sleep_ns};
       nanosleep(&ts, nullptr);
     }
-    return script(reads_++, out);
+    const IoStatus r = script(reads_++, out);
+    if (r == IoStatus::kTransportFault || r == IoStatus::kDeviceFault) set_fault_code(fault_code);
+    return r;
   }
-  IoStatus write(double force) noexcept override {
+  IoStatus on_write(double force) noexcept override {
     writes.push_back(force);
-    return writes.size() - 1 == fail_write_at ? IoStatus::kError : IoStatus::kOk;
+    if (writes.size() - 1 != fail_write_at) return IoStatus::kOk;
+    set_fault_code(fault_code);
+    return write_failure;
   }
-  int transport_delay_samples() const noexcept override { return 0; }
-  std::string_view name() const noexcept override { return "scripted"; }
-  std::string describe_error() const override { return "scripted failure"; }
-  double last_command() const noexcept override { return writes.empty() ? 0.0 : writes.back(); }
-  bool output_enabled() const noexcept override { return false; }
+  std::string describe(const DeviceFault& f) const override {
+    return "scripted failure, code " + std::to_string(f.code);
+  }
 
  private:
   std::uint64_t reads_ = 0;

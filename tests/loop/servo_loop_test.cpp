@@ -23,7 +23,7 @@ struct Rig {
         device(cfg.device, cfg.loop.sample_period_s()),
         controller(control::make_control_law(cfg)) {
     device.configure();
-    device.enable_output();
+    device.enable();
   }
   config::Config cfg;
   sim::SimDevice device;

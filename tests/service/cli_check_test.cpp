@@ -62,12 +62,14 @@ TEST(CliCheck, BadSetAndMissingFileExit2) {
   EXPECT_EQ(r.err, "hapticd: /nonexistent.yaml: cannot read: No such file or directory\n");
 }
 
-TEST(CliCheck, AnalysesTheDriversDeclaredDelayWithoutOpeningIt) {
+TEST(CliCheck, ReportsTheDriverAndTheDelayItDeclares) {
   const ProcessResult r =
-      run_process({hapticd_binary(), "check", "--json", "--set", "device.driver=hid"});
+      run_process({hapticd_binary(), "check", "--json", "--set", "wall.delay_samples=2"});
   const nlohmann::json j = nlohmann::json::parse(r.out);
-  EXPECT_EQ(j["device_delay_samples"], 1);  // HID: one USB frame
-  EXPECT_EQ(j["delay_samples"], 1);
+  EXPECT_EQ(j["driver"], "sim");
+  EXPECT_EQ(j["device_delay_samples"], 0);  // in-process
+  EXPECT_EQ(j["wall_delay_samples"], 2);
+  EXPECT_EQ(j["delay_samples"], 2);
 }
 
 TEST(CliHelp, EverySubcommandDocumentsItsOptions) {

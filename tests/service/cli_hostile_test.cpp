@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
+#include <cstdio>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -137,6 +138,24 @@ TEST(CliHostile, ADiskFullIsNotReportedAsRingDrops) {
   const nlohmann::json s = nlohmann::json::parse(read_file(sum));
   EXPECT_EQ(s["log_records_dropped"], 0);
   EXPECT_GT(s["log_records_lost"].get<int>(), 0);
+}
+
+TEST(CliHostile, AConfigFileThatCannotBeReadSaysWhy) {
+  const std::string missing = temp_path("nope.yaml"), dir = temp_path("conf.d");
+  std::filesystem::create_directory(dir);
+  for (const auto& [path, why] :
+       {std::pair{missing, "No such file or directory"}, std::pair{dir, "Is a directory"}}) {
+    const ProcessResult r = run_process({hapticd_binary(), "check", "--config", path});
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_TRUE(has(r.err, path + ": cannot read: " + why)) << r.err;
+  }
+  const std::string bad = temp_path("bad.yaml");
+  std::FILE* f = std::fopen(bad.c_str(), "w");
+  std::fputs("wall:\n  stiffness: -3\n", f);
+  std::fclose(f);
+  const ProcessResult r = run_process({hapticd_binary(), "check", "--config", bad});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_TRUE(has(r.err, bad + ":2: wall.stiffness: must be >= 0, got '-3'")) << r.err;
 }
 
 }  // namespace

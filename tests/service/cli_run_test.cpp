@@ -112,10 +112,12 @@ TEST(CliRun, WarnModeRunsAFailingGateAndSaysSo) {
   EXPECT_NE(r.err.find("running a loop that is not proven passive"), std::string::npos) << r.err;
 }
 
-TEST(CliRun, UnavailableDriverIsADeviceError) {
-  const ProcessResult r = run_process({hapticd_binary(), "run", "--set", "device.driver=can"});
-  EXPECT_EQ(r.exit_code, 4);
-  EXPECT_NE(r.err.find("device error: device.driver: can"), std::string::npos) << r.err;
+TEST(CliRun, ADriverThisBuildDoesNotHaveIsAConfigurationError) {
+  const ProcessResult r = run_process({hapticd_binary(), "run", "--set", "device.driver=usb"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--set device.driver=usb: device.driver: must be one of sim"),
+            std::string::npos)
+      << r.err;
 }
 
 TEST(CliRun, UnwritableLogIsAUsageError) {

@@ -10,8 +10,8 @@
 #include <gtest/gtest.h>
 
 #include "config/config.h"
+#include "reference.h"
 #include "sim/plant.h"
-#include "tests/sim/reference.h"
 
 namespace hapticd::sim {
 namespace {

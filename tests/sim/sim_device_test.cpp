@@ -80,6 +80,7 @@ TEST(SimDeviceEncoder, ConfigureRestartsTheNoiseSequence) {
   d.configure();
   std::vector<double> first, second;
   for (int i = 0; i < 31; ++i) first.push_back(read_position(d));  // odd: a cached normal
+  d.close();
   d.configure();
   for (int i = 0; i < 31; ++i) second.push_back(read_position(d));
   EXPECT_EQ(first, second);
@@ -89,49 +90,64 @@ TEST(SimDevice, DisabledOutputAppliesZeroForce) {
   SimDevice d(at_rest(0.0, 0.0), kT);
   d.configure();
   for (int i = 0; i < 100; ++i) {
-    EXPECT_EQ(d.write(5.0), IoStatus::kOk);
+    EXPECT_EQ(d.write(5.0), IoStatus::kTransportFault) << "refused until enable";
     EXPECT_EQ(read_position(d), 0.0);
   }
-  EXPECT_EQ(d.plant().motor_work_j(), 0.0);
+  EXPECT_EQ(d.axis().plant().motor_work_j(), 0.0);
   PositionSample s;
   d.read(s);
-  EXPECT_EQ(s.device_status & SimDevice::kStatusOutputEnabled, 0u);
+  EXPECT_EQ(s.status & SimDevice::kStatusOutputEnabled, 0u);
 
-  d.enable_output();
+  d.enable();
   for (int i = 0; i < 10; ++i) {
     d.write(5.0);
     d.read(s);
   }
   EXPECT_GT(s.position, 0.0);  // +u pushes toward +x
-  EXPECT_NE(s.device_status & SimDevice::kStatusOutputEnabled, 0u);
+  EXPECT_NE(s.status & SimDevice::kStatusOutputEnabled, 0u);
 
-  d.disable_output();
-  const double v = d.plant().velocity();
+  d.disable();
+  const double v = d.axis().plant().velocity();
   d.write(5.0);
   d.read(s);
-  EXPECT_LT(d.plant().velocity(), v);  // only damping acts now
+  EXPECT_LT(d.axis().plant().velocity(), v);  // only damping acts now
 }
 
-TEST(SimDevice, NonFiniteWriteIsAnError) {
+TEST(SimDevice, NonFiniteWriteFaultsAndAppliesZero) {
   SimDevice d(at_rest(0.0, 0.0), kT);
   d.configure();
-  d.enable_output();
-  EXPECT_EQ(d.write(std::numeric_limits<double>::quiet_NaN()), IoStatus::kError);
-  EXPECT_NE(d.describe_error().find("non-finite"), std::string::npos) << d.describe_error();
-  EXPECT_EQ(d.write(-std::numeric_limits<double>::infinity()), IoStatus::kError);
-  PositionSample s;
-  d.read(s);
-  d.read(s);
-  EXPECT_EQ(d.plant().velocity(), 0.0);  // zero was applied, not the garbage
-  EXPECT_EQ(d.write(1.0), IoStatus::kOk);
+  d.enable();
+  EXPECT_EQ(d.write(2.0), IoStatus::kOk);
+  EXPECT_EQ(d.write(std::numeric_limits<double>::quiet_NaN()), IoStatus::kTransportFault);
+  EXPECT_EQ(d.state(), DeviceState::kFaulted);
+  EXPECT_NE(d.describe_fault().find("non-finite"), std::string::npos) << d.describe_fault();
+  EXPECT_EQ(d.axis().held_force(), 0.0);  // zero was applied, not the garbage
+  EXPECT_EQ(d.last_command(), 0.0);
+  EXPECT_EQ(d.write(1.0), IoStatus::kTransportFault) << "latched: only zero passes";
+  EXPECT_EQ(d.axis().held_force(), 0.0);
+  d.clear_fault();
+  EXPECT_EQ(d.state(), DeviceState::kConfigured);
 }
 
-TEST(SimDevice, ReadBeforeConfigureIsAnError) {
+TEST(SimDevice, TheLifecycleRefusesWhatItsStateDoesNotAllow) {
   SimDevice d(at_rest(0.0, 0.0), kT);
   PositionSample s;
-  EXPECT_EQ(d.read(s), IoStatus::kError);
-  EXPECT_NE(d.describe_error().find("configure"), std::string::npos);
-  EXPECT_THROW(d.enable_output(), DeviceError);
+  EXPECT_EQ(d.read(s), IoStatus::kTransportFault) << "nothing is open before configure";
+  EXPECT_EQ(d.state(), DeviceState::kUnconfigured);
+  EXPECT_THROW(d.enable(), DeviceError);
+  EXPECT_THROW(d.clear_fault(), DeviceError);
+  d.configure();
+  EXPECT_THROW(d.configure(), DeviceError);
+  EXPECT_EQ(d.write(1.0), IoStatus::kTransportFault) << "output is off until enable";
+  EXPECT_EQ(d.axis().held_force(), 0.0);
+  d.enable();
+  EXPECT_THROW(d.enable(), DeviceError);
+  EXPECT_EQ(d.write(1.0), IoStatus::kOk);
+  EXPECT_EQ(d.last_command(), 1.0);
+  d.close();
+  EXPECT_EQ(d.state(), DeviceState::kUnconfigured);
+  EXPECT_FALSE(d.axis().output_on());
+  EXPECT_EQ(d.last_command(), 0.0);
 }
 
 TEST(SimDevice, OneReadIsOnePeriodWithTheLastWrittenForce) {
@@ -139,23 +155,24 @@ TEST(SimDevice, OneReadIsOnePeriodWithTheLastWrittenForce) {
   c.sim.initial_velocity = 0.1;
   SimDevice d(c, kT);
   d.configure();
-  d.enable_output();
+  d.enable();
   Plant ref(c.mass, c.damping, c.sim.op, kT, 0.002, 0.1);
   EXPECT_EQ(read_position(d), ref.position());  // first read: the initial state
-  EXPECT_EQ(d.plant().time_s(), 0.0);
+  EXPECT_EQ(d.axis().plant().time_s(), 0.0);
   for (int k = 1; k <= 50; ++k) {
     const double u = 0.5 * std::cos(0.3 * k);
     d.write(u);
     ref.step(u);
     EXPECT_EQ(read_position(d), ref.position()) << "tick " << k;
-    EXPECT_DOUBLE_EQ(d.plant().time_s(), k * kT);
+    EXPECT_DOUBLE_EQ(d.axis().plant().time_s(), k * kT);
   }
 }
 
 TEST(SimDevice, IdentityAndTransportDelay) {
   SimDevice d(config::DeviceConfig{}, kT);
-  EXPECT_EQ(d.transport_delay_samples(), 0);
-  EXPECT_EQ(d.name(), "sim");
+  d.configure();
+  EXPECT_EQ(d.info().transport_delay_samples, 0);
+  EXPECT_EQ(d.driver_name(), "sim");
 }
 
 TEST(SimDevice, RejectsBadEncoderConfig) {
@@ -176,7 +193,7 @@ TEST(SimDevice, NoAllocationOnTheTickPath) {
   c.sim.seed = 3;
   SimDevice d(c, kT);
   d.configure();
-  d.enable_output();
+  d.enable();
   PositionSample s;
   hapticd::testing::AllocationScope scope;
   for (int k = 0; k < 10000; ++k) {
@@ -184,7 +201,7 @@ TEST(SimDevice, NoAllocationOnTheTickPath) {
     d.write(-100.0 * s.position);
   }
   EXPECT_EQ(scope.count(), 0u);
-  EXPECT_DOUBLE_EQ(d.plant().time_s(), 9999 * kT);  // the loop really ran the breakpoints
+  EXPECT_DOUBLE_EQ(d.axis().plant().time_s(), 9999 * kT);  // the loop really ran the breakpoints
 }
 
 }  // namespace

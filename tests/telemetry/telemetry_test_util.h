@@ -54,6 +54,12 @@ inline TickRecord make_record(std::uint64_t tick) {
   r.force_commanded = -r.force_computed;
   r.flags = static_cast<std::uint32_t>(tick) & 0x7fu;
   r.device_status = static_cast<std::uint32_t>(tick * 2654435761u);
+  r.sample_time_ns = static_cast<std::int64_t>(tick) * 999'983;
+  r.sequence = static_cast<std::uint32_t>(tick * 3);
+  r.fault_cause = static_cast<std::uint8_t>(tick % 7);
+  r.fault_class = static_cast<std::uint8_t>(tick % 3);
+  r.sequence_gap = static_cast<std::uint16_t>(tick % 5);
+  r.fault_code = static_cast<std::uint32_t>(tick * 40503u);
   return r;
 }
 

@@ -1,16 +1,15 @@
-#include "service/device_factory.h"
+#include "sim/replay_log.h"
 
 #include <spdlog/spdlog.h>
 
 #include <cmath>
 #include <cstdlib>
+#include <string>
 
 #include "config/config_loader.h"
-#include "sim/sim_device.h"
 #include "telemetry/log_reader.h"
 
-namespace hapticd::service {
-
+namespace hapticd::sim {
 namespace {
 
 // The replay operator imposes one position per sample period: a log with a hole in its time
@@ -68,28 +67,4 @@ std::vector<double> load_replay_positions(const config::Config& cfg) {
   return x;
 }
 
-std::unique_ptr<Device> make_device(const config::Config& cfg) {
-  switch (cfg.device.driver) {
-    case config::DriverKind::kSim: {
-      std::vector<double> replay;
-      if (cfg.device.sim.op.kind == config::OperatorSpec::Kind::kReplay) {
-        replay = load_replay_positions(cfg);
-      }
-      try {
-        return std::make_unique<sim::SimDevice>(cfg.device, cfg.loop.sample_period_s(),
-                                                std::move(replay));
-      } catch (const std::invalid_argument& e) {
-        throw config::ConfigError({cfg.source_name + ": device.sim: " + e.what()});
-      }
-    }
-    case config::DriverKind::kHid:
-    case config::DriverKind::kCan:
-    case config::DriverKind::kGpio:
-      break;
-  }
-  throw DeviceError("device.driver: " + config::driver_name(cfg.device.driver) +
-                    ": this build has no such driver yet (only 'sim'); `hapticd check` analyses "
-                    "it with its declared transport delay, but `run` cannot open it");
-}
-
-}  // namespace hapticd::service
+}  // namespace hapticd::sim

@@ -1,4 +1,6 @@
-#include "config/yaml_reader.h"
+#include "config/schema_reader.h"
+
+#include "config/config_loader.h"  // kMaxMessages
 
 #include <algorithm>
 #include <charconv>
@@ -6,7 +8,7 @@
 #include <cstdlib>
 #include <utility>
 
-namespace hapticd::config::detail {
+namespace hapticd::config::schema {
 namespace {
 
 std::string quoted(const std::string& text) { return "'" + text + "'"; }
@@ -209,8 +211,8 @@ std::vector<std::string> Diagnostics::messages() const {
 
 // ------------------------------------------------------------------------------ MapReader
 
-MapReader::MapReader(Diagnostics& diag, const Field& field, std::vector<std::string> schema)
-    : diag_(diag), path_(field.path), mark_(field.key_mark), schema_(std::move(schema)) {
+MapReader::MapReader(Diagnostics& diag, const Field& field)
+    : diag_(diag), path_(field.path), mark_(field.key_mark) {
   if (!field.present || field.node.IsNull()) return;
   if (!field.node.IsMap()) {
     diag_.error(mark_, path_,
@@ -241,6 +243,7 @@ MapReader::Entry* MapReader::find(std::string_view key) {
 }
 
 Field MapReader::take(std::string_view key) {
+  if (std::find(known_.begin(), known_.end(), key) == known_.end()) known_.emplace_back(key);
   if (Entry* e = find(key)) {
     e->consumed = true;
     std::string path = child_path(path_, key);
@@ -261,13 +264,16 @@ void MapReader::not_used(std::string_view key, const std::string& reason) {
   }
 }
 
-void MapReader::finish(const std::vector<std::string>& expected) {
+void MapReader::finish() {
   for (Entry& e : entries_) {
     if (e.consumed) continue;
     e.consumed = true;
-    if (std::find(schema_.begin(), schema_.end(), e.key) != schema_.end()) continue;
-    diag_.error(e.mark, child_path(path_, e.key), unknown_key_message(e.key, expected));
+    diag_.error(e.mark, child_path(path_, e.key), unknown_key_message(e.key, known_));
   }
+}
+
+void MapReader::skip_rest() {
+  for (Entry& e : entries_) e.consumed = true;
 }
 
 std::string unknown_key_message(std::string_view key, const std::vector<std::string>& expected) {
@@ -420,4 +426,4 @@ std::optional<std::vector<double>> read_number_list(Diagnostics& diag, const Fie
   return out;
 }
 
-}  // namespace hapticd::config::detail
+}  // namespace hapticd::config::schema

@@ -1,12 +1,16 @@
 // A small schema-walking reader over yaml-cpp nodes: it looks keys up by name, remembers
-// which ones the schema consumed, checks types and ranges, and collects every error with
-// the place it came from (a file line, or the --set argument that produced the node).
-// Internal to the config library.
+// which ones were consumed, checks types and ranges, and collects every error with the place
+// it came from (a file line, or the --set argument that produced the node). The config
+// library reads its sections with it, and each driver reads its own section (device.<driver>)
+// with it, so every message has the same "FILE:LINE: key: what" form.
+//
+// There is one list of keys per section: the keys its reader take()s. A key in the document
+// that no reader takes is reported as unknown (suggesting the taken ones), so a key can never
+// be silently ignored; skip_rest() is the one explicit way to stop reading a section after an
+// error that makes the rest meaningless has been reported.
 #pragma once
 
 #include <yaml-cpp/yaml.h>
-
-#include "config/config_loader.h"
 
 #include <cstddef>
 #include <limits>
@@ -17,7 +21,7 @@
 #include <unordered_map>
 #include <vector>
 
-namespace hapticd::config::detail {
+namespace hapticd::config::schema {
 
 // `text` safe to print on a terminal: control bytes (and DEL) become \xNN escapes, so a
 // value echoed in a message cannot move the cursor, clear the screen or forge a line.
@@ -90,26 +94,29 @@ struct Field {
   bool present = false;
 };
 
-// One mapping read against the keys its schema allows (in schema order, for messages).
-// An absent or null mapping reads as empty; anything else but a mapping is reported once.
+// One mapping, read key by key. An absent or null mapping reads as empty; anything else but
+// a mapping is reported once.
 class MapReader {
  public:
-  MapReader(Diagnostics& diag, const Field& field, std::vector<std::string> schema);
+  MapReader(Diagnostics& diag, const Field& field);
 
   Diagnostics& diag() { return diag_; }
   bool ok() const { return ok_; }
+  const std::string& path() const { return path_; }
+  // Where the mapping's key is (for errors about the section as a whole).
+  const YAML::Mark& mark() const { return mark_; }
 
-  // Looks `key` up and marks it consumed.
+  // Looks `key` up, marks it consumed, and adds it to the keys this section knows.
   Field take(std::string_view key);
   // "path.key: missing (reason)" at this mapping's key; silent if this is not a mapping.
   void missing(std::string_view key, const std::string& reason);
-  // If `key` is present: "path.key: not used by <reason>".
+  // If `key` is present: "path.key: not used by <reason>" (it is consumed).
   void not_used(std::string_view key, const std::string& reason);
-  // Reports every key not consumed: keys outside the schema as unknown, suggesting from
-  // `expected` (the keys that apply here); schema keys left over are ignored silently, for
-  // when the reason they do not apply was already reported (e.g. a bad operator kind).
-  void finish(const std::vector<std::string>& expected);
-  void finish() { finish(schema_); }
+  // Reports every key not consumed as unknown, suggesting from the keys taken so far.
+  void finish();
+  // Consumes whatever is left without a word: only after an error already reported makes
+  // the rest of the section meaningless (e.g. an operator kind that does not exist).
+  void skip_rest();
 
  private:
   struct Entry {
@@ -124,7 +131,7 @@ class MapReader {
   std::unordered_map<std::string, std::size_t> index_;  // key -> entries_ position
   std::string path_;
   YAML::Mark mark_;
-  std::vector<std::string> schema_;
+  std::vector<std::string> known_;  // keys taken, in reading order (for suggestions)
   std::vector<Entry> entries_;
   bool ok_ = true;
 };
@@ -175,4 +182,4 @@ std::optional<std::size_t> read_choice(Diagnostics& diag, const Field& field,
 // A non-empty list of finite numbers; a bad element is reported as "path[i]: ...".
 std::optional<std::vector<double>> read_number_list(Diagnostics& diag, const Field& field);
 
-}  // namespace hapticd::config::detail
+}  // namespace hapticd::config::schema

@@ -1,0 +1,51 @@
+// A driver paced by its loopback peer, for freerun: after every write it waits until the peer
+// has handled it and answered, so the next read sees the answer whatever the two threads'
+// timing. Everything else is the driver's own: its lifecycle, faults and descriptions.
+#pragma once
+
+#include <memory>
+
+#include "drivers/device.h"
+#include "sim/peers/peer_runner.h"
+
+namespace hapticd::sim {
+
+class PacedDevice final : public Device {
+ public:
+  PacedDevice(std::unique_ptr<Device> inner, const PeerRunner& runner)
+      : inner_(std::move(inner)), runner_(runner) {}
+  std::string_view driver_name() const noexcept override { return inner_->driver_name(); }
+  void emergency_stop() noexcept override { inner_->emergency_stop(); }
+
+ protected:
+  DeviceInfo on_configure() override {
+    inner_->configure();
+    return inner_->info();
+  }
+  void on_enable() override { inner_->enable(); }
+  void on_disable() noexcept override { inner_->disable(); }
+  void on_clear_fault() override { inner_->clear_fault(); }
+  void on_close() noexcept override { inner_->close(); }
+  IoStatus on_read(PositionSample& out) noexcept override {
+    const IoStatus r = inner_->read(out);
+    if (r == IoStatus::kTransportFault || r == IoStatus::kDeviceFault) {
+      set_fault_code(inner_->fault().code);
+    }
+    return r;
+  }
+  IoStatus on_write(double force) noexcept override {
+    const IoStatus r = inner_->write(force);
+    runner_.wait_idle();
+    if (r == IoStatus::kTransportFault || r == IoStatus::kDeviceFault) {
+      set_fault_code(inner_->fault().code);
+    }
+    return r;
+  }
+  std::string describe(const DeviceFault&) const override { return inner_->describe_fault(); }
+
+ private:
+  std::unique_ptr<Device> inner_;
+  const PeerRunner& runner_;
+};
+
+}  // namespace hapticd::sim

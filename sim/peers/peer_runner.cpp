@@ -1,0 +1,77 @@
+#include "sim/peers/peer_runner.h"
+
+#include <poll.h>
+#include <pthread.h>
+#include <sched.h>
+#include <sys/eventfd.h>
+#include <sys/ioctl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdint>
+#include <system_error>
+
+namespace hapticd::sim {
+namespace {
+
+bool has_unread(int fd) noexcept {
+  int n = 0;
+  return ioctl(fd, FIONREAD, &n) == 0 && n > 0;
+}
+
+}  // namespace
+
+PeerRunner::PeerRunner(LoopbackPeer& peer, int priority) : peer_(peer) {
+  if (peer_.fd() < 0) return;  // lives inside its driver: nothing to run
+  stop_fd_ = eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
+  if (stop_fd_ < 0) throw std::system_error(errno, std::system_category(), "eventfd");
+  thread_ = std::thread([this, priority] { run(priority); });
+  pthread_setname_np(thread_.native_handle(), "hapticd-peer");
+}
+
+void PeerRunner::stop() noexcept {
+  if (!thread_.joinable()) return;
+  const std::uint64_t one = 1;
+  [[maybe_unused]] const ssize_t n = write(stop_fd_, &one, sizeof one);
+  thread_.join();
+  close(stop_fd_);
+  stop_fd_ = -1;
+}
+
+void PeerRunner::run(int priority) {
+  if (priority > 0) {
+    sched_param sp{};
+    sp.sched_priority = priority;
+    pthread_setschedparam(pthread_self(), SCHED_FIFO, &sp);  // refused without privileges: fine
+  }
+  pollfd fds[2] = {{peer_.fd(), POLLIN, 0}, {stop_fd_, POLLIN, 0}};
+  while (true) {
+    if (poll(fds, 2, -1) < 0 && errno != EINTR) break;
+    if (fds[1].revents != 0) break;
+    // busy before the first byte is taken, so wait_idle never sees "nothing unread, not busy"
+    // while an answer is still being made.
+    busy_.store(true);
+    try {
+      peer_.service();
+    } catch (const std::exception& e) {
+      error_ = e.what();
+      failed_.store(true);
+      busy_.store(false);
+      break;
+    }
+    busy_.store(false);
+    if (fds[0].revents & (POLLHUP | POLLERR)) break;  // the driver closed its end
+  }
+}
+
+void PeerRunner::wait_idle() const noexcept {
+  if (!thread_.joinable()) return;
+  while (!failed_.load()) {
+    if (!has_unread(peer_.fd()) && !busy_.load() && !has_unread(peer_.fd())) return;
+    sched_yield();
+  }
+}
+
+std::string PeerRunner::error() const { return failed_.load() ? error_ : std::string(); }
+
+}  // namespace hapticd::sim

@@ -1,0 +1,252 @@
+// The conformance suite (DESIGN.md §6): every registered driver, with its loopback peer, must
+// keep the lifecycle, command zero force on disable and on every fault class, detect stale
+// data and sequence gaps, and never allocate in read/write, whatever the configuration. A
+// driver joins by adding its example configurations to kCases; a registered driver without
+// one fails EveryRegisteredDriverIsCovered.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "alloc_counter.h"
+#include "config/config_loader.h"
+#include "control/controller.h"
+#include "drivers/registry.h"
+#include "loop/servo_loop.h"
+#include "sim/peers/paced_device.h"
+#include "sim/peers/peer_runner.h"
+
+namespace hapticd::drivers {
+namespace {
+
+struct Case {
+  const char* driver;
+  const char* config;  // relative to the source tree
+};
+
+const Case kCases[] = {
+    {"sim", "config/sim.yaml"},
+};
+
+config::Config load(const Case& c, const std::vector<std::string>& sets = {}) {
+  const std::string path = std::string(HAPTICD_SOURCE_DIR) + "/" + c.config;
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  std::vector<config::Override> overrides;
+  for (const std::string& s : sets) overrides.push_back(config::parse_override(s));
+  overrides.push_back(config::parse_override("loop.clock=freerun"));
+  return config::load_config_text(text.str(), path, overrides, HAPTICD_SOURCE_DIR "/config",
+                                  driver_schemas());
+}
+
+// The driver wired to its peer, the peer on its own thread, paced as in a freerun run.
+struct Rig {
+  explicit Rig(const config::Config& c)
+      : cfg(c),
+        pair(find_driver(c.device.driver).make_loopback(c)),
+        runner(*pair.peer),
+        device(std::move(pair.device), runner) {}
+  ~Rig() { device.close(); }
+  sim::LoopbackPeer& peer() { return *pair.peer; }
+  // Every force written so far has reached the peer.
+  void settle() { runner.wait_idle(); }
+
+  config::Config cfg;
+  Loopback pair;
+  sim::PeerRunner runner;
+  sim::PacedDevice device;
+};
+
+// Runs the servo loop in freerun; `allocations`, when given, counts the loop's own (everything
+// it needs is built before).
+loop::LoopResult run_loop(Rig& rig, std::uint64_t ticks, loop::LoopOptions o = {},
+                          std::uint64_t* allocations = nullptr) {
+  control::Controller controller(control::make_control_law(rig.cfg));
+  o.realtime = false;
+  o.period_ns = std::llround(rig.cfg.loop.sample_period_s() * 1e9);
+  o.max_ticks = ticks;
+  o.stale_fault_ticks = rig.cfg.safety.stale_fault_ticks;
+  o.max_speed = rig.cfg.safety.max_speed;
+  o.sequence_modulus = rig.device.info().sequence_modulus;
+  loop::ServoLoop servo(rig.device, controller, nullptr, o);
+  const std::atomic<bool> stop{false};
+  const testing::AllocationScope scope;
+  const loop::LoopResult r = servo.run(stop);
+  if (allocations != nullptr) *allocations = scope.count();
+  return r;
+}
+
+class Conformance : public ::testing::TestWithParam<Case> {};
+
+TEST_P(Conformance, LifecycleIsEnforcedAndOutputFollowsIt) {
+  Rig rig(load(GetParam()));
+  Device& d = rig.device;
+  PositionSample s;
+  EXPECT_EQ(d.read(s), IoStatus::kTransportFault) << "nothing is open before configure";
+  EXPECT_THROW(d.enable(), DeviceError);
+  d.configure();
+  EXPECT_EQ(d.state(), DeviceState::kConfigured);
+  EXPECT_EQ(d.info().transport_delay_samples,
+            find_driver(rig.cfg.device.driver).declared_delay(rig.cfg))
+      << "the device must declare what `check` analyses";
+  EXPECT_EQ(d.write(2.0), IoStatus::kTransportFault) << "no force before enable";
+  rig.settle();
+  EXPECT_FALSE(rig.peer().output_on());
+  EXPECT_EQ(rig.peer().applied_force(), 0.0);
+  d.enable();
+  EXPECT_EQ(d.write(2.0), IoStatus::kOk);
+  rig.settle();
+  EXPECT_TRUE(rig.peer().output_on());
+  EXPECT_NE(rig.peer().applied_force(), 0.0);
+  EXPECT_THROW(d.configure(), DeviceError);
+  d.disable();
+  rig.settle();
+  EXPECT_EQ(d.state(), DeviceState::kConfigured);
+  EXPECT_FALSE(rig.peer().output_on()) << "disable must switch the amplifier off";
+  EXPECT_EQ(rig.peer().applied_force(), 0.0) << "disable must leave zero force";
+  d.close();
+  EXPECT_EQ(d.state(), DeviceState::kUnconfigured);
+}
+
+// A fault the device reports, or a failing transport, injected while a force is applied:
+// zero reaches the device at the very read that sees it, before anyone writes again, and the
+// latched fault passes nothing but zero until clear_fault.
+TEST_P(Conformance, DeviceAndTransportFaultsCommandZeroAtOnce) {
+  const std::pair<sim::PeerFault, IoStatus> faults[] = {
+      {sim::PeerFault::kDeviceFault, IoStatus::kDeviceFault},
+      {sim::PeerFault::kTransportFault, IoStatus::kTransportFault}};
+  for (const auto& [fault, status] : faults) {
+    SCOPED_TRACE(std::string(sim::to_string(fault)));
+    Rig rig(load(GetParam()));
+    Device& d = rig.device;
+    d.configure();
+    d.enable();
+    PositionSample s;
+    d.read(s);
+    ASSERT_EQ(d.write(3.0), IoStatus::kOk);
+    rig.settle();
+    ASSERT_EQ(rig.peer().applied_force(), 3.0);
+    ASSERT_TRUE(rig.peer().inject(fault));
+    IoStatus seen = IoStatus::kOk;
+    for (int tick = 0; tick < 20 && (seen == IoStatus::kOk || seen == IoStatus::kNoNewData);
+         ++tick) {
+      seen = d.read(s);
+      rig.settle();
+      if (seen == IoStatus::kOk || seen == IoStatus::kNoNewData) {
+        seen = d.write(3.0);
+      } else {
+        EXPECT_EQ(rig.peer().applied_force(), 0.0) << "zero before any further write";
+      }
+    }
+    EXPECT_EQ(seen, status);
+    EXPECT_EQ(d.state(), DeviceState::kFaulted);
+    EXPECT_EQ(d.fault().fault_class,
+              status == IoStatus::kDeviceFault ? FaultClass::kDevice : FaultClass::kTransport);
+    EXPECT_EQ(d.last_command(), 0.0);
+    EXPECT_NE(d.write(3.0), IoStatus::kOk) << "latched";
+    rig.settle();
+    EXPECT_EQ(rig.peer().applied_force(), 0.0);
+    d.disable();
+    rig.settle();
+    EXPECT_EQ(d.state(), DeviceState::kFaulted) << "disable does not clear a fault";
+    EXPECT_FALSE(rig.peer().output_on());
+    EXPECT_FALSE(d.describe_fault().empty());
+  }
+}
+
+// Every fault class as the loop meets it, injected mid-run while the wall pushes: the loop
+// faults with the right cause and the device is left with zero force.
+TEST_P(Conformance, EveryFaultClassFaultsTheLoopWithZeroForce) {
+  const std::pair<sim::PeerFault, loop::FaultCause> faults[] = {
+      {sim::PeerFault::kDeviceFault, loop::FaultCause::kDeviceReported},
+      {sim::PeerFault::kTransportFault, loop::FaultCause::kTransportRead},
+      {sim::PeerFault::kStopAnswering, loop::FaultCause::kStaleData},
+      {sim::PeerFault::kSkipSequence, loop::FaultCause::kSequenceGap}};
+  for (const auto& [fault, cause] : faults) {
+    SCOPED_TRACE(std::string(sim::to_string(fault)));
+    // Start outside, pushed in by a constant force, so the wall pushes when the fault strikes.
+    Rig rig(load(GetParam(), {"device.sim.initial_position=-0.0005",
+                              "device.sim.operator={kind: force, force: {shape: constant, "
+                              "value: 3}}"}));
+    rig.device.configure();
+    rig.device.enable();
+    control::Controller controller(control::make_control_law(rig.cfg));
+    loop::LoopOptions o;
+    o.realtime = false;
+    o.period_ns = std::llround(rig.cfg.loop.sample_period_s() * 1e9);
+    o.max_ticks = 2'000'000;  // ends by the fault long before
+    o.sequence_gap_fault = 1;
+    o.sequence_modulus = rig.device.info().sequence_modulus;
+    loop::ServoLoop servo(rig.device, controller, nullptr, o);
+    const std::atomic<bool> stop{false};
+    loop::LoopResult r;
+    std::thread t([&] { r = servo.run(stop); });
+    while (servo.ticks_done() < 500) std::this_thread::yield();
+    const bool expressible = rig.peer().inject(fault);
+    if (!expressible) rig.peer().inject(sim::PeerFault::kTransportFault);  // end the run
+    t.join();
+    if (!expressible) GTEST_SKIP() << GetParam().driver << ": this transport cannot express it";
+    EXPECT_EQ(r.fault.cause, cause) << loop::describe(r.fault);
+    EXPECT_GT(r.contact_ticks, 100u) << "the wall was pushing when the fault struck";
+    rig.settle();
+    EXPECT_EQ(rig.peer().applied_force(), 0.0);
+    EXPECT_EQ(rig.device.last_command(), 0.0);
+    rig.device.disable();
+    rig.settle();
+    EXPECT_FALSE(rig.peer().output_on());
+  }
+}
+
+// Thousands of ticks through read/write, for each shape of configuration the controller and
+// the device support, and through the fault path: not one allocation on the loop's thread.
+TEST_P(Conformance, ReadAndWriteNeverAllocate) {
+  const std::vector<std::vector<std::string>> shapes = {
+      {},
+      {"wall.coupling={numerator: [0.1, -0.0752, 0.0016, -0.0101], "
+       "denominator: [1, -1.8407, 0.8444, -0.0037]}",
+       "safety.gate=warn"},
+      {"wall.delay_samples=7", "wall.discretization=tustin"},
+      {"device.sim.noise_counts=2", "device.sim.seed=5", "wall.no_pull=true"},
+  };
+  for (const auto& shape : shapes) {
+    SCOPED_TRACE(shape.empty() ? "default" : shape.front());
+    Rig rig(load(GetParam(), shape));
+    rig.device.configure();
+    rig.device.enable();
+    std::uint64_t allocations = 1;
+    const loop::LoopResult r = run_loop(rig, 5000, {}, &allocations);
+    EXPECT_EQ(allocations, 0u) << "allocations on the RT path over " << r.ticks << " ticks";
+    EXPECT_EQ(r.fault.cause, loop::FaultCause::kNone) << loop::describe(r.fault);
+    EXPECT_GT(r.contact_ticks, 0u) << "the demo presses into the wall";
+  }
+  Rig rig(load(GetParam()));
+  rig.device.configure();
+  rig.device.enable();
+  run_loop(rig, 100);
+  ASSERT_TRUE(rig.peer().inject(sim::PeerFault::kDeviceFault));
+  std::uint64_t allocations = 1;
+  const loop::LoopResult r = run_loop(rig, 100, {}, &allocations);
+  EXPECT_EQ(allocations, 0u) << "on the fault path";
+  EXPECT_EQ(r.fault.cause, loop::FaultCause::kDeviceReported);
+}
+
+std::string case_name(const ::testing::TestParamInfo<Case>& p) {
+  return std::string(p.param.driver) + "_" + std::to_string(p.index);
+}
+
+INSTANTIATE_TEST_SUITE_P(Drivers, Conformance, ::testing::ValuesIn(kCases), case_name);
+
+TEST(Conformance, EveryRegisteredDriverIsCovered) {
+  for (const DriverEntry& d : registered_drivers()) {
+    bool covered = false;
+    for (const Case& c : kCases) covered = covered || d.name == c.driver;
+    EXPECT_TRUE(covered) << "driver '" << d.name << "' has no conformance case";
+  }
+}
+
+}  // namespace
+}  // namespace hapticd::drivers
