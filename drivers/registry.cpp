@@ -4,13 +4,31 @@
 #include <string>
 
 #include "drivers/sim/sim_driver.h"
+#if HAPTICD_WITH_HID
+#include "drivers/hid/hid_driver.h"
+#endif
+#if HAPTICD_WITH_CAN
+#include "drivers/can/can_driver.h"
+#endif
+#if HAPTICD_WITH_GPIO
+#include "drivers/gpio/gpio_driver.h"
+#endif
 
 namespace hapticd::drivers {
 namespace {
 
 // One line per driver: the registration.
-const std::array kDrivers{
-    sim_driver::sim_driver(),
+const std::array kDrivers {
+  sim_driver::sim_driver(),
+#if HAPTICD_WITH_HID
+      hid::hid_driver(),
+#endif
+#if HAPTICD_WITH_CAN
+      can::can_driver(),
+#endif
+#if HAPTICD_WITH_GPIO
+      gpio::gpio_driver(),
+#endif
 };
 
 }  // namespace

@@ -27,8 +27,18 @@ struct Case {
   const char* config;  // relative to the source tree
 };
 
+// Each driver's example configurations, run against its peer.
 const Case kCases[] = {
     {"sim", "config/sim.yaml"},
+#if HAPTICD_WITH_HID
+    {"hid", "config/hid-report.yaml"}, {"hid", "config/hid-pid.yaml"},
+#endif
+#if HAPTICD_WITH_CAN
+    {"can", "config/can-cia402.yaml"}, {"can", "config/can-odrive.yaml"},
+#endif
+#if HAPTICD_WITH_GPIO
+    {"gpio", "config/gpio.yaml"},
+#endif
 };
 
 config::Config load(const Case& c, const std::vector<std::string>& sets = {}) {
