@@ -7,6 +7,7 @@
 
 #include <memory>
 #include <span>
+#include <string>
 #include <string_view>
 
 #include "config/config.h"
@@ -37,6 +38,13 @@ struct DriverEntry {
   // Not RT-safe. The device wired to its loopback peer, unconfigured. Throws
   // config::ConfigError for a plant (device.sim) that cannot be simulated.
   Loopback (*make_loopback)(const config::Config& cfg) = nullptr;
+  // Not RT-safe. The same peer speaking on a real kernel endpoint instead of a socketpair: a
+  // USB HID gadget's /dev/hidgN, a CAN interface, a gpio-sim chip (the format of `endpoint`
+  // is the driver's, documented in docs/drivers/<name>.md). `hapticd peer` runs it, so a
+  // driver can be tried against a simulated device through the kernel's own interfaces.
+  // Null for a driver without one (sim). Throws DeviceError when the endpoint cannot be used.
+  std::unique_ptr<sim::LoopbackPeer> (*make_peer_on)(const config::Config& cfg,
+                                                     const std::string& endpoint) = nullptr;
 };
 
 // Every driver of this build, the sim first.

@@ -13,6 +13,7 @@
 #include "service/check_command.h"
 #include "service/exit_codes.h"
 #include "service/export_command.h"
+#include "service/peer_command.h"
 #include "service/result_output.h"
 #include "service/run_command.h"
 #include "service/stop_signals.h"
@@ -108,6 +109,21 @@ int main(int argc, char** argv) {
   exp->add_option("log", export_log, "Tick log written by `hapticd run --log`")->required();
   exp->add_option("--out", export_out, "CSV file to write (default: stdout)");
 
+  hapticd::service::PeerOptions peer_opts;
+  std::optional<double> peer_duration;
+  CLI::App* peer = app.add_subcommand(
+      "peer",
+      "Run the configured driver's simulated device (the plant of device.sim) on a real kernel "
+      "endpoint - a USB HID gadget's /dev/hidgN, a CAN interface, a gpio-sim chip - until "
+      "SIGINT/SIGTERM or --duration, so `hapticd run` (or another master) can drive it through "
+      "the kernel as it would hardware.");
+  add_config_options(peer, peer_opts.config);
+  peer->add_option("--endpoint", peer_opts.endpoint,
+                   "Where the device lives; the driver says what it takes (docs/drivers/)")
+      ->required();
+  peer->add_option("--duration", peer_duration, "Stop after this many seconds")
+      ->check(CLI::Validator(check_duration, "SECONDS"));
+
   // Events (gate verdict, faults, lifecycle) go to stderr; stdout carries only the results a
   // script reads (the check table or JSON, the run summary).
   spdlog::set_default_logger(spdlog::stderr_color_mt("hapticd"));
@@ -119,8 +135,9 @@ int main(int argc, char** argv) {
     return rc == 0 ? hapticd::kExitOk : hapticd::kExitUsage;
   }
 
-  // Only `run` enables output and supervises the stop signals; the others die of them.
-  if (!*run) hapticd::service::release_stop_signals();
+  // Only `run` and `peer` supervise the stop signals; the others die of them (they enable
+  // nothing).
+  if (!*run && !*peer) hapticd::service::release_stop_signals();
   try {
     if (*check) return hapticd::service::check_command(check_cfg, check_json);
     if (*run) {
@@ -129,6 +146,11 @@ int main(int argc, char** argv) {
       return hapticd::service::run_command(run_opts, signals);
     }
     if (*verify) return hapticd::service::verify_command(verify_cfg, verify_json);
+    if (*peer) {
+      peer_opts.duration_s = peer_duration;
+      hapticd::service::SignalWatch signals;
+      return hapticd::service::peer_command(peer_opts, signals);
+    }
     if (*exp) return hapticd::service::export_command(export_log, export_out);
   } catch (const hapticd::config::ConfigError& e) {
     for (const std::string& m : e.messages()) std::cerr << "hapticd: " << m << "\n";
