@@ -68,8 +68,11 @@ std::optional<PwmApplied> PwmSim::wait_applied(unsigned channel, std::uint64_t a
     const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
         deadline - std::chrono::steady_clock::now());
     if (left.count() <= 0) return std::nullopt;
+    // No lost wake-up: sysfs compares the notify count with the one at our last read.
     pollfd pfd{fd.get(), POLLPRI | POLLERR, 0};
-    if (::poll(&pfd, 1, static_cast<int>(left.count())) < 0) throw_errno("poll " + path);
+    const int ready = ::poll(&pfd, 1, static_cast<int>(left.count()));
+    if (ready < 0) throw_errno("poll " + path);
+    if (ready == 0) return std::nullopt;  // not notified: the module did not sysfs_notify()
   }
 }
 
