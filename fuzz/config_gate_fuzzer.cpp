@@ -5,13 +5,18 @@
 #include <string_view>
 
 #include "config/config_loader.h"
+#include "drivers/registry.h"
 #include "support/config_oracle.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string_view yaml(reinterpret_cast<const char*>(data), size);
   // The base directory only resolves device.sim.operator.log; loading never opens that file.
+  // Every registered driver reads its own section, as in the daemon.
   hapticd::fuzz::check_load_then_gate(
-      [&] { return hapticd::config::load_config_text(yaml, "fuzz.yaml", {}, "/fuzz"); },
+      [&] {
+        return hapticd::config::load_config_text(yaml, "fuzz.yaml", {}, "/fuzz",
+                                                 hapticd::drivers::driver_schemas());
+      },
       {"fuzz.yaml:"});
   return 0;
 }

@@ -42,6 +42,8 @@ std::vector<tel::TickRecord> records(std::size_t n) {
     r.force_computed = r.penetration > 0.0 ? 2000.0 * r.penetration : 0.0;
     r.force_commanded = -r.force_computed;
     r.flags = r.penetration > 0.0 ? tel::kFlagContact : 0u;
+    r.sample_time_ns = r.scheduled_ns - 20000;
+    r.sequence = static_cast<std::uint32_t>(i + 1);
   }
   return out;
 }
@@ -87,6 +89,7 @@ void expect_repaired(const std::string& name, const Bytes& valid, std::size_t at
 // On a valid log the repair changes nothing; every CRC it covers and every payload byte
 // it protects, once broken, is repaired.
 void check_fixer(const std::string& name, const Bytes& valid) {
+  const std::size_t rsize = le32(valid, 8) == 1 ? tel::kRecordSizeV1 : tel::kRecordSize;
   const long blocks = blocks_read(valid);
   expect(blocks >= 0, name + ": the writer's log must read back");
   Bytes copy = valid;
@@ -100,8 +103,8 @@ void check_fixer(const std::string& name, const Bytes& valid) {
     const std::size_t n = le32(valid, offset + 4);
     expect_repaired(name, valid, offset + tel::kBlockCrcOffset, blocks);
     expect_repaired(name, valid, offset + 8, blocks);  // first_tick, under the block CRC
-    if (n > 0) expect_repaired(name, valid, offset + tel::block_size(n) - 1, blocks);
-    offset += tel::block_size(n);
+    if (n > 0) expect_repaired(name, valid, offset + tel::block_size(n, rsize) - 1, blocks);
+    offset += tel::block_size(n, rsize);
   }
 }
 
@@ -117,6 +120,29 @@ fs::path write_seed(const fs::path& dir, const std::string& name, const std::str
   tel::write_log_file(path, header, records(n), per_block);
   check_fixer(name, read_bytes(path));
   return path;
+}
+
+// The same log in format version 1, which the reader still accepts: 72-byte records (the
+// first 72 bytes of version 2's), CRCs recomputed.
+Bytes to_version1(const Bytes& v2) {
+  const std::size_t header = tel::file_header_size(le32(v2, 36));
+  Bytes v1(v2.begin(), v2.begin() + static_cast<std::ptrdiff_t>(header));
+  const std::uint32_t version = 1, record_size = tel::kRecordSizeV1;
+  std::memcpy(v1.data() + 8, &version, sizeof version);
+  std::memcpy(v1.data() + 12, &record_size, sizeof record_size);
+  for (std::size_t at = header; at < v2.size();) {
+    const std::size_t n = le32(v2, at + 4);
+    v1.insert(v1.end(), v2.begin() + static_cast<std::ptrdiff_t>(at),
+              v2.begin() + static_cast<std::ptrdiff_t>(at + tel::kBlockHeaderSize));
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto record = v2.begin() + static_cast<std::ptrdiff_t>(at + tel::kBlockHeaderSize +
+                                                                   i * tel::kRecordSize);
+      v1.insert(v1.end(), record, record + tel::kRecordSizeV1);
+    }
+    at += tel::block_size(n);
+  }
+  hapticd::fuzz::fix_log_crcs(v1);
+  return v1;
 }
 
 }  // namespace
@@ -136,5 +162,9 @@ int main(int argc, char** argv) {
   const Bytes full = read_bytes(three);
   write_bytes(dir / "cut_in_block.hlog", Bytes(full.begin(), full.end() - 30));
   write_bytes(dir / "cut_in_header.hlog", Bytes(full.begin(), full.begin() + 20));
+  const Bytes v1 = to_version1(full);
+  expect(blocks_read(v1) == blocks_read(full), "v1_three_blocks: a version 1 log must read back");
+  check_fixer("v1_three_blocks", v1);
+  write_bytes(dir / "v1_three_blocks.hlog", v1);
   return g_failures == 0 ? 0 : 1;
 }

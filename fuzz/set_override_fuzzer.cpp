@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "config/config_loader.h"
+#include "drivers/registry.h"
 #include "support/config_oracle.h"
 
 namespace {
@@ -37,10 +38,11 @@ std::vector<config::Override> parse_lines(std::string_view input) {
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::vector<config::Override> overrides =
       parse_lines({reinterpret_cast<const char*>(data), size});
-  fuzz::check_load_then_gate([&] { return config::load_embedded_default(overrides); },
+  const config::DriverSchemas& drivers = hapticd::drivers::driver_schemas();
+  fuzz::check_load_then_gate([&] { return config::load_embedded_default(overrides, drivers); },
                              {"config/sim.yaml (embedded):", "--set "});
   fuzz::check_load_then_gate(
-      [&] { return config::load_config_text("", "empty.yaml", overrides, "/fuzz"); },
+      [&] { return config::load_config_text("", "empty.yaml", overrides, "/fuzz", drivers); },
       {"empty.yaml:", "--set "});
   return 0;
 }

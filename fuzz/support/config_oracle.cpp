@@ -7,7 +7,7 @@
 #include <unordered_set>
 
 #include "control/control_law.h"
-#include "drivers/transport_delay.h"
+#include "drivers/registry.h"
 #include "gate/gate.h"
 #include "gate/gate_report_format.h"
 #include "support/check.h"
@@ -98,8 +98,8 @@ void check_config_error(const config::ConfigError& e,
 
 void check_gate(const config::Config& cfg) {
   if (!first_time(cfg)) return;
-  // Issue 8 moves the declared delay into the driver registry; this line follows it there.
-  const int device_delay = declared_transport_delay(cfg.device.driver);
+  // The delay the driver declares from its own settings, as `check`, `verify` and `run` take it.
+  const int device_delay = drivers::find_driver(cfg.device.driver).declared_delay(cfg);
   const gate::GateReport r = gate::evaluate_gate(cfg, device_delay);
   // `check` renders every verdict, passing or not.
   require(!gate::gate_to_json(r).dump().empty(), "empty JSON gate report");

@@ -10,6 +10,7 @@
 
 #include "config/config.h"
 #include "config/config_loader.h"
+#include "control/derived_check.h"
 
 namespace hapticd::fuzz {
 
@@ -24,13 +25,16 @@ void check_config_error(const config::ConfigError& e,
 // A configuration already checked in this process is skipped (see first_time).
 void check_gate(const config::Config& cfg);
 
-// load() either returns a Config, which goes through check_gate, or throws a ConfigError,
-// which goes through check_config_error.
+// load() either returns a Config, which is checked as the daemon checks one after loading
+// (service/config_source.cpp: the quantities derived from several keys must be finite) and
+// then goes through check_gate, or throws a ConfigError, which goes through
+// check_config_error.
 template <typename Load>
 void check_load_then_gate(Load&& load, std::initializer_list<std::string_view> prefixes) {
   config::Config cfg;
   try {
     cfg = load();
+    control::check_derived_quantities(cfg);
   } catch (const config::ConfigError& e) {
     check_config_error(e, prefixes);
     return;

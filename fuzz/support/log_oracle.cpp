@@ -13,6 +13,8 @@ namespace {
 
 using namespace hapticd::telemetry;
 
+constexpr std::size_t kVersionOffset = 8;
+constexpr std::size_t kRecordSizeOffset = 12;
 constexpr std::size_t kConfigLenOffset = 36;
 constexpr std::size_t kRecordCountOffset = 4;
 
@@ -30,34 +32,47 @@ std::uint32_t crc_of(std::span<const std::uint8_t> bytes) {
   return crc32_update(0, std::as_bytes(bytes));
 }
 
-// Checks the accepted block at `offset`: present, intact (its CRC recomputed here), and
-// returned as exactly its record bytes from c.records[records...]. Returns its size.
+// Whether record r is the rsize bytes at `at`, zero-extended (version 1 records are shorter).
+bool record_is(const TickRecord& r, const std::byte* at, std::size_t rsize) {
+  const auto* bytes = reinterpret_cast<const std::byte*>(&r);
+  for (std::size_t i = rsize; i < sizeof r; ++i) {
+    if (bytes[i] != std::byte{0}) return false;
+  }
+  return std::memcmp(bytes, at, rsize) == 0;
+}
+
+// Checks the accepted block at `offset`, of records of rsize bytes: present, intact (its CRC
+// recomputed here), and returned as exactly its records from c.records[records...]. Returns
+// its size.
 std::size_t check_block_at(std::span<const std::uint8_t> input, std::size_t offset,
-                           const LogContents& c, std::size_t& records, std::uint64_t& dropped) {
+                           std::size_t rsize, const LogContents& c, std::size_t& records,
+                           std::uint64_t& dropped) {
   const std::string at = std::to_string(offset);
   require(offset <= input.size() && input.size() - offset >= kBlockHeaderSize,
           "accepted block past the end of the input", at);
   const auto block = std::as_bytes(input.subspan(offset));
   const BlockHeader h = decode_block_header(block);
   require(std::memcmp(block.data(), kBlockMagic.data(), kBlockMagic.size()) == 0 &&
-              h.record_count <= kMaxBlockRecords && block.size() >= block_size(h.record_count),
+              h.record_count <= kMaxBlockRecords &&
+              block.size() >= block_size(h.record_count, rsize),
           "accepted block without its magic, or with more records than it holds", at);
-  const auto payload = block.subspan(kBlockHeaderSize, std::size_t{h.record_count} * kRecordSize);
+  const auto payload = block.subspan(kBlockHeaderSize, std::size_t{h.record_count} * rsize);
   require(crc32_update(crc32_update(0, block.first(kBlockCrcOffset)), payload) == h.crc,
           "accepted block whose CRC does not match", at);
-  require(records + h.record_count <= c.records.size() &&
-              (payload.empty() ||
-               std::memcmp(c.records.data() + records, payload.data(), payload.size()) == 0),
-          "returned records differ from the bytes of their block", at);
+  require(records + h.record_count <= c.records.size(), "fewer records returned than accepted", at);
+  for (std::size_t i = 0; i < h.record_count; ++i) {
+    require(record_is(c.records[records + i], payload.data() + i * rsize, rsize),
+            "a returned record differs from its bytes in the block", at);
+  }
   records += h.record_count;
   dropped += h.dropped_before;
-  return block_size(h.record_count);
+  return block_size(h.record_count, rsize);
 }
 
 // Walks the input in file order as the reader reports it: accepted blocks, with the skipped
 // stretches between them, each skipped stretch followed by a block. Returns where it ends.
 std::size_t check_file_order(std::span<const std::uint8_t> input, const LogContents& c,
-                             std::size_t offset) {
+                             std::size_t offset, std::size_t rsize) {
   std::size_t records = 0;
   std::size_t blocks = 0;
   std::size_t next_skip = 0;
@@ -75,7 +90,7 @@ std::size_t check_file_order(std::span<const std::uint8_t> input, const LogConte
     }
     require(blocks < c.complete_blocks, "skipped stretch away from the end of the previous block",
             std::to_string(offset));
-    offset += check_block_at(input, offset, c, records, dropped);
+    offset += check_block_at(input, offset, rsize, c, records, dropped);
     ++blocks;
     after_skip = false;
   }
@@ -103,7 +118,12 @@ void check_log_read(std::span<const std::uint8_t> input) {
   require(c.trailing_bytes_ignored <= input.size(), "more bytes ignored than read");
   require(c.trailing_reason.empty() == (c.trailing_bytes_ignored == 0),
           "a reason must be given exactly when bytes are ignored", c.trailing_reason);
-  const std::size_t end = check_file_order(input, c, file_header_size(c.header.config_text.size()));
+  // The header was accepted, so its record_size field is the one the blocks use.
+  const std::size_t rsize = load_u32(input, kRecordSizeOffset);
+  require(rsize > 0 && rsize <= sizeof(TickRecord), "accepted record size out of range",
+          std::to_string(rsize));
+  const std::size_t end =
+      check_file_order(input, c, file_header_size(c.header.config_text.size()), rsize);
   require(end + c.trailing_bytes_ignored == input.size(),
           "header, blocks, skipped stretches and ignored tail do not add up to the input");
 }
@@ -113,13 +133,15 @@ std::size_t fix_log_crcs(std::span<std::uint8_t> bytes) {
   const std::size_t config_len = load_u32(bytes, kConfigLenOffset);
   if (config_len > bytes.size() - file_header_size(0)) return 0;
   const std::size_t header_crc_at = kFileHeaderFixedSize + config_len;
+  // The version decides the record size, as in the reader (version 1: 72 bytes).
+  const std::size_t rsize = load_u32(bytes, kVersionOffset) == 1 ? kRecordSizeV1 : kRecordSize;
   store_u32(bytes, header_crc_at, crc_of(bytes.first(header_crc_at)));
   std::size_t fixed = 1;
   std::size_t offset = header_crc_at + kCrcSize;
   while (bytes.size() - offset >= kBlockHeaderSize) {
     const std::uint32_t count = load_u32(bytes, offset + kRecordCountOffset);
-    if (count > kMaxBlockRecords || bytes.size() - offset < block_size(count)) break;
-    const auto block = bytes.subspan(offset, block_size(count));
+    if (count > kMaxBlockRecords || bytes.size() - offset < block_size(count, rsize)) break;
+    const auto block = bytes.subspan(offset, block_size(count, rsize));
     const std::uint32_t crc = crc32_update(crc_of(block.first(kBlockCrcOffset)),
                                            std::as_bytes(block.subspan(kBlockHeaderSize)));
     store_u32(bytes, offset + kBlockCrcOffset, crc);

@@ -12,7 +12,8 @@ namespace hapticd::fuzz {
 // input has no storage, like an empty file). A LogFormatError must name the file; anything
 // else thrown escapes. A successful read must account for every input byte in file order
 // (header, accepted blocks, the stretches it skipped to resynchronise, the ignored tail),
-// accept only blocks whose CRC holds, and return exactly the record bytes of those blocks.
+// accept only blocks whose CRC holds, and return exactly the records of those blocks (a
+// version 1 record zero-extended).
 void check_log_read(std::span<const std::uint8_t> input);
 
 // Walks bytes as a tick log as far as its lengths allow and rewrites the header CRC and each
