@@ -13,7 +13,9 @@
 #   tools/fuzz.sh minimize TARGET INPUT NAME
 #                                        shrinks a crash input into fuzz/regressions/TARGET/NAME,
 #                                        replayed by every test run from then on
-# HAPTICD_FUZZ_BUILD overrides the build directory (default build-fuzz).
+# HAPTICD_FUZZ_BUILD overrides the build directory (default build-fuzz); HAPTICD_FUZZ_TIMEOUT
+# the seconds after which one input is a finding in long runs (default 5; on a machine busy
+# with other work a starved input looks slow, so raise it there and replay what it finds).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${HAPTICD_FUZZ_BUILD:-build-fuzz}
@@ -60,8 +62,8 @@ long_run() {
   local end=$((SECONDS + seconds)) found
   while ((SECONDS < end)); do
     found=$(find "$work/findings" -type f | wc -l)
-    nice -n 10 "$build/fuzz/${t}_fuzzer" -timeout=5 -rss_limit_mb=2048 -print_funcs=0 \
-      -max_total_time=$((end - SECONDS)) -dict="fuzz/dict/${dict[$t]}.dict" \
+    nice -n 10 "$build/fuzz/${t}_fuzzer" -timeout="${HAPTICD_FUZZ_TIMEOUT:-5}" -rss_limit_mb=2048 \
+      -print_funcs=0 -max_total_time=$((end - SECONDS)) -dict="fuzz/dict/${dict[$t]}.dict" \
       -artifact_prefix="$work/findings/" -print_final_stats=1 "$work/corpus" "${dirs[@]}" \
       >>"$work/fuzz.log" 2>&1 && break
     # No new crash input: it failed to start, or crashed again on one it already saved.
