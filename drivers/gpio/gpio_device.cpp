@@ -1,0 +1,201 @@
+#include "drivers/gpio/gpio_device.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+namespace hapticd::drivers::gpio {
+namespace {
+
+constexpr std::uint32_t kDetailMask = 0x00FF'FFFFu;
+
+DecoderConfig decoder_config(const GpioSettings& s) {
+  DecoderConfig c;
+  c.start_count = s.start_count;
+  c.has_index = s.line_index.has_value();
+  c.index_count = s.index_count;
+  c.max_edge_rate_hz = s.max_edge_rate_hz;
+  return c;
+}
+
+std::string errno_text(std::uint32_t detail) {
+  return std::string(std::strerror(static_cast<int>(detail))) + " (errno " +
+         std::to_string(detail) + ")";
+}
+
+}  // namespace
+
+std::uint32_t fault_code(FaultKind kind, std::uint64_t detail) noexcept {
+  return (static_cast<std::uint32_t>(kind) << 24) |
+         static_cast<std::uint32_t>(std::min<std::uint64_t>(detail, kDetailMask));
+}
+
+GpioDevice::GpioDevice(const GpioSettings& settings, double max_force,
+                       std::unique_ptr<GpioTransport> transport, int declared_delay)
+    : s_(settings),
+      max_force_(max_force),
+      transport_(std::move(transport)),
+      declared_delay_(declared_delay),
+      decoder_(decoder_config(settings)),
+      direction_level_(settings.direction_positive_high) {}
+
+std::uint8_t GpioDevice::logical_levels(std::uint8_t raw) const noexcept {
+  const std::uint8_t enc = wire::kLevelA | wire::kLevelB | wire::kLevelIndex;
+  std::uint8_t l = s_.encoder_active_low ? static_cast<std::uint8_t>(raw ^ enc) : raw;
+  if (s_.fault_active_low) l ^= wire::kLevelFault;
+  return l;
+}
+
+bool GpioDevice::logical(const Edge& e) const noexcept {
+  return e.line == Line::kFault ? e.level != s_.fault_active_low : e.level != s_.encoder_active_low;
+}
+
+OutputState GpioDevice::output(std::uint64_t duty_ns) const noexcept {
+  OutputState o;
+  o.duty_ns = duty_ns;
+  o.period_ns = s_.pwm_period_ns;
+  o.pwm_enabled = pwm_enabled_;
+  o.direction_level = direction_level_;
+  o.inversed = s_.pwm_inversed;
+  return o;
+}
+
+DeviceInfo GpioDevice::on_configure() {
+  pwm_enabled_ = s_.on_disable == DisableMode::kBrake;
+  direction_level_ = s_.direction_positive_high;
+  const std::uint8_t levels = logical_levels(transport_->open(output(0)));
+  decoder_.reset(levels);
+  fault_line_ = s_.line_fault && (levels & wire::kLevelFault) != 0;
+  if (fault_line_) {
+    throw DeviceError("gpio: the motor driver reports a fault (line " +
+                      std::to_string(*s_.line_fault) + " active) before anything was enabled");
+  }
+  DeviceInfo info;
+  info.description = transport_->describe();
+  info.transport_delay_samples = declared_delay_;
+  info.sequence_modulus = 0;  // GPIO samples carry no sequence of their own
+  return info;
+}
+
+void GpioDevice::on_enable() {
+  pwm_enabled_ = true;
+  if (const int e = transport_->write_output(output(0))) {
+    throw DeviceError(std::string("gpio: cannot enable the PWM: ") + std::strerror(e));
+  }
+}
+
+void GpioDevice::on_disable() noexcept {
+  pwm_enabled_ = s_.on_disable == DisableMode::kBrake;
+  transport_->write_output(output(0));  // best effort: the transport may be what failed
+}
+
+void GpioDevice::on_clear_fault() {
+  const std::uint8_t levels = logical_levels(transport_->read_levels());
+  if (s_.line_fault && (levels & wire::kLevelFault) != 0) {
+    throw DeviceError("gpio: the motor driver still reports a fault (line " +
+                      std::to_string(*s_.line_fault) + " active)");
+  }
+  fault_line_ = false;
+  // The count is kept (it may be off by the edges that were missed: re-home on the index);
+  // the counters start over so the tolerance applies afresh.
+  const std::int64_t count = decoder_.count();
+  DecoderConfig keep = decoder_config(s_);
+  keep.start_count = count;
+  decoder_ = QuadratureDecoder(keep);
+  decoder_.reset(levels);
+}
+
+void GpioDevice::on_close() noexcept { transport_->close(); }
+
+IoStatus GpioDevice::check_faults() noexcept {
+  if (fault_line_) {
+    set_fault_code(fault_code(FaultKind::kFaultLine, 0));
+    return IoStatus::kDeviceFault;
+  }
+  if (decoder_.rate_exceeded()) {
+    set_fault_code(fault_code(
+        FaultKind::kEdgeRate,
+        static_cast<std::uint64_t>(std::min(decoder_.exceeded_rate_hz(), double{kDetailMask}))));
+    return IoStatus::kDeviceFault;
+  }
+  if (decoder_.missed_edges() > s_.missed_edge_fault) {
+    set_fault_code(fault_code(FaultKind::kMissedEdges, decoder_.missed_edges()));
+    return IoStatus::kDeviceFault;
+  }
+  return IoStatus::kOk;
+}
+
+// RT-safe: called every tick.
+IoStatus GpioDevice::on_read(PositionSample& out) noexcept {
+  const EdgeRead r = transport_->read_edges(edges_);
+  const std::uint64_t hits_before = decoder_.index_hits();
+  const std::uint64_t ab_before = decoder_.edges();
+  for (std::size_t i = 0; i < r.count; ++i) {
+    Edge e = edges_[i];
+    e.level = logical(e);
+    if (e.line == Line::kFault) {
+      fault_line_ = s_.line_fault && e.level;
+    } else {
+      decoder_.apply(e);
+    }
+  }
+  decoder_.add_lost(r.lost);
+  if (r.error != 0) {
+    set_fault_code(fault_code(FaultKind::kReadError, static_cast<std::uint64_t>(r.error)));
+    return IoStatus::kTransportFault;
+  }
+  if (const IoStatus f = check_faults(); f != IoStatus::kOk) return f;
+  const bool moved = decoder_.edges() != ab_before;
+  if (!moved && r.complete_until_ns == 0 && r.count == 0) return IoStatus::kNoNewData;
+  out.position = static_cast<double>(decoder_.count()) / s_.counts_per_unit;
+  out.time_ns = moved ? decoder_.last_edge_ns() : r.complete_until_ns;
+  out.flags = kSampleHasTime;
+  out.status = (moved ? 0u : kStatusNoEdge) |
+               (decoder_.index_hits() != hits_before ? kStatusIndex : 0u) |
+               (decoder_.missed_edges() != 0 ? kStatusMissedEdges : 0u);
+  return IoStatus::kOk;
+}
+
+// RT-safe: called every tick.
+IoStatus GpioDevice::on_write(double force) noexcept {
+  const double fraction = std::min(std::abs(force) / max_force_, 1.0);
+  const auto duty =
+      static_cast<std::uint64_t>(std::llround(fraction * static_cast<double>(s_.pwm_period_ns)));
+  // Zero keeps the last direction: no needless toggling of the line at rest.
+  if (force != 0.0) direction_level_ = (force > 0.0) == s_.direction_positive_high;
+  if (const int e = transport_->write_output(output(duty))) {
+    set_fault_code(fault_code(FaultKind::kWriteError, static_cast<std::uint64_t>(e)));
+    return IoStatus::kTransportFault;
+  }
+  return IoStatus::kOk;
+}
+
+std::string GpioDevice::describe(const DeviceFault& fault) const {
+  const auto kind = static_cast<FaultKind>(fault.code >> 24);
+  const std::uint32_t detail = fault.code & kDetailMask;
+  const QuadratureDecoder& d = decoder_;
+  switch (kind) {
+    case FaultKind::kReadError:
+      return "gpio: reading the encoder's edge events failed: " + errno_text(detail);
+    case FaultKind::kWriteError:
+      return "gpio: writing the PWM duty or the direction line failed: " + errno_text(detail);
+    case FaultKind::kFaultLine:
+      return "gpio: the motor driver's fault line (line " +
+             std::to_string(s_.line_fault.value_or(0)) + ") went active";
+    case FaultKind::kMissedEdges:
+      return "gpio: " + std::to_string(detail) +
+             " encoder edges missed, more than device.gpio.missed_edge_fault " +
+             std::to_string(s_.missed_edge_fault) + " (" + std::to_string(d.repeated_levels()) +
+             " repeated levels, " + std::to_string(d.illegal_transitions()) +
+             " illegal transitions, " + std::to_string(d.out_of_order()) + " out of order, " +
+             std::to_string(d.lost()) + " lost by the kernel): the count is no longer trusted";
+    case FaultKind::kEdgeRate:
+      return "gpio: encoder edges at " + std::to_string(detail) +
+             " per second, faster than device.gpio.max_edge_rate " +
+             std::to_string(static_cast<long long>(s_.max_edge_rate_hz)) +
+             " (noise on the lines, or a motion beyond what the encoder and kernel can follow)";
+  }
+  return "gpio: fault code " + std::to_string(fault.code);
+}
+
+}  // namespace hapticd::drivers::gpio

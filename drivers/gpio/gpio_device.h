@@ -1,0 +1,83 @@
+// The GPIO Device (DESIGN.md §6): a quadrature encoder on two GPIO lines decoded x4 from the
+// kernel's timestamped edges, an optional index line that re-zeroes the count, an optional
+// motor-driver fault line, and a motor driver taking a sysfs PWM duty plus a direction line:
+// duty = |u| / max_force * period. The transport (kernel or loopback peer) is behind
+// gpio_transport.h, so this code is the same for both.
+//
+// A sample's time is the last A/B edge's kernel timestamp when the tick brought one; when it
+// brought none the shaft has not moved and the position is still current: the time is then
+// the moment up to which the edge stream is complete (the read time), and the status bit
+// kStatusNoEdge says so.
+#pragma once
+
+#include <array>
+#include <memory>
+
+#include "drivers/device.h"
+#include "drivers/gpio/gpio_settings.h"
+#include "drivers/gpio/gpio_transport.h"
+#include "drivers/gpio/quadrature_decoder.h"
+
+namespace hapticd::drivers::gpio {
+
+// PositionSample::status bits.
+enum GpioStatus : std::uint32_t {
+  kStatusNoEdge = 1u << 0,       // no A/B edge this tick: time_ns is the read time
+  kStatusIndex = 1u << 1,        // the index re-zeroed the count this tick
+  kStatusMissedEdges = 1u << 2,  // edges have been missed (within missed_edge_fault)
+  kStatusFaultLine = 1u << 3,    // the motor driver's fault line is active
+};
+
+// Fault codes: the kind in the top byte, a detail (errno, count, rate) below.
+enum class FaultKind : std::uint8_t {
+  kReadError = 1,    // reading edge events failed (detail: errno)
+  kWriteError = 2,   // writing the PWM or the direction line failed (detail: errno)
+  kFaultLine = 3,    // the motor driver's fault line went active
+  kMissedEdges = 4,  // more missed edges than missed_edge_fault (detail: how many)
+  kEdgeRate = 5,     // edges faster than max_edge_rate (detail: the rate seen, edges/s)
+};
+std::uint32_t fault_code(FaultKind kind, std::uint64_t detail) noexcept;
+
+class GpioDevice final : public Device {
+ public:
+  static constexpr std::size_t kEdgeBuffer = 256;  // edges one tick can take in
+
+  GpioDevice(const GpioSettings& settings, double max_force,
+             std::unique_ptr<GpioTransport> transport, int declared_delay);
+
+  std::string_view driver_name() const noexcept override { return "gpio"; }
+  void emergency_stop() noexcept override { transport_->emergency_stop(); }
+
+  // Any thread, for tests and the summary (plain reads of RT-owned counters: approximate
+  // while the loop runs).
+  const QuadratureDecoder& decoder() const noexcept { return decoder_; }
+  std::uint64_t lost_edges() const noexcept { return decoder_.lost(); }
+
+ protected:
+  DeviceInfo on_configure() override;
+  void on_enable() override;
+  void on_disable() noexcept override;
+  void on_clear_fault() override;
+  void on_close() noexcept override;
+  IoStatus on_read(PositionSample& out) noexcept override;
+  IoStatus on_write(double force) noexcept override;
+  std::string describe(const DeviceFault& fault) const override;
+
+ private:
+  bool logical(const Edge& e) const noexcept;
+  std::uint8_t logical_levels(std::uint8_t raw) const noexcept;
+  OutputState output(std::uint64_t duty_ns) const noexcept;
+  IoStatus check_faults() noexcept;
+
+  GpioSettings s_;
+  double max_force_;
+  std::unique_ptr<GpioTransport> transport_;
+  int declared_delay_;
+  QuadratureDecoder decoder_;
+  std::array<Edge, kEdgeBuffer> edges_{};
+  bool pwm_enabled_ = false;
+  bool direction_level_ = false;
+  bool fault_line_ = false;
+};
+
+}  // namespace hapticd::drivers::gpio

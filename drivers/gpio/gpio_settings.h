@@ -1,0 +1,58 @@
+// device.gpio: the GPIO driver's section (docs/drivers/gpio.md, config/gpio.yaml), read with
+// the config library's schema reader so its messages read "FILE:LINE: device.gpio.x: what".
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "config/driver_schema.h"
+
+namespace hapticd::drivers::gpio {
+
+enum class DisableMode : std::uint8_t {
+  kBrake,  // duty 0 with the PWM channel left enabled: its output held at the idle level
+  kCoast,  // duty 0 and the PWM channel disabled ('enable' 0)
+};
+
+struct GpioSettings final : config::DriverSettings {
+  // The GPIO chip: a path ("/dev/gpiochip0"), a name ("gpiochip0") or the chip's label.
+  std::string chip = "gpiochip0";
+  unsigned line_a = 0;
+  unsigned line_b = 1;
+  std::optional<unsigned> line_index;   // re-zeroes the count on its rising edge
+  unsigned line_direction = 2;          // output: the motor driver's direction input
+  std::optional<unsigned> line_fault;   // input: the motor driver's fault output (nFAULT)
+  bool encoder_active_low = false;      // A, B and index read inverted
+  bool fault_active_low = true;         // nFAULT: pulled low on a fault
+  bool direction_positive_high = true;  // the direction line's level for a positive force
+
+  double counts_per_unit = 1.0e5;  // x4 counts per m (or rad); negative: counts down as x grows
+  std::int64_t start_count = 0;    // the count assumed at configure (a relative encoder)
+  std::int64_t index_count = 0;    // the count the index sets
+  double max_edge_rate_hz = 0.0;   // A/B edges per second; 0: no limit
+  std::uint64_t missed_edge_fault = 0;  // missed edges tolerated; one more faults
+
+  std::string pwm_sysfs_root = "/sys/class/pwm";
+  unsigned pwm_chip = 0;
+  unsigned pwm_channel = 0;
+  std::uint64_t pwm_period_ns = 50'000;
+  bool pwm_inversed = false;
+  DisableMode on_disable = DisableMode::kCoast;
+};
+
+// The registry's read_section for device.gpio.
+std::shared_ptr<const config::DriverSettings> read_gpio_section(config::schema::MapReader& section,
+                                                                const config::Config& cfg);
+
+// The settings of a loaded configuration whose driver is gpio (throws std::logic_error
+// otherwise: the registry only calls the gpio driver for such a configuration).
+const GpioSettings& gpio_settings(const config::Config& cfg);
+
+// Whole samples between a PWM write and the force acting: the new duty waits for the running
+// PWM period to end, up to one period P later; with P <= T that is within the sample period
+// (0), beyond it ceil(P / T) - 1.
+int declared_delay_samples(const GpioSettings& s, double sample_period_s);
+
+}  // namespace hapticd::drivers::gpio

@@ -1,0 +1,133 @@
+#include "sim/peers/gpio/encoder_sim.h"
+
+#include <cmath>
+
+namespace hapticd::sim::gpio {
+namespace {
+
+constexpr std::uint8_t bit_of(dg::Line line) {
+  return static_cast<std::uint8_t>(1u << static_cast<unsigned>(line));
+}
+
+}  // namespace
+
+EncoderSim::EncoderSim(const config::Config& cfg, const dg::GpioSettings& s)
+    : axis_(cfg.device, cfg.loop.sample_period_s()),
+      s_(s),
+      max_force_(cfg.device.max_force),
+      period_ns_(std::llround(cfg.loop.sample_period_s() * 1e9)),
+      count_(0),
+      queued_levels_(0),
+      line_levels_(0) {
+  count_ = encoder_count();
+  const std::uint8_t st = dg::state_of_count(count_);
+  std::uint8_t levels =
+      raw(dg::Line::kA, (st & dg::kBitA) != 0) | raw(dg::Line::kB, (st & dg::kBitB) != 0);
+  if (s_.line_index) levels |= raw(dg::Line::kIndex, count_ == s_.index_count);
+  if (s_.line_fault) levels |= raw(dg::Line::kFault, false);
+  queued_levels_ = line_levels_ = levels;
+}
+
+// The encoder as mounted: counting down as x grows when the driver's counts_per_unit is
+// negative (the sim's encoder resolution is its magnitude).
+std::int64_t EncoderSim::encoder_count() noexcept {
+  const std::int64_t c = axis_.encoder_counts();
+  return s_.counts_per_unit < 0.0 ? -c : c;
+}
+
+// The raw bit for `line` at logical level `logical` (active-low inverts).
+std::uint8_t EncoderSim::raw(dg::Line line, bool logical) const noexcept {
+  const bool active_low = line == dg::Line::kFault ? s_.fault_active_low : s_.encoder_active_low;
+  return logical != active_low ? bit_of(line) : 0;
+}
+
+std::uint8_t EncoderSim::raw_levels() const noexcept { return line_levels_; }
+
+void EncoderSim::apply_output(const dg::wire::Output& out) noexcept {
+  if (fault_active_) return;  // a motor driver in fault keeps its bridge off
+  if (out.pwm_enabled != axis_.output_on()) axis_.set_output(out.pwm_enabled);
+  if (!out.pwm_enabled || out.period_ns == 0) return;
+  const double magnitude = static_cast<double>(out.duty_ns) / static_cast<double>(out.period_ns);
+  const bool positive = out.direction_level == s_.direction_positive_high;
+  axis_.hold_force((positive ? 1.0 : -1.0) * magnitude * max_force_);
+}
+
+void EncoderSim::set_fault_line(bool active, std::int64_t t_ns) {
+  if (!s_.line_fault || active == fault_active_) return;
+  fault_active_ = active;
+  if (active) axis_.set_output(false);
+  queue_edge(t_ns, dg::Line::kFault, active, false);
+}
+
+void EncoderSim::queue_edge(std::int64_t due_ns, dg::Line line, bool logical, bool paced) {
+  const std::uint8_t bit = bit_of(line);
+  const bool level = raw(line, logical) != 0;
+  queued_levels_ =
+      static_cast<std::uint8_t>(level ? (queued_levels_ | bit) : (queued_levels_ & ~bit));
+  queue_.push_back({due_ns, line, level, paced});
+}
+
+void EncoderSim::queue_count_edges(std::int64_t from, std::int64_t to, std::int64_t t0_ns) {
+  const std::int64_t n = to > from ? to - from : from - to;
+  const std::int64_t dir = to > from ? 1 : -1;
+  for (std::int64_t i = 0; i < n; ++i) {
+    const std::int64_t before = from + i * dir;
+    const std::int64_t after = before + dir;
+    const std::uint8_t s0 = dg::state_of_count(before);
+    const std::uint8_t s1 = dg::state_of_count(after);
+    const dg::Line line = ((s0 ^ s1) & dg::kBitA) != 0 ? dg::Line::kA : dg::Line::kB;
+    const std::uint8_t bit = line == dg::Line::kA ? dg::kBitA : dg::kBitB;
+    // Spread evenly over the period, as a constant velocity would.
+    const std::int64_t due = t0_ns + (period_ns_ * (2 * i + 1)) / (2 * n);
+    if (s_.line_index && before == s_.index_count) queue_edge(due, dg::Line::kIndex, false, true);
+    queue_edge(due, line, (s1 & bit) != 0, true);
+    if (s_.line_index && after == s_.index_count) queue_edge(due + 1, dg::Line::kIndex, true, true);
+  }
+}
+
+void EncoderSim::step(std::int64_t t0_ns) {
+  axis_.step();
+  const std::int64_t next = encoder_count();
+  queue_count_edges(count_, next, t0_ns);
+  count_ = next;
+}
+
+void EncoderSim::inject(WireFault f, std::int64_t t_ns) {
+  const std::uint8_t st = dg::state_of_count(count_);
+  switch (f) {
+    case WireFault::kEdgeBurst: {
+      const bool a = (st & dg::kBitA) != 0;
+      for (int i = 0; i < 32; ++i)
+        queue_edge(t_ns + i * 1000, dg::Line::kA, (i % 2 == 0) != a, false);
+      return;
+    }
+    case WireFault::kIllegalPattern:
+      // Two counts forward with A and B 1 us apart, 2 ms later back the same way: the count
+      // ends where it began, but each pair is a two-bit change within any sane resolution.
+      for (int k = 0; k < 4; ++k) {
+        const std::int64_t t = t_ns + k * 4'000'000;
+        const std::uint8_t s1 = dg::state_of_count(count_ + 1);
+        const std::uint8_t s2 = dg::state_of_count(count_ + 2);
+        const auto edge = [&](std::int64_t at, std::uint8_t from, std::uint8_t to) {
+          const dg::Line line = ((from ^ to) & dg::kBitA) != 0 ? dg::Line::kA : dg::Line::kB;
+          const std::uint8_t bit = line == dg::Line::kA ? dg::kBitA : dg::kBitB;
+          queue_edge(at, line, (to & bit) != 0, false);
+        };
+        edge(t, st, s1);
+        edge(t + 1000, s1, s2);
+        edge(t + 2'000'000, s2, s1);
+        edge(t + 2'001'000, s1, st);
+      }
+      return;
+    case WireFault::kLoseEdges:
+      return;  // the carrier's business: it numbers the edges
+  }
+}
+
+void EncoderSim::sent(const PendingEdge& e) noexcept {
+  const std::uint8_t bit = bit_of(e.line);
+  line_levels_ =
+      static_cast<std::uint8_t>(e.raw_level ? (line_levels_ | bit) : (line_levels_ & ~bit));
+}
+
+}  // namespace hapticd::sim::gpio

@@ -1,0 +1,79 @@
+// What sits on the far side of the GPIO driver's wires, as both GPIO peers simulate it: a
+// motor driver that turns the PWM duty and the direction line into a force on the plant
+// (force = +-duty/period * max_force while the PWM is enabled; off while its fault line is
+// active), and a quadrature encoder (with an optional one-count index mark at index_count and
+// an optional fault output) that turns the plant's motion into edges on its lines, spread over
+// the period in which the motion happened. Also the faults a peer can inject on those wires.
+// Not RT-safe; no OS calls: the peers (loopback_peer, kernel_peer) carry the edges.
+#pragma once
+
+#include <cstdint>
+#include <deque>
+#include <vector>
+
+#include "drivers/gpio/gpio_settings.h"
+#include "drivers/gpio/gpio_wire.h"
+#include "drivers/gpio/quadrature_decoder.h"
+#include "sim/sim_axis.h"
+
+namespace hapticd::sim::gpio {
+
+namespace dg = hapticd::drivers::gpio;
+
+// Faults on the GPIO wires beyond the generic PeerFault ones.
+enum class WireFault {
+  kEdgeBurst,       // 32 toggles of line A, 1 us apart: faster than any sane max_edge_rate
+  kIllegalPattern,  // 4 times: A and B changed 1 us apart (two steps at once), then back
+  kLoseEdges,       // the next edge's sequence number skips 5 (a kernel buffer overflow)
+};
+
+// An edge waiting to be put on the wires: `due_ns` is when it happens.
+struct PendingEdge {
+  std::int64_t due_ns = 0;
+  dg::Line line = dg::Line::kA;
+  bool raw_level = false;
+  bool paced = true;  // false: injected timing, not spread by the carrier's minimum spacing
+};
+
+class EncoderSim {
+ public:
+  EncoderSim(const config::Config& cfg, const dg::GpioSettings& s);
+
+  // Raw levels of the lines now (wire::kLevel* bits).
+  std::uint8_t raw_levels() const noexcept;
+  // The motor driver's inputs: force held from the next step on.
+  void apply_output(const dg::wire::Output& out) noexcept;
+  // One period of the plant from `t0_ns`; its encoder edges are queued, spread over the period.
+  void step(std::int64_t t0_ns);
+  // Queue an injected pattern starting at `t_ns`; the fault line.
+  void inject(WireFault f, std::int64_t t_ns);
+  void set_fault_line(bool active, std::int64_t t_ns);
+  bool fault_line() const noexcept { return fault_active_; }
+
+  std::deque<PendingEdge>& queue() noexcept { return queue_; }
+  // The level a queued edge leaves its line at, applied when the carrier sends it.
+  void sent(const PendingEdge& e) noexcept;
+
+  double applied_force() const noexcept { return axis_.held_force(); }
+  bool output_on() const noexcept { return axis_.output_on(); }
+  const Plant& plant() const noexcept { return axis_.plant(); }
+  std::int64_t period_ns() const noexcept { return period_ns_; }
+
+ private:
+  void queue_count_edges(std::int64_t from, std::int64_t to, std::int64_t t0_ns);
+  std::uint8_t raw(dg::Line line, bool logical) const noexcept;
+  std::int64_t encoder_count() noexcept;
+  void queue_edge(std::int64_t due_ns, dg::Line line, bool logical, bool paced);
+
+  SimAxis axis_;
+  dg::GpioSettings s_;
+  double max_force_;
+  std::int64_t period_ns_;
+  std::int64_t count_;          // the encoder's true count (the plant's), as queued
+  std::uint8_t queued_levels_;  // raw levels once every queued edge is sent
+  std::uint8_t line_levels_;    // raw levels as last sent (kLevel* bits)
+  bool fault_active_ = false;
+  std::deque<PendingEdge> queue_;
+};
+
+}  // namespace hapticd::sim::gpio

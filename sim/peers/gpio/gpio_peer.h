@@ -1,0 +1,39 @@
+// The GPIO driver's simulated device (DESIGN.md §6): a motor driver and a quadrature encoder
+// with the plant between them (encoder_sim.h), on one of two carriers:
+//   - GpioLoopbackPeer: the driver's socketpair (gpio_wire.h). It steps the plant once per
+//     output message (the driver sends one a tick: the PWM period's clock) and answers with the
+//     period's edges, time-stamped on the plant's clock (freerun: simulated time, so runs are
+//     reproducible; realtime: CLOCK_MONOTONIC).
+//   - GpioKernelPeer: a gpio-sim chip and the PWM simulator in the kernel test machine. It
+//     steps the plant on its own timer every period, reads the PWM channel's applied state and
+//     the direction line, and puts each edge on the wires at its time by writing the gpio-sim
+//     lines' `pull` attributes; the kernel time-stamps them as it would real edges.
+// Both also inject the GPIO wire faults (WireFault) besides the generic PeerFault ones.
+#pragma once
+
+#include <atomic>
+#include <memory>
+#include <string>
+
+#include "config/config.h"
+#include "drivers/io/unique_fd.h"
+#include "sim/peers/gpio/encoder_sim.h"
+#include "sim/peers/loopback_peer.h"
+
+namespace hapticd::sim::gpio {
+
+class GpioPeer : public LoopbackPeer {
+ public:
+  // Any thread. Produce `f` once, from the next period on.
+  virtual bool inject_wire(WireFault f) noexcept = 0;
+};
+
+// Throws config::ConfigError when device.sim and device.gpio disagree about the encoder (the
+// peer simulates the encoder device.gpio describes: resolution and start count must match).
+std::unique_ptr<GpioPeer> make_loopback_peer(const config::Config& cfg, io::UniqueFd fd);
+// `endpoint`: "GPIO_SIM_CHIP_SYSFS_DIR,PWM_SIM_CHANNEL_FILE", e.g.
+// "/sys/devices/platform/gpio-sim.0/gpiochip1,/sys/devices/platform/hapticd-pwm-sim/channel0".
+// Throws DeviceError when they cannot be opened.
+std::unique_ptr<GpioPeer> make_kernel_peer(const config::Config& cfg, const std::string& endpoint);
+
+}  // namespace hapticd::sim::gpio

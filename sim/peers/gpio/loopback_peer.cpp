@@ -1,0 +1,185 @@
+// GpioLoopbackPeer: the GPIO wires over the driver's socketpair (gpio_peer.h).
+#include <sys/socket.h>
+#include <time.h>
+
+#include <algorithm>
+#include <array>
+#include <cerrno>
+#include <cstring>
+#include <stdexcept>
+#include <system_error>
+#include <vector>
+
+#include "sim/peers/gpio/gpio_peer.h"
+#include "sim/peers/gpio/peer_checks.h"
+
+namespace hapticd::sim::gpio {
+namespace {
+
+namespace wire = dg::wire;
+
+class GpioLoopbackPeer final : public GpioPeer {
+ public:
+  GpioLoopbackPeer(const config::Config& cfg, const dg::GpioSettings& s, io::UniqueFd fd)
+      : enc_(cfg, s),
+        owned_(std::move(fd)),
+        fd_(owned_.get()),
+        simulated_clock_(cfg.loop.clock == config::ClockMode::kFreerun) {
+    if (s.max_edge_rate_hz > 0.0) spacing_ns_ = std::llround(2e9 / s.max_edge_rate_hz);
+  }
+
+  void service() override {
+    for (;;) {
+      const ssize_t n = ::recv(fd_, rx_.data(), rx_.size(), MSG_DONTWAIT);
+      if (n < 0) {
+        if (errno == EAGAIN || errno == EINTR || shut_) return;
+        throw std::system_error(errno, std::system_category(), "gpio peer: recv");
+      }
+      if (n == 0) return;  // the driver closed its end
+      handle({rx_.data(), static_cast<std::size_t>(n)});
+      publish();
+    }
+  }
+  int fd() const noexcept override { return fd_; }
+  double applied_force() const noexcept override { return force_.load(); }
+  bool output_on() const noexcept override { return on_.load(); }
+  const Plant& plant() const noexcept override { return enc_.plant(); }
+
+  bool inject(PeerFault f) noexcept override {
+    switch (f) {
+      case PeerFault::kStopAnswering:
+        stop_.store(true);
+        return true;
+      case PeerFault::kSkipSequence:
+        return false;  // a GPIO sample has no sequence of its own (lost edges: kLoseEdges)
+      case PeerFault::kDeviceFault:
+        if (!has_fault_line_) return false;  // no fault line: the motor driver cannot say
+        fault_.store(true);
+        return true;
+      case PeerFault::kTransportFault:
+        shut_ = true;
+        ::shutdown(fd_, SHUT_RDWR);  // the wires are cut: the driver's next recv sees it
+        // ... and the motor driver's inputs float to their pull-downs: no drive.
+        force_.store(0.0);
+        on_.store(false);
+        return true;
+    }
+    return false;
+  }
+  bool inject_wire(WireFault f) noexcept override {
+    wire_faults_.fetch_or(1u << static_cast<unsigned>(f));
+    return true;
+  }
+
+  void set_has_fault_line(bool v) { has_fault_line_ = v; }
+
+ private:
+  std::int64_t now_ns() const {
+    if (simulated_clock_) {
+      return 1'000'000'000 + static_cast<std::int64_t>(enc_.plant().steps()) * enc_.period_ns();
+    }
+    timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+  }
+
+  void send_bytes(const std::uint8_t* p, std::size_t n) {
+    if (::send(fd_, p, n, MSG_DONTWAIT | MSG_NOSIGNAL) < 0 && !shut_) {
+      throw std::system_error(errno, std::system_category(), "gpio peer: send");
+    }
+  }
+
+  void handle(std::span<const std::uint8_t> msg) {
+    wire::Output out;
+    if (wire::decode_hello(msg)) {
+      std::array<std::uint8_t, wire::kLevelsSize> buf{};
+      wire::encode_levels({enc_.raw_levels(), now_ns()}, buf);
+      send_bytes(buf.data(), buf.size());
+    } else if (wire::decode_output(msg, out)) {
+      period(out);
+    } else {
+      ++malformed_;  // a driver that sends garbage: counted, ignored
+    }
+  }
+
+  // One PWM period: the motor driver takes the output, the plant moves, the edges go back.
+  void period(const wire::Output& out) {
+    const std::int64_t t0 = now_ns();
+    if (fault_.exchange(false)) enc_.set_fault_line(true, t0);
+    const unsigned wf = wire_faults_.exchange(0);
+    for (WireFault f : {WireFault::kEdgeBurst, WireFault::kIllegalPattern, WireFault::kLoseEdges}) {
+      if ((wf & (1u << static_cast<unsigned>(f))) == 0) continue;
+      if (f == WireFault::kLoseEdges) skip_ += 5;
+      enc_.inject(f, t0);
+    }
+    enc_.apply_output(out);
+    enc_.step(t0);
+    if (stop_.load()) {
+      enc_.queue().clear();  // the device went quiet: nothing comes back, not even its clock
+      return;
+    }
+    send_edges(t0 + enc_.period_ns());
+  }
+
+  void send_edges(std::int64_t until) {
+    std::vector<dg::Edge>& batch = batch_;
+    batch.clear();
+    auto& q = enc_.queue();
+    while (!q.empty()) {
+      const PendingEdge& p = q.front();
+      const std::int64_t stamp = std::max(p.due_ns, last_ns_ + (p.paced ? spacing_ns_ : 1));
+      if (stamp > until) break;
+      seq_ += 1 + skip_;
+      skip_ = 0;
+      batch.push_back({stamp, seq_, p.line, p.raw_level});
+      enc_.sent(p);
+      last_ns_ = stamp;
+      q.pop_front();
+    }
+    std::array<std::uint8_t, wire::kMaxMessageSize> buf{};
+    std::size_t at = 0;
+    do {  // at least one message a period: it carries the clock
+      const std::size_t n = std::min(batch.size() - at, wire::kMaxEdgesPerMessage);
+      const std::size_t len =
+          wire::encode_edges(until, {batch.data() + at, n}, std::span<std::uint8_t>(buf));
+      send_bytes(buf.data(), len);
+      at += n;
+    } while (at < batch.size());
+  }
+
+  void publish() {
+    force_.store(enc_.applied_force());
+    on_.store(enc_.output_on());
+  }
+
+  EncoderSim enc_;
+  io::UniqueFd owned_;
+  int fd_;
+  bool simulated_clock_;
+  std::int64_t spacing_ns_ = 0;
+  std::int64_t last_ns_ = 0;
+  std::uint32_t seq_ = 0;
+  std::uint32_t skip_ = 0;
+  std::uint64_t malformed_ = 0;
+  bool has_fault_line_ = false;
+  std::atomic<bool> shut_{false};
+  std::atomic<bool> stop_{false};
+  std::atomic<bool> fault_{false};
+  std::atomic<unsigned> wire_faults_{0};
+  std::atomic<double> force_{0.0};
+  std::atomic<bool> on_{false};
+  std::array<std::uint8_t, wire::kMaxMessageSize> rx_{};
+  std::vector<dg::Edge> batch_;
+};
+
+}  // namespace
+
+std::unique_ptr<GpioPeer> make_loopback_peer(const config::Config& cfg, io::UniqueFd fd) {
+  const dg::GpioSettings& s = dg::gpio_settings(cfg);
+  check_peer_config(cfg, s);
+  auto p = std::make_unique<GpioLoopbackPeer>(cfg, s, std::move(fd));
+  p->set_has_fault_line(s.line_fault.has_value());
+  return p;
+}
+
+}  // namespace hapticd::sim::gpio
