@@ -9,6 +9,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "config/config.h"
 #include "config/driver_schema.h"
@@ -45,6 +46,10 @@ struct DriverEntry {
   // Null for a driver without one (sim). Throws DeviceError when the endpoint cannot be used.
   std::unique_ptr<sim::LoopbackPeer> (*make_peer_on)(const config::Config& cfg,
                                                      const std::string& endpoint) = nullptr;
+  // Not RT-safe, pure. Lines `hapticd check` prints after the gate's analysis and lists under
+  // "driver_notes" in --json (e.g. the bus load a CAN configuration needs; a line starting
+  // "warning:" is one). Null for a driver with nothing to add.
+  std::vector<std::string> (*notes)(const config::Config& cfg) = nullptr;
 };
 
 // Every driver of this build, the sim first.

@@ -46,7 +46,7 @@ void PeerRunner::run(int priority) {
   }
   pollfd fds[2] = {{peer_.fd(), POLLIN, 0}, {stop_fd_, POLLIN, 0}};
   while (true) {
-    if (poll(fds, 2, -1) < 0 && errno != EINTR) break;
+    if (poll(fds, 2, peer_.service_interval_ms()) < 0 && errno != EINTR) break;
     if (fds[1].revents != 0) break;
     // busy before the first byte is taken, so wait_idle never sees "nothing unread, not busy"
     // while an answer is still being made.

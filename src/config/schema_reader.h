@@ -110,7 +110,8 @@ class MapReader {
   Field take(std::string_view key);
   // "path.key: missing (reason)" at this mapping's key; silent if this is not a mapping.
   void missing(std::string_view key, const std::string& reason);
-  // If `key` is present: "path.key: not used by <reason>" (it is consumed).
+  // If `key` is present: "path.key: not used by <reason>" (it is consumed); an explicit null
+  // value is accepted without a word.
   void not_used(std::string_view key, const std::string& reason);
   // Reports every key not consumed as unknown, suggesting from the keys taken so far.
   void finish();

@@ -1,0 +1,114 @@
+#include "drivers/can/can_driver.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+
+#include "config/config_loader.h"
+#include "drivers/can/can_bus_load.h"
+#include "drivers/can/canopen.h"
+#include "drivers/can/cia402_device.h"
+#include "drivers/can/odrive_device.h"
+#include "drivers/can/odrive_protocol.h"
+#include "sim/peers/can/cia402_peer.h"
+#include "sim/peers/can/odrive_peer.h"
+
+namespace hapticd::drivers::can {
+namespace {
+
+bool realtime_clock(const config::Config& cfg) {
+  return cfg.loop.clock == config::ClockMode::kRealtime;
+}
+
+Loopback can_loopback(const config::Config& cfg) {
+  auto [driver_end, peer_end] = io::seqpacket_pair();
+  // The device keeps the pair's end and hands its transport a duplicate at each configure,
+  // so closing and configuring again works like unplugging and replugging a cable.
+  auto kept = std::make_shared<io::UniqueFd>(std::move(driver_end));
+  auto device = make_can_device(cfg, [kept] {
+    const int fd = ::fcntl(kept->get(), F_DUPFD_CLOEXEC, 0);
+    if (fd < 0) throw DeviceError(std::string("can: loopback: dup: ") + std::strerror(errno));
+    return CanSocket::adopt(io::UniqueFd(fd), "loopback");
+  });
+  auto peer = make_can_peer(cfg, CanSocket::adopt(std::move(peer_end), "loopback peer"),
+                            realtime_clock(cfg));
+  return {std::move(device), std::move(peer)};
+}
+
+std::unique_ptr<Device> can_device(const config::Config& cfg) {
+  const CanSettings& s = can_settings(cfg);
+  const std::vector<IdFilter> filters = receive_filters(cfg, false);
+  return make_can_device(cfg, [interface = s.interface, filters] {
+    return CanSocket::open_interface(interface, filters, true);
+  });
+}
+
+std::unique_ptr<sim::LoopbackPeer> can_peer_on(const config::Config& cfg,
+                                               const std::string& endpoint) {
+  return make_can_peer(cfg, CanSocket::open_interface(endpoint, receive_filters(cfg, true), false),
+                       true);
+}
+
+std::vector<std::string> can_notes(const config::Config& cfg) {
+  return bus_load_notes(can_settings(cfg), cfg.loop.rate_hz);
+}
+
+}  // namespace
+
+std::vector<IdFilter> receive_filters(const config::Config& cfg, bool peer) {
+  const CanSettings& s = can_settings(cfg);
+  const std::uint32_t n = s.node_id;
+  if (s.profile == Profile::kOdrive) {
+    return {{odrive::frame_id(s.node_id, 0), 0x7E0}};  // the node's 32 command ids
+  }
+  if (peer) {
+    return {{canopen::kNmtId},
+            {canopen::kSyncId},
+            {canopen::kRpdo1Base + n},
+            {canopen::kSdoRxBase + n},
+            {canopen::kHeartbeatBase + s.cia402.master_node_id}};
+  }
+  return {{canopen::kTpdo1Base + n},
+          {canopen::kTpdo2Base + n},
+          {canopen::kEmcyBase + n},
+          {canopen::kSdoTxBase + n},
+          {canopen::kHeartbeatBase + n}};
+}
+
+std::unique_ptr<Device> make_can_device(const config::Config& cfg,
+                                        std::function<CanSocket()> open) {
+  const CanSettings& s = can_settings(cfg);
+  const double period = cfg.loop.sample_period_s();
+  if (s.profile == Profile::kOdrive)
+    return std::make_unique<OdriveDevice>(s, period, std::move(open));
+  return std::make_unique<Cia402Device>(s, period, std::move(open));
+}
+
+std::unique_ptr<sim::LoopbackPeer> make_can_peer(const config::Config& cfg, CanSocket socket,
+                                                 bool realtime) {
+  try {
+    if (can_settings(cfg).profile == Profile::kOdrive) {
+      return std::make_unique<sim::OdrivePeer>(cfg, std::move(socket), realtime);
+    }
+    return std::make_unique<sim::Cia402Peer>(cfg, std::move(socket), realtime);
+  } catch (const std::invalid_argument& e) {
+    throw config::ConfigError({cfg.locate("device.sim") + ": device.sim: " + e.what()});
+  }
+}
+
+DriverEntry can_driver() {
+  DriverEntry e;
+  e.name = "can";
+  e.summary = "SocketCAN: a CiA 402 drive (cyclic synchronous torque) or an ODrive (CAN Simple)";
+  e.read_section = &read_can_section;
+  e.declared_delay = &declared_delay;
+  e.make_device = &can_device;
+  e.make_loopback = &can_loopback;
+  e.make_peer_on = &can_peer_on;
+  e.notes = &can_notes;
+  return e;
+}
+
+}  // namespace hapticd::drivers::can

@@ -1,0 +1,250 @@
+#include "drivers/can/odrive_device.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+namespace hapticd::drivers::can {
+namespace {
+
+using odrive::Heartbeat;
+
+bool any_heartbeat(const Heartbeat&) { return true; }
+bool idle(const Heartbeat& h) { return h.axis_error != 0 || h.axis_state == odrive::kAxisIdle; }
+bool closed_loop(const Heartbeat& h) {
+  return h.axis_error != 0 || h.axis_state == odrive::kAxisClosedLoop;
+}
+bool no_error(const Heartbeat& h) { return h.axis_error == 0; }
+
+std::uint32_t float_bits(float v) {
+  std::uint32_t bits;
+  std::memcpy(&bits, &v, sizeof bits);
+  return bits;
+}
+
+}  // namespace
+
+std::string OdriveDevice::node_name() const {
+  return "can: odrive node " + std::to_string(settings_.node_id) + " on " +
+         (socket_ ? socket_->description() : settings_.interface);
+}
+
+Heartbeat OdriveDevice::await_heartbeat(int timeout_ms, const std::string& waiting_for,
+                                        bool (*accept)(const Heartbeat&)) {
+  Heartbeat got;
+  const bool seen = await(
+      timeout_ms,
+      [&](const CanFrame& f) {
+        if (f.id != id_base_ + odrive::kHeartbeat || f.rtr) return false;
+        const auto h = odrive::decode_heartbeat(f);
+        if (!h) return false;
+        got = *h;
+        return accept(got);
+      },
+      nullptr);
+  if (!seen) {
+    throw DeviceError(
+        node_name() + ": no heartbeat " + waiting_for + " within " + std::to_string(timeout_ms) +
+        " ms" +
+        (accept == &any_heartbeat
+             ? " (node id, bitrate, wiring, power, "
+               "axis.config.can.heartbeat_msg_rate_ms)"
+             : ", last state " + std::string(odrive::axis_state_name(got.axis_state))));
+  }
+  return got;
+}
+
+std::string OdriveDevice::detect_firmware() {
+  if (!settings_.odrive.detect_firmware) return "firmware " + std::string(to_string(firmware_));
+  send_or_throw(odrive::request(settings_.node_id, odrive::kGetVersion, 8), "Get_Version");
+  std::optional<odrive::Version> version;
+  await(
+      settings_.sdo_timeout_ms,
+      [&](const CanFrame& f) {
+        if (f.id != id_base_ + odrive::kGetVersion || f.rtr) return false;
+        version = odrive::decode_version(f);
+        return version.has_value();
+      },
+      nullptr);
+  if (!version) {  // 0.5 has no Get_Version (its id 0 is the CANopen NMT message)
+    firmware_ = odrive::Firmware::k05;
+    return "firmware 0.5 (no answer to Get_Version)";
+  }
+  const std::string text =
+      "firmware " + std::to_string(version->fw_major) + "." + std::to_string(version->fw_minor) +
+      "." + std::to_string(version->fw_revision) + ", hardware " +
+      std::to_string(version->hw_major) + "." + std::to_string(version->hw_minor) + "." +
+      std::to_string(version->hw_variant);
+  const auto fw = odrive::firmware_of(*version);
+  if (!fw) throw DeviceError(node_name() + ": " + text + ": this driver speaks 0.5 and 0.6");
+  firmware_ = *fw;
+  return text;
+}
+
+void OdriveDevice::configure_watchdog() {
+  const OdriveSettings& o = settings_.odrive;
+  if (firmware_ != odrive::Firmware::k06 || o.watchdog_timeout_endpoint == 0) return;
+  const std::uint8_t node = settings_.node_id;
+  const std::uint32_t timeout = float_bits(static_cast<float>(o.watchdog_timeout_s));
+  send_or_throw(odrive::rx_sdo(node, true, o.watchdog_timeout_endpoint, timeout), "RxSdo");
+  if (o.enable_watchdog_endpoint != 0) {
+    send_or_throw(odrive::rx_sdo(node, true, o.enable_watchdog_endpoint, 1), "RxSdo");
+  }
+  send_or_throw(odrive::rx_sdo(node, false, o.watchdog_timeout_endpoint, 0), "RxSdo");
+  std::optional<odrive::TxSdo> answer;
+  await(
+      settings_.sdo_timeout_ms,
+      [&](const CanFrame& f) {
+        if (f.id != id_base_ + odrive::kTxSdo) return false;
+        answer = odrive::decode_tx_sdo(f);
+        return answer && answer->endpoint == o.watchdog_timeout_endpoint;
+      },
+      nullptr);
+  if (!answer || answer->value != timeout) {
+    throw DeviceError(node_name() + ": the axis watchdog time-out (endpoint " +
+                      std::to_string(o.watchdog_timeout_endpoint) +
+                      (answer ? ") reads back another value" : ") was not read back") +
+                      ": check the endpoint ids against the firmware's flat_endpoints.json");
+  }
+}
+
+DeviceInfo OdriveDevice::on_configure() {
+  id_base_ = odrive::frame_id(settings_.node_id, 0);
+  firmware_ = settings_.odrive.firmware;
+  open_transport();
+  const std::string fw = detect_firmware();
+  // The heartbeat comes every heartbeat_msg_rate_ms anyway; asking for it answers sooner
+  // where the firmware answers remote requests for cyclic messages.
+  send_or_throw(odrive::request(settings_.node_id, odrive::kHeartbeat, 8), "a heartbeat request");
+  const Heartbeat h = await_heartbeat(settings_.heartbeat_timeout_ms, "", &any_heartbeat);
+  if (h.axis_error != 0) {
+    throw DeviceError(node_name() + " reports axis error " +
+                      odrive::describe_axis_error(firmware_, h.axis_error) +
+                      ": find the cause and clear it (Clear_Errors, odrivetool) first");
+  }
+  const std::uint8_t node = settings_.node_id;
+  send_or_throw(odrive::set_input_torque(node, 0.0f), "Set_Input_Torque");
+  send_or_throw(odrive::set_axis_state(node, odrive::kAxisIdle), "Set_Axis_State");
+  send_or_throw(
+      odrive::set_controller_mode(node, odrive::kControlModeTorque, odrive::kInputModePassthrough),
+      "Set_Controller_Mode");
+  configure_watchdog();
+  send_or_throw(odrive::request(node, odrive::kHeartbeat, 8), "a heartbeat request");
+  await_heartbeat(settings_.state_timeout_ms, "showing IDLE", &idle);
+  set_emergency_frames(
+      {odrive::set_input_torque(node, 0.0f), odrive::set_axis_state(node, odrive::kAxisIdle)});
+  DeviceInfo info;
+  info.description =
+      "odrive node " + std::to_string(node) + " on " + socket_->description() + " (" + fw + ")";
+  info.transport_delay_samples = delay_samples(settings_, 1.0 / period_s_);
+  return info;
+}
+
+void OdriveDevice::on_enable() {
+  clear_pending();
+  fresh_ = false;
+  const std::uint8_t node = settings_.node_id;
+  send_or_throw(odrive::set_input_torque(node, 0.0f), "Set_Input_Torque");
+  send_or_throw(odrive::set_axis_state(node, odrive::kAxisClosedLoop), "Set_Axis_State");
+  const Heartbeat h =
+      await_heartbeat(settings_.state_timeout_ms, "showing CLOSED_LOOP_CONTROL", &closed_loop);
+  if (h.axis_error != 0) {
+    throw DeviceError(node_name() + ": entering closed loop failed with axis error " +
+                      odrive::describe_axis_error(firmware_, h.axis_error));
+  }
+  heartbeat_seen();
+}
+
+void OdriveDevice::on_disable() noexcept {
+  send_quietly(odrive::set_input_torque(settings_.node_id, 0.0f));
+  send_quietly(odrive::set_axis_state(settings_.node_id, odrive::kAxisIdle));
+}
+
+void OdriveDevice::on_clear_fault() {
+  if (!socket_) throw DeviceError(node_name() + ": the transport is closed");
+  clear_pending();
+  send_or_throw(odrive::clear_errors(settings_.node_id, firmware_), "Clear_Errors");
+  send_or_throw(odrive::set_axis_state(settings_.node_id, odrive::kAxisIdle), "Set_Axis_State");
+  await_heartbeat(settings_.state_timeout_ms, "without an axis error", &no_error);
+}
+
+void OdriveDevice::on_frame(const CanSocket::Received& rx) noexcept {
+  const CanFrame& f = rx.frame;
+  if (f.extended || f.rtr || (f.id & ~0x1Fu) != id_base_) {
+    counters_.unknown_ids.fetch_add(1, std::memory_order_relaxed);
+    return;
+  }
+  const std::uint8_t command = odrive::command_of(f.id);
+  if (command == odrive::kGetEncoderEstimates) {
+    const auto e = odrive::decode_encoder_estimates(f);
+    if (!e) {
+      counters_.wrong_length.fetch_add(1, std::memory_order_relaxed);
+      return;
+    }
+    fresh_ = true;
+    position_turns_ = e->position_turns;
+    velocity_turns_ = e->velocity_turns_per_s;
+    sample_time_ns_ = rx.time_ns;
+  } else if (command == odrive::kHeartbeat) {
+    const auto h = odrive::decode_heartbeat(f);
+    if (!h) {
+      counters_.wrong_length.fetch_add(1, std::memory_order_relaxed);
+      return;
+    }
+    heartbeat_seen();
+    axis_state_ = h->axis_state;
+    if (h->axis_error != 0) {
+      raise(CanFaultKind::kAxisError, h->axis_error);
+    } else if (state() == DeviceState::kActive && h->axis_state != odrive::kAxisClosedLoop) {
+      raise(CanFaultKind::kAxisStateChanged, h->axis_state);
+    }
+  } else {
+    counters_.unknown_ids.fetch_add(1, std::memory_order_relaxed);
+  }
+}
+
+IoStatus OdriveDevice::on_read(PositionSample& out) noexcept {
+  fresh_ = false;
+  const IoStatus drained = drain();
+  if (drained != IoStatus::kOk) return drained;
+  if (state() == DeviceState::kActive && heartbeat_lost()) {
+    return raise(CanFaultKind::kHeartbeatLost, ticks_since_heartbeat());
+  }
+  if (!fresh_) return IoStatus::kNoNewData;
+  out.position = static_cast<double>(position_turns_) * settings_.position_per_unit;
+  out.velocity = static_cast<double>(velocity_turns_) * settings_.position_per_unit;
+  out.time_ns = sample_time_ns_;
+  out.status = axis_state_;
+  out.flags = kSampleHasTime | kSampleHasVelocity;
+  return IoStatus::kOk;
+}
+
+IoStatus OdriveDevice::on_write(double force) noexcept {
+  const double torque =
+      std::clamp(force * settings_.torque_per_force, -settings_.max_torque, settings_.max_torque);
+  const std::uint8_t node = settings_.node_id;
+  bool ok = send_rt(odrive::set_input_torque(node, static_cast<float>(torque)));
+  if (ok && settings_.odrive.position_source == PositionSource::kRequest) {
+    ok = send_rt(odrive::request(node, odrive::kGetEncoderEstimates, 8));
+  }
+  if (ok) ok = end_tick_tx();
+  return ok ? IoStatus::kOk : pending_fault();
+}
+
+std::string OdriveDevice::describe(const DeviceFault& f) const {
+  switch (fault_kind()) {
+    case CanFaultKind::kAxisError:
+      return node_name() + " reports axis error " + odrive::describe_axis_error(firmware_, f.code) +
+             " (firmware " + std::string(to_string(firmware_)) + ")";
+    case CanFaultKind::kAxisStateChanged:
+      return node_name() + " left CLOSED_LOOP_CONTROL by itself: its heartbeat says " +
+             std::string(odrive::axis_state_name(f.code));
+    case CanFaultKind::kHeartbeatLost:
+      return node_name() + ": no heartbeat for " + std::to_string(f.code) +
+             " ticks (heartbeat_timeout_ms " + std::to_string(settings_.heartbeat_timeout_ms) + ")";
+    default:
+      return describe_transport(f);
+  }
+}
+
+}  // namespace hapticd::drivers::can

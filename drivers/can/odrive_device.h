@@ -1,0 +1,67 @@
+// An ODrive axis in closed-loop torque control with passthrough input, over CAN Simple
+// (DESIGN.md §6), firmware 0.5 or 0.6 (configured, or detected: 0.6 answers Get_Version).
+//
+// configure: the firmware found, a heartbeat awaited (an axis error refuses), the axis put in
+// IDLE (output off) with torque control + passthrough, and on 0.6 - where endpoint ids are
+// configured - the axis watchdog enabled and its time-out written and read back.
+// enable: input torque 0, CLOSED_LOOP_CONTROL requested and confirmed by a heartbeat within
+// state_timeout_ms.
+// Each tick: read drains encoder estimates, heartbeats and bus events; write sends
+// Set_Input_Torque (N m, through the transmission) and, in request mode, the remote request
+// for Get_Encoder_Estimates. Every frame feeds the axis watchdog. The position answering this
+// tick's request is the one the next tick acts on, and the torque acts from now until the next
+// write: one sample of delay (cyclic mode: the message period in samples, at least one).
+// disable: torque 0, IDLE. clear_fault: Clear_Errors, confirmed by a heartbeat without error.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "drivers/can/can_device_base.h"
+#include "drivers/can/odrive_protocol.h"
+
+namespace hapticd::drivers::can {
+
+class OdriveDevice final : public CanDeviceBase {
+ public:
+  OdriveDevice(const CanSettings& settings, double sample_period_s, Opener open)
+      : CanDeviceBase(settings, sample_period_s, std::move(open)),
+        firmware_(settings.odrive.firmware) {}
+  ~OdriveDevice() override { close(); }
+
+  // Valid from CONFIGURED on.
+  odrive::Firmware firmware() const noexcept { return firmware_; }
+
+ protected:
+  DeviceInfo on_configure() override;
+  void on_enable() override;
+  void on_disable() noexcept override;
+  void on_clear_fault() override;
+  void on_close() noexcept override { close_transport(); }
+  // RT-safe: called every tick.
+  IoStatus on_read(PositionSample& out) noexcept override;
+  // RT-safe: called every tick.
+  IoStatus on_write(double force) noexcept override;
+  std::string describe(const DeviceFault& fault) const override;
+
+ private:
+  void on_frame(const CanSocket::Received& rx) noexcept override;
+  std::string detect_firmware();
+  // The next heartbeat within timeout_ms for which `accept` holds; throws naming `waiting_for`.
+  odrive::Heartbeat await_heartbeat(int timeout_ms, const std::string& waiting_for,
+                                    bool (*accept)(const odrive::Heartbeat&));
+  void configure_watchdog();
+  std::string node_name() const;
+
+  odrive::Firmware firmware_;
+  std::uint32_t id_base_ = 0;  // node << 5
+
+  // RT state of the newest sample.
+  bool fresh_ = false;
+  float position_turns_ = 0.0f;
+  float velocity_turns_ = 0.0f;
+  std::int64_t sample_time_ns_ = 0;
+  std::uint8_t axis_state_ = 0;
+};
+
+}  // namespace hapticd::drivers::can

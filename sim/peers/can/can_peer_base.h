@@ -1,0 +1,92 @@
+// What the simulated CAN devices (a CiA 402 drive, an ODrive axis) share: their end of the
+// transport (a socketpair or a real interface, through the driver's own CanSocket), the
+// simulated axis behind them, what the person holding the device feels (published for any
+// thread), a bus that can be made to fail, and CAN-specific faults beyond PeerFault. Each
+// device decodes and answers with the driver's own pure codecs.
+//
+// Timing: in freerun (a paced loopback) the device's clock is its protocol trigger (SYNC,
+// the encoder request), so a run is reproducible; in realtime (and on a real interface) its
+// heartbeats and watchdogs also run on CLOCK_MONOTONIC, serviced every millisecond.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+
+#include "config/config.h"
+#include "drivers/can/can_settings.h"
+#include "drivers/can/can_socket.h"
+#include "sim/peers/loopback_peer.h"
+#include "sim/sim_axis.h"
+
+namespace hapticd::sim {
+
+// Faults only CAN can express, for the CAN tests (PeerFault covers the shared classes).
+enum class CanPeerFault : std::uint8_t {
+  kStopHeartbeat,     // heartbeats stop, everything else goes on
+  kStopSdo,           // SDO requests (CiA 402) go unanswered
+  kAbortSdo,          // the next SDO request (CiA 402) is aborted: 0x08000022, device state
+  kWrongLengthPdo,    // the next cyclic answer has the wrong DLC
+  kUnknownIds,        // frames with ids the driver does not expect, each tick
+  kTruncatedEmcy,     // an EMCY of 2 bytes (CiA 402)
+  kMalformedMessage,  // a message that is not one struct can_frame (socketpair only)
+};
+
+class CanPeerBase : public LoopbackPeer {
+ public:
+  void service() override;
+  int fd() const noexcept override { return socket_.fd(); }
+  int service_interval_ms() const noexcept override { return realtime_ ? 1 : -1; }
+  double applied_force() const noexcept override {
+    return applied_force_.load(std::memory_order_acquire);
+  }
+  bool output_on() const noexcept override { return output_on_.load(std::memory_order_acquire); }
+  const Plant& plant() const noexcept override { return axis_.plant(); }
+  bool inject(PeerFault fault) noexcept override;
+  // Any thread. False when this device cannot produce it.
+  virtual bool inject_can(CanPeerFault fault) noexcept;
+  // Any thread: frames this device received and sent so far.
+  std::uint64_t frames_received() const noexcept { return received_.load(); }
+
+ protected:
+  CanPeerBase(const config::Config& cfg, drivers::can::CanSocket socket, bool realtime);
+
+  // One frame from the master.
+  virtual void handle(const drivers::can::CanFrame& f) = 0;
+  // Realtime only: the device's own timers, at least every millisecond.
+  virtual void on_clock(std::int64_t now_ns) = 0;
+  // Faults injected since the last call (flags below are consumed by the device).
+  virtual void apply_device_fault() = 0;
+  // The bus failed: the device's reaction to losing its master.
+  virtual void on_bus_lost() = 0;
+
+  void send(const drivers::can::CanFrame& f);
+  // After each change of the axis: what any thread may read.
+  void publish() noexcept;
+  static std::int64_t now_ns() noexcept;
+  bool take(std::atomic<bool>& flag) noexcept { return flag.exchange(false); }
+
+  const drivers::can::CanSettings settings_;
+  const double period_s_;
+  SimAxis axis_;
+  drivers::can::CanSocket socket_;
+  const bool realtime_;
+  bool bus_failed_ = false;
+
+  std::atomic<bool> stop_answering_{false};
+  std::atomic<bool> stop_heartbeat_{false};
+  std::atomic<bool> stop_sdo_{false};
+  std::atomic<bool> abort_sdo_{false};
+  std::atomic<bool> wrong_length_{false};
+  std::atomic<bool> unknown_ids_{false};
+  std::atomic<bool> truncated_emcy_{false};
+  std::atomic<bool> malformed_{false};
+
+ private:
+  std::atomic<bool> device_fault_{false};
+  std::atomic<bool> transport_fault_{false};
+  std::atomic<double> applied_force_{0.0};
+  std::atomic<bool> output_on_{false};
+  std::atomic<std::uint64_t> received_{0};
+};
+
+}  // namespace hapticd::sim

@@ -1,0 +1,128 @@
+// The servo loop through each profile and its simulated drive, in freerun: the wall renders
+// as the sim driver renders it with the same plant, wall and total delay; each injected fault
+// faults the loop within the tick that sees it, with zero force and the cause named.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <thread>
+
+#include "can_rig.h"
+#include "control/controller.h"
+#include "loop/servo_loop.h"
+#include "sim/peers/paced_device.h"
+
+namespace hapticd::drivers::can::testing {
+namespace {
+
+loop::LoopOptions options(const config::Config& cfg, std::uint64_t ticks) {
+  loop::LoopOptions o;
+  o.realtime = false;
+  o.period_ns = std::llround(cfg.loop.sample_period_s() * 1e9);
+  o.max_ticks = ticks;
+  o.stale_fault_ticks = cfg.safety.stale_fault_ticks;
+  o.max_speed = cfg.safety.max_speed;
+  return o;
+}
+
+// The sim driver on the same file: the can section switched off, the driver's delay added to
+// the wall's own.
+loop::LoopResult run_sim(const char* example, int delay) {
+  const config::Config cfg = load_example(example, {"device.driver=sim", "device.can=null",
+                                                    "wall.delay_samples=" + std::to_string(delay)});
+  Loopback pair = find_driver("sim").make_loopback(cfg);
+  pair.device->configure();
+  pair.device->enable();
+  control::Controller controller(control::make_control_law(cfg));
+  loop::ServoLoop servo(*pair.device, controller, nullptr, options(cfg, 2500));
+  const std::atomic<bool> stop{false};
+  return servo.run(stop);
+}
+
+loop::LoopResult run_can(const char* example) {
+  const config::Config cfg = load_example(example);
+  CanRig rig(cfg);
+  sim::PacedDevice device(std::move(rig.pair.device), rig.runner);
+  rig.pair.device = nullptr;
+  device.configure();
+  device.enable();
+  control::Controller controller(control::make_control_law(cfg));
+  loop::ServoLoop servo(device, controller, nullptr, options(cfg, 2500));
+  const std::atomic<bool> stop{false};
+  const loop::LoopResult r = servo.run(stop);
+  device.close();
+  return r;
+}
+
+class CanRun : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(CanRun, RendersTheWallAsTheSimDriverDoesWithTheSameTotalDelay) {
+  const loop::LoopResult can = run_can(GetParam());
+  const loop::LoopResult sim = run_sim(GetParam(), 1);
+  ASSERT_EQ(can.fault.cause, loop::FaultCause::kNone) << loop::describe(can.fault);
+  ASSERT_EQ(sim.fault.cause, loop::FaultCause::kNone) << loop::describe(sim.fault);
+  EXPECT_GT(can.contact_ticks, 500u) << "the hand presses into the wall";
+  EXPECT_LE(can.stale_ticks, 1u) << "only the first tick, before the first SYNC";
+  EXPECT_NEAR(can.max_penetration, sim.max_penetration, 0.1 * sim.max_penetration)
+      << "can " << can.max_penetration * 1e3 << " mm, sim " << sim.max_penetration * 1e3 << " mm";
+  RecordProperty("penetration_can_mm", std::to_string(can.max_penetration * 1e3));
+  RecordProperty("penetration_sim_mm", std::to_string(sim.max_penetration * 1e3));
+}
+
+// Every fault the drive can produce, injected while the wall pushes: the loop faults with the
+// right cause, zero force at once, and the description names the cause and the code.
+TEST_P(CanRun, EachInjectedFaultEndsTheLoopWithZeroForceAndItsCauseNamed) {
+  struct Fault {
+    const char* name;
+    bool can_fault;
+    int fault;
+    loop::FaultCause cause;
+    const char* named;
+  };
+  const bool cia = std::string(GetParam()) == "can-cia402.yaml";
+  const Fault faults[] = {
+      {"device", false, static_cast<int>(sim::PeerFault::kDeviceFault),
+       loop::FaultCause::kDeviceReported, cia ? "EMCY 0x2310" : "CURRENT_LIMIT_VIOLATION"},
+      {"bus", false, static_cast<int>(sim::PeerFault::kTransportFault),
+       loop::FaultCause::kTransportRead, "bus-off"},
+      {"stale", false, static_cast<int>(sim::PeerFault::kStopAnswering),
+       loop::FaultCause::kStaleData, ""},
+      {"heartbeat", true, static_cast<int>(sim::CanPeerFault::kStopHeartbeat),
+       loop::FaultCause::kDeviceReported, "no heartbeat"},
+  };
+  for (const Fault& f : faults) {
+    SCOPED_TRACE(f.name);
+    const config::Config cfg = load_example(
+        GetParam(), {"device.sim.initial_position=-0.0005",
+                     "device.sim.operator={kind: force, force: {shape: constant, value: 3}}"});
+    CanRig rig(cfg);
+    sim::PacedDevice device(std::move(rig.pair.device), rig.runner);
+    device.configure();
+    device.enable();
+    control::Controller controller(control::make_control_law(cfg));
+    loop::ServoLoop servo(device, controller, nullptr, options(cfg, 100'000));
+    const std::atomic<bool> stop{false};
+    loop::LoopResult r;
+    std::thread t([&] { r = servo.run(stop); });
+    while (servo.ticks_done() < 300) std::this_thread::yield();
+    ASSERT_TRUE(f.can_fault ? rig.peer().inject_can(static_cast<sim::CanPeerFault>(f.fault))
+                            : rig.peer().inject(static_cast<sim::PeerFault>(f.fault)));
+    t.join();
+    EXPECT_EQ(r.fault.cause, f.cause) << loop::describe(r.fault);
+    EXPECT_GT(r.contact_ticks, 100u);
+    rig.settle();
+    EXPECT_EQ(rig.peer().applied_force(), 0.0);
+    EXPECT_EQ(device.last_command(), 0.0);
+    if (*f.named != '\0') {
+      EXPECT_NE(device.describe_fault().find(f.named), std::string::npos)
+          << device.describe_fault();
+    }
+    device.close();
+    rig.settle();
+    EXPECT_FALSE(rig.peer().output_on());
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Profiles, CanRun, ::testing::Values("can-cia402.yaml", "can-odrive.yaml"));
+
+}  // namespace
+}  // namespace hapticd::drivers::can::testing
