@@ -40,7 +40,7 @@ void sleep_ms(int ms) {
 }
 
 std::string read_first_word(const std::string& path) {
-  io::UniqueFd fd(::open(path.c_str(), O_RDONLY | O_CLOEXEC));
+  io::UniqueFd fd(::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC));
   if (!fd) return {};
   char buf[64] = {};
   const ssize_t n = ::read(fd.get(), buf, sizeof buf - 1);
@@ -60,27 +60,33 @@ void SysfsPwm::open(const PwmChannel& ch, bool enabled) {
                       " (device.gpio.pwm.chip, pwm.sysfs_root)");
   }
   const std::string dir = chip_dir + "/pwm" + std::to_string(ch.channel);
-  if (!writable(dir + "/duty_cycle")) {
+  {
     io::UniqueFd exp(::open((chip_dir + "/export").c_str(), O_WRONLY | O_CLOEXEC));
     if (!exp) throw DeviceError("gpio: cannot open " + chip_dir + "/export: " + err_text(errno));
     const std::string n = std::to_string(ch.channel) + "\n";
-    // EBUSY: exported already (by us before, or by someone racing us): the files will be there.
+    // EBUSY: exported already (by an earlier run: a channel stays exported) or held by a
+    // kernel driver; the files tell which.
     if (::write(exp.get(), n.data(), n.size()) < 0 && errno != EBUSY) {
       throw DeviceError("gpio: cannot export channel " + std::to_string(ch.channel) + " of " +
                         chip_dir + ": " + err_text(errno));
     }
-    int waited = 0;
-    for (; !writable(dir + "/duty_cycle") && waited < kExportWaitMs; waited += 10) sleep_ms(10);
-    if (!writable(dir + "/duty_cycle")) {
-      throw DeviceError("gpio: " + dir + "/duty_cycle is not there or not writable " +
-                        std::to_string(kExportWaitMs) + " ms after the export: " + err_text(errno) +
-                        " (a kernel driver may hold the channel)");
-    }
   }
-  // Order matters: the core refuses a period below the duty, and polarity while enabled.
-  write_text(dir + "/enable", "0");
-  write_text(dir + "/duty_cycle", "0");
+  int waited = 0;  // udev gives the new files their group a moment after they appear
+  for (; !writable(dir + "/duty_cycle") && waited < kExportWaitMs; waited += 10) sleep_ms(10);
+  if (!writable(dir + "/duty_cycle")) {
+    throw DeviceError("gpio: " + dir + "/duty_cycle is not there or not writable " +
+                      std::to_string(kExportWaitMs) + " ms after the export: " + err_text(errno) +
+                      " (a kernel driver may hold the channel)");
+  }
+  // Order matters: the core refuses a period of 0 (a fresh channel's) even to disable it, a
+  // period below the duty, and a polarity change while enabled.
+  if (read_first_word(dir + "/enable") == "1") write_text(dir + "/enable", "0");
+  const std::string duty = read_first_word(dir + "/duty_cycle");
+  std::uint64_t current = 0;
+  std::from_chars(duty.data(), duty.data() + duty.size(), current);  // unreadable: 0
+  if (current > ch.period_ns) write_text(dir + "/duty_cycle", "0");
   write_text(dir + "/period", std::to_string(ch.period_ns));
+  write_text(dir + "/duty_cycle", "0");
   const char* polarity = ch.inversed ? "inversed" : "normal";
   if (read_first_word(dir + "/polarity") != polarity) write_text(dir + "/polarity", polarity);
   if (enabled) write_text(dir + "/enable", "1");

@@ -268,7 +268,7 @@ TEST(GpioLoopback, FaultLineActiveAtConfigureRefusesAndClearFaultChecksIt) {
   Rig rig(load("gpio.yaml"));
   rig.device.configure();
   rig.device.enable();
-  rig.run(200, 100, {}, sim::PeerFault::kDeviceFault);
+  rig.run(20000, 100, {}, sim::PeerFault::kDeviceFault);
   ASSERT_EQ(rig.device.state(), DeviceState::kFaulted);
   EXPECT_THROW(rig.device.clear_fault(), DeviceError) << "the line is still active";
 }

@@ -1,6 +1,9 @@
 // GpioLoopbackPeer: the GPIO wires over the driver's socketpair (gpio_peer.h).
+#include <sys/epoll.h>
 #include <sys/socket.h>
+#include <sys/timerfd.h>
 #include <time.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <array>
@@ -26,21 +29,62 @@ class GpioLoopbackPeer final : public GpioPeer {
         fd_(owned_.get()),
         simulated_clock_(cfg.loop.clock == config::ClockMode::kFreerun) {
     if (s.max_edge_rate_hz > 0.0) spacing_ns_ = std::llround(2e9 / s.max_edge_rate_hz);
+    if (!simulated_clock_) start_clock();
   }
 
   void service() override {
+    receive();
+    if (!simulated_clock_) run_clock();
+  }
+
+  // Realtime: the plant runs on the peer's own clock, period by period, with whatever the
+  // driver last wrote (a PWM runs on whether or not it is rewritten); the socket and the
+  // period timer are behind one epoll descriptor, the one PeerRunner polls.
+  void start_clock() {
+    timer_.reset(timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC));
+    epoll_.reset(epoll_create1(EPOLL_CLOEXEC));
+    if (!timer_ || !epoll_) throw std::system_error(errno, std::system_category(), "gpio peer");
+    for (int f : {fd_, timer_.get()}) {
+      epoll_event ev{};
+      ev.events = EPOLLIN;
+      ev.data.fd = f;
+      if (epoll_ctl(epoll_.get(), EPOLL_CTL_ADD, f, &ev) != 0) {
+        throw std::system_error(errno, std::system_category(), "gpio peer: epoll_ctl");
+      }
+    }
+    next_step_ = now_ns() + enc_.period_ns();
+    itimerspec its{};
+    its.it_value.tv_sec = static_cast<time_t>(next_step_ / 1'000'000'000);
+    its.it_value.tv_nsec = static_cast<long>(next_step_ % 1'000'000'000);
+    its.it_interval.tv_nsec = static_cast<long>(enc_.period_ns());
+    timerfd_settime(timer_.get(), TFD_TIMER_ABSTIME, &its, nullptr);
+  }
+
+  void run_clock() {
+    std::uint64_t expirations = 0;
+    [[maybe_unused]] const ssize_t r = ::read(timer_.get(), &expirations, sizeof expirations);
+    for (const std::int64_t now = now_ns(); now >= next_step_; next_step_ += enc_.period_ns()) {
+      step(next_step_ - enc_.period_ns());
+    }
+    publish();
+  }
+
+  void receive() {
     for (;;) {
       const ssize_t n = ::recv(fd_, rx_.data(), rx_.size(), MSG_DONTWAIT);
       if (n < 0) {
         if (errno == EAGAIN || errno == EINTR || shut_) return;
         throw std::system_error(errno, std::system_category(), "gpio peer: recv");
       }
-      if (n == 0) return;  // the driver closed its end
+      if (n == 0) {  // the driver closed its end
+        if (epoll_) epoll_ctl(epoll_.get(), EPOLL_CTL_DEL, fd_, nullptr);
+        return;
+      }
       handle({rx_.data(), static_cast<std::size_t>(n)});
       publish();
     }
   }
-  int fd() const noexcept override { return fd_; }
+  int fd() const noexcept override { return epoll_ ? epoll_.get() : fd_; }
   double applied_force() const noexcept override { return force_.load(); }
   bool output_on() const noexcept override { return on_.load(); }
   const Plant& plant() const noexcept override { return enc_.plant(); }
@@ -85,6 +129,10 @@ class GpioLoopbackPeer final : public GpioPeer {
 
   void send_bytes(const std::uint8_t* p, std::size_t n) {
     if (::send(fd_, p, n, MSG_DONTWAIT | MSG_NOSIGNAL) < 0 && !shut_) {
+      // A driver that is not reading (start-up, a stalled loop) fills the socket: the batch
+      // is dropped, as a full kernel event buffer drops events, and the edges' sequence
+      // numbers tell the driver how many it lost.
+      if (errno == EAGAIN || errno == EPIPE || errno == ECONNRESET) return;
       throw std::system_error(errno, std::system_category(), "gpio peer: send");
     }
   }
@@ -96,15 +144,15 @@ class GpioLoopbackPeer final : public GpioPeer {
       wire::encode_levels({enc_.raw_levels(), now_ns()}, buf);
       send_bytes(buf.data(), buf.size());
     } else if (wire::decode_output(msg, out)) {
-      period(out);
+      enc_.apply_output(out);
+      if (simulated_clock_) step(now_ns());  // freerun: the driver's tick is the period
     } else {
       ++malformed_;  // a driver that sends garbage: counted, ignored
     }
   }
 
-  // One PWM period: the motor driver takes the output, the plant moves, the edges go back.
-  void period(const wire::Output& out) {
-    const std::int64_t t0 = now_ns();
+  // One period from t0: the plant moves under the held output, the edges go back.
+  void step(std::int64_t t0) {
     if (fault_.exchange(false)) enc_.set_fault_line(true, t0);
     const unsigned wf = wire_faults_.exchange(0);
     for (WireFault f : {WireFault::kEdgeBurst, WireFault::kIllegalPattern, WireFault::kLoseEdges}) {
@@ -112,7 +160,6 @@ class GpioLoopbackPeer final : public GpioPeer {
       if (f == WireFault::kLoseEdges) skip_ += 5;
       enc_.inject(f, t0);
     }
-    enc_.apply_output(out);
     enc_.step(t0);
     if (stop_.load()) {
       enc_.queue().clear();  // the device went quiet: nothing comes back, not even its clock
@@ -150,10 +197,19 @@ class GpioLoopbackPeer final : public GpioPeer {
   void publish() {
     force_.store(enc_.applied_force());
     on_.store(enc_.output_on());
+    // After the wires were cut nothing drives the motor, whatever this thread was handling
+    // when inject() cut them (inject stores zero after setting shut_; this re-checks after).
+    if (shut_.load()) {
+      force_.store(0.0);
+      on_.store(false);
+    }
   }
 
   EncoderSim enc_;
   io::UniqueFd owned_;
+  io::UniqueFd timer_;
+  io::UniqueFd epoll_;
+  std::int64_t next_step_ = 0;
   int fd_;
   bool simulated_clock_;
   std::int64_t spacing_ns_ = 0;
