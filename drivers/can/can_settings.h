@@ -36,7 +36,7 @@ struct OdriveSettings {
   PositionSource position_source = PositionSource::kRequest;
   int cyclic_period_ms = 1;          // axis.config.can.encoder_msg_rate_ms (cyclic)
   int heartbeat_period_ms = 100;     // axis.config.can.heartbeat_msg_rate_ms
-  double watchdog_timeout_s = 0.05;  // axis.config.watchdog_timeout the driver relies on
+  double watchdog_timeout_s = 0.25;  // axis.config.watchdog_timeout the driver relies on
   // 0.6 only: endpoint ids (flat_endpoints.json of the firmware) through which configure
   // writes enable_watchdog and watchdog_timeout and reads them back; 0: set by the user.
   std::uint16_t enable_watchdog_endpoint = 0;

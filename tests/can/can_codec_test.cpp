@@ -162,8 +162,12 @@ TEST(Cia402, PdoMappingInvalidatesFirstAndDisablesTheUnusedPdos) {
   EXPECT_TRUE(rpdo_valid_last);
   int entries = 0;
   for (const auto& e : m) {
-    if (e.at.index == 0x1A00 && e.at.subindex == 2) EXPECT_EQ(e.value, 0x60640020u);
-    if (e.at.index == 0x1801 && e.at.subindex == 1) EXPECT_EQ(e.value, 0x80000284u);
+    if (e.at.index == 0x1A00 && e.at.subindex == 2) {
+      EXPECT_EQ(e.value, 0x60640020u);
+    }
+    if (e.at.index == 0x1801 && e.at.subindex == 1) {
+      EXPECT_EQ(e.value, 0x80000284u);
+    }
     entries += e.final ? 1 : 0;
   }
   EXPECT_GT(entries, 10);

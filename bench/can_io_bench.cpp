@@ -1,0 +1,84 @@
+// The CAN driver's tick I/O cost with its simulated drive (BENCHMARKS.md, "CAN driver"): one
+// read (drain: the TPDO or encoder answer, heartbeats, then the EAGAIN that ends the drain) and
+// one write (CiA 402: RPDO and SYNC, hapticd's heartbeat every 20th tick; ODrive:
+// Set_Input_Torque and the encoder request) through the driver over the socketpair, for each
+// profile. The drive answers in the same thread between ticks (its thread is stopped after
+// enable), so no thread hand-over is in the numbers. Driver-only time is measured around
+// read+write alone; the full tick adds the simulated drive's own work.
+#include <benchmark/benchmark.h>
+
+#include <chrono>
+#include <fstream>
+#include <sstream>
+
+#include "config/config_loader.h"
+#include "drivers/can/can_device_base.h"
+#include "drivers/registry.h"
+#include "sim/peers/peer_runner.h"
+
+namespace {
+
+using namespace hapticd;
+
+config::Config load(const char* name) {
+  const std::string path = std::string(HAPTICD_SOURCE_DIR) + "/config/" + name;
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::vector<config::Override> o = {config::parse_override("loop.clock=freerun")};
+  return config::load_config_text(text.str(), path, o, HAPTICD_SOURCE_DIR "/config",
+                                  drivers::driver_schemas());
+}
+
+void tick_bench(benchmark::State& state, const char* example, bool driver_only) {
+  const config::Config cfg = load(example);
+  drivers::Loopback pair = drivers::find_driver("can").make_loopback(cfg);
+  {
+    sim::PeerRunner runner(*pair.peer);  // answers configure's and enable's requests
+    pair.device->configure();
+    pair.device->enable();
+  }
+  auto& can = dynamic_cast<drivers::can::CanDeviceBase&>(*pair.device);
+  const std::uint64_t sent0 = can.counters().frames_sent.load();
+  const std::uint64_t received0 = can.counters().frames_received.load();
+  PositionSample s;
+  double force = 0.5;
+  for (auto _ : state) {
+    const auto t0 = std::chrono::steady_clock::now();
+    benchmark::DoNotOptimize(pair.device->read(s));
+    benchmark::DoNotOptimize(pair.device->write(force));
+    const auto t1 = std::chrono::steady_clock::now();
+    pair.peer->service();
+    force = -force;
+    if (driver_only) state.SetIterationTime(std::chrono::duration<double>(t1 - t0).count());
+  }
+  const double ticks = static_cast<double>(state.iterations());
+  const double sent = static_cast<double>(can.counters().frames_sent.load() - sent0) / ticks;
+  const double received =
+      static_cast<double>(can.counters().frames_received.load() - received0) / ticks;
+  state.counters["frames_out"] = sent;
+  state.counters["frames_in"] = received;
+  // One send(2) per frame out; one recvmsg(2) per frame in plus the one that finds the socket
+  // empty.
+  state.counters["syscalls"] = sent + received + 1.0;
+  pair.device->disable();
+  pair.device->close();
+}
+
+void BM_CanCia402DriverTick(benchmark::State& state) { tick_bench(state, "can-cia402.yaml", true); }
+void BM_CanCia402TickWithDrive(benchmark::State& state) {
+  tick_bench(state, "can-cia402.yaml", false);
+}
+void BM_CanOdriveDriverTick(benchmark::State& state) { tick_bench(state, "can-odrive.yaml", true); }
+void BM_CanOdriveTickWithAxis(benchmark::State& state) {
+  tick_bench(state, "can-odrive.yaml", false);
+}
+
+BENCHMARK(BM_CanCia402DriverTick)->UseManualTime();
+BENCHMARK(BM_CanCia402TickWithDrive);
+BENCHMARK(BM_CanOdriveDriverTick)->UseManualTime();
+BENCHMARK(BM_CanOdriveTickWithAxis);
+
+}  // namespace
+
+BENCHMARK_MAIN();
