@@ -1,16 +1,22 @@
 #!/usr/bin/env bash
 # hapticd quick start for a fresh Debian 12 machine. Idempotent: installs only the Debian
-# packages that are missing, (re)builds incrementally, then
+# packages that are missing (as root, or through sudo), (re)builds incrementally, then
 #   tools/quickstart.sh demo   runs `hapticd run` on the embedded config/sim.yaml
-#   tools/quickstart.sh test   runs the whole test suite (what .ci/run does)
-# HAPTICD_SANITIZE=1 builds the test run with ASan+UBSan in build-asan/.
+#   tools/quickstart.sh test   runs every test, what .ci/run does (stages below)
+# The test command's stages, each timed, all run even when one fails:
+#   main    Release build (warnings are errors) and the whole suite, the kernel tests in the
+#           kernel test machine included (HAPTICD_KERNEL_TESTS=0 skips those, and says so)
+#   fuzz    every fuzz target's corpus replayed plus a few seconds of fuzzing (HAPTICD_FUZZ=0)
+#   asan    the suite under AddressSanitizer + UndefinedBehaviorSanitizer (kernel tests aside)
+#   tsan    the loop, telemetry and service tests under ThreadSanitizer
+# HAPTICD_STAGES="main asan" runs only the named stages.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 packages=(
   build-essential cmake ninja-build pkg-config   # toolchain
   libyaml-cpp-dev libspdlog-dev libeigen3-dev nlohmann-json3-dev libcli11-dev zlib1g-dev
-  libsystemd-dev systemd                         # sd_notify; systemd-analyze checks the unit
+  libsystemd-dev systemd man-db file             # sd_notify; the unit and man page checked
   libhidapi-dev libusb-1.0-0-dev libgpiod-dev    # the hardware transports
   libgtest-dev libgmock-dev libbenchmark-dev     # tests and benchmarks
   rt-tests python3 util-linux                    # cyclictest and tools/jitter_bench.py; prlimit
@@ -22,33 +28,87 @@ for p in "${packages[@]}"; do
 done
 if ((${#missing[@]})); then
   echo "quickstart: installing ${missing[*]}"
-  sudo=""
-  [[ $(id -u) -ne 0 ]] && sudo=sudo
-  $sudo apt-get update -q
-  $sudo env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends "${missing[@]}"
+  as_root=()
+  if [[ $(id -u) -ne 0 ]]; then
+    if ! command -v sudo >/dev/null; then
+      echo "quickstart: installing Debian packages needs root, and sudo is not installed." >&2
+      echo "quickstart: run this as root, or install sudo, or install yourself: ${missing[*]}" >&2
+      exit 2
+    fi
+    as_root=(sudo)
+  fi
+  "${as_root[@]}" apt-get update -q
+  "${as_root[@]}" env DEBIAN_FRONTEND=noninteractive \
+    apt-get install -y -q --no-install-recommends "${missing[@]}"
 fi
 
-build=build
-cmake_args=(-G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo)
-if [[ ${HAPTICD_SANITIZE:-0} == 1 ]]; then
-  build=build-asan
-  cmake_args+=(-DHAPTICD_SANITIZE=ON -DHAPTICD_BUILD_BENCHMARKS=OFF)
-fi
-[[ -f $build/CMakeCache.txt ]] || cmake -S . -B "$build" "${cmake_args[@]}"
-cmake --build "$build"
+# configure_and_build DIR CMAKE_ARGS... [-- TARGETS...]
+configure_and_build() {
+  local dir=$1 args=() targets=()
+  shift
+  while (($#)) && [[ $1 != -- ]]; do args+=("$1"); shift; done
+  (($#)) && shift && targets=("$@")
+  [[ -f $dir/CMakeCache.txt ]] || cmake -S . -B "$dir" -G Ninja -DHAPTICD_WERROR=ON "${args[@]}"
+  cmake --build "$dir" ${targets[@]+--target "${targets[@]}"}
+}
 
 case "${1:-}" in
   demo)
-    exec "$build/src/service/hapticd" run --duration 3 --log "$build/demo.hlog" ;;
-  test)
-    # --- fuzz step (fuzz/README.md): clang build in build-fuzz/, every fuzz regression
-    # replayed, then 5 s of fuzzing per target; HAPTICD_FUZZ=0 skips it. ---
-    fuzz_status=0
-    [[ ${HAPTICD_FUZZ:-1} == 0 ]] || tools/fuzz.sh test || fuzz_status=$?
-    # --- end fuzz step ---
-    cd "$build" && ctest --output-on-failure -j "$(nproc)"
-    exit "$fuzz_status" ;;
+    configure_and_build build -DCMAKE_BUILD_TYPE=Release
+    echo "quickstart: the daemon is build/src/service/hapticd; running the 3 s demo"
+    exec build/src/service/hapticd run --duration 3 --log build/demo.hlog ;;
+  test) ;;
   *)
     echo "usage: tools/quickstart.sh demo|test" >&2
     exit 2 ;;
 esac
+
+stages=${HAPTICD_STAGES:-main fuzz asan tsan}
+failed=()
+report=()
+run_stage() {
+  local name=$1 start=$SECONDS status=0
+  shift
+  [[ " $stages " == *" $name "* ]] || return 0
+  echo "quickstart: === stage $name ==="
+  ("$@") || status=$?
+  report+=("$(printf '%-5s %4d s  %s' "$name" $((SECONDS - start)) \
+    "$([[ $status -eq 0 ]] && echo ok || echo "FAILED ($status)")")")
+  [[ $status -eq 0 ]] || failed+=("$name")
+}
+
+stage_main() {
+  configure_and_build build -DCMAKE_BUILD_TYPE=Release
+  cd build && ctest --output-on-failure -j "$(nproc)"
+}
+stage_fuzz() {
+  if [[ ${HAPTICD_FUZZ:-1} == 0 ]]; then
+    echo "quickstart: HAPTICD_FUZZ=0: fuzz targets skipped on purpose"
+    return 0
+  fi
+  tools/fuzz.sh test
+}
+stage_asan() {
+  configure_and_build build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DHAPTICD_SANITIZE=address \
+    -DHAPTICD_BUILD_BENCHMARKS=OFF
+  # One boot of the kernel test machine per run: the main stage's.
+  cd build-asan && ctest --output-on-failure -j "$(nproc)" -LE kernel
+}
+stage_tsan() {
+  configure_and_build build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DHAPTICD_SANITIZE=thread \
+    -DHAPTICD_BUILD_BENCHMARKS=OFF -- hapticd hapticd_loop_tests hapticd_telemetry_tests \
+    hapticd_service_tests
+  cd build-tsan && ctest --output-on-failure -j "$(nproc)" -L "^(loop|telemetry|service)$"
+}
+
+run_stage main stage_main
+run_stage fuzz stage_fuzz
+run_stage asan stage_asan
+run_stage tsan stage_tsan
+echo "quickstart: stage  time    result"
+printf 'quickstart: %s\n' "${report[@]}"
+if ((${#failed[@]})); then
+  echo "quickstart: FAILED: ${failed[*]}" >&2
+  exit 1
+fi
+echo "quickstart: every stage passed"

@@ -27,7 +27,7 @@ CouplingCheck coupling_check(const TransferFunction& coupling, double sample_per
   r.admissible = true;
 
   // M(z) = (1 - w)/T * (Nc - (T/2b) Dc) / Dc. With C's pole at z = 1 the factor (1 - w)
-  // cancels it; without one, M(1) = 0 and the strict inequality fails at DC (seed 002,
+  // cancels it; without one, M(1) = 0 and the strict inequality fails at DC (Naghshtabrizi & Hespanha,
   // Remark 1: a coupling needs that integrator).
   const Polynomial shifted =
       poly_add(coupling.num, poly_scale(den, -sample_period / (2.0 * device_damping)));

@@ -1,4 +1,5 @@
-// The virtual-coupling checks of seed 002 (Naghshtabrizi & Hespanha): Theorem 1's condition
+// The virtual-coupling checks of P. Naghshtabrizi and J. P. Hespanha, "Designing Transparent
+// Stabilizing Haptic Controllers", American Control Conference, 2006: Theorem 1's condition
 // that (z - 1)/(T z) (C(z) - T/(2b)) is discrete-time strictly positive real, the
 // transparency gamma = max |W (H - E)|^2, and the static stiffness H(1) a user feels under a
 // steady push.

@@ -1,5 +1,6 @@
-// Oscillation-free criteria for a loop with a unilateral nonlinearity (seed 000, Tsai &
-// Colgate, eq. 25) and Tsypkin's criterion, on the loop gain L(z) seen by xi(.).
+// Oscillation-free criteria for a loop with a unilateral nonlinearity (J. C. Tsai and
+// J. E. Colgate, "Stability of Discrete Time Systems with Unilateral Nonlinearities", ASME
+// International Mechanical Engineering Congress and Exposition, 1995, eq. 25) and Tsypkin's criterion, on the loop gain L(z) seen by xi(.).
 // Tsai-Colgate: no limit cycle can exist if for all 0 < theta <= pi, with
 // m = sin(theta) / (1 - cos(theta)):  max(Re L + m Im L, Re L - m Im L) > -1.
 // Tsypkin: Re L > -1 for all theta.

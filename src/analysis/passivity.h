@@ -1,4 +1,6 @@
-// The passivity bound of seed 001 (Roberts, Moore & Colgate, eq. 45 and 54): the sampled-data
+// The passivity bound of R. G. Roberts, C. A. Moore and J. E. Colgate, "A New Expression for
+// the Passivity Bound for a Class of Sampled-Data Systems", IEEE Transactions on Haptics,
+// 2023 (eq. 45 and 54; docs/math.md): the sampled-data
 // loop of a device with damping b, ZOH, sampler and environment H(z) delayed by d samples is
 // passive against an operator with a shortage of passivity eta iff
 //   b > b_req = max_{0 <= theta <= pi} Re{ T H(e^{j theta}) e^{-j theta d} / (1 - e^{j theta}) } +

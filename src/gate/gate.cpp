@@ -53,7 +53,7 @@ void analyse_oscillation(const config::Config& cfg, const TransferFunction& e,
   if (c && r.coupling.admissible && analysis::poly_has_root_at(c->den, 1.0)) {
     r.oscillation.note =
         "not applicable: the coupling's pole at z = 1 makes the loop gain unbounded at DC; "
-        "seed 002 Theorem 1 (the DSPR check) covers oscillation instead";
+        "Naghshtabrizi and Hespanha's Theorem 1 (the DSPR check) covers oscillation instead";
     return;
   }
   // The loop seen by xi(.): E (z^-d G + C), which is DESIGN.md's E z^-d G without coupling.
@@ -86,7 +86,7 @@ GateReport evaluate_gate(const config::Config& cfg, int device_delay_samples) {
   const TransferFunction h = analysis::contact_map(e, c);
   r.static_stiffness = analysis::static_stiffness(e, c);
 
-  // Passivity (seed 001) of what will run: H delayed by the wall's and the driver's samples.
+  // Passivity (Roberts, Moore & Colgate) of what will run: H delayed by the wall's and the driver's samples.
   const analysis::PassivityBound pb = analysis::passivity_bound(h, t, r.delay_samples, eta);
   PassivityReport& p = r.passivity;
   p.required_damping = pb.required_damping;
@@ -107,7 +107,7 @@ GateReport evaluate_gate(const config::Config& cfg, int device_delay_samples) {
       },
       t, r.delay_samples, eta, p.available_damping);
 
-  // Coupling (seed 002).
+  // Coupling (Naghshtabrizi & Hespanha).
   r.coupling.present = c.has_value();
   if (c) {
     const analysis::CouplingCheck cc = analysis::coupling_check(*c, t, b);
@@ -130,10 +130,10 @@ GateReport evaluate_gate(const config::Config& cfg, int device_delay_samples) {
   r.pass = r.reasons.empty();
 
   if (c && r.coupling.admissible && !r.coupling.dspr) {
-    r.warnings.push_back("coupling: seed 002 Theorem 1 does not hold (" + r.coupling.note + ")");
+    r.warnings.push_back("coupling: Naghshtabrizi and Hespanha's Theorem 1 does not hold (" + r.coupling.note + ")");
   }
   if (c && r.delay_samples > 0) {
-    r.warnings.push_back("coupling: seed 002 Theorem 1 assumes no delay; with " +
+    r.warnings.push_back("coupling: Naghshtabrizi and Hespanha's Theorem 1 assumes no delay; with " +
                          std::to_string(r.delay_samples) +
                          " samples the passivity bound is what guarantees the loop");
   }

@@ -82,7 +82,7 @@ std::string gate_to_text(const GateReport& r, const config::Config& cfg) {
                    std::to_string(r.wall_delay_samples) + " + driver " +
                    std::to_string(r.device_delay_samples) + ")");
   row("device damping b", format_number(r.device_damping) + " N s/m");
-  os << "passivity (seed 001, Roberts-Moore-Colgate)\n";
+  os << "passivity (Roberts, Moore & Colgate)\n";
   row("required damping b_req",
       format_number(p.required_damping) + " N s/m" +
           (std::isfinite(p.required_damping) ? " at " + format_number(p.worst_frequency_hz) + " Hz"
@@ -101,7 +101,7 @@ std::string gate_to_text(const GateReport& r, const config::Config& cfg) {
   row("static stiffness H(1)",
       format_number(r.static_stiffness) + " N/m (what a steady push feels)");
   const OscillationReport& o = r.oscillation;
-  os << "oscillation (seed 000; operator k_h " + format_number(cfg.analysis.operator_stiffness) +
+  os << "oscillation (Tsai & Colgate; operator k_h " + format_number(cfg.analysis.operator_stiffness) +
             " N/m, b_h " + format_number(cfg.analysis.operator_damping) + " N s/m)\n";
   if (o.applicable) {
     row("Tsai-Colgate", std::string(o.tsai_colgate ? "holds" : "fails") + " (margin " +
@@ -116,7 +116,7 @@ std::string gate_to_text(const GateReport& r, const config::Config& cfg) {
   if (!c.present) {
     os << "coupling                    none\n";
   } else {
-    os << "coupling (seed 002)\n";
+    os << "coupling (Naghshtabrizi & Hespanha)\n";
     row("DSPR (Theorem 1)",
         std::string(c.dspr ? "holds" : "fails") +
             (c.admissible ? " (min Re " + format_number(c.dspr_min_real) + ")" : "") +

@@ -27,14 +27,14 @@ int peer_command(const PeerOptions& options, SignalWatch& signals) {
     sim::PeerRunner runner(*peer);
     spdlog::info("peer: a simulated {} device on {}", cfg.device.driver, options.endpoint);
     const auto start = std::chrono::steady_clock::now();
-    pollfd fd{signals.fd(), POLLIN, 0};
+    pollfd fds[2] = {{signals.fd(), POLLIN, 0}, {signals.pipe_fd(), POLLIN, 0}};
     while (!signals.take_pending()) {
       if (options.duration_s &&
           std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() >=
               *options.duration_s) {
         break;
       }
-      poll(&fd, 1, 20);
+      poll(fds, 2, 20);
     }
     runner.stop();
     error = runner.error();

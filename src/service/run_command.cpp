@@ -16,6 +16,7 @@
 #include "gate/gate.h"
 #include "gate/gate_report_format.h"
 #include "loop/servo_loop.h"
+#include "service/crash_guard.h"
 #include "service/device_session.h"
 #include "service/exit_codes.h"
 #include "service/result_output.h"
@@ -225,6 +226,7 @@ loop::LoopResult servo(const config::Config& cfg, bool realtime, Device& device,
                        RunSummary& s) {
   loop::LoopResult result;
   if (stop_requested(signals, s, "before output was enabled")) return result;
+  const CrashGuard crash_guard(device);  // a crash while enabled still writes zero first
   device.enable();
   s.output_was_enabled = true;
   {

@@ -49,9 +49,10 @@ std::string RtThread::supervise(SignalWatch& signals) {
   std::uint64_t watchdog_usec = 0;
   const bool watchdog = sd_watchdog_enabled(0, &watchdog_usec) > 0;
   std::uint64_t last_ticks = 0;
-  pollfd fds[2] = {{signals.fd(), POLLIN, 0}, {ended_fd_, POLLIN, 0}};
+  pollfd fds[3] = {
+      {signals.fd(), POLLIN, 0}, {signals.pipe_fd(), POLLIN, 0}, {ended_fd_, POLLIN, 0}};
   while (!finished_.load(std::memory_order_acquire)) {
-    poll(fds, 2, 50);  // the time-out paces the watchdog
+    poll(fds, 3, 50);  // the time-out paces the watchdog
     if (const auto sig = signals.take_pending(); sig && !stop_.load()) {
       reason = "signal " + signal_name(*sig);
       spdlog::info("{} received: stopping", signal_name(*sig));

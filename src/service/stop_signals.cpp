@@ -1,5 +1,6 @@
 #include "service/stop_signals.h"
 
+#include <fcntl.h>
 #include <signal.h>
 #include <string.h>
 #include <sys/signalfd.h>
@@ -27,6 +28,17 @@ const std::vector<int>& all_stop_signals() {
   return signals;
 }
 
+// The self-pipe of the handler: written on whatever thread a stop signal lands, read by the
+// supervisor. Created once, before any thread.
+int g_pipe[2] = {-1, -1};
+
+void on_stop_signal(int sig) {
+  const int saved = errno;  // a handler must leave errno as it found it
+  const auto byte = static_cast<unsigned char>(sig);
+  [[maybe_unused]] const ssize_t n = write(g_pipe[1], &byte, 1);
+  errno = saved;
+}
+
 sigset_t stop_set() {
   sigset_t set;
   sigemptyset(&set);
@@ -38,13 +50,23 @@ sigset_t stop_set() {
 
 std::span<const int> stop_signal_numbers() { return all_stop_signals(); }
 
+void forward_stop_signal(int sig) noexcept { on_stop_signal(sig); }
+
 void install_signal_policy() {
   const sigset_t set = stop_set();
   pthread_sigmask(SIG_BLOCK, &set, nullptr);
+  if (g_pipe[0] < 0 && pipe2(g_pipe, O_NONBLOCK | O_CLOEXEC) == 0) {
+    struct sigaction sa {};
+    sa.sa_handler = on_stop_signal;
+    sa.sa_mask = set;  // one at a time
+    sa.sa_flags = SA_RESTART;
+    for (int sig : all_stop_signals()) sigaction(sig, &sa, nullptr);
+  }
   for (int sig : {SIGPIPE, SIGXFSZ, SIGTTIN, SIGTTOU}) signal(sig, SIG_IGN);
 }
 
 void release_stop_signals() {
+  for (int sig : all_stop_signals()) signal(sig, SIG_DFL);
   const sigset_t set = stop_set();
   pthread_sigmask(SIG_UNBLOCK, &set, nullptr);
 }
@@ -67,14 +89,19 @@ SignalWatch::~SignalWatch() {
   if (fd_ >= 0) close(fd_);
 }
 
+int SignalWatch::pipe_fd() const noexcept { return g_pipe[0]; }
+
 std::optional<int> SignalWatch::take_pending() noexcept {
   signalfd_siginfo info{};
   for (;;) {
     const ssize_t n = read(fd_, &info, sizeof info);
     if (n == static_cast<ssize_t>(sizeof info)) return static_cast<int>(info.ssi_signo);
     if (n < 0 && errno == EINTR) continue;
-    return std::nullopt;  // EAGAIN: nothing pending
+    break;  // EAGAIN: nothing pending there
   }
+  unsigned char byte = 0;
+  if (g_pipe[0] >= 0 && read(g_pipe[0], &byte, 1) == 1) return static_cast<int>(byte);
+  return std::nullopt;
 }
 
 }  // namespace hapticd::service

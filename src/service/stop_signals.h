@@ -6,6 +6,11 @@
 // so the write that provoked them fails with an error the caller reports (EPIPE, EFBIG).
 // SIGKILL, SIGSTOP and a crash cannot be caught: for those the device side must fail safe
 // (docs/devices.md says what each driver relies on).
+//
+// A thread that exists before main() (a sanitizer's runtime thread, a library's) does not
+// have the mask, and the kernel may hand it a process-directed signal. So every stop signal
+// also has a handler: wherever it runs, it writes the signal's number to a self-pipe that
+// SignalWatch reads beside its signalfd.
 #pragma once
 
 #include <optional>
@@ -19,19 +24,24 @@ namespace hapticd::service {
 // SIGTSTP (a stopped loop would hold its last force) and every real-time signal.
 std::span<const int> stop_signal_numbers();
 
-// Not RT-safe. Call first in main(), before any thread: blocks the stop signals and ignores
-// SIGPIPE, SIGXFSZ, SIGTTIN and SIGTTOU.
+// Not RT-safe. Call first in main(), before any thread: blocks the stop signals, gives them
+// the self-pipe handler, and ignores SIGPIPE, SIGXFSZ, SIGTTIN and SIGTTOU.
 void install_signal_policy();
 
 // Not RT-safe. For sub-commands that never enable output (check, verify, export): the stop
-// signals get their default actions back, so Ctrl-C ends them at once.
+// signals get their default actions back and are unblocked, so Ctrl-C ends them at once.
 void release_stop_signals();
+
+// Async-signal-safe. Hands a stop signal caught by another handler to the supervisor (the
+// crash guard does this for a SIGABRT sent by another process, which is a stop, not a crash).
+void forward_stop_signal(int sig) noexcept;
 
 // "SIGTERM", "SIGRTMIN+3": the name a person recognises.
 std::string signal_name(int sig);
 
-// A signalfd over the stop signals. They stay pending until taken, so a stop requested at
-// any moment - during start-up included - is seen by the next take_pending().
+// A signalfd over the stop signals, and the self-pipe their handler writes. Blocked signals
+// stay pending until taken, so a stop requested at any moment - during start-up included - is
+// seen by the next take_pending().
 class SignalWatch {
  public:
   SignalWatch();  // throws std::system_error when the signalfd cannot be created
@@ -43,6 +53,8 @@ class SignalWatch {
   std::optional<int> take_pending() noexcept;
   // For poll(2): readable while a stop signal is pending.
   int fd() const noexcept { return fd_; }
+  // For poll(2) too: readable when the handler caught one on a thread without the mask.
+  int pipe_fd() const noexcept;
 
  private:
   int fd_ = -1;

@@ -1,4 +1,4 @@
-// Seed 002 (Naghshtabrizi & Hespanha) Example 1: T = 0.02, b = 10, K = 1000, B = 20 and the
+// Naghshtabrizi & Hespanha's Example 1: T = 0.02, b = 10, K = 1000, B = 20 and the
 // paper's third-order C(z).
 #include <gtest/gtest.h>
 

@@ -38,12 +38,12 @@ TEST(MaxStiffness, RoundTripsThroughRequiredDamping) {
 }
 
 TEST(MaxStiffness, NoneWhenTheWallDampingAloneNeedsMore) {
-  // seed 002 Example 1 bare wall: B = 20 > b = 10, no stiffness passes.
+  // Naghshtabrizi & Hespanha's Example 1 bare wall: B = 20 > b = 10, no stiffness passes.
   const StiffnessLimit lim = max_stiffness(backward_family(20.0, 0.02), 0.02, 0, 0.0, 10.0);
   EXPECT_EQ(lim.kind, StiffnessLimit::Kind::kNone);
 }
 
-TEST(MaxStiffness, UnboundedBehindTheSeed002Coupling) {
+TEST(MaxStiffness, UnboundedBehindTheExampleCoupling) {
   const TransferFunction c{{0.1, -0.0752, 0.0016, -0.0101}, {1, -1.8407, 0.8444, -0.0037}};
   const auto family = [&](double k) {
     return contact_map(environment_filter({k, 20.0, 0.02, WallDiscretization::kBackward}), c);

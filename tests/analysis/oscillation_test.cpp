@@ -32,7 +32,7 @@ TransferFunction wall_loop(double k, double b_wall, int delay, double kh) {
 
 TEST(Oscillation, TsaiColgateHoldsWhereTsypkinFails) {
   // A 1000 N/m wall pressed by a soft (100 N/m) hand: Re L dips below -1 near the
-  // hand-wall resonance, but the wedge of seed 000 eq. 25 clears -1 at every frequency.
+  // hand-wall resonance, but the wedge of Tsai & Colgate (eq. 25) clears -1 at every frequency.
   const OscillationCheck r = oscillation_check(wall_loop(1000, 0.0, 0, 100));
   ASSERT_TRUE(r.applicable) << r.note;
   EXPECT_TRUE(r.tsai_colgate);

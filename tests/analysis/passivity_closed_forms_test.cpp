@@ -1,4 +1,4 @@
-// Every closed form of seed 001 (Roberts, Moore & Colgate) that DESIGN.md §3 lists, reproduced
+// Every closed form of Roberts, Moore & Colgate that DESIGN.md §3 lists, reproduced
 // by the numerical bound to a relative 1e-9.
 #include <gtest/gtest.h>
 
@@ -30,7 +30,7 @@ struct Wall {
 };
 constexpr Wall kWalls[] = {{2000, 0.2, 1e-3}, {1000, 20, 0.02}, {5e4, 3.0, 1e-4}, {300, 0.0, 5e-3}};
 
-TEST(PassivityClosedForm, BackwardDifferenceWallIsKTHalfPlusB) {  // seed 001 eq. 46
+TEST(PassivityClosedForm, BackwardDifferenceWallIsKTHalfPlusB) {  // Roberts-Moore-Colgate eq. 46
   for (const Wall& w : kWalls) {
     const PassivityBound pb = passivity_bound(backward(w.k, w.b, w.t), w.t, 0);
     expect_rel(pb.required_damping, w.k * w.t / 2 + w.b);
@@ -44,7 +44,7 @@ TEST(PassivityClosedForm, BackwardWallWorstFrequencyIsNyquist) {
   EXPECT_NEAR(pb.worst_frequency_hz, 500.0, 1e-3);
 }
 
-TEST(PassivityClosedForm, TustinWallIsKTHalfMinusB) {  // seed 001 Example 3
+TEST(PassivityClosedForm, TustinWallIsKTHalfMinusB) {  // Roberts-Moore-Colgate Example 3
   for (const Wall& w : kWalls) {
     expect_rel(passivity_bound(tustin(w.k, w.b, w.t), w.t, 0).required_damping,
                w.k * w.t / 2 - w.b);
@@ -65,7 +65,7 @@ TEST(PassivityClosedForm, BackwardDerivativeChainsSumAlphaTwoOverTPowers) {  // 
   }
 }
 
-TEST(PassivityClosedForm, FirstOrderIirFilters) {  // seed 001 Example 3
+TEST(PassivityClosedForm, FirstOrderIirFilters) {  // Roberts-Moore-Colgate Example 3
   const double t = 1e-3;
   for (double a : {-0.6, -0.2, 0.0, 0.3, 0.8}) {
     // (z - 1)/(z + a) = (1 - z^-1)/(1 + a z^-1)
@@ -76,7 +76,7 @@ TEST(PassivityClosedForm, FirstOrderIirFilters) {  // seed 001 Example 3
   }
 }
 
-TEST(PassivityClosedForm, OneSampleDelayBothBranches) {  // seed 001 Example 4
+TEST(PassivityClosedForm, OneSampleDelayBothBranches) {  // Roberts-Moore-Colgate Example 4
   const double t = 1e-3;
   // K T >= 4 B: b_req = KT/2 + B + (KT - 2B)
   expect_rel(passivity_bound(backward(5000, 0.2, t), t, 1).required_damping,
@@ -87,7 +87,7 @@ TEST(PassivityClosedForm, OneSampleDelayBothBranches) {  // seed 001 Example 4
   EXPECT_NEAR(std::cos(pb.worst_theta), 1000 * t / (4 * 0.5), 1e-6);
 }
 
-TEST(PassivityClosedForm, TustinWithOneSampleDelay) {  // seed 001 Example 4, Tustin
+TEST(PassivityClosedForm, TustinWithOneSampleDelay) {  // Roberts-Moore-Colgate Example 4, Tustin
   const double t = 1e-3;
   for (const auto& [k, b] : {std::pair{1000.0, 0.2}, std::pair{1000.0, 2.0}}) {
     expect_rel(passivity_bound(tustin(k, b, t), t, 1).required_damping,
@@ -95,7 +95,7 @@ TEST(PassivityClosedForm, TustinWithOneSampleDelay) {  // seed 001 Example 4, Tu
   }
 }
 
-TEST(PassivityClosedForm, DelayedWallMatchesDirichletExpression) {  // seed 001 eq. 53
+TEST(PassivityClosedForm, DelayedWallMatchesDirichletExpression) {  // Roberts-Moore-Colgate eq. 53
   const double t = 1e-3, k = 3000, b = 0.4;
   for (int n = 2; n <= 3; ++n) {
     double best = -1e300;
@@ -109,7 +109,7 @@ TEST(PassivityClosedForm, DelayedWallMatchesDirichletExpression) {  // seed 001 
   }
 }
 
-TEST(PassivityClosedForm, ShortageOfPassivityAddsEta) {  // seed 001 eq. 54
+TEST(PassivityClosedForm, ShortageOfPassivityAddsEta) {  // Roberts-Moore-Colgate eq. 54
   for (double eta : {0.0, 0.05, 1.5}) {
     expect_rel(passivity_bound(backward(2000, 0.2, 1e-3), 1e-3, 0, eta).required_damping,
                1.2 + eta);

@@ -16,7 +16,7 @@ const std::vector<double> kCd{1, -1.8407, 0.8444, -0.0037};
 
 config::Config coupled(config::Discretization disc) {
   config::Config c;
-  c.loop.rate_hz = 50.0;  // seed 002 Example 1: T = 0.02
+  c.loop.rate_hz = 50.0;  // Naghshtabrizi & Hespanha's Example 1: T = 0.02
   c.wall.stiffness = 1000;
   c.wall.damping = 20;
   c.wall.discretization = disc;

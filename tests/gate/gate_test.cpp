@@ -20,7 +20,7 @@ config::Config demo() {  // the numbers of config/sim.yaml
   return c;
 }
 
-config::Config example1(bool with_coupling) {  // seed 002 Example 1
+config::Config example1(bool with_coupling) {  // Naghshtabrizi & Hespanha's Example 1
   config::Config c = demo();
   c.loop.rate_hz = 50;
   c.device.damping = 10;

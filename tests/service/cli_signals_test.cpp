@@ -47,10 +47,11 @@ TEST(CliSignals, EveryTerminatingSignalStopsTheRunLikeSigterm) {
     const std::string tag = std::to_string(n.sig);
     const std::string log = temp_path("sig" + tag + ".hlog"),
                       sum = temp_path("sig" + tag + ".json");
+    NotifySocket notify;
     BackgroundProcess p(
-        {hapticd_binary(), "run", "--duration", "10", "--log", log, "--summary-json", sum});
-    ASSERT_TRUE(p.wait_until_blocked(n.sig));
-    std::this_thread::sleep_for(std::chrono::milliseconds(250));  // servoing by now
+        {hapticd_binary(), "run", "--duration", "10", "--log", log, "--summary-json", sum},
+        {notify.env()});
+    ASSERT_TRUE(notify.wait_for("READY=1")) << "servoing";
     p.signal(n.sig);
     const ProcessResult r = p.wait();
     ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -65,9 +66,10 @@ TEST(CliSignals, EveryTerminatingSignalStopsTheRunLikeSigterm) {
 
 TEST(CliSignals, SignalsWhoseOnlyHarmIsTheirDefaultAreIgnored) {
   const std::string sum = temp_path("ignored.json");
-  BackgroundProcess p({hapticd_binary(), "run", "--duration", "10", "--summary-json", sum});
-  ASSERT_TRUE(p.wait_until_blocked(SIGTERM));
-  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  NotifySocket notify;
+  BackgroundProcess p({hapticd_binary(), "run", "--duration", "10", "--summary-json", sum},
+                      {notify.env()});
+  ASSERT_TRUE(notify.wait_for("READY=1"));
   for (int sig : {SIGPIPE, SIGXFSZ, SIGTTIN, SIGTTOU}) p.signal(sig);
   std::this_thread::sleep_for(std::chrono::milliseconds(200));
   p.signal(SIGTERM);
@@ -81,9 +83,10 @@ TEST(CliSignals, SignalsWhoseOnlyHarmIsTheirDefaultAreIgnored) {
 // used to kill the process with SIGPIPE (exit 141) and output enabled.
 TEST(CliSignals, AClosedOutputPipeDoesNotKillTheRun) {
   const std::string sum = temp_path("pipe.json");
-  BackgroundProcess p({hapticd_binary(), "run", "--duration", "10", "--summary-json", sum});
-  ASSERT_TRUE(p.wait_until_blocked(SIGTERM));
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  NotifySocket notify;
+  BackgroundProcess p({hapticd_binary(), "run", "--duration", "10", "--summary-json", sum},
+                      {notify.env()});
+  ASSERT_TRUE(notify.wait_for("READY=1"));
   p.close_output();
   p.signal(SIGTERM);
   const ProcessResult r = p.wait();

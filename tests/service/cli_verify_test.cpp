@@ -37,7 +37,7 @@ TEST(CliVerify, FindsAnInteriorWorstFrequency) {
 
 TEST(CliVerify, RefusesAWallThatCannotStayInContact) {
   const ProcessResult r = run_process(
-      {hapticd_binary(), "verify", "--config", source_dir() + "/config/seed002-example1.yaml"});
+      {hapticd_binary(), "verify", "--config", source_dir() + "/config/coupling-example.yaml"});
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("proxy left contact"), std::string::npos) << r.err;
 }

@@ -1,6 +1,6 @@
-// Seed 002 Example 1 (T = 0.02, b = 10, K = 1000, B = 20): the gate refuses the bare wall and
-// passes it behind the paper's C(z); in a run with a hand pressing in, the coupled wall
-// settles while the bare wall (forced on with safety.gate: warn) keeps bouncing.
+// Naghshtabrizi & Hespanha's Example 1 (T = 0.02, b = 10, K = 1000, B = 20): the gate refuses the
+// bare wall and passes it behind the paper's C(z); in a run with a hand pressing in, the coupled
+// wall settles while the bare wall (forced on with safety.gate: warn) keeps bouncing.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -13,7 +13,7 @@
 namespace hapticd::testing {
 namespace {
 
-std::string example() { return source_dir() + "/config/seed002-example1.yaml"; }
+std::string example() { return source_dir() + "/config/coupling-example.yaml"; }
 
 double max_speed_in_last(const std::vector<telemetry::TickRecord>& r, std::size_t n) {
   double v = 0.0;
@@ -21,7 +21,7 @@ double max_speed_in_last(const std::vector<telemetry::TickRecord>& r, std::size_
   return v;
 }
 
-TEST(Seed002Example1, GateRefusesTheBareWallAndPassesTheCoupledOne) {
+TEST(CouplingExample1, GateRefusesTheBareWallAndPassesTheCoupledOne) {
   const ProcessResult bare = run_process(
       {hapticd_binary(), "check", "--json", "--config", example(), "--set", "wall.coupling="});
   EXPECT_EQ(bare.exit_code, 3);
@@ -39,7 +39,7 @@ TEST(Seed002Example1, GateRefusesTheBareWallAndPassesTheCoupledOne) {
   EXPECT_LT(c["passivity"]["required_damping"].get<double>(), 1.0);
 }
 
-TEST(Seed002Example1, CoupledWallSettlesBareWallKeepsBouncing) {
+TEST(CouplingExample1, CoupledWallSettlesBareWallKeepsBouncing) {
   const std::string coupled_log = temp_path("ex1_coupled.hlog"),
                     bare_log = temp_path("ex1_bare.hlog");
   const std::string bare_sum = temp_path("ex1_bare.json");

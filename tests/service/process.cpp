@@ -3,9 +3,12 @@
 #include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
+#include <sys/socket.h>
+#include <sys/un.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
@@ -131,8 +134,38 @@ ProcessResult BackgroundProcess::wait() {
   return r;
 }
 
+NotifySocket::NotifySocket() {
+  static int counter = 0;
+  path_ = temp_path("notify" + std::to_string(counter++) + ".sock");
+  fd_ = socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+  sockaddr_un addr{};
+  addr.sun_family = AF_UNIX;
+  std::snprintf(addr.sun_path, sizeof addr.sun_path, "%s", path_.c_str());
+  if (fd_ < 0 || bind(fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) {
+    throw std::runtime_error("notify socket " + path_);
+  }
+}
+
+NotifySocket::~NotifySocket() {
+  close(fd_);
+  unlink(path_.c_str());
+}
+
+bool NotifySocket::wait_for(const std::string& text, int timeout_ms) {
+  char buf[1024];
+  pollfd p{fd_, POLLIN, 0};
+  while (poll(&p, 1, timeout_ms) > 0) {
+    const ssize_t n = recv(fd_, buf, sizeof buf, 0);
+    if (n > 0 && std::string(buf, static_cast<std::size_t>(n)).find(text) != std::string::npos) {
+      return true;
+    }
+  }
+  return false;
+}
+
 std::string hapticd_binary() { return HAPTICD_BINARY; }
 std::string source_dir() { return HAPTICD_SOURCE_DIR; }
+std::string build_dir() { return HAPTICD_BUILD_DIR; }
 
 std::string temp_path(const std::string& name) {
   const char* base = std::getenv("TMPDIR");

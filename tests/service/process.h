@@ -43,8 +43,26 @@ class BackgroundProcess {
   int err_fd_ = -1;
 };
 
+// A systemd notify socket the daemon reports to (pass env() to the process): a test waits
+// for READY=1 (output enabled, the RT thread running) instead of guessing with a sleep.
+class NotifySocket {
+ public:
+  NotifySocket();
+  ~NotifySocket();
+  NotifySocket(const NotifySocket&) = delete;
+  NotifySocket& operator=(const NotifySocket&) = delete;
+  std::string env() const { return "NOTIFY_SOCKET=" + path_; }
+  // Waits up to `timeout_ms` for a message containing `text`; false on time-out.
+  bool wait_for(const std::string& text, int timeout_ms = 10000);
+
+ private:
+  std::string path_;
+  int fd_ = -1;
+};
+
 std::string hapticd_binary();                    // path of the built daemon
 std::string source_dir();                        // the project root
+std::string build_dir();                         // the build tree the tests belong to
 std::string temp_path(const std::string& name);  // a fresh path under the test's temp dir
 std::string read_file(const std::string& path);
 
