@@ -18,6 +18,13 @@ DecoderConfig decoder_config(const GpioSettings& s) {
   return c;
 }
 
+std::string schema_number(double v) {
+  std::string s = std::to_string(v);
+  s.erase(s.find_last_not_of('0') + 1);
+  if (!s.empty() && s.back() == '.') s.pop_back();
+  return s;
+}
+
 std::string errno_text(std::uint32_t detail) {
   return std::string(std::strerror(static_cast<int>(detail))) + " (errno " +
          std::to_string(detail) + ")";
@@ -37,7 +44,19 @@ GpioDevice::GpioDevice(const GpioSettings& settings, double max_force,
       transport_(std::move(transport)),
       declared_delay_(declared_delay),
       decoder_(decoder_config(settings)),
-      direction_level_(settings.direction_positive_high) {}
+      direction_level_(settings.direction_positive_high),
+      missed_times_(settings.missed_edge_fault + 1, 0) {}
+
+// RT-safe. Records the missed edges the decoder counted since the last read, at `now_ns`.
+void GpioDevice::note_missed(std::int64_t now_ns) noexcept {
+  const std::uint64_t total = decoder_.missed_edges();
+  const std::uint64_t fresh = std::min<std::uint64_t>(total - missed_seen_, missed_times_.size());
+  missed_seen_ = total;
+  for (std::uint64_t i = 0; i < fresh; ++i) {
+    missed_times_[missed_next_] = now_ns;
+    missed_next_ = (missed_next_ + 1) % missed_times_.size();
+  }
+}
 
 std::uint8_t GpioDevice::logical_levels(std::uint8_t raw) const noexcept {
   const std::uint8_t enc = wire::kLevelA | wire::kLevelB | wire::kLevelIndex;
@@ -65,6 +84,10 @@ DeviceInfo GpioDevice::on_configure() {
   direction_level_ = s_.direction_positive_high;
   const std::uint8_t levels = logical_levels(transport_->open(output(0)));
   decoder_.reset(levels);
+  previous_complete_ns_ = 0;
+  std::fill(missed_times_.begin(), missed_times_.end(), 0);
+  missed_next_ = 0;
+  missed_seen_ = 0;
   fault_line_ = s_.line_fault && (levels & wire::kLevelFault) != 0;
   if (fault_line_) {
     throw DeviceError("gpio: the motor driver reports a fault (line " +
@@ -103,6 +126,9 @@ void GpioDevice::on_clear_fault() {
   keep.start_count = count;
   decoder_ = QuadratureDecoder(keep);
   decoder_.reset(levels);
+  std::fill(missed_times_.begin(), missed_times_.end(), 0);
+  missed_next_ = 0;
+  missed_seen_ = 0;
 }
 
 void GpioDevice::on_close() noexcept { transport_->close(); }
@@ -118,8 +144,13 @@ IoStatus GpioDevice::check_faults() noexcept {
         static_cast<std::uint64_t>(std::min(decoder_.exceeded_rate_hz(), double{kDetailMask}))));
     return IoStatus::kDeviceFault;
   }
-  if (decoder_.missed_edges() > s_.missed_edge_fault) {
-    set_fault_code(fault_code(FaultKind::kMissedEdges, decoder_.missed_edges()));
+  // The oldest of the last missed_edge_fault + 1 missed edges, within the window: too many.
+  const std::int64_t oldest = missed_times_[missed_next_];
+  const std::int64_t newest =
+      missed_times_[(missed_next_ + missed_times_.size() - 1) % missed_times_.size()];
+  if (missed_seen_ > s_.missed_edge_fault &&
+      newest - oldest <= std::llround(s_.missed_edge_window_s * 1e9)) {
+    set_fault_code(fault_code(FaultKind::kMissedEdges, missed_seen_));
     return IoStatus::kDeviceFault;
   }
   return IoStatus::kOk;
@@ -140,6 +171,7 @@ IoStatus GpioDevice::on_read(PositionSample& out) noexcept {
     }
   }
   decoder_.add_lost(r.lost);
+  note_missed(r.complete_until_ns != 0 ? r.complete_until_ns : previous_complete_ns_);
   if (r.error != 0) {
     set_fault_code(fault_code(FaultKind::kReadError, static_cast<std::uint64_t>(r.error)));
     return IoStatus::kTransportFault;
@@ -148,7 +180,13 @@ IoStatus GpioDevice::on_read(PositionSample& out) noexcept {
   const bool moved = decoder_.edges() != ab_before;
   if (!moved && r.complete_until_ns == 0 && r.count == 0) return IoStatus::kNoNewData;
   out.position = static_cast<double>(decoder_.count()) / s_.counts_per_unit;
-  out.time_ns = moved ? decoder_.last_edge_ns() : r.complete_until_ns;
+  // The last edge's time when it came since the previous read; edges older than that (the
+  // backlog of the first read after configure) changed the position long ago, and the
+  // position is current as of the read: its time then.
+  const bool edge_time =
+      moved && previous_complete_ns_ != 0 && decoder_.last_edge_ns() >= previous_complete_ns_;
+  out.time_ns = edge_time ? decoder_.last_edge_ns() : r.complete_until_ns;
+  if (r.complete_until_ns != 0) previous_complete_ns_ = r.complete_until_ns;
   out.flags = kSampleHasTime;
   out.status = (moved ? 0u : kStatusNoEdge) |
                (decoder_.index_hits() != hits_before ? kStatusIndex : 0u) |
@@ -183,12 +221,14 @@ std::string GpioDevice::describe(const DeviceFault& fault) const {
       return "gpio: the motor driver's fault line (line " +
              std::to_string(s_.line_fault.value_or(0)) + ") went active";
     case FaultKind::kMissedEdges:
-      return "gpio: " + std::to_string(detail) +
-             " encoder edges missed, more than device.gpio.missed_edge_fault " +
-             std::to_string(s_.missed_edge_fault) + " (" + std::to_string(d.repeated_levels()) +
-             " repeated levels, " + std::to_string(d.illegal_transitions()) +
-             " illegal transitions, " + std::to_string(d.out_of_order()) + " out of order, " +
-             std::to_string(d.lost()) + " lost by the kernel): the count is no longer trusted";
+      return "gpio: " + std::to_string(s_.missed_edge_fault + 1) + " encoder edges missed within " +
+             schema_number(s_.missed_edge_window_s) +
+             " s, more than device.gpio.missed_edge_fault " + std::to_string(s_.missed_edge_fault) +
+             "; " + std::to_string(detail) + " since enable (" +
+             std::to_string(d.repeated_levels()) + " repeated levels, " +
+             std::to_string(d.illegal_transitions()) + " illegal transitions, " +
+             std::to_string(d.out_of_order()) + " out of order, " + std::to_string(d.lost()) +
+             " lost by the kernel): the count is no longer trusted";
     case FaultKind::kEdgeRate:
       return "gpio: encoder edges at " + std::to_string(detail) +
              " per second, faster than device.gpio.max_edge_rate " +

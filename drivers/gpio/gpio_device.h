@@ -4,14 +4,16 @@
 // duty = |u| / max_force * period. The transport (kernel or loopback peer) is behind
 // gpio_transport.h, so this code is the same for both.
 //
-// A sample's time is the last A/B edge's kernel timestamp when the tick brought one; when it
-// brought none the shaft has not moved and the position is still current: the time is then
-// the moment up to which the edge stream is complete (the read time), and the status bit
-// kStatusNoEdge says so.
+// A sample's time is the last A/B edge's kernel timestamp when the tick brought one that
+// happened since the previous read; when it brought none the shaft has not moved and the
+// position is still current: the time is then the moment up to which the edge stream is
+// complete (the read time), and the status bit kStatusNoEdge says so. (The first read after
+// configure, whose edges may be a backlog from long before, also takes the read time.)
 #pragma once
 
 #include <array>
 #include <memory>
+#include <vector>
 
 #include "drivers/device.h"
 #include "drivers/gpio/gpio_settings.h"
@@ -68,6 +70,7 @@ class GpioDevice final : public Device {
   std::uint8_t logical_levels(std::uint8_t raw) const noexcept;
   OutputState output(std::uint64_t duty_ns) const noexcept;
   IoStatus check_faults() noexcept;
+  void note_missed(std::int64_t now_ns) noexcept;
 
   GpioSettings s_;
   double max_force_;
@@ -78,6 +81,11 @@ class GpioDevice final : public Device {
   bool pwm_enabled_ = false;
   bool direction_level_ = false;
   bool fault_line_ = false;
+  std::int64_t previous_complete_ns_ = 0;  // the last read's EdgeRead::complete_until_ns
+  // When each of the last missed_edge_fault + 1 missed edges was seen (a ring, preallocated).
+  std::vector<std::int64_t> missed_times_;
+  std::size_t missed_next_ = 0;
+  std::uint64_t missed_seen_ = 0;  // decoder_.missed_edges() at the last read
 };
 
 }  // namespace hapticd::drivers::gpio

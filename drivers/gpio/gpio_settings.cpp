@@ -105,8 +105,12 @@ void read_encoder(MapReader& m, GpioSettings& s) {
     s.max_edge_rate_hz = *v;
   }
   if (const auto v = config::schema::read_integer(d, m.take("missed_edge_fault"),
-                                                  IntRange::at_least(0, LLONG_MAX))) {
+                                                  IntRange::between(0, kMaxMissedEdgeFault))) {
     s.missed_edge_fault = static_cast<std::uint64_t>(*v);
+  }
+  if (const auto v = config::schema::read_number(d, m.take("missed_edge_window"),
+                                                 Range::interval(0.0, false, 3600.0, true))) {
+    s.missed_edge_window_s = *v;
   }
 }
 

@@ -16,6 +16,9 @@ enum class DisableMode : std::uint8_t {
   kCoast,  // duty 0 and the PWM channel disabled ('enable' 0)
 };
 
+// The missed-edge tolerance is a window of that many edge times, preallocated.
+inline constexpr long long kMaxMissedEdgeFault = 10000;
+
 struct GpioSettings final : config::DriverSettings {
   // The GPIO chip: a path ("/dev/gpiochip0"), a name ("gpiochip0") or the chip's label.
   std::string chip = "gpiochip0";
@@ -32,7 +35,9 @@ struct GpioSettings final : config::DriverSettings {
   std::int64_t start_count = 0;    // the count assumed at configure (a relative encoder)
   std::int64_t index_count = 0;    // the count the index sets
   double max_edge_rate_hz = 0.0;   // A/B edges per second; 0: no limit
-  std::uint64_t missed_edge_fault = 0;  // missed edges tolerated; one more faults
+  // More than missed_edge_fault missed edges within missed_edge_window_s fault the device.
+  std::uint64_t missed_edge_fault = 4;  // 0..kMaxMissedEdgeFault
+  double missed_edge_window_s = 1.0;    // > 0
 
   std::string pwm_sysfs_root = "/sys/class/pwm";
   unsigned pwm_chip = 0;

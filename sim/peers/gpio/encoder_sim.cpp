@@ -102,10 +102,11 @@ void EncoderSim::inject(WireFault f, std::int64_t t_ns) {
       return;
     }
     case WireFault::kIllegalPattern:
-      // Two counts forward with A and B 1 us apart, 2 ms later back the same way: the count
-      // ends where it began, but each pair is a two-bit change within any sane resolution.
+      // Two counts forward with A and B 1 us apart, 4 ms later back the same way: the count
+      // ends where it began, but each pair is a two-bit change within any sane resolution,
+      // while the pattern as a whole (8 edges in 16 ms) stays below a sane rate limit.
       for (int k = 0; k < 4; ++k) {
-        const std::int64_t t = t_ns + k * 4'000'000;
+        const std::int64_t t = t_ns + k * 8'000'000;
         const std::uint8_t s1 = dg::state_of_count(count_ + 1);
         const std::uint8_t s2 = dg::state_of_count(count_ + 2);
         const auto edge = [&](std::int64_t at, std::uint8_t from, std::uint8_t to) {
@@ -115,8 +116,8 @@ void EncoderSim::inject(WireFault f, std::int64_t t_ns) {
         };
         edge(t, st, s1);
         edge(t + 1000, s1, s2);
-        edge(t + 2'000'000, s2, s1);
-        edge(t + 2'001'000, s1, st);
+        edge(t + 4'000'000, s2, s1);
+        edge(t + 4'001'000, s1, st);
       }
       return;
     case WireFault::kLoseEdges:

@@ -23,7 +23,8 @@ namespace dg = hapticd::drivers::gpio;
 // Faults on the GPIO wires beyond the generic PeerFault ones.
 enum class WireFault {
   kEdgeBurst,       // 32 toggles of line A, 1 us apart: faster than any sane max_edge_rate
-  kIllegalPattern,  // 4 times: A and B changed 1 us apart (two steps at once), then back
+  kIllegalPattern,  // 4 times, 8 ms apart: A and B changed 1 us apart (two steps at once),
+                    // and 4 ms later back
   kLoseEdges,       // the next edge's sequence number skips 5 (a kernel buffer overflow)
 };
 
