@@ -25,9 +25,15 @@ void check_contiguous(const telemetry::LogContents& log, const std::string& wher
                                "; the damaged stretch leaves a gap, replay needs every tick"});
   }
   const auto period_ns = std::llround(log.header.sample_period_s * 1e9);
-  for (std::size_t i = 1; i < log.records.size(); ++i) {
-    const telemetry::TickRecord& a = log.records[i - 1];
-    const telemetry::TickRecord& b = log.records[i];
+  const telemetry::TickRecord* prev = nullptr;
+  for (const telemetry::TickRecord& b : log.records) {
+    if (b.marker != telemetry::kMarkerNone) continue;  // an event, not a tick
+    if (prev == nullptr) {
+      prev = &b;
+      continue;
+    }
+    const telemetry::TickRecord& a = *prev;
+    prev = &b;
     if (b.tick != a.tick + 1 || std::llabs(b.scheduled_ns - a.scheduled_ns - period_ns) > 1) {
       throw config::ConfigError(
           {where + path + " has a gap after tick " + std::to_string(a.tick) +
@@ -63,7 +69,9 @@ std::vector<double> load_replay_positions(const config::Config& cfg) {
   }
   std::vector<double> x;
   x.reserve(log.records.size());
-  for (const telemetry::TickRecord& r : log.records) x.push_back(r.position);
+  for (const telemetry::TickRecord& r : log.records) {
+    if (r.marker == telemetry::kMarkerNone) x.push_back(r.position);
+  }
   return x;
 }
 

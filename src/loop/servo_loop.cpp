@@ -183,7 +183,9 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
 
     PositionSample sample;
     double command = 0.0;
-    if (sense(tick, wake, sample, st, rec, res)) {
+    const bool stepped = sense(tick, wake, sample, st, rec, res);
+    if (!stepped && res.fault.cause == FaultCause::kNone) rec.flags |= telemetry::kFlagNoPosition;
+    if (stepped) {
       const control::ControlOutput out = controller_.step(sample.position);
       command = out.force_commanded;
       rec.position = sample.position;

@@ -27,7 +27,8 @@
 //        24 f64 position, 32 f64 penetration, 40 f64 velocity, 48 f64 force_computed,
 //        56 f64 force_commanded, 64 u32 flags (TickFlag bits), 68 u32 device_status,
 //        72 i64 sample_time_ns, 80 u32 sequence, 84 u8 fault_cause, 85 u8 fault_class,
-//        86 u16 sequence_gap, 88 u32 fault_code, 92 u32 reserved (0)
+//        86 u16 sequence_gap, 88 u32 fault_code, 92 u32 marker (TickMarker: 0 for a tick,
+//        1 reload accepted, 2 reload refused: an event at a tick boundary, not a tick)
 //
 // CRC-32 is the common one (zlib crc32, Python zlib.crc32: reflected polynomial 0xEDB88320,
 // initial value and final xor 0xFFFFFFFF). A reader accepts blocks in order; a block that is
@@ -80,7 +81,7 @@ static_assert(offsetof(TickRecord, scheduled_ns) == 8 &&
               offsetof(TickRecord, sample_time_ns) == 72 && offsetof(TickRecord, sequence) == 80 &&
               offsetof(TickRecord, fault_cause) == 84 && offsetof(TickRecord, fault_class) == 85 &&
               offsetof(TickRecord, sequence_gap) == 86 && offsetof(TickRecord, fault_code) == 88 &&
-              offsetof(TickRecord, reserved) == 92);
+              offsetof(TickRecord, marker) == 92);
 
 // What the file header carries besides the constants.
 struct LogHeader {

@@ -19,6 +19,15 @@ enum TickFlag : std::uint32_t {
   kFlagUnarmed = 1u << 6,      // started inside the wall: zero force until the device first leaves
   kFlagNonFinite = 1u << 7,    // the controller computed a non-finite force: zero commanded, fault
   kFlagSequenceGap = 1u << 8,  // the device's sequence skipped samples before this one
+  kFlagNoPosition = 1u << 9,   // no position to act on yet: the controller was not stepped
+};
+
+// A record that is not a tick but an event at a tick boundary (TickRecord::marker): `tick` is
+// the first tick the event applies to, the other fields are those of the tick before it.
+enum TickMarker : std::uint32_t {
+  kMarkerNone = 0,            // an ordinary tick
+  kMarkerReloadAccepted = 1,  // a live reload swapped the control law in from `tick` on
+  kMarkerReloadRefused = 2,   // a live reload was refused; the law in force stays
 };
 
 struct TickRecord {
@@ -40,7 +49,7 @@ struct TickRecord {
   std::uint8_t fault_class = 0;     // FaultClass of a device fault: 1 transport, 2 device
   std::uint16_t sequence_gap = 0;   // samples missing before this one (saturates at 65535)
   std::uint32_t fault_code = 0;     // the driver's code of that fault (errno, EMCY, axis error)
-  std::uint32_t reserved = 0;       // zero: keeps the record a multiple of 8 bytes
+  std::uint32_t marker = 0;         // TickMarker: 0 for a tick, else an event record
 };
 
 static_assert(std::is_trivially_copyable_v<TickRecord>);

@@ -163,7 +163,7 @@ TEST(CliExport, WritesOneCsvRowPerTickAndExportsWhatSurvivesOfACutLog) {
   const std::string text = read_file(csv);
   EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 3001);  // header + 3000 ticks
   EXPECT_EQ(text.rfind("tick,scheduled_s,", 0), 0u);
-  EXPECT_NE(text.find(",stale,unarmed,non_finite,device_status\n"),
+  EXPECT_NE(text.find(",stale,unarmed,non_finite,sequence_gap,no_position,device_status,"),
             std::string::npos);  // every flag
   EXPECT_NE(text.find("\n2999,2.999000000,"), std::string::npos);
 
