@@ -34,16 +34,17 @@ using namespace std::chrono_literals;
 
 // The emulated guest (qemu without KVM) sustains 100 Hz with the peer writing edges beside
 // the loop; 200 Hz already overran a third of its ticks. At T = 10 ms the wall is softened to
-// pass the gate (b_req = K T/2 + B = 1.45 <= 1.8 N s/m), the encoder is coarser (0.1 mm a
-// count), and the press slower (about 300 edges/s), so the edges stay well inside the rate
-// limit of 1000 edges/s (resolution 1 ms; the peer spaces its edges 2 ms apart at least).
+// pass the gate (b_req = K T/2 + B = 1.45 <= 1.8 N s/m), and the encoder is coarse (0.2 mm a
+// count, about 50 edges/s during a 1 s press) with a rate limit of 250 edges/s (resolution
+// 4 ms; the peer spaces its edges 8 ms apart at least): the emulated kernel's interrupt thread
+// runs late, and edges closer than about a millisecond coalesce there.
 const std::vector<std::string> kGuestSets = {
-    "loop.rate_hz=100", "wall.stiffness=250", "device.gpio.counts_per_unit=10000",
-    "device.sim.counts_per_unit=10000", "device.gpio.start_count=-201",
-    "device.gpio.max_edge_rate=1000",
-    // Half a count from a count boundary, so the plant at rest (numerically still only to
-    // 1e-18) does not dither across one.
-    "device.sim.initial_position=-0.02005", "device.sim.operator.setpoint.rest=-0.02005",
+    "loop.rate_hz=100", "wall.stiffness=250", "device.gpio.counts_per_unit=5000",
+    "device.sim.counts_per_unit=5000", "device.gpio.start_count=-101",
+    "device.gpio.max_edge_rate=250",
+    // Mid-count, so the plant at rest (numerically still only to 1e-18) does not dither
+    // across a count boundary.
+    "device.sim.initial_position=-0.0201", "device.sim.operator.setpoint.rest=-0.0201",
     // The plant runs from the peer's start and hapticd takes seconds to start in an emulated
     // guest: the hand presses from 4 s on, when the loop is running, over 1 s.
     "device.sim.operator.setpoint.start=4", "device.sim.operator.setpoint.ramp=1"};
@@ -97,7 +98,7 @@ TEST(GpioKernel, DeviceOnGpioSimAndThePwmSimulator) {
   PositionSample s;
   ASSERT_EQ(device->read(s), IoStatus::kOk);
   EXPECT_NE(s.status & kStatusNoEdge, 0u) << "nothing moved: the read time, marked";
-  EXPECT_DOUBLE_EQ(s.position, -201 / 10000.0);
+  EXPECT_DOUBLE_EQ(s.position, -101 / 5000.0);
   ASSERT_EQ(device->write(5.0), IoStatus::kOk);
   PwmApplied a = m.pwm.applied(0);
   EXPECT_TRUE(a.enabled);
@@ -113,7 +114,7 @@ TEST(GpioKernel, DeviceOnGpioSimAndThePwmSimulator) {
   m.chip.set_pull(0, true);
   std::this_thread::sleep_for(20ms);
   ASSERT_EQ(device->read(s), IoStatus::kOk);
-  EXPECT_DOUBLE_EQ(s.position, -200 / 10000.0);
+  EXPECT_DOUBLE_EQ(s.position, -100 / 5000.0);
   EXPECT_EQ(s.status & kStatusNoEdge, 0u);
   EXPECT_GE(s.time_ns, before.tv_sec * 1'000'000'000LL + before.tv_nsec) << "the edge's time";
   device->emergency_stop();  // what the crash handler does: zero on the open descriptor

@@ -1,5 +1,6 @@
 #include "sim/peers/gpio/encoder_sim.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace hapticd::sim::gpio {
@@ -19,6 +20,10 @@ EncoderSim::EncoderSim(const config::Config& cfg, const dg::GpioSettings& s)
       count_(0),
       queued_levels_(0),
       line_levels_(0) {
+  // Injected edges come four times faster than the rate limit allows (1 us without one).
+  if (s.max_edge_rate_hz > 0.0) {
+    fast_ns_ = std::max<std::int64_t>(1, std::llround(0.25e9 / s.max_edge_rate_hz));
+  }
   count_ = encoder_count();
   const std::uint8_t st = dg::state_of_count(count_);
   std::uint8_t levels =
@@ -97,16 +102,17 @@ void EncoderSim::inject(WireFault f, std::int64_t t_ns) {
   switch (f) {
     case WireFault::kEdgeBurst: {
       const bool a = (st & dg::kBitA) != 0;
-      for (int i = 0; i < 32; ++i)
-        queue_edge(t_ns + i * 1000, dg::Line::kA, (i % 2 == 0) != a, false);
+      for (int i = 0; i < 32; ++i) {
+        queue_edge(t_ns + i * fast_ns_, dg::Line::kA, (i % 2 == 0) != a, false);
+      }
       return;
     }
     case WireFault::kIllegalPattern:
-      // Two counts forward with A and B 1 us apart, 4 ms later back the same way: the count
-      // ends where it began, but each pair is a two-bit change within any sane resolution,
-      // while the pattern as a whole (8 edges in 16 ms) stays below a sane rate limit.
+      // Two counts forward with A and B as close as a burst's edges, 20 ms later back the same
+      // way: the count ends where it began, but each pair is a two-bit change within the
+      // resolution, while the pattern as a whole (8 edges in 140 ms) stays below the limit.
       for (int k = 0; k < 4; ++k) {
-        const std::int64_t t = t_ns + k * 8'000'000;
+        const std::int64_t t = t_ns + k * 40'000'000;
         const std::uint8_t s1 = dg::state_of_count(count_ + 1);
         const std::uint8_t s2 = dg::state_of_count(count_ + 2);
         const auto edge = [&](std::int64_t at, std::uint8_t from, std::uint8_t to) {
@@ -115,9 +121,9 @@ void EncoderSim::inject(WireFault f, std::int64_t t_ns) {
           queue_edge(at, line, (to & bit) != 0, false);
         };
         edge(t, st, s1);
-        edge(t + 1000, s1, s2);
-        edge(t + 4'000'000, s2, s1);
-        edge(t + 4'001'000, s1, st);
+        edge(t + fast_ns_, s1, s2);
+        edge(t + 20'000'000, s2, s1);
+        edge(t + 20'000'000 + fast_ns_, s1, st);
       }
       return;
     case WireFault::kLoseEdges:

@@ -22,9 +22,10 @@ namespace dg = hapticd::drivers::gpio;
 
 // Faults on the GPIO wires beyond the generic PeerFault ones.
 enum class WireFault {
-  kEdgeBurst,       // 32 toggles of line A, 1 us apart: faster than any sane max_edge_rate
-  kIllegalPattern,  // 4 times, 8 ms apart: A and B changed 1 us apart (two steps at once),
-                    // and 4 ms later back
+  kEdgeBurst,       // 32 toggles of line A, 4 times faster than max_edge_rate allows (1 us
+                    // apart without one)
+  kIllegalPattern,  // 4 times, 40 ms apart: A and B changed as close as a burst's edges
+                    // (two steps at once within the resolution), 20 ms later back
   kLoseEdges,       // the next edge's sequence number skips 5 (a kernel buffer overflow)
 };
 
@@ -74,6 +75,7 @@ class EncoderSim {
   std::uint8_t queued_levels_;  // raw levels once every queued edge is sent
   std::uint8_t line_levels_;    // raw levels as last sent (kLevel* bits)
   bool fault_active_ = false;
+  std::int64_t fast_ns_ = 1000;  // the spacing of injected edges
   std::deque<PendingEdge> queue_;
 };
 
