@@ -53,8 +53,19 @@ void CanDeviceBase::send_or_throw(const CanFrame& f, const char* what) {
 
 void CanDeviceBase::send_quietly(const CanFrame& f) noexcept {
   if (!socket_) return;
-  int error = 0;
-  if (socket_->send(f, error) == CanSocket::Io::kDone) bump(counters_.frames_sent);
+  // Not the RT thread: a full queue is worth a short wait, since these are the frames that
+  // switch the drive off.
+  for (int attempt = 0; attempt < 20; ++attempt) {
+    int error = 0;
+    const CanSocket::Io r = socket_->send(f, error);
+    if (r == CanSocket::Io::kDone) {
+      bump(counters_.frames_sent);
+      return;
+    }
+    if (r != CanSocket::Io::kEmpty) return;
+    bump(counters_.tx_queue_full);
+    socket_->wait_readable(1);
+  }
 }
 
 bool CanDeviceBase::await(int timeout_ms, const std::function<bool(const CanFrame&)>& accept,

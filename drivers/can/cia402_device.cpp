@@ -382,6 +382,11 @@ IoStatus Cia402Device::on_write(double force) noexcept {
 }
 
 std::string Cia402Device::describe(const DeviceFault& f) const {
+  const std::string seen = counter_summary();
+  return describe_cause(f) + (seen.empty() ? "" : " (also seen on the bus: " + seen + ")");
+}
+
+std::string Cia402Device::describe_cause(const DeviceFault& f) const {
   const std::string node = "can: cia402 node " + std::to_string(settings_.node_id);
   switch (fault_kind()) {
     case CanFaultKind::kEmcy:

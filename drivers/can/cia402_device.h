@@ -47,6 +47,7 @@ class Cia402Device final : public CanDeviceBase {
 
  private:
   void on_frame(const CanSocket::Received& rx) noexcept override;
+  std::string describe_cause(const DeviceFault& fault) const;
   void on_tpdo1(const CanSocket::Received& rx) noexcept;
   void on_emcy(const CanFrame& f) noexcept;
 

@@ -232,6 +232,11 @@ IoStatus OdriveDevice::on_write(double force) noexcept {
 }
 
 std::string OdriveDevice::describe(const DeviceFault& f) const {
+  const std::string seen = counter_summary();
+  return describe_cause(f) + (seen.empty() ? "" : " (also seen on the bus: " + seen + ")");
+}
+
+std::string OdriveDevice::describe_cause(const DeviceFault& f) const {
   switch (fault_kind()) {
     case CanFaultKind::kAxisError:
       return node_name() + " reports axis error " + odrive::describe_axis_error(firmware_, f.code) +

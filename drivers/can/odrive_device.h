@@ -46,6 +46,7 @@ class OdriveDevice final : public CanDeviceBase {
 
  private:
   void on_frame(const CanSocket::Received& rx) noexcept override;
+  std::string describe_cause(const DeviceFault& fault) const;
   std::string detect_firmware();
   // The next heartbeat within timeout_ms for which `accept` holds; throws naming `waiting_for`.
   odrive::Heartbeat await_heartbeat(int timeout_ms, const std::string& waiting_for,

@@ -208,9 +208,9 @@ TEST_P(CanOnVcan, AKilledHapticdLeavesADriveThatSwitchesItselfOff) {
                           "the drive's output on");
   std::this_thread::sleep_for(milliseconds(800));
   ASSERT_TRUE(peer->output_on());
+  const auto killed = std::chrono::steady_clock::now();
   run.signal(SIGKILL);
   EXPECT_EQ(run.wait(seconds(10)), 128 + SIGKILL);
-  const auto killed = std::chrono::steady_clock::now();
   kernel_test::wait_until([&] { return !peer->output_on(); }, milliseconds(2000),
                           "the drive switching itself off");
   const auto ms =
