@@ -34,12 +34,6 @@ class LoopbackPeer {
   // How often service() must run even when nothing arrived (a device's own timers: heartbeats
   // produced, watchdogs that expire when the master goes silent), in ms; -1: only on input.
   virtual int service_interval_ms() const noexcept { return -1; }
-  // How often service() must run even when nothing arrived (a device's own timers: heartbeats
-  // produced, watchdogs that expire when the master goes silent), in ms; -1: only on input.
-  virtual int service_interval_ms() const noexcept { return -1; }
-  // How often service() must run even when nothing arrived (a device's own timers: heartbeats
-  // produced, watchdogs that expire when the master goes silent), in ms; -1: only on input.
-  virtual int service_interval_ms() const noexcept { return -1; }
 
   // Any thread. What the person holding the device feels: the force the plant is given and
   // whether the simulated amplifier is on.
