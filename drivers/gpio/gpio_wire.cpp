@@ -27,6 +27,13 @@ std::uint64_t get_u64(const std::uint8_t* p) noexcept {
   return v;
 }
 
+bool all_zero(std::span<const std::uint8_t> bytes) noexcept {
+  for (const std::uint8_t b : bytes) {
+    if (b != 0) return false;
+  }
+  return true;
+}
+
 constexpr std::uint8_t kOutEnabled = 1u << 0;
 constexpr std::uint8_t kOutDirection = 1u << 1;
 constexpr std::uint8_t kOutInversed = 1u << 2;
@@ -98,6 +105,7 @@ bool decode_hello(std::span<const std::uint8_t> msg) noexcept {
 bool decode_output(std::span<const std::uint8_t> msg, Output& o) noexcept {
   if (msg.size() != kOutputSize || msg[0] != static_cast<std::uint8_t>(Type::kOutput)) return false;
   if ((msg[1] & ~(kOutEnabled | kOutDirection | kOutInversed)) != 0) return false;
+  if (!all_zero(msg.subspan(2, 6))) return false;  // reserved: a sender that sets them is wrong
   const std::uint64_t duty = get_u64(&msg[8]);
   const std::uint64_t period = get_u64(&msg[16]);
   if (duty > period) return false;  // the PWM core refuses it too
@@ -121,6 +129,7 @@ bool decode_edges_header(std::span<const std::uint8_t> msg, EdgesHeader& h) noex
   if (msg.size() < kEdgesHeaderSize || msg[0] != static_cast<std::uint8_t>(Type::kEdges)) {
     return false;
   }
+  if (msg[1] != 0 || !all_zero(msg.subspan(4, 4))) return false;  // reserved
   const std::uint16_t count = get_u16(&msg[2]);
   if (count > kMaxEdgesPerMessage || msg.size() != kEdgesHeaderSize + count * kEdgeSize) {
     return false;

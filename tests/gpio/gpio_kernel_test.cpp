@@ -23,6 +23,7 @@
 #include "pwm_sim.h"
 #include "sim/peers/gpio/gpio_peer.h"
 #include "sim/peers/peer_runner.h"
+#include "sysfs.h"
 
 namespace hapticd::drivers::gpio {
 namespace {
@@ -133,6 +134,16 @@ TEST(GpioKernel, DeviceOnGpioSimAndThePwmSimulator) {
   EXPECT_THROW(device->configure(), DeviceError);
   m.chip.set_pull(3, true);
   device->configure();
+  device->enable();
+  // Unplugged mid-run: the chip goes away under the open line request.
+  kernel_test::write_text("/sys/kernel/config/gpio-sim/hapticd/live", "0");
+  for (int tick = 0; tick < 10 && device->state() == DeviceState::kActive; ++tick) {
+    if (device->read(s) == IoStatus::kOk) device->write(1.0);  // the direction line's ioctl
+  }
+  EXPECT_EQ(device->state(), DeviceState::kFaulted) << "an unplugged chip must be noticed";
+  EXPECT_EQ(device->fault().fault_class, FaultClass::kTransport) << device->describe_fault();
+  std::cout << "unplugged: " << device->describe_fault() << "\n";
+  EXPECT_EQ(m.pwm.applied(0).duty_cycle_ns, 0u);
   device->close();
 }
 

@@ -1,7 +1,7 @@
 // The gpio-sim peer's writes, on a directory of its own: the simulated lines' `pull`
 // attributes are FIFOs, so the test sees every edge the peer puts on the wires.
-#include <gtest/gtest.h>
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -52,7 +52,8 @@ struct FakeChip {
     std::string out;
     char buf[4096];
     ssize_t n;
-    while ((n = ::read(fifo[line], buf, sizeof buf)) > 0) out.append(buf, static_cast<std::size_t>(n));
+    while ((n = ::read(fifo[line], buf, sizeof buf)) > 0)
+      out.append(buf, static_cast<std::size_t>(n));
     return out;
   }
   fs::path root;
@@ -61,13 +62,12 @@ struct FakeChip {
 
 TEST(GpioKernelPeer, AtRestItPutsTheLevelsOnceAndNothingMore) {
   FakeChip chip;
-  const config::Config cfg = load({"loop.rate_hz=200", "device.gpio.counts_per_unit=20000",
-                                   "device.sim.counts_per_unit=20000", "device.gpio.start_count=-400",
-                                   "device.sim.operator.setpoint.start=4",
-                                   "device.sim.initial_position=-0.020025",
-                                   "device.sim.operator.setpoint.rest=-0.020025"});
-  auto peer = find_driver("gpio").make_peer_on(cfg, chip.root.string() + "," +
-                                                        (chip.root / "channel0").string());
+  const config::Config cfg = load(
+      {"loop.rate_hz=200", "device.gpio.counts_per_unit=20000", "device.sim.counts_per_unit=20000",
+       "device.gpio.start_count=-400", "device.sim.operator.setpoint.start=4",
+       "device.sim.initial_position=-0.020025", "device.sim.operator.setpoint.rest=-0.020025"});
+  auto peer = find_driver("gpio").make_peer_on(
+      cfg, chip.root.string() + "," + (chip.root / "channel0").string());
   sim::PeerRunner runner(*peer);
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
   runner.stop();

@@ -31,6 +31,9 @@ TEST(GpioWire, OutputRoundTripsAndRefusesWhatThePwmCoreWould) {
   buf[1] |= 0x80;
   EXPECT_FALSE(wire::decode_output(buf, back)) << "unknown flag bits";
   EXPECT_FALSE(wire::decode_output(std::span(buf).first(wire::kOutputSize - 1), back));
+  wire::encode_output(o, buf);
+  buf[5] = 1;  // a reserved byte (found by fuzz/gpio_decoder_fuzzer.cpp)
+  EXPECT_FALSE(wire::decode_output(buf, back)) << "reserved bytes must be zero";
   EXPECT_EQ(wire::encode_output(o, std::span(buf).first(3)), 0u) << "too small a buffer";
 }
 
@@ -66,6 +69,9 @@ TEST(GpioWire, EdgesRoundTripAndEveryMalformedBatchIsRefused) {
   bad = buf;
   bad[wire::kEdgesHeaderSize + 13] = 2;  // a level is 0 or 1
   EXPECT_FALSE(wire::decode_edge(std::span<const std::uint8_t>(bad.data(), n), 0, e));
+  bad = buf;
+  bad[6] = 1;  // reserved
+  EXPECT_FALSE(wire::decode_edges_header(std::span<const std::uint8_t>(bad.data(), n), h));
   bad = buf;
   bad[2] = 0xff;  // count above the maximum
   EXPECT_FALSE(wire::decode_edges_header(std::span<const std::uint8_t>(bad.data(), n), h));
