@@ -6,6 +6,7 @@
 
 #include "config/config_schema.h"
 #include "config/schema_reader.h"
+#include "config/yaml_documents.h"
 
 namespace hapticd::config {
 namespace {
@@ -52,7 +53,7 @@ void apply_overrides(YAML::Node& root, const std::vector<Override>& overrides,
     }
     YAML::Node value;
     try {
-      const std::vector<YAML::Node> docs = YAML::LoadAll(o.value);
+      const std::vector<YAML::Node> docs = load_yaml_documents(o.value);
       if (docs.size() > 1) {
         diag.set_error(text, i, o.key_path, "value holds more than one YAML document ('---')");
         continue;
@@ -129,7 +130,7 @@ Config load_config_text(std::string_view yaml, const std::string& source_name,
                         const DriverSchemas& drivers) {
   std::vector<YAML::Node> documents;
   try {
-    documents = YAML::LoadAll(std::string(yaml));
+    documents = load_yaml_documents(std::string(yaml));
   } catch (const YAML::Exception& e) {
     std::string where = source_name;
     if (e.mark.line >= 0) {

@@ -200,7 +200,8 @@ std::vector<std::string> Diagnostics::messages() const {
   std::vector<std::string> out;
   for (const Entry* e : order) {
     if (out.size() == kMaxMessages) {
-      out.push_back("... and " + std::to_string(order.size() - kMaxMessages) +
+      // Named like every other line, so a reader of several tools' output knows whose.
+      out.push_back(source_ + ": ... and " + std::to_string(order.size() - kMaxMessages) +
                     " more problems not shown");
       break;
     }

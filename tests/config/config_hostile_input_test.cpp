@@ -19,6 +19,17 @@ TEST(HostileConfig, ASecondDocumentIsRefusedNotIgnored) {
                   "one YAML document ('---')"});
 }
 
+// yaml-cpp 0.7's LoadAll never returns on a stray ',' and allocates until memory runs out
+// (found by fuzz/, regressions new-yaml-loadall-comma-*): refused with the place instead.
+TEST(HostileConfig, AStrayCommaIsASyntaxErrorNotAHang) {
+  EXPECT_EQ(errors_of(",\n"),
+            Lines{"t.yaml:1:1: YAML syntax error: unexpected ',': the YAML parser cannot get "
+                  "past it"});
+  EXPECT_EQ(errors_of("", sets({"wall.stiffness=,"})),
+            Lines{"--set wall.stiffness=,: wall.stiffness: value is not valid YAML: unexpected "
+                  "',': the YAML parser cannot get past it"});
+}
+
 TEST(HostileConfig, ANumberBelowTheDoubleRangeIsRefusedNotZero) {
   EXPECT_EQ(errors_of("wall:\n  damping: 1e-400\n"),
             Lines{"t.yaml:2: wall.damping: is too close to zero to be represented (it would "
@@ -50,7 +61,7 @@ TEST(HostileConfig, ThousandsOfKeysGiveABoundedReport) {
   yaml += "  k7: 2\n";  // a duplicate among them is still found
   const Lines e = errors_of(yaml);
   ASSERT_EQ(e.size(), kMaxMessages + 1);
-  EXPECT_EQ(e.back(), "... and 39901 more problems not shown");
+  EXPECT_EQ(e.back(), "t.yaml: ... and 39901 more problems not shown");
   EXPECT_EQ(e.front(),
             "t.yaml:2: wall.k0: unknown key; expected one of: position, normal, "
             "stiffness, damping, discretization, delay_samples, no_pull, coupling");

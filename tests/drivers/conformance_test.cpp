@@ -200,7 +200,13 @@ TEST_P(Conformance, EveryFaultClassFaultsTheLoopWithZeroForce) {
     if (!expressible) rig.peer().inject(sim::PeerFault::kTransportFault);  // end the run
     t.join();
     if (!expressible) GTEST_SKIP() << GetParam().driver << ": this transport cannot express it";
-    EXPECT_EQ(r.fault.cause, cause) << loop::describe(r.fault);
+    // A broken transport faults whichever direction meets it first: a read of data still
+    // buffered can succeed and the write after it fail (the GPIO loopback does that).
+    const bool either_direction = cause == loop::FaultCause::kTransportRead &&
+                                  r.fault.cause == loop::FaultCause::kTransportWrite;
+    if (!either_direction) {
+      EXPECT_EQ(r.fault.cause, cause) << loop::describe(r.fault);
+    }
     EXPECT_GT(r.contact_ticks, 100u) << "the wall was pushing when the fault struck";
     rig.settle();
     EXPECT_EQ(rig.peer().applied_force(), 0.0);
