@@ -27,7 +27,9 @@ TEST(Install, GivesAStrippedBinaryAManPageAndAUnitThatVerifies) {
   if (file.exit_code == 0) {
     EXPECT_TRUE(has(file.out, "stripped") && !has(file.out, "not stripped")) << file.out;
   }
+#ifndef HAPTICD_SANITIZED  // a sanitizer's runtime and checks take a stripped binary past 30 MB
   EXPECT_LT(std::filesystem::file_size(bin), 20u << 20) << "a stripped binary is a few MB";
+#endif
 
   const std::string unit = prefix + "/lib/systemd/system/hapticd.service";
   ASSERT_TRUE(std::filesystem::exists(unit)) << inst.out;
