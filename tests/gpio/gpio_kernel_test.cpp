@@ -221,8 +221,8 @@ class GpioKernelRun : public testing::Test {
 // emulated guest no longer keeps the 100 Hz loop and the peer's edges in step - penetration
 // 8.6 mm for 5.5, and the injected burst and illegal pattern arrive coalesced by the guest's
 // late interrupt thread, so no fault is seen (issue 12 is open for it). The same three runs
-// pass on the host against the loopback peer (gpio_loopback_test.cpp), and the gpio-sim and PWM-simulator
-// tests above still run in the guest.
+// pass on the host against the loopback peer (gpio_loopback_test.cpp), and the gpio-sim and
+// PWM-simulator tests above still run in the guest.
 TEST_F(GpioKernelRun, DISABLED_RendersTheWallAt100HzNoFault) {
   const RunResult r = run_hapticd(m_, 7.0, {}, *peer_, std::nullopt);
   ASSERT_EQ(r.exit_code, 0) << r.output;
