@@ -17,10 +17,10 @@ void add(BusLoad& load, const Cyclic& c) {
   load.bits_per_tick += c.per_tick * worst_case_frame_bits(c.bytes);
   char text[96];
   if (c.per_tick == 1.0) {
-    std::snprintf(text, sizeof text, "%s (%d bytes)", c.name, c.bytes);
+    std::snprintf(text, sizeof text, "%s (%d byte%s)", c.name, c.bytes, c.bytes == 1 ? "" : "s");
   } else {
-    std::snprintf(text, sizeof text, "%s (%d bytes, every %.0f ticks)", c.name, c.bytes,
-                  1.0 / c.per_tick);
+    std::snprintf(text, sizeof text, "%s (%d byte%s, every %.0f ticks)", c.name, c.bytes,
+                  c.bytes == 1 ? "" : "s", 1.0 / c.per_tick);
   }
   load.frames.emplace_back(text);
 }

@@ -47,7 +47,10 @@ void PeerRunner::run(int priority) {
   pollfd fds[2] = {{peer_.fd(), POLLIN, 0}, {stop_fd_, POLLIN, 0}};
   while (true) {
     if (poll(fds, 2, peer_.service_interval_ms()) < 0 && errno != EINTR) break;
-    if (fds[1].revents != 0) break;
+    // Asked to stop: what the driver said last (its disable) is still handled first, so the
+    // simulated amplifier ends as the driver left it.
+    const bool stopping = fds[1].revents != 0;
+    if (stopping && (fds[0].revents & POLLIN) == 0) break;
     // busy before the first byte is taken, so wait_idle never sees "nothing unread, not busy"
     // while an answer is still being made.
     busy_.store(true);
@@ -60,7 +63,7 @@ void PeerRunner::run(int priority) {
       break;
     }
     busy_.store(false);
-    if (fds[0].revents & (POLLHUP | POLLERR)) break;  // the driver closed its end
+    if (stopping || (fds[0].revents & (POLLHUP | POLLERR))) break;  // or the driver closed its end
   }
 }
 

@@ -223,6 +223,37 @@ TEST_P(CanOnVcan, AKilledHapticdLeavesADriveThatSwitchesItselfOff) {
   runner.stop();
 }
 
+// The interface vanishes mid-run (a USB CAN adapter pulled out): the next tick is a transport
+// fault naming what the kernel said, with zero commanded, never a crash or a hang.
+TEST_P(CanOnVcan, AnInterfaceThatVanishesMidRunIsATransportFault) {
+  const std::string profile = GetParam();
+  auto bus = std::make_unique<kernel_test::VcanInterface>("vcan0");
+  const config::Config cfg = load_example("can-" + profile + ".yaml", vm_sets(profile), false);
+  auto peer = find_driver("can").make_peer_on(cfg, "vcan0");
+  sim::PeerRunner runner(*peer);
+  auto device = find_driver("can").make_device(cfg);
+  device->configure();
+  device->enable();
+  PositionSample s;
+  for (int i = 0; i < 20; ++i) {
+    device->read(s);
+    ASSERT_EQ(device->write(1.0), IoStatus::kOk);
+    std::this_thread::sleep_for(milliseconds(10));
+  }
+  runner.stop();
+  bus.reset();  // RTM_DELLINK: the interface is gone
+  IoStatus r = IoStatus::kOk;
+  for (int i = 0; i < 5 && (r == IoStatus::kOk || r == IoStatus::kNoNewData); ++i) {
+    r = device->read(s);
+    if (r == IoStatus::kOk || r == IoStatus::kNoNewData) r = device->write(1.0);
+  }
+  EXPECT_EQ(r, IoStatus::kTransportFault);
+  EXPECT_EQ(device->last_command(), 0.0);
+  EXPECT_NE(device->describe_fault().find("the socket failed"), std::string::npos)
+      << device->describe_fault();
+  device->close();
+}
+
 INSTANTIATE_TEST_SUITE_P(Profiles, CanOnVcan, ::testing::Values("cia402", "odrive"));
 
 }  // namespace
