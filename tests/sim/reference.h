@@ -41,9 +41,12 @@ inline std::function<double(double)> affine_on(const std::vector<std::pair<doubl
   }
   if (i < 0) return [v = pts.front().second](double) { return v; };
   if (j < 0) return [v = pts.back().second](double) { return v; };
-  const auto [ta, va] = pts[static_cast<std::size_t>(i)];
-  const auto [tb, vb] = pts[static_cast<std::size_t>(j)];
-  return [=](double t) { return va + (vb - va) * (t - ta) / (tb - ta); };
+  // Plain copies, not structured bindings: clang before 16 cannot capture those.
+  const std::pair<double, double> pa = pts[static_cast<std::size_t>(i)];
+  const std::pair<double, double> pb = pts[static_cast<std::size_t>(j)];
+  return [pa, pb](double t) {
+    return pa.second + (pb.second - pa.second) * (t - pa.first) / (pb.first - pa.first);
+  };
 }
 
 inline double operator_force(const Params& p, double s, double x, double v) {

@@ -3,6 +3,16 @@
 #include <cstdlib>
 #include <new>
 
+// Under ASan and TSan the sanitizer owns malloc. GCC says so with __SANITIZE_*__, clang (before
+// 17) only through __has_feature.
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#define HAPTICD_SANITIZER_OWNS_MALLOC 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
+#define HAPTICD_SANITIZER_OWNS_MALLOC 1
+#endif
+#endif
+
 namespace {
 // Zero-initialised TLS needs no dynamic initialisation, so it is safe to touch from malloc.
 thread_local std::uint64_t t_allocations = 0;
@@ -10,15 +20,15 @@ thread_local std::uint64_t t_allocations = 0;
 
 namespace hapticd::testing {
 std::uint64_t thread_allocations() noexcept { return t_allocations; }
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#ifdef HAPTICD_SANITIZER_OWNS_MALLOC
 bool malloc_is_counted() noexcept { return false; }
 #else
 bool malloc_is_counted() noexcept { return true; }
 #endif
 }  // namespace hapticd::testing
 
-#if !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
-// Under ASan and TSan the sanitizer owns malloc: only operator new is counted there.
+#ifndef HAPTICD_SANITIZER_OWNS_MALLOC
+// Where a sanitizer owns malloc, only operator new is counted.
 extern "C" {
 void* __libc_malloc(std::size_t);
 void* __libc_calloc(std::size_t, std::size_t);

@@ -113,7 +113,7 @@ void OdrivePeer::on_command(std::uint8_t command, const CanFrame& f) {
           if (r->endpoint == settings_.odrive.watchdog_timeout_endpoint) {
             float t;
             std::memcpy(&t, &r->value, sizeof t);
-            watchdog_timeout_s_ = t;
+            watchdog_timeout_s_ = static_cast<double>(t);  // the wire carries a float
           }
         } else {
           send(odrive::tx_sdo(node_, {r->endpoint, endpoints_[r->endpoint]}));
