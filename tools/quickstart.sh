@@ -86,8 +86,8 @@ stage_main() {
 }
 # clang, because libFuzzer ships with it: one instrumented build serves both the suite under
 # the sanitizers and the fuzz targets (fuzz/README.md), where two builds of the same code
-# took a third of the test command. Line tables are all a sanitizer's report needs; full
-# debug information doubled the compile time of the Eigen-heavy files.
+# took a third of the test command. Line tables are all a sanitizer's report needs (full
+# debug information: 6 % more compile time, objects 6 times larger, e.g. sim/plant.cpp).
 stage_asan() {
   local fuzz=ON
   if [[ ${HAPTICD_FUZZ:-1} == 0 ]]; then
