@@ -48,7 +48,10 @@ TEST(CliRun, DemoRunsThePressAndWritesSummaryAndLog) {
 
 TEST(CliRun, SigtermStopsCleanlyWithZeroForceAndAFlushedLog) {
   const std::string log = temp_path("term.hlog"), sum = temp_path("term.json");
-  BackgroundProcess p({hapticd_binary(), "run", "--log", log, "--summary-json", sum});
+  NotifySocket notify;
+  BackgroundProcess p({hapticd_binary(), "run", "--log", log, "--summary-json", sum},
+                      {notify.env()});
+  ASSERT_TRUE(notify.wait_for("READY=1")) << "servoing";         // the log is open from here on
   std::this_thread::sleep_for(std::chrono::milliseconds(1500));  // into contact: hand pressing
   p.signal(SIGTERM);
   const ProcessResult r = p.wait();

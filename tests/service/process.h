@@ -52,8 +52,10 @@ class NotifySocket {
   NotifySocket(const NotifySocket&) = delete;
   NotifySocket& operator=(const NotifySocket&) = delete;
   std::string env() const { return "NOTIFY_SOCKET=" + path_; }
-  // Waits up to `timeout_ms` for a message containing `text`; false on time-out.
-  bool wait_for(const std::string& text, int timeout_ms = 10000);
+  // Waits up to `timeout_ms` for a message containing `text`; false on time-out. The default
+  // is a deadline for a daemon that never gets there: under ThreadSanitizer on a loaded
+  // 2-core machine a start-up took over 10 s.
+  bool wait_for(const std::string& text, int timeout_ms = 30000);
 
  private:
   std::string path_;
