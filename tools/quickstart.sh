@@ -96,9 +96,11 @@ stage_asan() {
   fi
   CC=clang CXX=clang++ configure_and_build build-asan-clang -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -gline-tables-only -DNDEBUG" \
-    -DHAPTICD_SANITIZE=address -DHAPTICD_FUZZ=$fuzz -DHAPTICD_BUILD_BENCHMARKS=OFF
-  # One boot of the kernel test machine per run: the main stage's.
-  cd build-asan-clang && ctest --output-on-failure -j "$(nproc)" -LE kernel
+    -DHAPTICD_SANITIZE=address -DHAPTICD_FUZZ=$fuzz -DHAPTICD_BUILD_BENCHMARKS=OFF \
+    -DHAPTICD_BUILD_KERNEL_TESTS=OFF
+  # One boot of the kernel test machine per run: the main stage's; its binaries are not even
+  # built here (a sixth of the build).
+  cd build-asan-clang && ctest --output-on-failure -j "$(nproc)"
 }
 stage_tsan() {
   configure_and_build build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo \
