@@ -20,9 +20,12 @@ EncoderSim::EncoderSim(const config::Config& cfg, const dg::GpioSettings& s)
       count_(0),
       queued_levels_(0),
       line_levels_(0) {
-  // Injected edges come four times faster than the rate limit allows (1 us without one).
+  // Injected edges come four times faster than the rate limit allows (1 us without one). The
+  // illegal pattern's step is 4 resolutions at least, so that the pattern as a whole stays
+  // below the limit at any rate (any 8 of its edges span 3 steps).
   if (s.max_edge_rate_hz > 0.0) {
     fast_ns_ = std::max<std::int64_t>(1, std::llround(0.25e9 / s.max_edge_rate_hz));
+    pattern_step_ns_ = std::max(pattern_step_ns_, 16 * fast_ns_);
   }
   count_ = encoder_count();
   const std::uint8_t st = dg::state_of_count(count_);
@@ -108,11 +111,12 @@ void EncoderSim::inject(WireFault f, std::int64_t t_ns) {
       return;
     }
     case WireFault::kIllegalPattern:
-      // Two counts forward with A and B as close as a burst's edges, 20 ms later back the same
-      // way: the count ends where it began, but each pair is a two-bit change within the
-      // resolution, while the pattern as a whole (8 edges in 140 ms) stays below the limit.
+      // Two counts forward with A and B as close as a burst's edges, a step (20 ms) later back
+      // the same way: the count ends where it began, but each pair is a two-bit change within
+      // the resolution, while the pattern as a whole (any 8 edges span 3 steps) stays below the
+      // limit.
       for (int k = 0; k < 4; ++k) {
-        const std::int64_t t = t_ns + k * 40'000'000;
+        const std::int64_t t = t_ns + k * 2 * pattern_step_ns_;
         const std::uint8_t s1 = dg::state_of_count(count_ + 1);
         const std::uint8_t s2 = dg::state_of_count(count_ + 2);
         const auto edge = [&](std::int64_t at, std::uint8_t from, std::uint8_t to) {
@@ -122,8 +126,8 @@ void EncoderSim::inject(WireFault f, std::int64_t t_ns) {
         };
         edge(t, st, s1);
         edge(t + fast_ns_, s1, s2);
-        edge(t + 20'000'000, s2, s1);
-        edge(t + 20'000'000 + fast_ns_, s1, st);
+        edge(t + pattern_step_ns_, s2, s1);
+        edge(t + pattern_step_ns_ + fast_ns_, s1, st);
       }
       return;
     case WireFault::kLoseEdges:

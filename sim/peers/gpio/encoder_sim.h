@@ -25,7 +25,8 @@ enum class WireFault {
   kEdgeBurst,       // 32 toggles of line A, 4 times faster than max_edge_rate allows (1 us
                     // apart without one)
   kIllegalPattern,  // 4 times, 40 ms apart: A and B changed as close as a burst's edges
-                    // (two steps at once within the resolution), 20 ms later back
+                    // (two steps at once within the resolution), 20 ms later back; at a
+                    // max_edge_rate below 200 edges/s, 8 and 4 resolutions instead
   kLoseEdges,       // the next edge's sequence number skips 5 (a kernel buffer overflow)
 };
 
@@ -60,6 +61,7 @@ class EncoderSim {
   bool output_on() const noexcept { return axis_.output_on(); }
   const Plant& plant() const noexcept { return axis_.plant(); }
   std::int64_t period_ns() const noexcept { return period_ns_; }
+  std::int64_t injected_spacing_ns() const noexcept { return fast_ns_; }
 
  private:
   void queue_count_edges(std::int64_t from, std::int64_t to, std::int64_t t0_ns);
@@ -75,7 +77,8 @@ class EncoderSim {
   std::uint8_t queued_levels_;  // raw levels once every queued edge is sent
   std::uint8_t line_levels_;    // raw levels as last sent (kLevel* bits)
   bool fault_active_ = false;
-  std::int64_t fast_ns_ = 1000;  // the spacing of injected edges
+  std::int64_t fast_ns_ = 1000;                // the spacing of injected edges
+  std::int64_t pattern_step_ns_ = 20'000'000;  // the illegal pattern's step
   std::deque<PendingEdge> queue_;
 };
 
