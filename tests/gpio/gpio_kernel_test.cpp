@@ -44,9 +44,9 @@ using namespace std::chrono_literals;
 //    safety.stale_fault_ticks 10 (200 ms: a sample carries its last edge's time, so a tick
 //    woken 2 T late just after an edge would read as stale).
 //  - max_edge_rate 25 edges/s (resolution 40 ms): the injected burst's edges are 10 ms apart
-//    (four times the limit), the illegal pattern's A/B pairs 10 ms apart (still within the
-//    resolution if the second write is 30 ms late) and its steps 160 ms. A probe in the guest
-//    saw edges 10 ms apart on one line merged rarely, 5 ms apart often.
+//    (four times the limit), the illegal pattern's steps 160 ms (its A/B pairs are written at
+//    once: edges on two lines do not merge). A probe in the guest saw edges 10 ms apart on
+//    one line merged rarely, 5 ms apart often.
 //  - The peer spaces the plant's edges 2/max_edge_rate = 80 ms apart at least, so the press
 //    must stay well below 12.5 edges/s, or the measured position slews behind the plant (the
 //    settings before pressed at 150 edges/s: 8.6 mm for 5.5). A 0.5 mm encoder and the hand

@@ -111,12 +111,14 @@ void EncoderSim::inject(WireFault f, std::int64_t t_ns) {
       return;
     }
     case WireFault::kIllegalPattern:
-      // Two counts forward with A and B as close as a burst's edges, a step (20 ms) later back
+      // Two counts forward with A and B changing at once (1 us apart at most: within the
+      // resolution even when a carrier puts them on the wires late), a step (20 ms) later back
       // the same way: the count ends where it began, but each pair is a two-bit change within
       // the resolution, while the pattern as a whole (any 8 edges span 3 steps) stays below the
       // limit.
       for (int k = 0; k < 4; ++k) {
         const std::int64_t t = t_ns + k * 2 * pattern_step_ns_;
+        const std::int64_t pair = std::min<std::int64_t>(fast_ns_, 1000);
         const std::uint8_t s1 = dg::state_of_count(count_ + 1);
         const std::uint8_t s2 = dg::state_of_count(count_ + 2);
         const auto edge = [&](std::int64_t at, std::uint8_t from, std::uint8_t to) {
@@ -125,9 +127,9 @@ void EncoderSim::inject(WireFault f, std::int64_t t_ns) {
           queue_edge(at, line, (to & bit) != 0, false);
         };
         edge(t, st, s1);
-        edge(t + fast_ns_, s1, s2);
+        edge(t + pair, s1, s2);
         edge(t + pattern_step_ns_, s2, s1);
-        edge(t + pattern_step_ns_ + fast_ns_, s1, st);
+        edge(t + pattern_step_ns_ + pair, s1, st);
       }
       return;
     case WireFault::kLoseEdges:

@@ -24,9 +24,9 @@ namespace dg = hapticd::drivers::gpio;
 enum class WireFault {
   kEdgeBurst,       // 32 toggles of line A, 4 times faster than max_edge_rate allows (1 us
                     // apart without one)
-  kIllegalPattern,  // 4 times, 40 ms apart: A and B changed as close as a burst's edges
-                    // (two steps at once within the resolution), 20 ms later back; at a
-                    // max_edge_rate below 200 edges/s, 8 and 4 resolutions instead
+  kIllegalPattern,  // 4 times, 40 ms apart: A and B changed at once (two steps within the
+                    // resolution), 20 ms later back; at a max_edge_rate below 200 edges/s,
+                    // 8 and 4 resolutions instead
   kLoseEdges,       // the next edge's sequence number skips 5 (a kernel buffer overflow)
 };
 

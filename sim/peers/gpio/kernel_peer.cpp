@@ -146,21 +146,23 @@ class GpioKernelPeer final : public GpioPeer {
 
   // Puts every edge that is due on the wires (paced ones at least spacing_ns_ apart, so a
   // peer that fell behind catches up at a legal rate); the time of the next, if any. An
-  // injected pattern put late is shifted, not bunched: the kernel reads a gpio-sim line's
-  // level in its interrupt thread, so two writes closer than that thread's latency (ms in an
-  // emulated guest) would reach the driver as one edge, and the pattern would be lost.
+  // injected pattern put late is shifted, not bunched, and keeps the injected spacing on each
+  // line: the kernel reads a gpio-sim line's level in the line's interrupt thread, so two
+  // writes on one line closer than that thread's latency (ms in an emulated guest) would reach
+  // the driver as one edge, and the pattern would be lost.
   std::optional<std::int64_t> put_due_edges() {
     auto& q = enc_.queue();
     while (!q.empty()) {
       const PendingEdge& p = q.front();
+      const auto line = static_cast<std::size_t>(p.line);
       const std::int64_t at =
           p.paced ? std::max(p.due_ns, last_put_ + spacing_ns_)
-                  : std::max(p.due_ns + shift_ns_, last_put_ + enc_.injected_spacing_ns());
+                  : std::max(p.due_ns + shift_ns_, line_put_[line] + enc_.injected_spacing_ns());
       const std::int64_t now = monotonic_ns();
       if (at > now) return at;
       if (!p.paced) shift_ns_ = now - p.due_ns;
       put(static_cast<int>(p.line), p.raw_level);
-      last_put_ = monotonic_ns();
+      last_put_ = line_put_[line] = monotonic_ns();
       enc_.sent(p);
       q.pop_front();
     }
@@ -176,6 +178,7 @@ class GpioKernelPeer final : public GpioPeer {
   io::UniqueFd timer_;
   std::int64_t next_step_ = 0;
   std::int64_t last_put_ = 0;
+  std::int64_t line_put_[4] = {};  // the last put on each line
   std::int64_t spacing_ns_ = 0;
   std::int64_t shift_ns_ = 0;  // how late the injected edges on the wires are
   std::atomic<bool> stop_{false};
