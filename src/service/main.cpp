@@ -84,6 +84,13 @@ int main(int argc, char** argv) {
                   "Write the binary tick log here (overrides telemetry.log)");
   run->add_option("--summary-json", run_opts.summary_json_path,
                   "Also write the run summary as one JSON object to this file");
+  run->add_option("--socket", run_opts.socket_path,
+                  "Serve the control socket here (hapticctl: status, stop, reload, clear-fault)");
+  std::string on_fault = "exit";
+  run->add_option("--on-fault", on_fault,
+                  "exit: a fault ends the run (exit 1); hold: the fault latches with output "
+                  "off and the daemon waits for `hapticctl clear-fault` or a stop")
+      ->check(CLI::IsMember({"exit", "hold"}));
   run->add_flag("--loopback", run_opts.loopback,
                 "Drive the configured driver's own protocol code against its simulated peer "
                 "(the plant of device.sim) instead of hardware: try a hardware configuration "
@@ -142,6 +149,7 @@ int main(int argc, char** argv) {
     if (*check) return hapticd::service::check_command(check_cfg, check_json);
     if (*run) {
       run_opts.duration_s = duration;
+      run_opts.on_fault_hold = on_fault == "hold";
       hapticd::service::SignalWatch signals;
       return hapticd::service::run_command(run_opts, signals);
     }

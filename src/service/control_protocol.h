@@ -1,0 +1,38 @@
+// The control socket's protocol, version 1 (docs/operations.md): one JSON object per line in
+// each direction, at most kMaxRequestBytes a line. Pure: no sockets here, so it is fuzzed and
+// tested on its own.
+//
+// Request:  {"v": 1, "cmd": "status" | "stop" | "reload" | "clear-fault", "id": <any>,
+//            "config": "<YAML text>", "source": "<name for messages>"}    (config: reload only)
+// Response: {"v": 1, "id": <echoed>, "ok": true|false, "error": "<why>" (when not ok), ...}
+#pragma once
+
+#include <cstddef>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <string_view>
+
+namespace hapticd::service {
+
+inline constexpr int kProtocolVersion = 1;
+inline constexpr std::size_t kMaxRequestBytes = 256 * 1024;  // a configuration fits with room
+
+enum class Command { kStatus, kStop, kReload, kClearFault };
+
+struct Request {
+  Command command = Command::kStatus;
+  nlohmann::json id;        // echoed in the response; null when absent
+  std::string config_text;  // reload
+  std::string source;       // reload: the name messages about the configuration use
+};
+
+// Parses one line (without its newline). On a malformed request returns nothing and sets
+// `error` (and `id` when the line had a readable one), for an error response.
+std::optional<Request> parse_request(std::string_view line, std::string& error, nlohmann::json& id);
+
+// {"v":1,"id":id,"ok":true} merged with `payload`'s members, as one line with its newline.
+std::string ok_response(const nlohmann::json& id, const nlohmann::json& payload = {});
+std::string error_response(const nlohmann::json& id, const std::string& error);
+
+}  // namespace hapticd::service
