@@ -4,7 +4,7 @@
 # The binary is stripped (its debug information stays in the build tree).
 
 install(CODE "set(CMAKE_INSTALL_DO_STRIP ON)")  # before the targets: they honour it
-install(TARGETS hapticd RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+install(TARGETS hapticd hapticctl RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 
 # /usr installs its configuration in /etc (the FHS), every other prefix in PREFIX/etc.
 if(CMAKE_INSTALL_PREFIX STREQUAL "/usr")

@@ -109,6 +109,7 @@ void ServoLoop::publish(const telemetry::TickRecord& rec, const LoopResult& res)
   live_.position.store(rec.position, r);
   live_.penetration.store(rec.penetration, r);
   live_.force_commanded.store(rec.force_commanded, r);
+  live_.wall_energy_j.store(energy_before_ + res.wall_energy_j, r);
 }
 
 bool ServoLoop::check_sequence(std::uint64_t tick, const PositionSample& sample, SenseState& st,
@@ -204,6 +205,7 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
   std::int64_t deadline = start;  // the first tick is due at once
   int overrun_streak = 0;
   SenseState st;
+  double last_command = 0.0;  // u_{k-1}, for the wall's work over the period just ended
 
   for (std::uint64_t n = 0;; ++n) {
     if (stop.load(std::memory_order_relaxed)) break;
@@ -229,6 +231,9 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
     const bool stepped = sense(tick, wake, sample, st, rec, res);
     if (!stepped && res.fault.cause == FaultCause::kNone) rec.flags |= telemetry::kFlagNoPosition;
     if (stepped) {
+      if (st.have_work_x) res.wall_energy_j += last_command * (sample.position - st.work_x);
+      st.work_x = sample.position;
+      st.have_work_x = true;
       const control::ControlOutput out = controller_->step(sample.position);
       command = out.force_commanded;
       rec.position = sample.position;
@@ -254,6 +259,7 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
       device_.write(0.0);  // zero force at once; the service then disables output
     }
     rec.force_commanded = command;
+    last_command = command;
 
     // Bookkeeping after the timed window.
     const std::int64_t done = now_ns();
@@ -300,6 +306,7 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
   }
   device_.write(0.0);  // the last command must not outlive the loop that was servoing it
   next_tick_ += res.ticks;
+  energy_before_ += res.wall_energy_j;
   return res;
 }
 

@@ -46,6 +46,7 @@ struct LiveStatus {
   std::atomic<double> position{0.0};
   std::atomic<double> penetration{0.0};
   std::atomic<double> force_commanded{0.0};
+  std::atomic<double> wall_energy_j{0.0};  // LoopResult::wall_energy_j, over every run()
 };
 
 struct LoopResult {
@@ -60,6 +61,10 @@ struct LoopResult {
   std::uint64_t sequence_gaps = 0;   // times the device's sequence skipped
   std::uint64_t samples_missed = 0;  // samples those gaps skipped in all
   double max_penetration = 0.0;
+  // Work the commanded force did on the device, sum of u_{k-1} (x_k - x_{k-1}) over the
+  // ticks with a position (J): negative while the wall takes energy in (pressing into it),
+  // positive when it hands energy back; above the energy its spring holds, the wall was active.
+  double wall_energy_j = 0.0;
   Fault fault;
 };
 
@@ -107,6 +112,8 @@ class ServoLoop {
     std::int64_t last_time_ns = 0;     // the last sample's own time (0: it had none)
     std::uint64_t last_sequence = 0;
     bool have_sequence = false;
+    double work_x = 0.0;  // the position the last step was taken at (the wall's work)
+    bool have_work_x = false;
   };
   bool sense(std::uint64_t tick, std::int64_t wake_ns, PositionSample& sample, SenseState& st,
              telemetry::TickRecord& rec, LoopResult& res) noexcept;
@@ -126,6 +133,7 @@ class ServoLoop {
   LatencyHistogram compute_time_;
   std::atomic<std::uint64_t> ticks_done_{0};
   std::uint64_t next_tick_ = 0;  // the first tick of the next run()
+  double energy_before_ = 0.0;   // wall_energy_j of the earlier run()s
   LiveStatus live_;
 };
 

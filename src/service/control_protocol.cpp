@@ -68,8 +68,9 @@ std::string ok_response(const json& id, const json& payload) {
   return line(std::move(j));
 }
 
-std::string error_response(const json& id, const std::string& error) {
-  return line({{"v", kProtocolVersion}, {"id", id}, {"ok", false}, {"error", error}});
+std::string error_response(const json& id, const std::string& error, int code) {
+  return line(
+      {{"v", kProtocolVersion}, {"id", id}, {"ok", false}, {"error", error}, {"code", code}});
 }
 
 }  // namespace hapticd::service

@@ -1,10 +1,14 @@
 // The control socket's protocol, version 1 (docs/operations.md): one JSON object per line in
-// each direction, at most kMaxRequestBytes a line. Pure: no sockets here, so it is fuzzed and
-// tested on its own.
+// each direction, at most kMaxRequestBytes a line. Pure: no sockets here, so it is tested on
+// its own.
 //
 // Request:  {"v": 1, "cmd": "status" | "stop" | "reload" | "clear-fault", "id": <any>,
 //            "config": "<YAML text>", "source": "<name for messages>"}    (config: reload only)
-// Response: {"v": 1, "id": <echoed>, "ok": true|false, "error": "<why>" (when not ok), ...}
+// Response: {"v": 1, "id": <echoed>, "ok": true, ...the command's members}
+//           {"v": 1, "id": <echoed>, "ok": false, "error": "<why>", "code": <exit code>}
+// `code` is the exit code of DESIGN.md §9 a client reports for the failure: 2 a malformed
+// request or an invalid configuration (or one that needs a restart), 3 the gate refused it,
+// 1 anything else (no fault to clear, a device that faults again, permission denied).
 #pragma once
 
 #include <cstddef>
@@ -33,6 +37,6 @@ std::optional<Request> parse_request(std::string_view line, std::string& error, 
 
 // {"v":1,"id":id,"ok":true} merged with `payload`'s members, as one line with its newline.
 std::string ok_response(const nlohmann::json& id, const nlohmann::json& payload = {});
-std::string error_response(const nlohmann::json& id, const std::string& error);
+std::string error_response(const nlohmann::json& id, const std::string& error, int code = 1);
 
 }  // namespace hapticd::service

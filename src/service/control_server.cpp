@@ -13,8 +13,6 @@
 #include <cerrno>
 #include <chrono>
 #include <cstring>
-#include <fstream>
-#include <sstream>
 #include <vector>
 
 namespace hapticd::service {
@@ -39,18 +37,25 @@ gid_t socket_group() {
   return getegid();
 }
 
-// Whether process `pid` has `gid` among its supplementary groups (/proc/PID/status Groups:).
-bool in_group(pid_t pid, gid_t gid) {
-  std::ifstream status("/proc/" + std::to_string(pid) + "/status");
-  std::string line;
-  while (std::getline(status, line)) {
-    if (line.rfind("Groups:", 0) != 0) continue;
-    std::istringstream groups(line.substr(7));
-    for (unsigned long g = 0; groups >> g;) {
-      if (g == gid) return true;
+// Whether the peer on `fd` had `gid` among its supplementary groups when it connected
+// (SO_PEERGROUPS: the kernel's record of the connecting process, not a later look at /proc).
+bool peer_in_group(int fd, gid_t gid) {
+  std::vector<gid_t> groups(64);
+  for (int attempt = 0; attempt < 2; ++attempt) {
+    auto len = static_cast<socklen_t>(groups.size() * sizeof(gid_t));
+    if (getsockopt(fd, SOL_SOCKET, SO_PEERGROUPS, groups.data(), &len) == 0) {
+      groups.resize(len / sizeof(gid_t));
+      return std::find(groups.begin(), groups.end(), gid) != groups.end();
     }
+    if (errno != ERANGE) return false;
+    groups.resize(len / sizeof(gid_t) + 1);  // len now says how many there are
   }
   return false;
+}
+
+std::string group_name(gid_t gid) {
+  if (const group* g = getgrgid(gid)) return g->gr_name;
+  return std::to_string(gid);
 }
 
 }  // namespace
@@ -100,23 +105,57 @@ ControlServer::~ControlServer() {
 bool ControlServer::allowed(int fd) const {
   ucred peer{};
   socklen_t len = sizeof peer;
-  if (getsockopt(fd, SOL_SOCKET, SO_PEERCRED, &peer, &len) != 0) return false;
-  if (peer.uid == 0 || peer.uid == geteuid() || peer.gid == group_ || in_group(peer.pid, group_)) {
+  if (getsockopt(fd, SOL_SOCKET, SO_PEERCRED, &peer, &len) != 0) {
+    spdlog::warn("control socket: refused a client whose credentials cannot be read: {}",
+                 std::strerror(errno));
+    return false;
+  }
+  if (peer.uid == 0 || peer.uid == geteuid() || peer.gid == group_ || peer_in_group(fd, group_)) {
     return true;
   }
   spdlog::warn(
-      "control socket: refused pid {} uid {} gid {}: not root, not uid {}, not in group {}",
-      peer.pid, peer.uid, peer.gid, geteuid(), group_);
+      "control socket: refused pid {} uid {} gid {}: not root, not uid {} and not in group {}",
+      peer.pid, peer.uid, peer.gid, geteuid(), group_name(group_));
   return false;
 }
 
+namespace {
+
+// The client idle longest that may give up its slot: one with nothing left to send it.
+template <typename Clients>
+auto idlest(Clients& clients) {
+  const auto now = std::chrono::steady_clock::now();
+  auto best = clients.end();
+  for (auto it = clients.begin(); it != clients.end(); ++it) {
+    if (!it->out.empty() || it->in.find('\n') != std::string::npos) continue;
+    if (now - it->last_active < std::chrono::milliseconds(ControlServer::kEvictAfterMs)) continue;
+    if (best == clients.end() || it->last_active < best->last_active) best = it;
+  }
+  return best;
+}
+
+}  // namespace
+
+bool ControlServer::room(const std::vector<Client>& clients) {
+  return clients.size() < static_cast<std::size_t>(kMaxClients) || idlest(clients) != clients.end();
+}
+
+void ControlServer::evict_idlest(std::vector<Client>& clients) {
+  const auto it = idlest(clients);
+  if (it == clients.end()) return;
+  close(it->fd);
+  clients.erase(it);
+}
+
 void ControlServer::accept_clients(std::vector<Client>& clients) {
-  while (clients.size() < static_cast<std::size_t>(kMaxClients)) {
+  while (room(clients)) {
     const int fd = accept4(listen_fd_, nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC);
     if (fd < 0) return;  // EAGAIN: no more waiting
+    if (clients.size() >= static_cast<std::size_t>(kMaxClients)) evict_idlest(clients);
     if (!allowed(fd)) {
       refused_.fetch_add(1);
-      const std::string no = error_response(nullptr, "permission denied: not in group hapticd");
+      const std::string no =
+          error_response(nullptr, "permission denied: not in group " + group_name(group_));
       [[maybe_unused]] const ssize_t n = send(fd, no.data(), no.size(), MSG_NOSIGNAL);
       close(fd);
       continue;
@@ -131,7 +170,9 @@ void ControlServer::accept_clients(std::vector<Client>& clients) {
 void ControlServer::serve(Client& c) {
   constexpr int kLinesPerTurn = 8;
   char buf[65536];
-  if (!c.closing) {
+  // Lines already buffered are answered first: a client that floods requests waits in its
+  // socket, its buffer here stays bounded.
+  if (!c.closing && c.in.size() <= kMaxRequestBytes) {
     const ssize_t n = recv(c.fd, buf, sizeof buf, 0);
     if (n > 0) {
       c.in.append(buf, static_cast<std::size_t>(n));
@@ -148,19 +189,21 @@ void ControlServer::serve(Client& c) {
     nlohmann::json id;
     const std::optional<Request> r = parse_request(line, error, id);
     if (!r) {
-      c.out += error_response(id, error);
+      c.out += error_response(id, error, 2);
       continue;
     }
     try {
       c.out += ok_response(r->id, handler_.handle(*r));
+    } catch (const ControlRefusal& e) {
+      c.out += error_response(r->id, e.what(), e.code());
     } catch (const std::exception& e) {
       c.out += error_response(r->id, e.what());
     }
   }
   if (c.in.size() > kMaxRequestBytes && c.in.find('\n') == std::string::npos) {
     // A line that never ends: answer and hang up.
-    c.out += error_response(nullptr,
-                            "request longer than " + std::to_string(kMaxRequestBytes) + " bytes");
+    c.out += error_response(
+        nullptr, "request longer than " + std::to_string(kMaxRequestBytes) + " bytes", 2);
     c.in.clear();
     c.closing = true;
   }
@@ -176,7 +219,10 @@ void ControlServer::run() noexcept {
   std::vector<pollfd> fds;
   try {
     for (;;) {
-      fds.assign({{stop_fd_, POLLIN, 0}, {listen_fd_, POLLIN, 0}});
+      // While every slot is taken, new connections wait in the backlog (not polled: a ready
+      // listening socket that is never accepted from would make poll return at once).
+      const bool space = room(clients);
+      fds.assign({{stop_fd_, POLLIN, 0}, {listen_fd_, static_cast<short>(space ? POLLIN : 0), 0}});
       for (const Client& c : clients) {
         fds.push_back({c.fd, static_cast<short>(POLLIN | (c.out.empty() ? 0 : POLLOUT)), 0});
       }
@@ -184,7 +230,9 @@ void ControlServer::run() noexcept {
       const bool queued = std::any_of(clients.begin(), clients.end(), [](const Client& c) {
         return c.in.find('\n') != std::string::npos;
       });
-      if (poll(fds.data(), fds.size(), queued ? 0 : 1000) < 0 && errno != EINTR) break;
+      // Full: look again soon, for a slot that becomes free to evict.
+      const int wait_ms = queued ? 0 : (space ? 1000 : 100);
+      if (poll(fds.data(), fds.size(), wait_ms) < 0 && errno != EINTR) break;
       if (fds[0].revents != 0) break;
       if (fds[1].revents & POLLIN) accept_clients(clients);
       const auto now = std::chrono::steady_clock::now();

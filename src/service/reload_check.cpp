@@ -6,10 +6,15 @@ namespace hapticd::service {
 namespace {
 
 // A section of the effective document as text ("" when absent), to compare sections whose
-// meaning the service does not know (a driver's own section, the simulated plant).
+// meaning the service does not know (a driver's own section, the simulated plant). The
+// documents are the files as written (and --set): a section left out where the running one
+// spelled out its defaults counts as a change, which errs on the side of a restart.
 std::string section(const std::string& yaml, const std::string& a, const std::string& b) {
   const YAML::Node root = YAML::Load(yaml);
-  const YAML::Node node = root[a][b];
+  if (!root.IsMap()) return "";
+  const YAML::Node outer = root[a];
+  if (!outer.IsDefined() || !outer.IsMap()) return "";
+  const YAML::Node node = outer[b];
   if (!node.IsDefined() || node.IsNull()) return "";
   YAML::Emitter out;
   out << node;
@@ -33,12 +38,11 @@ std::vector<std::string> reload_blockers(const config::Config& running,
           "a new fault check in the loop");
   const std::string& drv = running.device.driver;
   differs(drv != next.device.driver, "device.driver", "a different device");
-  differs(drv == next.device.driver && section(running.effective_yaml, "device", drv) !=
-                                           section(next.effective_yaml, "device", drv),
+  differs(drv == next.device.driver && drv != "sim" &&
+              section(running.effective_yaml, "device", drv) !=
+                  section(next.effective_yaml, "device", drv),
           "device." + drv, "a differently configured device");
-  differs(section(running.effective_yaml, "device", "sim") !=
-              section(next.effective_yaml, "device", "sim"),
-          "device.sim", "a different simulated plant");
+  differs(!(running.device.sim == next.device.sim), "device.sim", "a different simulated plant");
   const config::SafetyConfig &s = running.safety, &t = next.safety;
   differs(s.max_speed != t.max_speed || s.stale_fault_ticks != t.stale_fault_ticks ||
               s.sequence_gap_fault != t.sequence_gap_fault,

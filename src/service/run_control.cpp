@@ -8,12 +8,14 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <optional>
 #include <thread>
 
 #include "config/config_loader.h"
 #include "gate/gate_report_format.h"
 #include "gate/number_format.h"
 #include "service/config_source.h"
+#include "service/exit_codes.h"
 #include "service/reload_check.h"
 #include "service/run_session.h"
 
@@ -75,7 +77,7 @@ json RunSession::status() const {
       {"last_command", d.last_command()}};
   j["wall"] = {{"stiffness", cfg_.wall.stiffness}, {"damping", cfg_.wall.damping}};
   j["fault"] = fault_.empty() ? json(nullptr) : json(fault_);
-  j["gate"] = summary_.gate;
+  j["gate"] = gate_;
   if (servo_) {
     const loop::LiveStatus& live = servo_->live();
     constexpr auto r = std::memory_order_relaxed;
@@ -88,6 +90,7 @@ json RunSession::status() const {
     j["position"] = live.position.load(r);
     j["penetration"] = live.penetration.load(r);
     j["force_commanded"] = live.force_commanded.load(r);
+    j["wall_energy_j"] = live.wall_energy_j.load(r);
     j["wake_latency_us"] = realtime_ ? percentiles_us(servo_->wake_latency()) : json(nullptr);
     j["compute_us"] = percentiles_us(servo_->compute_time());
   }
@@ -98,73 +101,93 @@ json RunSession::status() const {
 json RunSession::reload(const std::string& text, const std::string& source,
                         const std::vector<std::string>& sets) {
   std::lock_guard serial(reload_mutex_);
-  const auto refuse = [&](const std::vector<std::string>& why) -> json {
-    swap_.note_refused();  // the RT thread marks it in the tick log
-    spdlog::warn("reload from {} refused: {}", source, joined(why));
-    throw ControlRefusal("reload refused: " + joined(why));
-  };
-  config::Config next;
   config::Config running;
-  {
-    std::lock_guard lock(mutex_);
-    running = cfg_;
-  }
-  const std::string base = std::filesystem::path(source).parent_path().string();
-  try {
-    next = load_config_text_checked(text, source, base.empty() ? "." : base, sets);
-  } catch (const config::ConfigError& e) {
-    return refuse(e.messages());
-  }
-  if (const auto blockers = reload_blockers(running, next); !blockers.empty()) {
-    return refuse(blockers);
-  }
-  const gate::GateReport report =
-      gate::evaluate_gate(next, session_->device().info().transport_delay_samples);
-  if (!report.pass && next.safety.gate == config::GateMode::kEnforce) return refuse(report.reasons);
-  if (!report.pass) {
-    spdlog::error(
-        "reload: the gate FAILED but safety.gate is 'warn': swapping in a loop that "
-        "is not proven passive ({})",
-        joined(report.reasons));
-  }
-  auto law = std::make_unique<control::Controller>(control::make_control_law(next));
-  bool swapped = false;
-  std::uint64_t first_tick = 0;
   Phase phase = Phase::kStarting;
   {
     std::lock_guard lock(mutex_);
+    running = cfg_;
     phase = phase_;
   }
-  if (phase == Phase::kRunning) {
-    const std::uint64_t before = swap_.swaps();
-    if (log_.writer) log_.writer->queue_config_change(next.effective_yaml);
-    if (!swap_.offer(law.get())) {
-      if (log_.writer) log_.writer->withdraw_config_change();
-      return refuse({"a previous reload is still being applied"});
+  Prepared next;
+  try {
+    if (phase == Phase::kStarting || phase == Phase::kEnded) {
+      throw ControlRefusal(std::string("the run is ") + name(phase) + "; nothing to reload into");
     }
-    for (int waited = 0; waited < 2000 && swap_.swaps() == before; ++waited) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(1));
-    }
-    swapped = !swap_.withdraw(law.get());  // false: the loop ended before taking it
-    if (!swapped && log_.writer) log_.writer->withdraw_config_change();
-    if (swapped) {
-      first_tick = swap_.last_swap_tick();
-      swap_.retire();  // the replaced law; `active_` owns it and lets it go below
-    }
+    next = prepare(running, text, source, sets);
+  } catch (const std::exception& e) {  // ControlRefusal, or whatever checking it threw
+    swap_.note_refused();              // the RT thread marks it in the tick log
+    spdlog::warn("reload from {} refused: {}", source, e.what());
+    const auto* refusal = dynamic_cast<const ControlRefusal*>(&e);
+    throw ControlRefusal(std::string("reload refused: ") + e.what(),
+                         refusal != nullptr ? refusal->code() : 1);
   }
+  std::optional<std::uint64_t> first_tick;
+  if (phase == Phase::kRunning) first_tick = swap_in(next);
+  const double k = next.cfg.wall.stiffness, b = next.cfg.wall.damping;
+  json out = {{"accepted", true},
+              {"applied_at_tick", first_tick ? json(*first_tick) : json(nullptr)},
+              {"gate", gate::gate_to_json(next.report)}};
   {
     std::lock_guard lock(mutex_);
-    if (swapped) active_ = std::move(law);  // the old law, no longer used, is destroyed
-    cfg_ = std::move(next);
-    summary_.gate = gate::gate_to_json(report);
+    cfg_ = std::move(next.cfg);
+    gate_ = out["gate"];
+    summary_.gate = gate_;
   }
-  spdlog::info("reload from {} accepted: wall K {} N/m B {} N s/m{}", source, cfg_.wall.stiffness,
-               cfg_.wall.damping,
-               swapped ? " from tick " + std::to_string(first_tick) : " for the next arming");
-  json out = {{"accepted", true},
-              {"applied_at_tick", swapped ? json(first_tick) : json(nullptr)},
-              {"gate", summary_.gate}};
+  spdlog::info("reload from {} accepted: wall K {} N/m B {} N s/m {}", source, k, b,
+               first_tick ? "from tick " + std::to_string(*first_tick) : "for the next arming");
   return {{"reload", out}};
+}
+
+// Everything a reload needs before the swap, off the RT thread. Throws ControlRefusal with
+// every reason when it may not be applied.
+RunSession::Prepared RunSession::prepare(const config::Config& running, const std::string& text,
+                                         const std::string& source,
+                                         const std::vector<std::string>& sets) const {
+  Prepared p;
+  const std::string base = std::filesystem::path(source).parent_path().string();
+  try {
+    p.cfg = load_config_text_checked(text, source, base.empty() ? "." : base, sets);
+  } catch (const config::ConfigError& e) {
+    throw ControlRefusal(joined(e.messages()), kExitUsage);
+  }
+  if (const auto blockers = reload_blockers(running, p.cfg); !blockers.empty()) {
+    throw ControlRefusal(joined(blockers), kExitUsage);
+  }
+  p.report = gate::evaluate_gate(p.cfg, session_->device().info().transport_delay_samples);
+  if (!p.report.pass && p.cfg.safety.gate == config::GateMode::kEnforce) {
+    throw ControlRefusal("the gate refuses it: " + joined(p.report.reasons), kExitGateRefused);
+  }
+  if (!p.report.pass) {
+    spdlog::error(
+        "reload from {}: the gate FAILED but safety.gate is 'warn': swapping in a loop that is "
+        "not proven passive ({})",
+        source, joined(p.report.reasons));
+  }
+  p.law = std::make_unique<control::Controller>(control::make_control_law(p.cfg));
+  return p;
+}
+
+// Offers the new law to the RT thread and waits for the tick boundary it is taken at (none
+// when the loop ended first). The law it replaced is destroyed here, off the RT thread.
+std::optional<std::uint64_t> RunSession::swap_in(Prepared& next) {
+  const std::uint64_t before = swap_.swaps();
+  if (log_.writer) log_.writer->queue_config_change(next.cfg.effective_yaml);
+  if (!swap_.offer(next.law.get())) {  // reload_mutex_ serialises offers: not expected
+    if (log_.writer) log_.writer->withdraw_config_change();
+    throw ControlRefusal("reload refused: a previous reload is still being applied");
+  }
+  for (int waited = 0; waited < 2000 && swap_.swaps() == before; ++waited) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  if (swap_.withdraw(next.law.get())) {  // the loop ended (or stalled) before taking it
+    if (log_.writer) log_.writer->withdraw_config_change();
+    return std::nullopt;
+  }
+  const std::uint64_t tick = swap_.last_swap_tick();
+  swap_.retire();  // the replaced law: `active_` owns it and lets it go below
+  std::lock_guard lock(mutex_);
+  active_ = std::move(next.law);
+  return tick;
 }
 
 // SIGHUP: the file the run was started with, read again, with the same --set arguments.
@@ -235,6 +258,10 @@ bool RunSession::hold() {
     cleared_.notify_all();
     if (why.empty()) {
       fault_.clear();
+      // Cleared: history, not a failure of the run (the summary lists it apart).
+      summary_.cleared_faults.insert(summary_.cleared_faults.end(), summary_.faults.begin(),
+                                     summary_.faults.end());
+      summary_.faults.clear();
       spdlog::info("fault cleared: re-arming through the gate");
       return true;
     }

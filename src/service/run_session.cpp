@@ -66,7 +66,12 @@ void RunSession::set_phase(Phase p) {
 
 // Configures the device and gates it, opens the log, builds the law and the loop.
 bool RunSession::start_up(gate::GateReport& report) {
-  if (!configure_and_gate(cfg_, *session_, summary_, report)) return false;
+  const bool pass = configure_and_gate(cfg_, *session_, summary_, report);
+  {
+    std::lock_guard lock(mutex_);
+    gate_ = summary_.gate;
+  }
+  if (!pass) return false;
   const int cpus = static_cast<int>(std::thread::hardware_concurrency());
   if (realtime_ && cfg_.loop.cpu >= cpus) {
     throw config::ConfigError({cfg_.locate("loop.cpu") + ": loop.cpu: CPU " +
@@ -128,26 +133,41 @@ int RunSession::run() {
   return finish();
 }
 
+config::Config RunSession::config_snapshot() const {
+  std::lock_guard lock(mutex_);
+  return cfg_;
+}
+
 // Enables output, runs the RT thread until the loop ends, disables output.
 loop::LoopResult RunSession::arm() {
   loop::LoopResult result;
-  if (stop_requested(signals_, summary_, "before output was enabled", reload_pending_))
+  if (stop_requested(signals_, summary_, "before output was enabled", reload_pending_)) {
     return result;
+  }
+  {
+    std::lock_guard lock(mutex_);
+    if (stop_asked_) {  // `hapticctl stop` during start-up (or while a fault was held)
+      summary_.stop_reason = "control socket: stop";
+      spdlog::info("control socket: stop requested before output was enabled");
+      return result;
+    }
+  }
+  const config::Config cfg = config_snapshot();  // a reload may replace cfg_ meanwhile
   Device& device = session_->device();
   const CrashGuard crash_guard(device);  // a crash while enabled still writes zero first
   device.enable();
   const bool first = !summary_.output_was_enabled;
   summary_.output_was_enabled = true;
   {
-    RtThread rt(*servo_, cfg_.loop.rt_priority, cfg_.loop.cpu, realtime_, rt_);
+    RtThread rt(*servo_, cfg.loop.rt_priority, cfg.loop.cpu, realtime_, rt_);
     if (const std::string error = rt.wait_ready(); !error.empty()) {
-      throw config::ConfigError({cfg_.locate("loop.cpu") + ": " + error});
+      throw config::ConfigError({cfg.locate("loop.cpu") + ": " + error});
     }
     spdlog::info("output enabled: {} at {} Hz ({}), wall K {} N/m B {} N s/m",
-                 device.info().description, cfg_.loop.rate_hz, realtime_ ? "realtime" : "freerun",
-                 cfg_.wall.stiffness, cfg_.wall.damping);
+                 device.info().description, cfg.loop.rate_hz, realtime_ ? "realtime" : "freerun",
+                 cfg.wall.stiffness, cfg.wall.damping);
     if (realtime_ && first) announce_rt(rt_);
-    sd_notifyf(0, "READY=1\nSTATUS=servo running at %.0f Hz", cfg_.loop.rate_hz);
+    sd_notifyf(0, "READY=1\nSTATUS=servo running at %.0f Hz", cfg.loop.rate_hz);
     set_phase(Phase::kRunning);
     supervise(rt);
     result = rt.join();
@@ -220,6 +240,7 @@ void RunSession::accumulate(const loop::LoopResult& r) {
   t.sequence_gaps += r.sequence_gaps;
   t.samples_missed += r.samples_missed;
   t.max_penetration = std::max(t.max_penetration, r.max_penetration);
+  t.wall_energy_j += r.wall_energy_j;
   t.fault = r.fault;
 }
 

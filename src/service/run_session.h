@@ -9,6 +9,7 @@
 
 #include <atomic>
 #include <condition_variable>
+#include <cstdint>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -54,9 +55,20 @@ class RunSession final : public ControlHandler {
   void accumulate(const loop::LoopResult& r);
   int finish();
 
+  // A reload's new configuration, its gate report and the law built from it.
+  struct Prepared {
+    config::Config cfg;
+    gate::GateReport report;
+    std::unique_ptr<control::Controller> law;
+  };
+
   nlohmann::json status() const;
   nlohmann::json reload(const std::string& text, const std::string& source,
                         const std::vector<std::string>& sets);
+  Prepared prepare(const config::Config& running, const std::string& text,
+                   const std::string& source, const std::vector<std::string>& sets) const;
+  std::optional<std::uint64_t> swap_in(Prepared& next);
+  config::Config config_snapshot() const;
   nlohmann::json reload_file();
   nlohmann::json clear_fault();
   void set_phase(Phase p);
@@ -78,6 +90,7 @@ class RunSession final : public ControlHandler {
 
   mutable std::mutex mutex_;  // guards what the control thread reads or asks for, below
   config::Config cfg_;        // replaced by an accepted reload
+  nlohmann::json gate_;       // the verdict on cfg_, as JSON
   Phase phase_ = Phase::kStarting;
   std::string fault_;  // the last fault, described
   bool stop_asked_ = false;

@@ -37,6 +37,9 @@ json summary_to_json(const RunSummary& s) {
   j["wake_latency_us"] = s.realtime ? percentiles_us(s.wake_latency) : json(nullptr);
   j["compute_us"] = percentiles_us(s.compute_time);
   j["faults"] = s.faults;
+  j["cleared_faults"] = s.cleared_faults;
+  j["reloads"] = s.loop.reloads;
+  j["wall_energy_j"] = s.loop.wall_energy_j;
   j["stop_reason"] = s.stop_reason;
   j["contact_ticks"] = s.loop.contact_ticks;
   j["saturated_ticks"] = s.loop.saturated_ticks;
@@ -94,6 +97,11 @@ std::string summary_to_text(const RunSummary& s) {
   os << "  contact        " << s.loop.contact_ticks << " ticks, max penetration "
      << format_number(s.loop.max_penetration * 1e3) << " mm, saturated " << s.loop.saturated_ticks
      << " ticks\n";
+  os << "  wall energy    " << format_number(s.loop.wall_energy_j)
+     << " J (work the wall did on the device)\n";
+  if (s.loop.reloads > 0) {
+    os << "  reloads        " << s.loop.reloads << " swapped in at a tick boundary\n";
+  }
   if (s.operator_work_j) {
     os << "  operator work  " << format_number(*s.operator_work_j)
        << " J (done by the operator on the device)\n";
@@ -121,6 +129,10 @@ std::string summary_to_text(const RunSummary& s) {
   os << "  faults         "
      << (s.faults.empty() ? std::string("none") : std::to_string(s.faults.size())) << "\n";
   for (const std::string& f : s.faults) os << "    " << f << "\n";
+  if (!s.cleared_faults.empty()) {
+    os << "  cleared        " << s.cleared_faults.size() << " (by clear-fault; the run went on)\n";
+    for (const std::string& f : s.cleared_faults) os << "    " << f << "\n";
+  }
   return os.str();
 }
 

@@ -20,6 +20,9 @@ struct RunSummary {
   const loop::LatencyHistogram* compute_time = nullptr;
   loop::RtStatus rt;
   std::vector<std::string> faults;
+  // Faults latched and then cleared by `hapticctl clear-fault` (--on-fault hold): reported,
+  // but the run went on and they do not make its exit code 1.
+  std::vector<std::string> cleared_faults;
   std::optional<double> operator_work_j;  // sim only
   std::string log_path;                   // "" when no log was written
   std::uint64_t log_records_written = 0;
