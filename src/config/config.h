@@ -141,9 +141,17 @@ struct AnalysisConfig {
   Coefficients transparency_weight_denominator{1.0};
 };
 
+// telemetry.max_segment_mb / max_total_mb: at most this many MB (2^20 bytes).
+inline constexpr long long kMaxLogMegabytes = 1LL << 24;  // 16 TB: a bound, not advice
+
 struct TelemetryConfig {
   std::string log_path;                 // empty: no tick log unless --log is given
   std::uint32_t ring_capacity = 65536;  // records between RT thread and writer, 64..2^22
+  // A log rolls to a new segment (each a complete log) before it would pass this; 0: never.
+  std::uint32_t max_segment_mb = 64;
+  // The oldest segments and older runs' logs at the same path are deleted to keep them all
+  // under this; 0: nothing is deleted. Needs max_segment_mb, and at least twice it.
+  std::uint32_t max_total_mb = 1024;
 };
 
 struct Config {

@@ -51,6 +51,9 @@ json summary_to_json(const RunSummary& s) {
   j["log_records_dropped"] = s.log_records_dropped;
   j["log_records_lost"] = s.log_records_lost;
   j["log_io_errors"] = s.log_io_errors;
+  j["log_segments"] = s.log_segments;
+  j["log_files_deleted"] = s.log_files_deleted;
+  j["log_bytes_deleted"] = s.log_bytes_deleted;
   j["previous_log"] = s.previous_log.empty() ? json(nullptr) : json(s.previous_log);
   j["output_was_enabled"] = s.output_was_enabled;
   j["device"] = {{"name", s.device_name},
@@ -110,7 +113,12 @@ std::string summary_to_text(const RunSummary& s) {
     os << "  tick log       " << s.log_path << ": " << s.log_records_written << " records, "
        << s.log_records_dropped << " dropped";
     if (s.log_io_errors) os << ", " << s.log_records_lost << " lost to WRITE ERRORS";
+    if (s.log_segments > 1) os << ", " << s.log_segments << " segments";
     os << "\n";
+    if (s.log_files_deleted > 0) {
+      os << "                 (retention deleted " << s.log_files_deleted << " old files, "
+         << format_number(static_cast<double>(s.log_bytes_deleted) / (1u << 20)) << " MB)\n";
+    }
     if (!s.previous_log.empty())
       os << "                 (the previous log is now " << s.previous_log << ")\n";
   }

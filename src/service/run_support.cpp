@@ -73,6 +73,9 @@ TickLog open_tick_log(const RunOptions& options, const config::Config& cfg, bool
         *log.ring, 512, std::chrono::milliseconds(5),
         realtime ? telemetry::LogWriter::Flush::kEveryPoll
                  : telemetry::LogWriter::Flush::kFullBlocks);
+    constexpr std::uint64_t kMb = 1u << 20;
+    log.writer->set_rotation({cfg.telemetry.max_segment_mb * kMb, cfg.telemetry.max_total_mb * kMb,
+                              [](const std::string& event) { spdlog::info("{}", event); }});
     log.writer->start();
   } catch (const std::exception& e) {
     throw config::ConfigError({where + ": " + e.what()});
@@ -116,6 +119,9 @@ void summarise_log(const TickLog& log, RunSummary& s) {
   s.log_records_dropped = w.records_dropped();
   s.log_records_lost = w.records_lost();
   s.log_io_errors = w.io_errors();
+  s.log_segments = w.segments();
+  s.log_files_deleted = w.files_deleted();
+  s.log_bytes_deleted = w.bytes_deleted();
   if (s.log_records_dropped > 0) {
     spdlog::warn("tick log: the RT ring was full and dropped {} records (marked in the log)",
                  s.log_records_dropped);

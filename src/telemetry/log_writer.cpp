@@ -182,6 +182,8 @@ void LogWriter::append_config_block(std::uint64_t first_tick) {
   } catch (const std::exception&) {
     note_error("config block too large", EFBIG);
   }
+  // The next segments' headers carry the configuration in force when they begin.
+  header_.config_text = std::move(text);
 }
 
 bool LogWriter::write_bytes(std::span<const std::byte> bytes) {
