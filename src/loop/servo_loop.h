@@ -78,8 +78,9 @@ class ServoLoop {
   // Runs on the calling thread (set up as the RT thread) until `stop`, max_ticks or a fault.
   // RT-safe after entry: no allocation, lock, log or throw; blocks only in the device read
   // and the absolute-time sleep. Whatever ends it, it commands zero force before returning.
-  // It may run again (after a fault was cleared): ticks go on counting where they stopped,
-  // the timing histograms keep accumulating, and the result is that run's alone.
+  // It may run again (after a fault was cleared): ticks go on counting where they stopped (a
+  // kMarkerRearmed record marks the first), the timing histograms keep accumulating, and the
+  // result is that run's alone.
   LoopResult run(const std::atomic<bool>& stop) noexcept;
 
   // Not RT-safe; only while run() is not running. The law the next run() starts with.

@@ -113,9 +113,11 @@ int RunSession::run() {
     accumulate(arm());
     if (summary_.loop.fault.cause == loop::FaultCause::kNone || !options_.on_fault_hold) break;
     if (!hold()) break;
-    // Re-armed: a fresh law from the configuration in force (a reload may have replaced it).
+    // Re-armed: a fresh law from the configuration in force (a reload may have replaced it),
+    // recorded after the loop's re-armed marker.
     std::lock_guard lock(mutex_);
     active_ = std::make_unique<control::Controller>(control::make_control_law(cfg_));
+    if (log_.writer) log_.writer->queue_config_change(cfg_.effective_yaml);
     servo_->set_controller(*active_);
     summary_.loop.fault = {};
   }

@@ -28,11 +28,12 @@
 //        56 f64 force_commanded, 64 u32 flags (TickFlag bits), 68 u32 device_status,
 //        72 i64 sample_time_ns, 80 u32 sequence, 84 u8 fault_cause, 85 u8 fault_class,
 //        86 u16 sequence_gap, 88 u32 fault_code, 92 u32 marker (TickMarker: 0 for a tick,
-//        1 reload accepted, 2 reload refused: an event at a tick boundary, not a tick)
+//        1 reload accepted, 2 reload refused, 3 re-armed after a cleared fault: an event at a
+//        tick boundary, not a tick)
 //
-// A live reload that swapped a new control law in adds a config block, right after the block
-// holding its marker record (TickRecord::marker = 1), so a reader knows the law from that
-// tick on. Config block (28 + len bytes):
+// A live reload that swapped a new control law in (marker 1), and a re-arming (marker 3, a
+// law started afresh), add a config block right after the block holding their marker record,
+// so a reader knows the law from that tick on. Config block (28 + len bytes):
 //   0   u8[4]  magic "HCFG" (48 43 46 47)
 //   4   u32    len: bytes of configuration text, at most kMaxConfigBytes
 //   8   u64    first_tick: the first tick the new configuration governs

@@ -40,7 +40,8 @@ struct LogContents {
   // Corrupt stretches passed over to reach later intact blocks (the reader resynchronises on
   // the next block header whose CRC holds); the ticks they held are missing from `records`.
   std::vector<SkippedRegion> skipped;
-  // Live reloads, in order (config blocks); header.config_text governs before the first.
+  // Config blocks, in order: live reloads and re-armings after a cleared fault (their marker
+  // records say which); header.config_text governs before the first.
   std::vector<ConfigChange> reloads;
   // "" when the whole file was read, else why reading stopped, e.g.
   // "incomplete block at byte 4242 (log cut short)", "CRC mismatch in block at byte 4242",

@@ -157,7 +157,8 @@ void LogWriter::withdraw_config_change() {
 void LogWriter::append_records(std::size_t n, std::uint64_t dropped_before) {
   std::size_t from = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    if (staging_[i].marker != kMarkerReloadAccepted) continue;
+    const std::uint32_t m = staging_[i].marker;
+    if (m != kMarkerReloadAccepted && m != kMarkerRearmed) continue;
     append_block(std::span(staging_.data() + from, i + 1 - from), staging_[from].tick,
                  from == 0 ? dropped_before : 0);
     append_config_block(staging_[i].tick);

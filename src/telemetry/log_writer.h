@@ -79,11 +79,11 @@ class LogWriter {
   std::uint64_t files_deleted() const noexcept;
   std::uint64_t bytes_deleted() const noexcept;
 
-  // Any thread. The configuration a live reload is about to swap in: written as a config
-  // block right after the block holding the reload's marker record (TickRecord::marker ==
-  // kMarkerReloadAccepted), so the log says which law governs from which tick. Queue it before
-  // the RT thread can take the new law; withdraw_config_change() takes it back if the reload
-  // does not happen after all.
+  // Any thread. The configuration a live reload is about to swap in (or a re-arming starts
+  // with): written as a config block right after the block holding the marker record
+  // (TickRecord::marker == kMarkerReloadAccepted or kMarkerRearmed), so the log says which law
+  // governs from which tick. Queue it before the RT thread can take the new law;
+  // withdraw_config_change() takes it back if the reload does not happen after all.
   void queue_config_change(std::string config_text);
   void withdraw_config_change();
 
