@@ -80,7 +80,9 @@ std::string receive_line(int fd, const std::string& socket, int timeout_ms) {
 
 }  // namespace
 
-std::string instance_socket(const std::string& name) { return "/run/hapticd/" + name + ".sock"; }
+std::string instance_socket(const std::string& name) {
+  return "/run/hapticd/" + name + "/control.sock";
+}
 
 nlohmann::json request(const std::string& socket, nlohmann::json request, int timeout_ms) {
   request["v"] = kProtocolVersion;

@@ -15,7 +15,8 @@ class ClientError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// The socket of instance `name` of the template unit hapticd@.service: /run/hapticd/NAME.sock.
+// The socket of instance `name` of the template unit hapticd@.service:
+// /run/hapticd/NAME/control.sock.
 std::string instance_socket(const std::string& name);
 
 // Connects to `socket`, sends `request` (its "v" is set) as one line and returns the one-line

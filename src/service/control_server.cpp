@@ -80,8 +80,11 @@ ControlServer::ControlServer(const std::string& path, ControlHandler& handler)
   listen_fd_ = socket(AF_UNIX, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
   if (listen_fd_ < 0) throw failure(path, "socket");
   // Mode and group before listen(): no connection is possible before they hold.
+  // chown only when the group is not ours already: the service runs in group hapticd, and its
+  // system-call filter has no chown.
   if (bind(listen_fd_, reinterpret_cast<const sockaddr*>(&addr), sizeof addr) != 0 ||
-      chmod(path.c_str(), 0660) != 0 || chown(path.c_str(), static_cast<uid_t>(-1), group_) != 0 ||
+      chmod(path.c_str(), 0660) != 0 ||
+      (group_ != getegid() && chown(path.c_str(), static_cast<uid_t>(-1), group_) != 0) ||
       listen(listen_fd_, 128) != 0) {
     const int err = errno;
     close(listen_fd_);

@@ -63,7 +63,8 @@ int main(int argc, char** argv) {
   double timeout_s = 30.0;
   app.add_option("--socket", socket, "The daemon's control socket (hapticd run --socket)");
   app.add_option("-i,--instance", instance,
-                 "Instance of hapticd@.service: the socket /run/hapticd/INSTANCE.sock")
+                 "Instance of hapticd@.service: the socket /run/hapticd/INSTANCE/control.sock "
+                 "(default: hapticd)")
       ->excludes("--socket");
   app.add_flag("--json", as_json, "Print the daemon's answer as one JSON object");
   app.add_option("--timeout", timeout_s, "Seconds to wait for the answer")

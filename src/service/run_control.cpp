@@ -86,7 +86,7 @@ json RunSession::status() const {
     j["missed_ticks"] = live.missed_ticks.load(r);
     j["stale_ticks"] = live.stale_ticks.load(r);
     j["contact_ticks"] = live.contact_ticks.load(r);
-    j["reloads"] = swap_.swaps();
+    j["reloads"] = reloads_;
     j["position"] = live.position.load(r);
     j["penetration"] = live.penetration.load(r);
     j["force_commanded"] = live.force_commanded.load(r);
@@ -130,6 +130,7 @@ json RunSession::reload(const std::string& text, const std::string& source,
   {
     std::lock_guard lock(mutex_);
     cfg_ = std::move(next.cfg);
+    ++reloads_;
     gate_ = out["gate"];
     summary_.gate = gate_;
   }

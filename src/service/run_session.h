@@ -88,9 +88,10 @@ class RunSession final : public ControlHandler {
   int wake_fd_ = -1;  // eventfd: the control thread wakes the supervisor (stop, clear-fault)
   bool reload_pending_ = false;  // a SIGHUP taken before the servo ran (supervisor thread)
 
-  mutable std::mutex mutex_;  // guards what the control thread reads or asks for, below
-  config::Config cfg_;        // replaced by an accepted reload
-  nlohmann::json gate_;       // the verdict on cfg_, as JSON
+  mutable std::mutex mutex_;   // guards what the control thread reads or asks for, below
+  config::Config cfg_;         // replaced by an accepted reload
+  nlohmann::json gate_;        // the verdict on cfg_, as JSON
+  std::uint64_t reloads_ = 0;  // accepted reloads: cfg_ and the law swapped in agree
   Phase phase_ = Phase::kStarting;
   std::string fault_;  // the last fault, described
   bool stop_asked_ = false;
