@@ -84,7 +84,8 @@ std::string result_text(const std::string& log, const telemetry::LogSet& set, co
   os << "hapticd replay: " << log << ": " << r.ticks.size() << " ticks";
   if (!r.ticks.empty()) os << " (" << r.ticks.front() << " to " << r.ticks.back() << ")";
   os << ", " << set.segments.size() << (set.segments.size() == 1 ? " segment" : " segments") << ", "
-     << r.reloads << " reloads, " << r.rearms << " re-armings\n";
+     << r.reloads << (r.reloads == 1 ? " reload, " : " reloads, ") << r.rearms
+     << (r.rearms == 1 ? " re-arming\n" : " re-armings\n");
   if (!r.stopped.empty()) os << "  stopped early  " << r.stopped << "\n";
   os << "  forces         ";
   if (r.differing == 0) {

@@ -169,8 +169,8 @@ loop::LoopResult RunSession::arm() {
                  device.info().description, cfg.loop.rate_hz, realtime_ ? "realtime" : "freerun",
                  cfg.wall.stiffness, cfg.wall.damping);
     if (realtime_ && first) announce_rt(rt_);
+    set_phase(Phase::kRunning);  // before READY=1: whoever waits for it may ask at once
     sd_notifyf(0, "READY=1\nSTATUS=servo running at %.0f Hz", cfg.loop.rate_hz);
-    set_phase(Phase::kRunning);
     supervise(rt);
     result = rt.join();
   }

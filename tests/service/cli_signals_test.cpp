@@ -70,9 +70,9 @@ TEST(CliSignals, EveryTerminatingSignalStopsTheRunLikeSigterm) {
 TEST(CliSignals, SighupReloadsAndNeverStopsTheRun) {
   const std::string sum = temp_path("hup.json"), log = temp_path("hup.hlog");
   NotifySocket notify;
-  BackgroundProcess p(
-      {hapticd_binary(), "run", "--duration", "1.5", "--log", log, "--summary-json", sum},
-      {notify.env()});
+  BackgroundProcess p({hapticd_binary(), "run", "--duration", "1.5", "--log", log, "--summary-json",
+                       sum, "--set", "loop.overrun_fault_streak=1000000000"},
+                      {notify.env()});
   ASSERT_TRUE(notify.wait_for("READY=1"));
   p.signal(SIGHUP);
   const ProcessResult r = p.wait();

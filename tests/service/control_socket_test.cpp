@@ -84,13 +84,13 @@ TEST(ControlSocket, StatusReloadsAndStopThroughHapticctl) {
   EXPECT_TRUE(has(gate.err, "the gate refuses it")) << gate.err;
   EXPECT_TRUE(has(gate.err, "wall.stiffness must be <= 3600 N/m to pass (now 5000)")) << gate.err;
   const ProcessResult rate =
-      d.ctl({"reload", write("rate.yaml", pressing_config(3000, "loop:\n  rate_hz: 500\n"))});
+      d.ctl({"reload", write("rate.yaml", pressing_config(3000, "  rate_hz: 500\n"))});
   EXPECT_EQ(rate.exit_code, 2) << rate.err;
   EXPECT_TRUE(has(rate.err, "loop.rate_hz: a new sample rate; that needs a restart")) << rate.err;
   const std::string bad = write("bad.yaml", pressing_config(-5));
   const ProcessResult yaml = d.ctl({"reload", bad});
   EXPECT_EQ(yaml.exit_code, 2) << yaml.err;
-  EXPECT_TRUE(has(yaml.err, bad + ":10: wall.stiffness: must be >= 0")) << yaml.err;
+  EXPECT_TRUE(has(yaml.err, bad + ":12: wall.stiffness: must be >= 0")) << yaml.err;
 
   s = d.wait_status([](const json&) { return true; });
   EXPECT_EQ(s["state"], "running") << "refusals leave the servo running";

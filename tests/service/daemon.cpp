@@ -14,8 +14,11 @@ namespace hapticd::testing {
 
 std::string hapticctl_binary() { return HAPTICCTL_BINARY; }
 
-std::string pressing_config(double k, const std::string& extra) {
-  return "device:\n"
+std::string pressing_config(double k, const std::string& loop, const std::string& wall) {
+  return "loop:\n"
+         "  overrun_fault_streak: 1000000000\n" +
+         loop +
+         "device:\n"
          "  sim:\n"
          "    initial_position: -0.001\n"
          "    operator:\n"
@@ -28,7 +31,7 @@ std::string pressing_config(double k, const std::string& extra) {
          std::to_string(k) +
          "\n"
          "  damping: 0\n" +
-         extra;
+         wall;
 }
 
 Daemon::Daemon(const std::vector<std::string>& args, const std::string& dir) {
@@ -40,8 +43,11 @@ Daemon::Daemon(const std::vector<std::string>& args, const std::string& dir) {
   socket_ = at("ctl") + ".sock";
   log_ = at("ticks") + ".hlog";
   summary_ = at("summary") + ".json";
-  std::vector<std::string> argv{hapticd_binary(), "run", "--socket",       socket_,
-                                "--log",          log_,  "--summary-json", summary_};
+  std::vector<std::string> argv{hapticd_binary(), "run",
+                                "--socket",       socket_,
+                                "--log",          log_,
+                                "--summary-json", summary_,
+                                "--set",          "loop.overrun_fault_streak=1000000000"};
   argv.insert(argv.end(), args.begin(), args.end());
   process_ = std::make_unique<BackgroundProcess>(argv, std::vector<std::string>{notify_.env()});
   ready_ = notify_.wait_for("READY=1", 20000);

@@ -18,12 +18,15 @@ std::string hapticctl_binary();
 
 // A full configuration for the sim (reloads send whole files): a hand holding the device
 // 10 mm inside an undamped wall of stiffness `k` (so in steady contact f = K p exactly).
-std::string pressing_config(double k, const std::string& extra = "");
+// `loop` and `wall` are more lines of those sections. The loop tolerates any overrun streak:
+// a loaded test machine must not fault a test about something else.
+std::string pressing_config(double k, const std::string& loop = "", const std::string& wall = "");
 
 class Daemon {
  public:
   // Starts `hapticd run --socket ... --log ... --summary-json ... ARGS` in `dir` ("" for a
-  // test temp dir) and waits for READY=1; ready() says whether it came.
+  // test temp dir) and waits for READY=1; ready() says whether it came. It tolerates any
+  // overrun streak (--set loop.overrun_fault_streak, the value pressing_config() has too).
   explicit Daemon(const std::vector<std::string>& args, const std::string& dir = "");
   ~Daemon();  // stops a daemon still running (SIGTERM) and collects it
 

@@ -65,9 +65,9 @@ TEST(CliReplay, AFreerunLogIsReproducedBitForBitAndItsEnergyAgrees) {
 }
 
 TEST(CliReplay, ARealtimeLogWithALiveReloadIsReproducedAcrossTheSwap) {
-  const std::string yaml = pressing_config(2000, "") +
-                           "  delay_samples: 2\n"
-                           "  coupling: {numerator: [0.001], denominator: [1]}\n";
+  const std::string yaml = pressing_config(2000, "",
+                                           "  delay_samples: 2\n"
+                                           "  coupling: {numerator: [0.001], denominator: [1]}\n");
   const std::string base = temp_path("replay_base.yaml"), next = temp_path("replay_next.yaml");
   std::ofstream(base) << yaml;
   std::string changed = yaml;
