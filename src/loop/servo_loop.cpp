@@ -100,6 +100,15 @@ void ServoLoop::take_reloads(std::uint64_t tick, std::int64_t scheduled_ns, Loop
   }
 }
 
+void ServoLoop::mark_rearmed(const std::atomic<bool>& stop) noexcept {
+  telemetry::TickRecord rearmed;
+  rearmed.tick = next_tick_;
+  rearmed.scheduled_ns =
+      options_.realtime ? 0 : static_cast<std::int64_t>(next_tick_) * options_.period_ns;
+  rearmed.marker = telemetry::kMarkerRearmed;
+  log(rearmed, stop);
+}
+
 void ServoLoop::publish(const telemetry::TickRecord& rec, const LoopResult& res) noexcept {
   constexpr auto r = std::memory_order_relaxed;
   live_.overruns.store(res.overruns, r);
@@ -206,13 +215,7 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
   int overrun_streak = 0;
   SenseState st;
   double last_command = 0.0;  // u_{k-1}, for the wall's work over the period just ended
-  if (next_tick_ > 0) {       // enabled again after a fault: say where the fresh law starts
-    telemetry::TickRecord rearmed;
-    rearmed.tick = next_tick_;
-    rearmed.scheduled_ns = options_.realtime ? 0 : static_cast<std::int64_t>(next_tick_) * period;
-    rearmed.marker = telemetry::kMarkerRearmed;
-    log(rearmed, stop);
-  }
+  if (next_tick_ > 0) mark_rearmed(stop);  // enabled again after a fault
 
   for (std::uint64_t n = 0;; ++n) {
     if (stop.load(std::memory_order_relaxed)) break;

@@ -123,11 +123,15 @@ class ServoLoop {
                       telemetry::TickRecord& rec, LoopResult& res) noexcept;
   // Records a fault on this tick (the device's class and code for device and transport ones).
   void set_fault(Fault f, telemetry::TickRecord& rec, LoopResult& res) const noexcept;
-  // Hands one record to the ring (freerun waits for room). RT-safe.
+  // Hands one record to the ring (freerun waits for room). RT-safe: called every tick.
   void log(const telemetry::TickRecord& rec, const std::atomic<bool>& stop) noexcept;
-  // Swaps in a law a live reload offered, and marks it (and refusals) in the log. RT-safe.
+  // Swaps in a law a live reload offered, and marks it (and refusals) in the log.
+  // RT-safe: called every tick (one atomic load when nothing is offered).
   void take_reloads(std::uint64_t tick, std::int64_t scheduled_ns, LoopResult& res,
                     const std::atomic<bool>& stop) noexcept;
+  // Marks where a run after a cleared fault starts its fresh law (kMarkerRearmed). RT-safe.
+  void mark_rearmed(const std::atomic<bool>& stop) noexcept;
+  // Stores what `hapticctl status` reads (LiveStatus). RT-safe: called every tick.
   void publish(const telemetry::TickRecord& rec, const LoopResult& res) noexcept;
 
   LatencyHistogram wake_latency_;

@@ -92,6 +92,13 @@ ControlServer::ControlServer(const std::string& path, ControlHandler& handler)
     throw failure(path, "bind/chmod/chown/listen");
   }
   stop_fd_ = eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
+  if (stop_fd_ < 0) {
+    const int err = errno;
+    close(listen_fd_);
+    unlink(path.c_str());
+    errno = err;
+    throw failure(path, "eventfd");
+  }
   thread_ = std::thread([this] { run(); });
   pthread_setname_np(thread_.native_handle(), "hapticd-ctl");
 }
