@@ -4,7 +4,7 @@
 # The binary is stripped (its debug information stays in the build tree).
 
 install(CODE "set(CMAKE_INSTALL_DO_STRIP ON)")  # before the targets: they honour it
-install(TARGETS hapticd RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+install(TARGETS hapticd hapticctl RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 
 # /usr installs its configuration in /etc (the FHS), every other prefix in PREFIX/etc.
 if(CMAKE_INSTALL_PREFIX STREQUAL "/usr")
@@ -16,20 +16,33 @@ install(FILES ${PROJECT_SOURCE_DIR}/config/sim.yaml DESTINATION ${HAPTICD_CONFIG
         RENAME hapticd.yaml)
 install(FILES ${PROJECT_SOURCE_DIR}/docs/man/hapticd.1 DESTINATION ${CMAKE_INSTALL_MANDIR}/man1)
 
-# Where systemd looks for units under this prefix, as pkg-config's systemdsystemunitdir
-# says (relative to the prefix, so it follows --prefix too).
-execute_process(
-  COMMAND ${PKG_CONFIG_EXECUTABLE} --define-variable=rootprefix=/@prefix@
-          --define-variable=prefix=/@prefix@ --variable=systemdsystemunitdir systemd
-  OUTPUT_VARIABLE _unit_dir OUTPUT_STRIP_TRAILING_WHITESPACE RESULT_VARIABLE _unit_rc)
-if(NOT _unit_rc EQUAL 0 OR NOT _unit_dir MATCHES "^/@prefix@/")
-  set(_unit_dir "/@prefix@/lib/systemd/system")
-endif()
-string(REPLACE "/@prefix@/" "" _unit_dir "${_unit_dir}")
+# Where systemd looks for units and sysusers.d files under this prefix, as pkg-config says
+# (relative to the prefix, so they follow --prefix too); udev rules go to lib/udev/rules.d.
+function(hapticd_systemd_dir variable fallback out)
+  execute_process(
+    COMMAND ${PKG_CONFIG_EXECUTABLE} --define-variable=rootprefix=/@prefix@
+            --define-variable=prefix=/@prefix@ --variable=${variable} systemd
+    OUTPUT_VARIABLE dir OUTPUT_STRIP_TRAILING_WHITESPACE RESULT_VARIABLE rc)
+  if(NOT rc EQUAL 0 OR NOT dir MATCHES "^/@prefix@/")
+    set(dir "/@prefix@/${fallback}")
+  endif()
+  string(REPLACE "/@prefix@/" "" dir "${dir}")
+  set(${out} "${dir}" PARENT_SCOPE)
+endfunction()
+hapticd_systemd_dir(systemdsystemunitdir lib/systemd/system _unit_dir)
+hapticd_systemd_dir(sysusersdir lib/sysusers.d _sysusers_dir)
 set(HAPTICD_SYSTEMD_UNIT_DIR "${_unit_dir}" CACHE STRING
     "systemd system unit directory, relative to the install prefix unless absolute")
+set(HAPTICD_SYSUSERS_DIR "${_sysusers_dir}" CACHE STRING
+    "sysusers.d directory, relative to the install prefix unless absolute")
+set(HAPTICD_UDEV_RULES_DIR "lib/udev/rules.d" CACHE STRING
+    "udev rules directory, relative to the install prefix unless absolute")
+install(FILES ${PROJECT_SOURCE_DIR}/systemd/hapticd.sysusers DESTINATION ${HAPTICD_SYSUSERS_DIR}
+        RENAME hapticd.conf)
+file(GLOB _udev_rules ${PROJECT_SOURCE_DIR}/udev/*.rules)
+install(FILES ${_udev_rules} DESTINATION ${HAPTICD_UDEV_RULES_DIR})
 install(CODE "
-  set(HAPTICD_UNIT_TEMPLATE \"${PROJECT_SOURCE_DIR}/systemd/hapticd.service.in\")
+  set(HAPTICD_UNIT_TEMPLATE \"${PROJECT_SOURCE_DIR}/systemd/hapticd@.service.in\")
   set(HAPTICD_UNIT_DIR \"${HAPTICD_SYSTEMD_UNIT_DIR}\")
   set(HAPTICD_INSTALL_BINDIR \"${CMAKE_INSTALL_BINDIR}\")
   set(HAPTICD_INSTALL_SYSCONFDIR \"${CMAKE_INSTALL_SYSCONFDIR}\")

@@ -1,17 +1,17 @@
-# Runs at install time (cmake/install.cmake): writes the systemd unit for the prefix being
-# installed to, under DESTDIR when one is set.
+# Runs at install time (cmake/install.cmake): writes the systemd template unit
+# hapticd@.service for the prefix being installed to, under DESTDIR when one is set.
 set(_prefix "${CMAKE_INSTALL_PREFIX}")
 set(HAPTICD_BINDIR "${_prefix}/${HAPTICD_INSTALL_BINDIR}")
 if(_prefix STREQUAL "/usr")
-  set(HAPTICD_CONFIG "/etc/hapticd/hapticd.yaml")
+  set(HAPTICD_CONFIG_DIR "/etc/hapticd")
 else()
-  set(HAPTICD_CONFIG "${_prefix}/${HAPTICD_INSTALL_SYSCONFDIR}/hapticd/hapticd.yaml")
+  set(HAPTICD_CONFIG_DIR "${_prefix}/${HAPTICD_INSTALL_SYSCONFDIR}/hapticd")
 endif()
 if(IS_ABSOLUTE "${HAPTICD_UNIT_DIR}")
   set(_dir "${HAPTICD_UNIT_DIR}")
 else()
   set(_dir "${_prefix}/${HAPTICD_UNIT_DIR}")
 endif()
-set(_out "$ENV{DESTDIR}${_dir}/hapticd.service")
+set(_out "$ENV{DESTDIR}${_dir}/hapticd@.service")
 message(STATUS "Installing: ${_out}")
 configure_file("${HAPTICD_UNIT_TEMPLATE}" "${_out}" @ONLY)

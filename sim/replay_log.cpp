@@ -8,6 +8,7 @@
 
 #include "config/config_loader.h"
 #include "telemetry/log_reader.h"
+#include "telemetry/log_set.h"
 
 namespace hapticd::sim {
 namespace {
@@ -51,7 +52,7 @@ std::vector<double> load_replay_positions(const config::Config& cfg) {
   const std::string where = cfg.locate("device.sim.operator.log") + ": device.sim.operator.log: ";
   telemetry::LogContents log;
   try {
-    log = telemetry::read_log(path);
+    log = telemetry::read_log_set(path).contents;  // every segment of a rotated log
   } catch (const std::exception& e) {
     throw config::ConfigError({where + e.what()});
   }

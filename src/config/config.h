@@ -45,6 +45,7 @@ struct LoopConfig {
 struct ProfilePoint {
   double t_s = 0.0;
   double value = 0.0;
+  friend bool operator==(const ProfilePoint&, const ProfilePoint&) = default;
 };
 struct ProfileSpec {
   enum class Shape { kConstant, kStep, kRamp, kSine, kPress };
@@ -54,6 +55,7 @@ struct ProfileSpec {
   double amplitude = 0.0;            // sine only
   double frequency_hz = 0.0;         // sine only
   double phase_rad = 0.0;            // sine only
+  friend bool operator==(const ProfileSpec&, const ProfileSpec&) = default;
 };
 
 // Imposed motion: positions at the sample instants are offset + amplitude*cos(2 pi f t + phase);
@@ -63,6 +65,7 @@ struct MotionSpec {
   double amplitude = 0.0;
   double frequency_hz = 1.0;
   double phase_rad = 0.0;
+  friend bool operator==(const MotionSpec&, const MotionSpec&) = default;
 };
 
 struct OperatorSpec {
@@ -74,6 +77,7 @@ struct OperatorSpec {
   ProfileSpec force;         // force: operator force (N)
   MotionSpec motion;         // motion
   std::string replay_log;    // replay: tick log whose positions are imposed (absolute path)
+  friend bool operator==(const OperatorSpec&, const OperatorSpec&) = default;
 };
 
 struct SimDeviceConfig {
@@ -83,6 +87,7 @@ struct SimDeviceConfig {
   double initial_position = 0.0;   // m
   double initial_velocity = 0.0;   // m/s
   OperatorSpec op;
+  friend bool operator==(const SimDeviceConfig&, const SimDeviceConfig&) = default;
 };
 
 // A driver's own settings, the section device.<driver>: parsed and validated by the driver's
@@ -136,9 +141,17 @@ struct AnalysisConfig {
   Coefficients transparency_weight_denominator{1.0};
 };
 
+// telemetry.max_segment_mb / max_total_mb: at most this many MB (2^20 bytes).
+inline constexpr long long kMaxLogMegabytes = 1LL << 24;  // 16 TB: a bound, not advice
+
 struct TelemetryConfig {
   std::string log_path;                 // empty: no tick log unless --log is given
   std::uint32_t ring_capacity = 65536;  // records between RT thread and writer, 64..2^22
+  // A log rolls to a new segment (each a complete log) before it would pass this; 0: never.
+  std::uint32_t max_segment_mb = 64;
+  // The oldest segments and older runs' logs at the same path are deleted to keep them all
+  // under this; 0: nothing is deleted. Needs max_segment_mb, and at least twice it.
+  std::uint32_t max_total_mb = 1024;
 };
 
 struct Config {

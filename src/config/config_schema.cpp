@@ -353,6 +353,31 @@ void read_telemetry(MapReader& top, TelemetryConfig& telemetry) {
                                   IntRange::between(64, kMaxRingCapacity))) {
     telemetry.ring_capacity = static_cast<std::uint32_t>(*v);
   }
+  const Field segment = m.take("max_segment_mb");
+  if (const auto v = read_integer(m.diag(), segment, IntRange::between(0, kMaxLogMegabytes))) {
+    telemetry.max_segment_mb = static_cast<std::uint32_t>(*v);
+  }
+  const Field total = m.take("max_total_mb");
+  if (const auto v = read_integer(m.diag(), total, IntRange::between(0, kMaxLogMegabytes))) {
+    telemetry.max_total_mb = static_cast<std::uint32_t>(*v);
+  }
+  // The segment being written is never deleted: without a segment size nothing bounds it, and
+  // a cap below two segments would delete each one as soon as the next begins. Said at the key
+  // that is off (a segment size of 0, a cap too small) when the document has it.
+  const std::uint64_t cap = telemetry.max_total_mb, seg = telemetry.max_segment_mb;
+  if (cap > 0 && seg == 0) {
+    const Field& at = segment.present ? segment : total;
+    m.diag().error(at.key_mark, at.path,
+                   "max_segment_mb 0 with max_total_mb " + std::to_string(cap) +
+                       ": one endless segment could not be kept under the cap (make "
+                       "max_total_mb 0 too, or give a segment size)");
+  } else if (cap > 0 && cap < 2 * seg) {
+    const Field& at = total.present ? total : segment;
+    m.diag().error(at.key_mark, at.path,
+                   "max_total_mb " + std::to_string(cap) + " is less than twice max_segment_mb " +
+                       std::to_string(seg) +
+                       ": the cap must hold the segment being written and the one before it");
+  }
   m.finish();
 }
 

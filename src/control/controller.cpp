@@ -17,6 +17,21 @@ void Controller::reset() noexcept {
   armed_ = false;
 }
 
+void Controller::continue_from(const Controller& previous) noexcept {
+  xi_ = previous.xi_;
+  force_ = previous.force_;
+  proxy_ = previous.proxy_;
+  last_position_ = previous.last_position_;
+  have_last_position_ = previous.have_last_position_;
+  armed_ = previous.armed_;
+  // The newest commands of the old delay line, as many as this one holds: f_{k-1}, f_{k-2}...
+  const std::size_t n = delay_line_.size(), m = previous.delay_line_.size();
+  for (std::size_t age = 0; age < n; ++age) {
+    const double v = age < m ? previous.delay_line_[(previous.delay_head_ + m - age) % m] : 0.0;
+    delay_line_[(delay_head_ + n - age) % n] = v;
+  }
+}
+
 ControlOutput Controller::step(double position) noexcept {
   ControlOutput out;
   out.penetration = law_.normal * (position - law_.wall_position);

@@ -42,6 +42,12 @@ class Controller {
   // RT-safe. Clears every filter state and the delay line, and disarms (as at construction).
   void reset() noexcept;
 
+  // RT-safe: called at the tick boundary where a live reload swaps this law in. Takes over the
+  // signal histories (xi, f, the coupling's output), the commands already in the delay line,
+  // the last position and the arming of the law it replaces, so a new K or B takes effect
+  // from the next step on without a kick from the damping term or the delay line restarting.
+  void continue_from(const Controller& previous) noexcept;
+
   const ControlLaw& law() const noexcept { return law_; }
 
  private:

@@ -30,28 +30,34 @@ std::int64_t LatencyHistogram::upper_edge(std::size_t bucket) noexcept {
 
 void LatencyHistogram::record(std::int64_t ns) noexcept {
   ns = std::max<std::int64_t>(ns, 0);
-  ++buckets_[bucket_of(ns)];
-  ++count_;
-  max_ = std::max(max_, ns);
+  // One recording thread: a load and a store, no locked read-modify-write.
+  constexpr auto r = std::memory_order_relaxed;
+  std::atomic<std::uint64_t>& bucket = buckets_[bucket_of(ns)];
+  bucket.store(bucket.load(r) + 1, r);
+  count_.store(count_.load(r) + 1, r);
+  if (ns > max_.load(r)) max_.store(ns, r);
 }
 
 std::int64_t LatencyHistogram::percentile_ns(double q) const noexcept {
-  if (count_ == 0) return 0;
-  if (q >= 1.0) return max_;
+  constexpr auto r = std::memory_order_relaxed;
+  const std::uint64_t count = count_.load(r);
+  const std::int64_t max = max_.load(r);
+  if (count == 0) return 0;
+  if (q >= 1.0) return max;
   const auto rank = std::max<std::uint64_t>(
-      static_cast<std::uint64_t>(std::ceil(q * static_cast<double>(count_))), 1);
+      static_cast<std::uint64_t>(std::ceil(q * static_cast<double>(count))), 1);
   std::uint64_t seen = 0;
   for (std::size_t b = 0; b < kBuckets; ++b) {
-    seen += buckets_[b];
-    if (seen >= rank) return std::min(upper_edge(b), max_);
+    seen += buckets_[b].load(r);
+    if (seen >= rank) return std::min(upper_edge(b), max);
   }
-  return max_;
+  return max;
 }
 
 void LatencyHistogram::reset() noexcept {
-  buckets_.fill(0);
-  count_ = 0;
-  max_ = 0;
+  for (auto& b : buckets_) b.store(0, std::memory_order_relaxed);
+  count_.store(0, std::memory_order_relaxed);
+  max_.store(0, std::memory_order_relaxed);
 }
 
 }  // namespace hapticd::loop

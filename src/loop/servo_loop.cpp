@@ -1,8 +1,9 @@
 // The tick, and everything it touches. The RT working set is kept small and listed here, so a
 // change that adds to it is seen: the Device (its state, the driver's buffers), the
 // Controller (ControlLaw and three 16-tap histories, the delay line), this ServoLoop (options,
-// two 4 KB LatencyHistograms, counters), the SenseState and TickRecord on the stack, and one
-// slot of the SPSC ring. Nothing else: no allocation, no lock, no log, no throw.
+// two 4 KB LatencyHistograms, counters, the LiveStatus atomics), the LawSwap mailbox (one
+// atomic load a tick), the SenseState and TickRecord on the stack, and one slot of the SPSC
+// ring. Nothing else: no allocation, no lock, no log, no throw.
 #include "loop/servo_loop.h"
 
 #include <sched.h>
@@ -53,7 +54,7 @@ std::int32_t clamp_i32(std::int64_t v) noexcept {
 ServoLoop::ServoLoop(Device& device, control::Controller& controller,
                      telemetry::SpscRing<telemetry::TickRecord>* ring, const LoopOptions& options)
     : device_(device),
-      controller_(controller),
+      controller_(&controller),
       ring_(ring),
       options_(options),
       max_step_(options.max_speed * static_cast<double>(options.period_ns) / kNsPerS) {}
@@ -68,6 +69,56 @@ void ServoLoop::set_fault(Fault f, telemetry::TickRecord& rec, LoopResult& res) 
     rec.fault_class = static_cast<std::uint8_t>(df.fault_class);
     rec.fault_code = df.code;
   }
+}
+
+void ServoLoop::log(const telemetry::TickRecord& rec, const std::atomic<bool>& stop) noexcept {
+  if (ring_ == nullptr) return;
+  while (options_.wait_for_ring && ring_->size_approx() >= ring_->capacity() &&
+         !stop.load(std::memory_order_relaxed)) {
+    sched_yield();
+  }
+  ring_->try_push(rec);  // realtime: a full ring counts the loss, never blocks
+}
+
+void ServoLoop::take_reloads(std::uint64_t tick, std::int64_t scheduled_ns, LoopResult& res,
+                             const std::atomic<bool>& stop) noexcept {
+  if (options_.law_swap == nullptr) return;
+  telemetry::TickRecord marker;
+  marker.tick = tick;
+  marker.scheduled_ns = scheduled_ns;
+  if (control::Controller* next = options_.law_swap->take(controller_, tick)) {
+    next->continue_from(*controller_);
+    controller_ = next;
+    ++res.reloads;
+    live_.reloads.store(res.reloads, std::memory_order_relaxed);
+    marker.marker = telemetry::kMarkerReloadAccepted;
+    log(marker, stop);
+  }
+  for (std::uint32_t n = options_.law_swap->take_refusals(); n > 0; --n) {
+    marker.marker = telemetry::kMarkerReloadRefused;
+    log(marker, stop);
+  }
+}
+
+void ServoLoop::mark_rearmed(const std::atomic<bool>& stop) noexcept {
+  telemetry::TickRecord rearmed;
+  rearmed.tick = next_tick_;
+  rearmed.scheduled_ns =
+      options_.realtime ? 0 : static_cast<std::int64_t>(next_tick_) * options_.period_ns;
+  rearmed.marker = telemetry::kMarkerRearmed;
+  log(rearmed, stop);
+}
+
+void ServoLoop::publish(const telemetry::TickRecord& rec, const LoopResult& res) noexcept {
+  constexpr auto r = std::memory_order_relaxed;
+  live_.overruns.store(res.overruns, r);
+  live_.missed_ticks.store(res.missed_ticks, r);
+  live_.stale_ticks.store(res.stale_ticks, r);
+  live_.contact_ticks.store(res.contact_ticks, r);
+  live_.position.store(rec.position, r);
+  live_.penetration.store(rec.penetration, r);
+  live_.force_commanded.store(rec.force_commanded, r);
+  live_.wall_energy_j.store(energy_before_ + res.wall_energy_j, r);
 }
 
 bool ServoLoop::check_sequence(std::uint64_t tick, const PositionSample& sample, SenseState& st,
@@ -163,10 +214,13 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
   std::int64_t deadline = start;  // the first tick is due at once
   int overrun_streak = 0;
   SenseState st;
+  double last_command = 0.0;  // u_{k-1}, for the wall's work over the period just ended
+  if (next_tick_ > 0) mark_rearmed(stop);  // enabled again after a fault
 
-  for (std::uint64_t tick = 0;; ++tick) {
+  for (std::uint64_t n = 0;; ++n) {
     if (stop.load(std::memory_order_relaxed)) break;
-    if (options_.max_ticks != 0 && tick >= options_.max_ticks) break;
+    if (options_.max_ticks != 0 && n >= options_.max_ticks) break;
+    const std::uint64_t tick = next_tick_ + n;
 
     telemetry::TickRecord rec;
     rec.tick = tick;
@@ -178,15 +232,19 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
       rec.wake_latency_ns = clamp_i32(wake - deadline);
     } else {
       wake = now_ns();
-      rec.scheduled_ns = static_cast<std::int64_t>(tick) * period;
+      rec.scheduled_ns = static_cast<std::int64_t>(tick) * period;  // k T, across runs
     }
 
+    take_reloads(tick, rec.scheduled_ns, res, stop);
     PositionSample sample;
     double command = 0.0;
     const bool stepped = sense(tick, wake, sample, st, rec, res);
     if (!stepped && res.fault.cause == FaultCause::kNone) rec.flags |= telemetry::kFlagNoPosition;
     if (stepped) {
-      const control::ControlOutput out = controller_.step(sample.position);
+      if (st.have_work_x) res.wall_energy_j += last_command * (sample.position - st.work_x);
+      st.work_x = sample.position;
+      st.have_work_x = true;
+      const control::ControlOutput out = controller_->step(sample.position);
       command = out.force_commanded;
       rec.position = sample.position;
       rec.penetration = out.penetration;
@@ -211,6 +269,7 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
       device_.write(0.0);  // zero force at once; the service then disables output
     }
     rec.force_commanded = command;
+    last_command = command;
 
     // Bookkeeping after the timed window.
     const std::int64_t done = now_ns();
@@ -237,15 +296,10 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
     if (rec.flags & telemetry::kFlagSaturated) ++res.saturated_ticks;
     if (rec.flags & telemetry::kFlagUnarmed) ++res.unarmed_ticks;
     res.max_penetration = std::max(res.max_penetration, rec.penetration);
-    if (ring_ != nullptr) {
-      while (options_.wait_for_ring && ring_->size_approx() >= ring_->capacity() &&
-             !stop.load(std::memory_order_relaxed)) {
-        sched_yield();
-      }
-      ring_->try_push(rec);  // realtime: a full ring counts the loss, never blocks
-    }
+    log(rec, stop);
+    publish(rec, res);
     ++res.ticks;
-    ticks_done_.store(res.ticks, std::memory_order_relaxed);
+    ticks_done_.store(next_tick_ + res.ticks, std::memory_order_relaxed);
     if (res.fault.cause != FaultCause::kNone) break;
 
     deadline += period;
@@ -261,6 +315,8 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
     }
   }
   device_.write(0.0);  // the last command must not outlive the loop that was servoing it
+  next_tick_ += res.ticks;
+  energy_before_ += res.wall_energy_j;
   return res;
 }
 

@@ -10,6 +10,7 @@
 #include "control/controller.h"
 #include "drivers/device.h"
 #include "loop/latency_histogram.h"
+#include "loop/law_swap.h"
 #include "loop/loop_fault.h"
 #include "telemetry/spsc_ring.h"
 #include "telemetry/tick_record.h"
@@ -30,6 +31,22 @@ struct LoopOptions {
   // Freerun only: wait for room in the ring instead of dropping (a simulation is not real
   // time, and a complete log is what makes it reproducible). Needs a consumer.
   bool wait_for_ring = false;
+  // Live reload: the mailbox a new control law arrives through (null: none).
+  LawSwap* law_swap = nullptr;
+};
+
+// What the loop is doing, readable from any thread while it runs (relaxed atomics, stored
+// once a tick): for `hapticctl status`.
+struct LiveStatus {
+  std::atomic<std::uint64_t> overruns{0};
+  std::atomic<std::uint64_t> missed_ticks{0};
+  std::atomic<std::uint64_t> stale_ticks{0};
+  std::atomic<std::uint64_t> contact_ticks{0};
+  std::atomic<std::uint64_t> reloads{0};
+  std::atomic<double> position{0.0};
+  std::atomic<double> penetration{0.0};
+  std::atomic<double> force_commanded{0.0};
+  std::atomic<double> wall_energy_j{0.0};  // LoopResult::wall_energy_j, over every run()
 };
 
 struct LoopResult {
@@ -40,25 +57,41 @@ struct LoopResult {
   std::uint64_t contact_ticks = 0;
   std::uint64_t saturated_ticks = 0;
   std::uint64_t unarmed_ticks = 0;   // inside the wall before it was first left (zero force)
+  std::uint64_t reloads = 0;         // control laws swapped in at a tick boundary
   std::uint64_t sequence_gaps = 0;   // times the device's sequence skipped
   std::uint64_t samples_missed = 0;  // samples those gaps skipped in all
   double max_penetration = 0.0;
+  // Work the commanded force did on the device, sum of u_{k-1} (x_k - x_{k-1}) over the
+  // ticks with a position (J): negative while the wall takes energy in (pressing into it),
+  // positive when it hands energy back; above the energy its spring holds, the wall was active.
+  double wall_energy_j = 0.0;
   Fault fault;
 };
 
 class ServoLoop {
  public:
-  // Not RT-safe. `ring` may be null (no tick log).
+  // Not RT-safe. `ring` may be null (no tick log). `controller` is the law the loop starts
+  // with; a live reload (options.law_swap) replaces it at a tick boundary.
   ServoLoop(Device& device, control::Controller& controller,
             telemetry::SpscRing<telemetry::TickRecord>* ring, const LoopOptions& options);
 
   // Runs on the calling thread (set up as the RT thread) until `stop`, max_ticks or a fault.
   // RT-safe after entry: no allocation, lock, log or throw; blocks only in the device read
   // and the absolute-time sleep. Whatever ends it, it commands zero force before returning.
+  // It may run again (after a fault was cleared): ticks go on counting where they stopped (a
+  // kMarkerRearmed record marks the first), the timing histograms keep accumulating, and the
+  // result is that run's alone.
   LoopResult run(const std::atomic<bool>& stop) noexcept;
 
-  // Any thread: ticks completed so far (for the watchdog and progress).
+  // Not RT-safe; only while run() is not running. The law the next run() starts with.
+  void set_controller(control::Controller& controller) noexcept { controller_ = &controller; }
+
+  // Any thread: ticks completed so far, over every run() (for the watchdog and progress), and
+  // the rest of what it is doing.
   std::uint64_t ticks_done() const noexcept { return ticks_done_.load(std::memory_order_relaxed); }
+  const LiveStatus& live() const noexcept { return live_; }
+  // Off-RT, after run(): the law in force at the end (the last one swapped in).
+  control::Controller& controller() const noexcept { return *controller_; }
 
   // Off-RT, after run(): wake latency and compute time of every tick.
   const LatencyHistogram& wake_latency() const noexcept { return wake_latency_; }
@@ -66,7 +99,7 @@ class ServoLoop {
 
  private:
   Device& device_;
-  control::Controller& controller_;
+  control::Controller* controller_;
   telemetry::SpscRing<telemetry::TickRecord>* ring_;
   LoopOptions options_;
   double max_step_ = 0.0;  // max_speed * T: cached so the tick multiplies, not divides
@@ -80,6 +113,8 @@ class ServoLoop {
     std::int64_t last_time_ns = 0;     // the last sample's own time (0: it had none)
     std::uint64_t last_sequence = 0;
     bool have_sequence = false;
+    double work_x = 0.0;  // the position the last step was taken at (the wall's work)
+    bool have_work_x = false;
   };
   bool sense(std::uint64_t tick, std::int64_t wake_ns, PositionSample& sample, SenseState& st,
              telemetry::TickRecord& rec, LoopResult& res) noexcept;
@@ -88,10 +123,23 @@ class ServoLoop {
                       telemetry::TickRecord& rec, LoopResult& res) noexcept;
   // Records a fault on this tick (the device's class and code for device and transport ones).
   void set_fault(Fault f, telemetry::TickRecord& rec, LoopResult& res) const noexcept;
+  // Hands one record to the ring (freerun waits for room). RT-safe: called every tick.
+  void log(const telemetry::TickRecord& rec, const std::atomic<bool>& stop) noexcept;
+  // Swaps in a law a live reload offered, and marks it (and refusals) in the log.
+  // RT-safe: called every tick (one atomic load when nothing is offered).
+  void take_reloads(std::uint64_t tick, std::int64_t scheduled_ns, LoopResult& res,
+                    const std::atomic<bool>& stop) noexcept;
+  // Marks where a run after a cleared fault starts its fresh law (kMarkerRearmed). RT-safe.
+  void mark_rearmed(const std::atomic<bool>& stop) noexcept;
+  // Stores what `hapticctl status` reads (LiveStatus). RT-safe: called every tick.
+  void publish(const telemetry::TickRecord& rec, const LoopResult& res) noexcept;
 
   LatencyHistogram wake_latency_;
   LatencyHistogram compute_time_;
   std::atomic<std::uint64_t> ticks_done_{0};
+  std::uint64_t next_tick_ = 0;  // the first tick of the next run()
+  double energy_before_ = 0.0;   // wall_energy_j of the earlier run()s
+  LiveStatus live_;
 };
 
 }  // namespace hapticd::loop

@@ -12,8 +12,6 @@
 #include "drivers/registry.h"
 
 namespace hapticd::service {
-namespace {
-
 // The config library parses text; reading the file is the service's (it owns all I/O).
 std::string read_config_file(const std::string& path) {
   const auto fail = [&](int err) {
@@ -38,22 +36,28 @@ std::string read_config_file(const std::string& path) {
   return text;
 }
 
-}  // namespace
+config::Config load_config_text_checked(const std::string& text, const std::string& source,
+                                        const std::string& base_dir,
+                                        const std::vector<std::string>& sets) {
+  std::vector<config::Override> overrides;
+  for (const std::string& s : sets) overrides.push_back(config::parse_override(s));
+  config::Config cfg =
+      config::load_config_text(text, source, overrides, base_dir, drivers::driver_schemas());
+  control::check_derived_quantities(cfg);
+  return cfg;
+}
 
 config::Config load_config(const ConfigOptions& options) {
   std::vector<config::Override> overrides;
   overrides.reserve(options.sets.size());
   for (const std::string& s : options.sets) overrides.push_back(config::parse_override(s));
-  const config::DriverSchemas& drivers = drivers::driver_schemas();
-  config::Config cfg;
-  if (options.path.empty()) {
-    cfg = config::load_embedded_default(overrides, drivers);
-  } else {
+  if (!options.path.empty()) {
     std::string base_dir = std::filesystem::path(options.path).parent_path().string();
     if (base_dir.empty()) base_dir = ".";
-    cfg = config::load_config_text(read_config_file(options.path), options.path, overrides,
-                                   base_dir, drivers);
+    return load_config_text_checked(read_config_file(options.path), options.path, base_dir,
+                                    options.sets);
   }
+  config::Config cfg = config::load_embedded_default(overrides, drivers::driver_schemas());
   control::check_derived_quantities(cfg);
   return cfg;
 }

@@ -17,4 +17,13 @@ struct ConfigOptions {
 // Throws config::ConfigError (exit code 2) with every problem found.
 config::Config load_config(const ConfigOptions& options);
 
+// The same for text already read (a live reload's): `source` names it in messages and
+// `base_dir` resolves its relative paths; `sets` are applied as --set arguments.
+config::Config load_config_text_checked(const std::string& text, const std::string& source,
+                                        const std::string& base_dir,
+                                        const std::vector<std::string>& sets = {});
+
+// A configuration file's text. Throws config::ConfigError "PATH: cannot read: REASON".
+std::string read_config_file(const std::string& path);
+
 }  // namespace hapticd::service

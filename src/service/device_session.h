@@ -26,6 +26,7 @@ class DeviceSession {
   DeviceSession& operator=(const DeviceSession&) = delete;
 
   Device& device() { return *device_; }
+  const Device& device() const { return *device_; }
   const drivers::DriverEntry& driver() const { return driver_; }
   // The simulated device behind a loopback (null for real hardware).
   sim::LoopbackPeer* peer() { return peer_.get(); }

@@ -7,17 +7,24 @@
 #include <cstring>
 #include <fstream>
 #include <iostream>
+#include <utility>
 
 #include "service/exit_codes.h"
 #include "service/result_output.h"
 #include "telemetry/log_reader.h"
+#include "telemetry/log_set.h"
 
 namespace hapticd::service {
 
 int export_command(const std::string& log_path, const std::string& out_path) {
   telemetry::LogContents log;
   try {
-    log = telemetry::read_log(log_path);
+    telemetry::LogSet set = telemetry::read_log_set(log_path);  // every segment, in order
+    if (set.segments.size() > 1) {
+      spdlog::info("{}: {} segments, {} to {}", log_path, set.segments.size(), set.segments.front(),
+                   set.segments.back());
+    }
+    log = std::move(set.contents);
   } catch (const telemetry::LogFormatError& e) {
     std::cerr << "hapticd: " << e.what() << "\n";
     return kExitUsage;

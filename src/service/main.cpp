@@ -14,6 +14,7 @@
 #include "service/exit_codes.h"
 #include "service/export_command.h"
 #include "service/peer_command.h"
+#include "service/replay_command.h"
 #include "service/result_output.h"
 #include "service/run_command.h"
 #include "service/stop_signals.h"
@@ -84,6 +85,13 @@ int main(int argc, char** argv) {
                   "Write the binary tick log here (overrides telemetry.log)");
   run->add_option("--summary-json", run_opts.summary_json_path,
                   "Also write the run summary as one JSON object to this file");
+  run->add_option("--socket", run_opts.socket_path,
+                  "Serve the control socket here (hapticctl: status, stop, reload, clear-fault)");
+  std::string on_fault = "exit";
+  run->add_option("--on-fault", on_fault,
+                  "exit: a fault ends the run (exit 1); hold: the fault latches with output "
+                  "off and the daemon waits for `hapticctl clear-fault` or a stop")
+      ->check(CLI::IsMember({"exit", "hold"}));
   run->add_flag("--loopback", run_opts.loopback,
                 "Drive the configured driver's own protocol code against its simulated peer "
                 "(the plant of device.sim) instead of hardware: try a hardware configuration "
@@ -124,6 +132,25 @@ int main(int argc, char** argv) {
   peer->add_option("--duration", peer_duration, "Stop after this many seconds")
       ->check(CLI::Validator(check_duration, "SECONDS"));
 
+  hapticd::service::ReplayOptions replay_opts;
+  CLI::App* replay = app.add_subcommand(
+      "replay",
+      "Feed a tick log's positions through a controller built from the log's own configuration "
+      "(the forces must come back bit for bit: exit 0, else 1) and, with --config OTHER or "
+      "--set, through that configuration: its gate verdict and a side-by-side summary (exit 3 "
+      "when its gate fails). Reads every segment of a rotated log.");
+  replay->add_option("LOG", replay_opts.log_path, "Tick log (its first segment's name)")
+      ->required();
+  add_config_options(replay, replay_opts.other);
+  replay->get_option("--config")
+      ->description(
+          "Another configuration to replay the log through (what-if); --set alone "
+          "changes the log's own");
+  replay->add_option("--out", replay_opts.out_path,
+                     "Write the force series as CSV: tick, position, force_logged, "
+                     "force_replayed (and force_other)");
+  replay->add_flag("--json", replay_opts.json, "Print exactly one JSON object");
+
   // Events (gate verdict, faults, lifecycle) go to stderr; stdout carries only the results a
   // script reads (the check table or JSON, the run summary).
   spdlog::set_default_logger(spdlog::stderr_color_mt("hapticd"));
@@ -142,6 +169,7 @@ int main(int argc, char** argv) {
     if (*check) return hapticd::service::check_command(check_cfg, check_json);
     if (*run) {
       run_opts.duration_s = duration;
+      run_opts.on_fault_hold = on_fault == "hold";
       hapticd::service::SignalWatch signals;
       return hapticd::service::run_command(run_opts, signals);
     }
@@ -152,6 +180,7 @@ int main(int argc, char** argv) {
       return hapticd::service::peer_command(peer_opts, signals);
     }
     if (*exp) return hapticd::service::export_command(export_log, export_out);
+    if (*replay) return hapticd::service::replay_command(replay_opts);
   } catch (const hapticd::config::ConfigError& e) {
     for (const std::string& m : e.messages()) std::cerr << "hapticd: " << m << "\n";
     return hapticd::kExitUsage;

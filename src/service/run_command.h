@@ -15,11 +15,15 @@ struct RunOptions {
   std::optional<double> duration_s;  // none: until SIGINT/SIGTERM
   std::string log_path;              // overrides telemetry.log
   std::string summary_json_path;
-  bool loopback = false;  // drive the configured driver against its simulated peer
+  bool loopback = false;    // drive the configured driver against its simulated peer
+  std::string socket_path;  // the control socket; "" for none
+  // A fault latches and waits for `clear-fault` (or a stop) instead of ending the run.
+  bool on_fault_hold = false;
 };
 
 // Returns the process exit code (DESIGN.md §9). A stop signal taken from `signals` at any
-// moment before output is enabled means output is never enabled (exit 0, 0 ticks).
+// moment before output is enabled means output is never enabled (exit 0, 0 ticks); SIGHUP
+// reloads the configuration file (with the same --set arguments) through the gate.
 int run_command(const RunOptions& options, SignalWatch& signals);
 
 }  // namespace hapticd::service

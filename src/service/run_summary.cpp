@@ -37,6 +37,9 @@ json summary_to_json(const RunSummary& s) {
   j["wake_latency_us"] = s.realtime ? percentiles_us(s.wake_latency) : json(nullptr);
   j["compute_us"] = percentiles_us(s.compute_time);
   j["faults"] = s.faults;
+  j["cleared_faults"] = s.cleared_faults;
+  j["reloads"] = s.loop.reloads;
+  j["wall_energy_j"] = s.loop.wall_energy_j;
   j["stop_reason"] = s.stop_reason;
   j["contact_ticks"] = s.loop.contact_ticks;
   j["saturated_ticks"] = s.loop.saturated_ticks;
@@ -48,6 +51,9 @@ json summary_to_json(const RunSummary& s) {
   j["log_records_dropped"] = s.log_records_dropped;
   j["log_records_lost"] = s.log_records_lost;
   j["log_io_errors"] = s.log_io_errors;
+  j["log_segments"] = s.log_segments;
+  j["log_files_deleted"] = s.log_files_deleted;
+  j["log_bytes_deleted"] = s.log_bytes_deleted;
   j["previous_log"] = s.previous_log.empty() ? json(nullptr) : json(s.previous_log);
   j["output_was_enabled"] = s.output_was_enabled;
   j["device"] = {{"name", s.device_name},
@@ -94,6 +100,11 @@ std::string summary_to_text(const RunSummary& s) {
   os << "  contact        " << s.loop.contact_ticks << " ticks, max penetration "
      << format_number(s.loop.max_penetration * 1e3) << " mm, saturated " << s.loop.saturated_ticks
      << " ticks\n";
+  os << "  wall energy    " << format_number(s.loop.wall_energy_j)
+     << " J (work the wall did on the device)\n";
+  if (s.loop.reloads > 0) {
+    os << "  reloads        " << s.loop.reloads << " swapped in at a tick boundary\n";
+  }
   if (s.operator_work_j) {
     os << "  operator work  " << format_number(*s.operator_work_j)
        << " J (done by the operator on the device)\n";
@@ -102,7 +113,12 @@ std::string summary_to_text(const RunSummary& s) {
     os << "  tick log       " << s.log_path << ": " << s.log_records_written << " records, "
        << s.log_records_dropped << " dropped";
     if (s.log_io_errors) os << ", " << s.log_records_lost << " lost to WRITE ERRORS";
+    if (s.log_segments > 1) os << ", " << s.log_segments << " segments";
     os << "\n";
+    if (s.log_files_deleted > 0) {
+      os << "                 (retention deleted " << s.log_files_deleted << " old files, "
+         << format_number(static_cast<double>(s.log_bytes_deleted) / (1u << 20)) << " MB)\n";
+    }
     if (!s.previous_log.empty())
       os << "                 (the previous log is now " << s.previous_log << ")\n";
   }
@@ -121,6 +137,10 @@ std::string summary_to_text(const RunSummary& s) {
   os << "  faults         "
      << (s.faults.empty() ? std::string("none") : std::to_string(s.faults.size())) << "\n";
   for (const std::string& f : s.faults) os << "    " << f << "\n";
+  if (!s.cleared_faults.empty()) {
+    os << "  cleared        " << s.cleared_faults.size() << " (by clear-fault; the run went on)\n";
+    for (const std::string& f : s.cleared_faults) os << "    " << f << "\n";
+  }
   return os.str();
 }
 

@@ -20,12 +20,18 @@ struct RunSummary {
   const loop::LatencyHistogram* compute_time = nullptr;
   loop::RtStatus rt;
   std::vector<std::string> faults;
+  // Faults latched and then cleared by `hapticctl clear-fault` (--on-fault hold): reported,
+  // but the run went on and they do not make its exit code 1.
+  std::vector<std::string> cleared_faults;
   std::optional<double> operator_work_j;  // sim only
   std::string log_path;                   // "" when no log was written
   std::uint64_t log_records_written = 0;
   std::uint64_t log_records_dropped = 0;  // by the full RT ring
   std::uint64_t log_records_lost = 0;     // to write errors (disk full, size limit)
   std::uint64_t log_io_errors = 0;
+  std::uint32_t log_segments = 0;       // files of this run's log (rotation), 0 with no log
+  std::uint64_t log_files_deleted = 0;  // by the retention cap (telemetry.max_total_mb)
+  std::uint64_t log_bytes_deleted = 0;
   std::string previous_log;           // where a log already at log_path was kept, "" if none
   std::string stop_reason;            // "duration", "signal SIGTERM", "fault"
   bool output_was_enabled = false;    // false: stopped before output was ever enabled

@@ -1,9 +1,6 @@
 #include "service/run_threads.h"
 
-#include <poll.h>
-#include <spdlog/spdlog.h>
 #include <sys/eventfd.h>
-#include <systemd/sd-daemon.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -44,27 +41,9 @@ std::string RtThread::wait_ready() {
   return error_;
 }
 
-std::string RtThread::supervise(SignalWatch& signals) {
-  std::string reason = "duration";
-  std::uint64_t watchdog_usec = 0;
-  const bool watchdog = sd_watchdog_enabled(0, &watchdog_usec) > 0;
-  std::uint64_t last_ticks = 0;
-  pollfd fds[3] = {
-      {signals.fd(), POLLIN, 0}, {signals.pipe_fd(), POLLIN, 0}, {ended_fd_, POLLIN, 0}};
-  while (!finished_.load(std::memory_order_acquire)) {
-    poll(fds, 3, 50);  // the time-out paces the watchdog
-    if (const auto sig = signals.take_pending(); sig && !stop_.load()) {
-      reason = "signal " + signal_name(*sig);
-      spdlog::info("{} received: stopping", signal_name(*sig));
-      sd_notify(0, "STOPPING=1");
-      stop_.store(true);
-    }
-    const std::uint64_t ticks = loop_.ticks_done();
-    if (watchdog && ticks != last_ticks) sd_notify(0, "WATCHDOG=1");
-    last_ticks = ticks;
-  }
-  thread_.join();  // result_ is complete
-  return reason;
+const loop::LoopResult& RtThread::join() {
+  if (thread_.joinable()) thread_.join();
+  return result_;
 }
 
 }  // namespace hapticd::service

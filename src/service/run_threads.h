@@ -1,6 +1,5 @@
-// The threads of `hapticd run`: the RT thread that owns the servo loop, and the supervisor
-// (the calling thread) that turns a stop signal into a stop request, feeds the systemd
-// watchdog while ticks advance, and wakes the moment the loop ends.
+// The RT thread of `hapticd run`: it owns the servo loop while it runs, and says when the loop
+// has ended through a descriptor the supervisor (RunSession) polls.
 #pragma once
 
 #include <atomic>
@@ -10,7 +9,6 @@
 #include "drivers/device.h"
 #include "loop/rt_setup.h"
 #include "loop/servo_loop.h"
-#include "service/stop_signals.h"
 
 namespace hapticd::service {
 
@@ -27,10 +25,13 @@ class RtThread {
 
   // Blocks until the RT thread has configured itself; returns why it could not ("" if it did).
   std::string wait_ready();
-  // Supervises until the loop ends; returns what stopped it ("duration", "signal SIGTERM").
-  std::string supervise(SignalWatch& signals);
-  // After supervise(): what the loop did.
-  const loop::LoopResult& result() const { return result_; }
+  // Any thread. Asks the loop to stop at its next tick.
+  void request_stop() noexcept { stop_.store(true); }
+  // Any thread. Whether the loop has ended; readable (POLLIN) once it has.
+  bool finished() const noexcept { return finished_.load(std::memory_order_acquire); }
+  int ended_fd() const noexcept { return ended_fd_; }
+  // Joins the thread (the loop must have ended or been asked to); then what the loop did.
+  const loop::LoopResult& join();
 
  private:
   loop::ServoLoop& loop_;

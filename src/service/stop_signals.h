@@ -19,9 +19,11 @@
 
 namespace hapticd::service {
 
-// The signals handled like SIGTERM: SIGINT, SIGTERM, SIGHUP, SIGQUIT, SIGUSR1, SIGUSR2,
-// SIGALRM, SIGVTALRM, SIGPROF, SIGTRAP, SIGABRT, SIGXCPU, SIGIO, SIGPWR, SIGSTKFLT, SIGSYS,
-// SIGTSTP (a stopped loop would hold its last force) and every real-time signal.
+// The signals that are taken through SignalWatch, never by their default action: SIGINT,
+// SIGTERM, SIGHUP, SIGQUIT, SIGUSR1, SIGUSR2, SIGALRM, SIGVTALRM, SIGPROF, SIGTRAP, SIGABRT,
+// SIGXCPU, SIGIO, SIGPWR, SIGSTKFLT, SIGSYS, SIGTSTP (a stopped loop would hold its last force)
+// and every real-time signal. Each is handled like SIGTERM, except SIGHUP in `hapticd run`,
+// which reloads the configuration file (run_session.h).
 std::span<const int> stop_signal_numbers();
 
 // Not RT-safe. Call first in main(), before any thread: blocks the stop signals, gives them

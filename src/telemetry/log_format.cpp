@@ -68,6 +68,25 @@ std::size_t encode_block(std::span<std::byte> out, std::uint64_t first_tick,
   return size;
 }
 
+std::vector<std::byte> encode_config_block(std::uint64_t first_tick, std::string_view text) {
+  if (text.size() > kMaxConfigBytes) {
+    throw std::invalid_argument("tick log: configuration text of " + std::to_string(text.size()) +
+                                " bytes exceeds the format limit of " +
+                                std::to_string(kMaxConfigBytes));
+  }
+  std::vector<std::byte> out(kBlockHeaderSize + text.size());
+  std::byte* p = out.data();
+  std::memcpy(p, kConfigMagic.data(), kConfigMagic.size());
+  store<std::uint32_t>(p + 4, static_cast<std::uint32_t>(text.size()));
+  store<std::uint64_t>(p + 8, first_tick);
+  store<std::uint64_t>(p + 16, 0);
+  if (!text.empty()) std::memcpy(p + kBlockHeaderSize, text.data(), text.size());
+  std::uint32_t crc = crc32_update(0, std::span(out).first(kBlockCrcOffset));
+  crc = crc32_update(crc, std::span(out).subspan(kBlockHeaderSize));
+  store<std::uint32_t>(p + kBlockCrcOffset, crc);
+  return out;
+}
+
 BlockHeader decode_block_header(std::span<const std::byte> bytes) noexcept {
   BlockHeader h;
   if (bytes.size() < kBlockHeaderSize) return h;

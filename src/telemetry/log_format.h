@@ -28,7 +28,18 @@
 //        56 f64 force_commanded, 64 u32 flags (TickFlag bits), 68 u32 device_status,
 //        72 i64 sample_time_ns, 80 u32 sequence, 84 u8 fault_cause, 85 u8 fault_class,
 //        86 u16 sequence_gap, 88 u32 fault_code, 92 u32 marker (TickMarker: 0 for a tick,
-//        1 reload accepted, 2 reload refused: an event at a tick boundary, not a tick)
+//        1 reload accepted, 2 reload refused, 3 re-armed after a cleared fault: an event at a
+//        tick boundary, not a tick)
+//
+// A live reload that swapped a new control law in (marker 1), and a re-arming (marker 3, a
+// law started afresh), add a config block right after the block holding their marker record,
+// so a reader knows the law from that tick on. Config block (28 + len bytes):
+//   0   u8[4]  magic "HCFG" (48 43 46 47)
+//   4   u32    len: bytes of configuration text, at most kMaxConfigBytes
+//   8   u64    first_tick: the first tick the new configuration governs
+//   16  u64    0
+//   24  u32    CRC-32 of bytes [0, 24) followed by the text
+//   28  u8[len]  the new effective configuration as UTF-8 YAML
 //
 // CRC-32 is the common one (zlib crc32, Python zlib.crc32: reflected polynomial 0xEDB88320,
 // initial value and final xor 0xFFFFFFFF). A reader accepts blocks in order; a block that is
@@ -43,6 +54,7 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "telemetry/tick_record.h"
@@ -62,6 +74,7 @@ inline constexpr std::size_t kCrcSize = 4;
 inline constexpr std::uint32_t kMaxConfigBytes = 16u << 20;  // a sanity bound, not a YAML limit
 
 inline constexpr std::array<char, 4> kBlockMagic = {'H', 'B', 'L', 'K'};
+inline constexpr std::array<char, 4> kConfigMagic = {'H', 'C', 'F', 'G'};
 inline constexpr std::size_t kBlockHeaderSize = 28;
 inline constexpr std::size_t kBlockCrcOffset = 24;
 inline constexpr std::uint32_t kMaxBlockRecords = 65536;
@@ -119,6 +132,10 @@ std::vector<std::byte> encode_file_header(const LogHeader& header);
 std::size_t encode_block(std::span<std::byte> out, std::uint64_t first_tick,
                          std::uint64_t dropped_before,
                          std::span<const TickRecord> records) noexcept;
+
+// A config block (layout above). Not RT-safe (allocates). Throws std::invalid_argument when
+// the text is longer than kMaxConfigBytes.
+std::vector<std::byte> encode_config_block(std::uint64_t first_tick, std::string_view text);
 
 // Decodes the 28-byte block header at the start of bytes (which must hold at least
 // kBlockHeaderSize bytes, else all fields are 0). The magic is not checked here.

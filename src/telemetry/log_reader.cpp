@@ -68,8 +68,37 @@ std::size_t read_header(std::span<const std::byte> bytes, const std::string& nam
 
 // One block at the start of `block`: its size when it is complete and intact, else 0 with
 // the reason (offset is for the message).
+// A config block at the start of `block`: its size when complete and intact, else 0.
+std::size_t check_config_block(std::span<const std::byte> block, std::size_t offset,
+                               std::string& why) {
+  if (block.size() < kBlockHeaderSize) {
+    why = "incomplete config block" + at_byte(offset) + " (log cut short)";
+    return 0;
+  }
+  const BlockHeader h = decode_block_header(block);  // record_count holds the text length
+  if (h.record_count > kMaxConfigBytes) {
+    why = "corrupt config block" + at_byte(offset);
+    return 0;
+  }
+  const std::size_t size = kBlockHeaderSize + h.record_count;
+  if (block.size() < size) {
+    why = "incomplete config block" + at_byte(offset) + " (log cut short)";
+    return 0;
+  }
+  const auto text = block.subspan(kBlockHeaderSize, h.record_count);
+  if (crc32_update(crc32_update(0, block.first(kBlockCrcOffset)), text) != h.crc) {
+    why = "CRC mismatch in config block" + at_byte(offset);
+    return 0;
+  }
+  return size;
+}
+
 std::size_t check_block(std::span<const std::byte> block, std::size_t offset, std::size_t rsize,
                         std::string& why) {
+  if (block.size() >= kConfigMagic.size() &&
+      std::memcmp(block.data(), kConfigMagic.data(), kConfigMagic.size()) == 0) {
+    return check_config_block(block, offset, why);
+  }
   if (!magic_prefix_matches(block, kBlockMagic)) {
     why = "bad block magic" + at_byte(offset);
     return 0;
@@ -102,8 +131,10 @@ std::size_t check_block(std::span<const std::byte> block, std::size_t offset, st
 std::size_t resynchronise(std::span<const std::byte> bytes, std::size_t from, std::size_t rsize) {
   std::string ignored;
   for (std::size_t at = from + 1; at + kBlockHeaderSize <= bytes.size(); ++at) {
-    if (std::memcmp(bytes.data() + at, kBlockMagic.data(), kBlockMagic.size()) == 0 &&
-        check_block(bytes.subspan(at), at, rsize, ignored) != 0) {
+    const bool magic =
+        std::memcmp(bytes.data() + at, kBlockMagic.data(), kBlockMagic.size()) == 0 ||
+        std::memcmp(bytes.data() + at, kConfigMagic.data(), kConfigMagic.size()) == 0;
+    if (magic && check_block(bytes.subspan(at), at, rsize, ignored) != 0) {
       return at;
     }
   }
@@ -112,6 +143,12 @@ std::size_t resynchronise(std::span<const std::byte> bytes, std::size_t from, st
 
 void accept_block(std::span<const std::byte> block, std::size_t rsize, LogContents& contents) {
   const BlockHeader h = decode_block_header(block);
+  if (std::memcmp(block.data(), kConfigMagic.data(), kConfigMagic.size()) == 0) {
+    contents.reloads.push_back(
+        {h.first_tick, std::string(reinterpret_cast<const char*>(block.data()) + kBlockHeaderSize,
+                                   h.record_count)});
+    return;
+  }
   // A loss marker has no records: nothing is copied (no memcpy into a null vector).
   const std::byte* p = block.data() + kBlockHeaderSize;
   for (std::uint32_t i = 0; i < h.record_count; ++i, p += rsize) {

@@ -24,6 +24,12 @@ struct SkippedRegion {
       reason;  // why the block at `offset` was refused, e.g. "CRC mismatch in block at byte 4242"
 };
 
+// A live reload recorded in the log: the configuration that governs from first_tick on.
+struct ConfigChange {
+  std::uint64_t first_tick = 0;
+  std::string config_text;
+};
+
 struct LogContents {
   LogHeader header;
   std::uint32_t version = kFormatVersion;    // of the file; version 1 records read with zeros
@@ -34,6 +40,9 @@ struct LogContents {
   // Corrupt stretches passed over to reach later intact blocks (the reader resynchronises on
   // the next block header whose CRC holds); the ticks they held are missing from `records`.
   std::vector<SkippedRegion> skipped;
+  // Config blocks, in order: live reloads and re-armings after a cleared fault (their marker
+  // records say which); header.config_text governs before the first.
+  std::vector<ConfigChange> reloads;
   // "" when the whole file was read, else why reading stopped, e.g.
   // "incomplete block at byte 4242 (log cut short)", "CRC mismatch in block at byte 4242",
   // "bad block magic at byte 4242", "corrupt block header at byte 4242 (record count 9999999)".

@@ -9,6 +9,9 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "telemetry/log_path.h"
+#include "telemetry/log_retention.h"
+
 namespace hapticd::telemetry {
 namespace {
 
@@ -44,7 +47,7 @@ int write_all(int fd, const std::byte* p, std::size_t n) noexcept {
 
 LogWriter::LogWriter(const std::string& path, const LogHeader& header, SpscRing<TickRecord>& ring,
                      std::size_t max_block_records, std::chrono::milliseconds poll, Flush flush)
-    : path_(path), ring_(ring), poll_(poll), flush_(flush) {
+    : path_(path), header_(header), segment_(path), ring_(ring), poll_(poll), flush_(flush) {
   check_block_records(max_block_records);
   if (poll.count() <= 0) throw std::invalid_argument("tick log: poll period must be positive");
   const std::vector<std::byte> head = encode_file_header(header);  // validates before opening
@@ -58,6 +61,7 @@ LogWriter::LogWriter(const std::string& path, const LogHeader& header, SpscRing<
         path_ + ": cannot open tick log: writing the header failed: " + std::strerror(err));
   }
   good_end_ = static_cast<off_t>(head.size());
+  header_bytes_ = good_end_;
 }
 
 LogWriter::~LogWriter() { stop(); }
@@ -86,6 +90,10 @@ void LogWriter::stop() {
   // Drops after the last record pushed are not stamped on any record: mark them here.
   const std::uint64_t trailing = ring_.take_trailing_drops();
   if (trailing + pending_loss_ > 0) append_block({}, next_tick_, trailing);
+  close_segment();
+}
+
+void LogWriter::close_segment() noexcept {
   // A failed write may have left a partial block after the last good one.
   if (tail_dirty_ && ::ftruncate(fd_, good_end_) != 0) note_error("truncate failed", errno);
   if (::fdatasync(fd_) != 0) note_error("fdatasync failed", errno);
@@ -131,13 +139,74 @@ void LogWriter::drain(bool final) {
     if (!final && flush_ == Flush::kFullBlocks && ring_.size_approx() < full) return;
     const std::size_t n = ring_.pop_run(staging_.data(), want, dropped_before);
     if (n == 0) return;
-    append_block(std::span(staging_.data(), n), staging_[0].tick, dropped_before);
+    append_records(n, dropped_before);
     next_tick_ = staging_[n - 1].tick + 1;
   }
 }
 
+void LogWriter::queue_config_change(std::string config_text) {
+  std::lock_guard lock(config_mutex_);
+  config_changes_.push_back(std::move(config_text));
+}
+
+void LogWriter::withdraw_config_change() {
+  std::lock_guard lock(config_mutex_);
+  if (!config_changes_.empty()) config_changes_.pop_back();
+}
+
+void LogWriter::append_records(std::size_t n, std::uint64_t dropped_before) {
+  std::size_t from = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint32_t m = staging_[i].marker;
+    if (m != kMarkerReloadAccepted && m != kMarkerRearmed) continue;
+    append_block(std::span(staging_.data() + from, i + 1 - from), staging_[from].tick,
+                 from == 0 ? dropped_before : 0);
+    append_config_block(staging_[i].tick);
+    from = i + 1;
+  }
+  if (from < n) {
+    append_block(std::span(staging_.data() + from, n - from), staging_[from].tick,
+                 from == 0 ? dropped_before : 0);
+  }
+}
+
+void LogWriter::append_config_block(std::uint64_t first_tick) {
+  std::string text;
+  {
+    std::lock_guard lock(config_mutex_);
+    if (config_changes_.empty()) return;  // nothing queued: the marker alone says a reload happened
+    text = std::move(config_changes_.front());
+    config_changes_.pop_front();
+  }
+  try {
+    write_bytes(encode_config_block(first_tick, text));
+  } catch (const std::exception&) {
+    note_error("config block too large", EFBIG);
+  }
+  // The next segments' headers carry the configuration in force when they begin.
+  header_.config_text = std::move(text);
+}
+
+bool LogWriter::write_bytes(std::span<const std::byte> bytes) {
+  const int err = write_all(fd_, bytes.data(), bytes.size());
+  if (err == 0) {
+    good_end_ += static_cast<off_t>(bytes.size());
+    return true;
+  }
+  note_error("write failed", err);
+  tail_dirty_ = true;
+  ::lseek(fd_, good_end_, SEEK_SET);  // the next block overwrites the partial one
+  return false;
+}
+
 void LogWriter::append_block(std::span<const TickRecord> records, std::uint64_t first_tick,
                              std::uint64_t dropped_before) {
+  // A segment holds at least one block; the next one would pass the cap: roll first.
+  if (rotation_.max_segment_bytes != 0 && good_end_ > header_bytes_ &&
+      static_cast<std::uint64_t>(good_end_) + block_size(records.size()) >
+          rotation_.max_segment_bytes) {
+    roll(first_tick);
+  }
   // The ring's loss is known now, whether or not its marker reaches the disk.
   ring_dropped_.fetch_add(dropped_before, std::memory_order_relaxed);
   // Records that earlier failed to reach the disk are marked with the next block that does.
@@ -164,13 +233,107 @@ void LogWriter::note_error(const char* what, int err) {
     std::lock_guard lock(error_mutex_);
     if (first_error_.empty()) {
       try {
-        first_error_ = path_ + ": " + what + ": " + std::strerror(err);
+        first_error_ = segment_ + ": " + what + ": " + std::strerror(err);
       } catch (...) {
         // Out of memory while formatting: the count below still records the error.
       }
     }
   }
   io_errors_.fetch_add(1, std::memory_order_release);
+}
+
+void LogWriter::note_error(const std::string& message) {
+  {
+    std::lock_guard lock(error_mutex_);
+    if (first_error_.empty()) first_error_ = message;
+  }
+  io_errors_.fetch_add(1, std::memory_order_release);
+}
+
+void LogWriter::set_rotation(Rotation rotation) {
+  rotation_ = std::move(rotation);
+  retain();
+}
+
+std::uint32_t LogWriter::segments() const noexcept {
+  return segments_.load(std::memory_order_relaxed);
+}
+std::uint64_t LogWriter::files_deleted() const noexcept {
+  return files_deleted_.load(std::memory_order_relaxed);
+}
+std::uint64_t LogWriter::bytes_deleted() const noexcept {
+  return bytes_deleted_.load(std::memory_order_relaxed);
+}
+
+void LogWriter::tell(const std::string& sentence) noexcept {
+  if (!rotation_.on_event) return;
+  try {
+    rotation_.on_event(sentence);
+  } catch (...) {
+    // A sink that fails must not take the log down with it.
+  }
+}
+
+// The next segment is opened and given its header before the current one is closed: when it
+// cannot be (a full disk, a name taken), the writer stays in the current segment, past the
+// cap, and tries again at the next block.
+void LogWriter::roll(std::uint64_t first_tick) {
+  const std::string next = segment_path(path_, segment_index_ + 1);
+  std::vector<std::byte> head;
+  try {
+    head = encode_file_header(header_);
+  } catch (const std::exception&) {
+    note_error("cannot encode the next segment's header", EINVAL);
+    return;
+  }
+  const int fd = ::open(next.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
+  const int err = fd < 0 ? errno : write_all(fd, head.data(), head.size());
+  if (err != 0) {
+    if (fd >= 0) {
+      ::close(fd);
+      ::unlink(next.c_str());
+    }
+    note_error("cannot start the next segment", err);
+    retain();  // what retention frees may let the next attempt succeed
+    return;
+  }
+  close_segment();
+  fd_ = fd;
+  segment_ = next;
+  ++segment_index_;
+  good_end_ = header_bytes_ = static_cast<off_t>(head.size());
+  tail_dirty_ = false;
+  segments_.store(segment_index_, std::memory_order_relaxed);
+  tell("tick log: segment " + std::to_string(segment_index_) + " is " + next + " (from tick " +
+       std::to_string(first_tick) + ")");
+  retain();
+}
+
+void LogWriter::retain() noexcept {
+  if (rotation_.max_total_bytes == 0) return;
+  try {
+    const RetentionResult r =
+        enforce_retention(path_, segment_, rotation_.max_total_bytes, rotation_.max_segment_bytes);
+    for (const std::string& e : r.errors) {
+      tell("tick log: retention: " + e);
+      note_error("retention: " + e);
+    }
+    if (r.deleted.empty()) return;
+    files_deleted_.fetch_add(r.deleted.size(), std::memory_order_relaxed);
+    bytes_deleted_.fetch_add(r.bytes, std::memory_order_relaxed);
+    std::string names;
+    for (const std::string& d : r.deleted) names += (names.empty() ? "" : ", ") + d;
+    tell("tick log: retention deleted " + std::to_string(r.deleted.size()) + " file(s), " +
+         std::to_string(r.bytes) + " bytes, to keep the logs under " +
+         std::to_string(rotation_.max_total_bytes) + " bytes: " + names);
+  } catch (const std::exception& e) {
+    try {
+      tell(std::string("tick log: retention: ") + e.what());
+      note_error(std::string("retention: ") + e.what());
+    } catch (...) {
+      io_errors_.fetch_add(1, std::memory_order_release);  // out of memory: still counted
+    }
+  }
 }
 
 void write_log_file(const std::string& path, const LogHeader& header,

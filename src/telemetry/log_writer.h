@@ -10,6 +10,8 @@
 #include <condition_variable>
 #include <cstddef>
 #include <cstdint>
+#include <deque>
+#include <functional>
 #include <mutex>
 #include <span>
 #include <string>
@@ -56,6 +58,35 @@ class LogWriter {
   // one controlling thread.
   void stop();
 
+  // How big the log may grow (telemetry.max_segment_mb, telemetry.max_total_mb); 0 = no limit.
+  struct Rotation {
+    // Before a block would take the segment past this, the writer closes it and goes on in a
+    // new one (log_path.h: PATH.part2, PATH.part3, ...): a complete log with its own header
+    // (the configuration in force, the run's start time) whose ticks continue the last one's.
+    std::uint64_t max_segment_bytes = 0;
+    // Retention cap of the log's whole family, older runs' sets included: at set_rotation()
+    // and after every roll the oldest files go until the others plus max_segment_bytes fit
+    // (log_retention.h). The segment being written is never deleted.
+    std::uint64_t max_total_bytes = 0;
+    // Told one sentence per roll and per deletion, from the writer thread (and from
+    // set_rotation's caller). Not RT: it may log. What it throws is ignored.
+    std::function<void(const std::string&)> on_event;
+  };
+  // Before start(), from the controlling thread. Applies the retention cap once at once.
+  void set_rotation(Rotation rotation);
+  // Segments begun so far (1 + rolls), files deleted by retention and the bytes they held.
+  std::uint32_t segments() const noexcept;
+  std::uint64_t files_deleted() const noexcept;
+  std::uint64_t bytes_deleted() const noexcept;
+
+  // Any thread. The configuration a live reload is about to swap in (or a re-arming starts
+  // with): written as a config block right after the block holding the marker record
+  // (TickRecord::marker == kMarkerReloadAccepted or kMarkerRearmed), so the log says which law
+  // governs from which tick. Queue it before the RT thread can take the new law;
+  // withdraw_config_change() takes it back if the reload does not happen after all.
+  void queue_config_change(std::string config_text);
+  void withdraw_config_change();
+
   // Records that are in the log (their block was written completely).
   std::uint64_t records_written() const noexcept;
   // Records the RT ring dropped because it was full, as reported to the writer so far; after
@@ -77,9 +108,24 @@ class LogWriter {
   void drain(bool final);
   void append_block(std::span<const TickRecord> records, std::uint64_t first_tick,
                     std::uint64_t dropped_before);
+  // Appends records [0, n), cutting after each accepted-reload marker for its config block.
+  void append_records(std::size_t n, std::uint64_t dropped_before);
+  void append_config_block(std::uint64_t first_tick);
+  bool write_bytes(std::span<const std::byte> bytes);
   void note_error(const char* what, int err);
+  void note_error(const std::string& message);  // the whole message, for last_error()
+  // Rotation, on the thread that drains.
+  void roll(std::uint64_t first_tick);
+  void close_segment() noexcept;
+  void retain() noexcept;
+  void tell(const std::string& sentence) noexcept;
 
   std::string path_;
+  LogHeader header_;     // each segment's header; config_text follows the reloads
+  Rotation rotation_;    // set before start()
+  std::string segment_;  // the file being written: path_, then path_.part2, ...
+  std::uint32_t segment_index_ = 1;
+  off_t header_bytes_ = 0;  // of the segment being written
   SpscRing<TickRecord>& ring_;
   std::chrono::milliseconds poll_;
   Flush flush_;
@@ -97,8 +143,14 @@ class LogWriter {
   std::atomic<std::uint64_t> ring_dropped_{0};
   std::atomic<std::uint64_t> io_lost_{0};
   std::atomic<std::uint64_t> io_errors_{0};
+  std::atomic<std::uint32_t> segments_{1};
+  std::atomic<std::uint64_t> files_deleted_{0};
+  std::atomic<std::uint64_t> bytes_deleted_{0};
   mutable std::mutex error_mutex_;
   std::string first_error_;
+
+  std::mutex config_mutex_;
+  std::deque<std::string> config_changes_;  // guarded by config_mutex_
 
   std::mutex wake_mutex_;
   std::condition_variable wake_;

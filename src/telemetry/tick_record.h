@@ -28,6 +28,7 @@ enum TickMarker : std::uint32_t {
   kMarkerNone = 0,            // an ordinary tick
   kMarkerReloadAccepted = 1,  // a live reload swapped the control law in from `tick` on
   kMarkerReloadRefused = 2,   // a live reload was refused; the law in force stays
+  kMarkerRearmed = 3,  // output enabled again after a cleared fault: a fresh law from `tick` on
 };
 
 struct TickRecord {

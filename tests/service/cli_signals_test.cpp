@@ -36,12 +36,13 @@ struct Named {
 };
 
 TEST(CliSignals, EveryTerminatingSignalStopsTheRunLikeSigterm) {
-  const Named stops[] = {{SIGHUP, "SIGHUP"},       {SIGINT, "SIGINT"},     {SIGQUIT, "SIGQUIT"},
-                         {SIGUSR1, "SIGUSR1"},     {SIGUSR2, "SIGUSR2"},   {SIGALRM, "SIGALRM"},
-                         {SIGVTALRM, "SIGVTALRM"}, {SIGPROF, "SIGPROF"},   {SIGTRAP, "SIGTRAP"},
-                         {SIGABRT, "SIGABRT"},     {SIGXCPU, "SIGXCPU"},   {SIGIO, "SIGPOLL"},
-                         {SIGPWR, "SIGPWR"},       {SIGTSTP, "SIGTSTP"},   {SIGSTKFLT, "SIGSTKFLT"},
-                         {SIGRTMIN, "SIGRTMIN"},   {SIGRTMAX, "SIGRTMIN+"}};
+  // SIGHUP is not among them: it reloads the configuration (CliSignals.SighupReloads...).
+  const Named stops[] = {{SIGINT, "SIGINT"},     {SIGQUIT, "SIGQUIT"},     {SIGUSR1, "SIGUSR1"},
+                         {SIGUSR2, "SIGUSR2"},   {SIGALRM, "SIGALRM"},     {SIGVTALRM, "SIGVTALRM"},
+                         {SIGPROF, "SIGPROF"},   {SIGTRAP, "SIGTRAP"},     {SIGABRT, "SIGABRT"},
+                         {SIGXCPU, "SIGXCPU"},   {SIGIO, "SIGPOLL"},       {SIGPWR, "SIGPWR"},
+                         {SIGTSTP, "SIGTSTP"},   {SIGSTKFLT, "SIGSTKFLT"}, {SIGRTMIN, "SIGRTMIN"},
+                         {SIGRTMAX, "SIGRTMIN+"}};
   for (const Named& n : stops) {
     SCOPED_TRACE(n.name);
     const std::string tag = std::to_string(n.sig);
@@ -62,6 +63,26 @@ TEST(CliSignals, EveryTerminatingSignalStopsTheRunLikeSigterm) {
     EXPECT_GT(s["ticks"].get<int>(), 0);
     expect_safe_end(sum, log);
   }
+}
+
+// SIGHUP reloads the file the run was started with; the embedded default has none, so the
+// run says so and goes on to the end of its duration.
+TEST(CliSignals, SighupReloadsAndNeverStopsTheRun) {
+  const std::string sum = temp_path("hup.json"), log = temp_path("hup.hlog");
+  NotifySocket notify;
+  BackgroundProcess p({hapticd_binary(), "run", "--duration", "1.5", "--log", log, "--summary-json",
+                       sum, "--set", "loop.overrun_fault_streak=1000000000"},
+                      {notify.env()});
+  ASSERT_TRUE(notify.wait_for("READY=1"));
+  p.signal(SIGHUP);
+  const ProcessResult r = p.wait();
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("SIGHUP"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("nothing to reload"), std::string::npos) << r.err;
+  const json s = json::parse(read_file(sum));
+  EXPECT_EQ(s["stop_reason"], "duration");
+  EXPECT_EQ(s["ticks"], 1500);
+  expect_safe_end(sum, log);
 }
 
 TEST(CliSignals, SignalsWhoseOnlyHarmIsTheirDefaultAreIgnored) {

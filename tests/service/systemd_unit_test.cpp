@@ -1,6 +1,7 @@
 // The installed service as a packager and an operator see it: `cmake --install` to a fresh
-// prefix gives a stripped binary, a unit generated for that prefix that systemd-analyze
-// verifies (man page included), and a man page `man` finds.
+// prefix gives stripped binaries, a template unit generated for that prefix that
+// systemd-analyze verifies (man page included) and rates at most 2.0 for exposure, the
+// sysusers.d entry of its user, the udev rules, and a man page `man` finds.
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
@@ -31,14 +32,19 @@ TEST(Install, GivesAStrippedBinaryAManPageAndAUnitThatVerifies) {
   EXPECT_LT(std::filesystem::file_size(bin), 20u << 20) << "a stripped binary is a few MB";
 #endif
 
-  const std::string unit = prefix + "/lib/systemd/system/hapticd.service";
+  EXPECT_TRUE(std::filesystem::exists(prefix + "/bin/hapticctl")) << inst.out;
+  const std::string unit = prefix + "/lib/systemd/system/hapticd@.service";
   ASSERT_TRUE(std::filesystem::exists(unit)) << inst.out;
+  EXPECT_FALSE(std::filesystem::exists(prefix + "/lib/systemd/system/hapticd.service"))
+      << "the template's default instance replaces the plain unit";
   const std::string text = read_file(unit);
-  EXPECT_TRUE(
-      has(text, "ExecStart=" + bin + " run --config " + prefix + "/etc/hapticd/hapticd.yaml"))
+  EXPECT_TRUE(has(text, "ExecStart=" + bin + " run --config " + prefix +
+                            "/etc/hapticd/%i.yaml --socket ${RUNTIME_DIRECTORY}/control.sock"))
       << text;
+  EXPECT_TRUE(has(text, "DefaultInstance=hapticd")) << text;
   EXPECT_FALSE(has(text, "http")) << "no URL that does not exist";
-  EXPECT_TRUE(std::filesystem::exists(prefix + "/etc/hapticd/hapticd.yaml"));
+  EXPECT_TRUE(std::filesystem::exists(prefix + "/etc/hapticd/hapticd.yaml"))
+      << "the default instance's configuration";
 
   const std::string manpath = "MANPATH=" + prefix + "/share/man";
   const ProcessResult man = run_process({"/bin/sh", "-c", manpath + " man -w hapticd"});
@@ -49,7 +55,63 @@ TEST(Install, GivesAStrippedBinaryAManPageAndAUnitThatVerifies) {
   const ProcessResult verify =
       run_process({"/bin/sh", "-c", manpath + " systemd-analyze verify '" + unit + "' 2>&1"});
   EXPECT_EQ(verify.exit_code, 0) << verify.out;
-  EXPECT_FALSE(has(verify.out, "hapticd.service")) << "systemd-analyze complains:\n" << verify.out;
+  EXPECT_FALSE(has(verify.out, "hapticd@")) << "systemd-analyze complains:\n" << verify.out;
+}
+
+// The template unit's hardening as systemd rates it: exposure at most 2.0 ("OK"), with the
+// capabilities, devices and scheduling a servo needs and nothing more.
+TEST(Install, TheTemplateUnitsExposureIsAtMostTwo) {
+  const std::string prefix = temp_path("prefix-security");
+  ASSERT_EQ(run_process({"/bin/sh", "-c",
+                         "cmake --install '" + build_dir() + "' --prefix '" + prefix + "' 2>&1"})
+                .exit_code,
+            0);
+  const std::string unit = prefix + "/lib/systemd/system/hapticd@.service";
+  const ProcessResult r = run_process(
+      {"/bin/sh", "-c", "systemd-analyze security --offline=true --no-pager '" + unit + "' 2>&1"});
+  const std::string key = "Overall exposure level for hapticd@";
+  const auto at = r.out.find(key);
+  ASSERT_NE(at, std::string::npos) << r.out;
+  const auto colon = r.out.find(": ", at);
+  ASSERT_NE(colon, std::string::npos) << r.out;
+  const double exposure = std::stod(r.out.substr(colon + 2));
+  EXPECT_LE(exposure, 2.0) << r.out;
+  const std::string text = read_file(unit);
+  for (const char* must :
+       {"User=hapticd", "CapabilityBoundingSet=CAP_SYS_NICE CAP_IPC_LOCK", "DevicePolicy=closed",
+        "RuntimeDirectory=hapticd/%i", "ProtectKernelTunables=yes",
+        "SystemCallFilter=@system-service", "RestrictAddressFamilies=AF_UNIX AF_CAN AF_NETLINK"}) {
+    EXPECT_TRUE(has(text, must)) << must;
+  }
+}
+
+// The system user the unit runs as, and the udev rules that give its group the devices.
+TEST(Install, CreatesTheSystemUserAndTheUdevRules) {
+  const std::string prefix = temp_path("prefix-users");
+  ASSERT_EQ(run_process({"/bin/sh", "-c",
+                         "cmake --install '" + build_dir() + "' --prefix '" + prefix + "' 2>&1"})
+                .exit_code,
+            0);
+  const std::string sysusers = prefix + "/lib/sysusers.d/hapticd.conf";
+  ASSERT_TRUE(std::filesystem::exists(sysusers));
+  const std::string root = temp_path("sysroot");
+  std::filesystem::create_directories(root + "/etc");
+  const ProcessResult r = run_process(
+      {"/bin/sh", "-c", "systemd-sysusers --root='" + root + "' '" + sysusers + "' 2>&1"});
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const std::string passwd = read_file(root + "/etc/passwd");
+  EXPECT_TRUE(has(passwd, "hapticd:x:")) << passwd;
+  EXPECT_TRUE(has(passwd, ":/usr/sbin/nologin")) << "a system user with no login shell";
+  EXPECT_TRUE(has(read_file(root + "/etc/group"), "hapticd:x:"));
+  for (const char* rules : {"60-hapticd-gpio.rules", "60-hapticd-hid.rules", "60-hapticd-rt.rules",
+                            "80-hapticd-can.rules"}) {
+    const std::string path = prefix + "/lib/udev/rules.d/" + rules;
+    ASSERT_TRUE(std::filesystem::exists(path)) << path;
+  }
+  EXPECT_TRUE(
+      has(read_file(prefix + "/lib/udev/rules.d/60-hapticd-hid.rules"), "SUBSYSTEM==\"hidraw\""));
+  EXPECT_TRUE(has(read_file(prefix + "/lib/udev/rules.d/60-hapticd-gpio.rules"),
+                  "KERNEL==\"gpiochip[0-9]*\", GROUP=\"hapticd\""));
 }
 
 }  // namespace

@@ -1,0 +1,73 @@
+// The one-slot mailbox through which a live reload hands the RT thread a new control law
+// (DESIGN.md §2: a swap at a tick boundary). The reload builds, checks and gates the new
+// Controller off the RT thread (allocating as it likes), offer()s it, and the RT thread takes
+// it at the start of its next tick without allocating, locking or waiting; the controller it
+// replaced comes back through retire() for the offering side to destroy. A refused reload is
+// noted here too, so the RT thread - the ring's only producer - can mark it in the tick log.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+
+#include "control/controller.h"
+
+namespace hapticd::loop {
+
+class LawSwap {
+ public:
+  // Not RT-safe (any one thread at a time). Hands `next` over; false when a previous offer has
+  // not been taken yet, or the controller it replaced not retire()d yet (the caller keeps
+  // ownership of `next` then).
+  bool offer(control::Controller* next) noexcept {
+    if (retired_.load(std::memory_order_acquire) != nullptr) return false;
+    control::Controller* expected = nullptr;
+    return pending_.compare_exchange_strong(expected, next, std::memory_order_acq_rel);
+  }
+  // Not RT-safe. The controller replaced by the last swap, once the RT thread is done with it
+  // (ownership passes to the caller); null when there is none.
+  control::Controller* retire() noexcept {
+    return retired_.exchange(nullptr, std::memory_order_acq_rel);
+  }
+  // Not RT-safe. Takes an offer back that the RT thread has not taken (true: the caller owns
+  // `offered` again); false when it was taken meanwhile.
+  bool withdraw(control::Controller* offered) noexcept {
+    return pending_.compare_exchange_strong(offered, nullptr, std::memory_order_acq_rel);
+  }
+  // Not RT-safe. A reload was refused: the RT thread writes a marker record at its next tick.
+  void note_refused() noexcept { refused_.fetch_add(1, std::memory_order_release); }
+  // Any thread: how many swaps the RT thread has made, and the tick the last one governs from.
+  std::uint64_t swaps() const noexcept { return swaps_.load(std::memory_order_acquire); }
+  std::uint64_t last_swap_tick() const noexcept {
+    return swap_tick_.load(std::memory_order_acquire);
+  }
+
+  // RT-safe: called every tick. The offered controller, if any; `current` goes to retire().
+  // The caller continues the new law from the old one and switches to it from `tick` on.
+  control::Controller* take(control::Controller* current, std::uint64_t tick) noexcept {
+    control::Controller* next = pending_.load(std::memory_order_acquire);
+    if (next == nullptr) return nullptr;  // the usual tick: one load, nothing else
+    // The slot for the retired one is free: the offering side takes it before offering again.
+    // Claim the offer first: a concurrent withdraw() then fails and the offerer knows.
+    if (!pending_.compare_exchange_strong(next, nullptr, std::memory_order_acq_rel)) {
+      return nullptr;
+    }
+    retired_.store(current, std::memory_order_release);
+    swap_tick_.store(tick, std::memory_order_release);
+    swaps_.fetch_add(1, std::memory_order_acq_rel);
+    return next;
+  }
+  // RT-safe: called every tick. Refusals noted since the last call.
+  std::uint32_t take_refusals() noexcept {
+    if (refused_.load(std::memory_order_acquire) == 0) return 0;
+    return refused_.exchange(0, std::memory_order_acq_rel);
+  }
+
+ private:
+  std::atomic<control::Controller*> pending_{nullptr};
+  std::atomic<control::Controller*> retired_{nullptr};
+  std::atomic<std::uint32_t> refused_{0};
+  std::atomic<std::uint64_t> swaps_{0};
+  std::atomic<std::uint64_t> swap_tick_{0};
+};
+
+}  // namespace hapticd::loop

@@ -1,0 +1,42 @@
+// The control socket's protocol, version 1 (docs/operations.md): one JSON object per line in
+// each direction, at most kMaxRequestBytes a line. Pure: no sockets here, so it is tested on
+// its own.
+//
+// Request:  {"v": 1, "cmd": "status" | "stop" | "reload" | "clear-fault", "id": <any>,
+//            "config": "<YAML text>", "source": "<name for messages>"}    (config: reload only)
+// Response: {"v": 1, "id": <echoed>, "ok": true, ...the command's members}
+//           {"v": 1, "id": <echoed>, "ok": false, "error": "<why>", "code": <exit code>}
+// `code` is the exit code of DESIGN.md §9 a client reports for the failure: 2 a malformed
+// request or an invalid configuration (or one that needs a restart), 3 the gate refused it,
+// 1 anything else (no fault to clear, a device that faults again, permission denied).
+#pragma once
+
+#include <cstddef>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <string_view>
+
+namespace hapticd::service {
+
+inline constexpr int kProtocolVersion = 1;
+inline constexpr std::size_t kMaxRequestBytes = 256 * 1024;  // a configuration fits with room
+
+enum class Command { kStatus, kStop, kReload, kClearFault };
+
+struct Request {
+  Command command = Command::kStatus;
+  nlohmann::json id;        // echoed in the response; null when absent
+  std::string config_text;  // reload
+  std::string source;       // reload: the name messages about the configuration use
+};
+
+// Parses one line (without its newline). On a malformed request returns nothing and sets
+// `error` (and `id` when the line had a readable one), for an error response.
+std::optional<Request> parse_request(std::string_view line, std::string& error, nlohmann::json& id);
+
+// {"v":1,"id":id,"ok":true} merged with `payload`'s members, as one line with its newline.
+std::string ok_response(const nlohmann::json& id, const nlohmann::json& payload = {});
+std::string error_response(const nlohmann::json& id, const std::string& error, int code = 1);
+
+}  // namespace hapticd::service
