@@ -1,8 +1,9 @@
 // libgpiod 2.x (Debian 13), the kernel's GPIO uAPI v2: one line request holds every line (the
 // inputs with both-edge detection on the monotonic clock, the direction output), its events
 // come from one descriptor through a preallocated edge-event buffer, and each event carries
-// a global sequence number: a gap means the kernel's buffer overflowed (it drops the oldest)
-// and tells how many edges were lost.
+// a global sequence number, given in the interrupt's hard part: a gap means the kernel's
+// buffer overflowed (it drops the oldest) or an edge was merged into the next on its line, and
+// tells how many edges were lost.
 #include <dirent.h>
 #include <fcntl.h>
 #include <gpiod.h>
@@ -196,7 +197,10 @@ int GpiodLines::read_events(std::span<Edge> out, std::size_t& count, std::uint64
   while (count < out.size()) {
     const std::size_t want = std::min(out.size() - count, kEventBuffer);
     const int n = gpiod_line_request_read_edge_events(m.request, m.buffer, want);
-    if (n < 0) return errno == EAGAIN ? 0 : errno;
+    if (n < 0) {
+      if (errno == EAGAIN) break;
+      return errno;
+    }
     for (int i = 0; i < n; ++i) {
       gpiod_edge_event* ev =
           gpiod_edge_event_buffer_get_event(m.buffer, static_cast<unsigned long>(i));
@@ -205,10 +209,23 @@ int GpiodLines::read_events(std::span<Edge> out, std::size_t& count, std::uint64
       e.seqno = static_cast<std::uint32_t>(gpiod_edge_event_get_global_seqno(ev));
       e.line = m.role_of(gpiod_edge_event_get_line_offset(ev));
       e.level = gpiod_edge_event_get_event_type(ev) == GPIOD_EDGE_EVENT_RISING_EDGE;
-      lost += m.seq.next(e.seqno);  // the kernel numbers events 1, 2, 3... per request
     }
     if (static_cast<std::size_t>(n) < want) break;
   }
+  // Each line's interrupt thread queues its own events, so two lines' edges close together
+  // can come out of the order the kernel numbered them in: back in that order (as uAPI v1's
+  // lines are merged by timestamp), or each such pair would count as edges lost and out of
+  // order. Insertion sort, wrap-aware: a handful of events per tick.
+  for (std::size_t i = 1; i < count; ++i) {
+    const Edge e = out[i];
+    std::size_t j = i;
+    for (; j > 0 && static_cast<std::int32_t>(out[j - 1].seqno - e.seqno) > 0; --j) {
+      out[j] = out[j - 1];
+    }
+    out[j] = e;
+  }
+  // The kernel numbers events 1, 2, 3... per request.
+  for (std::size_t i = 0; i < count; ++i) lost += m.seq.next(out[i].seqno);
   return 0;
 }
 
