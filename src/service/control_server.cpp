@@ -252,7 +252,10 @@ void ControlServer::run() noexcept {
         if ((ev & (POLLIN | POLLOUT)) || c.in.find('\n') != std::string::npos) serve(c);
         const bool idle = now - c.last_active > std::chrono::seconds(kIdleSeconds);
         const bool gone = (ev & (POLLHUP | POLLERR)) && c.out.empty();
-        if (gone || idle || c.out.size() > kMaxPendingOutput || (c.closing && c.out.empty())) {
+        // A client that ended its input is answered every complete line it sent before the
+        // hang-up, not only those of the turn its end of input arrived in.
+        const bool answered = c.out.empty() && c.in.find('\n') == std::string::npos;
+        if (gone || idle || c.out.size() > kMaxPendingOutput || (c.closing && answered)) {
           close(c.fd);
           c.fd = -1;
         }

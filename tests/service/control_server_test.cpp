@@ -1,0 +1,115 @@
+// The control socket's server in-process, with a handler of the test's own: how it frames
+// requests and answers, whatever the daemon behind it does. (The daemon's own answers are
+// tested end to end in control_socket_test.cpp.)
+#include "service/control_server.h"
+
+#include <gtest/gtest.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <unistd.h>
+
+#include <cstring>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace hapticd::service {
+namespace {
+
+using nlohmann::json;
+
+class ScriptedHandler : public ControlHandler {
+ public:
+  json handle(const Request& r) override {
+    if (r.command == Command::kClearFault) throw ControlRefusal("no fault to clear", 1);
+    if (r.command == Command::kReload) throw std::runtime_error("disk on fire");
+    return {{"seen", ++seen}};
+  }
+  int seen = 0;
+};
+
+// Connects, writes `bytes`, half-closes, and returns every answer line until the server
+// hangs up.
+std::vector<std::string> converse(const std::string& path, const std::string& bytes) {
+  const int fd = socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  sockaddr_un addr{};
+  addr.sun_family = AF_UNIX;
+  std::strncpy(addr.sun_path, path.c_str(), sizeof addr.sun_path - 1);
+  EXPECT_EQ(connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
+  EXPECT_EQ(send(fd, bytes.data(), bytes.size(), MSG_NOSIGNAL),
+            static_cast<ssize_t>(bytes.size()));
+  shutdown(fd, SHUT_WR);
+  std::string in;
+  char buf[4096];
+  for (;;) {
+    pollfd p{fd, POLLIN, 0};
+    if (poll(&p, 1, 20000) != 1) break;  // a hang: the assertions below say what is missing
+    const ssize_t n = recv(fd, buf, sizeof buf, 0);
+    if (n <= 0) break;
+    in.append(buf, static_cast<std::size_t>(n));
+  }
+  close(fd);
+  std::vector<std::string> lines;
+  for (std::size_t at = 0, nl; (nl = in.find('\n', at)) != std::string::npos; at = nl + 1) {
+    lines.push_back(in.substr(at, nl - at));
+  }
+  return lines;
+}
+
+struct ServerRig : ::testing::Test {
+  ScriptedHandler handler;
+  std::string path = ::testing::TempDir() + "control-server-" + std::to_string(getpid()) + ".sock";
+  ControlServer server{path, handler};
+};
+
+std::string status_line(int id) {
+  return R"({"v":1,"cmd":"status","id":)" + std::to_string(id) + "}\n";
+}
+
+TEST_F(ServerRig, ManyRequestsInOneWriteThenEndOfInputAreAllAnsweredInOrder) {
+  // More lines than the server answers in one turn, all arriving with the end of input: a
+  // client that pipelines its requests and half-closes must get every answer.
+  std::string requests;
+  for (int i = 1; i <= 40; ++i) requests += status_line(i);
+  const std::vector<std::string> answers = converse(path, requests);
+  ASSERT_EQ(answers.size(), 40u);
+  for (int i = 1; i <= 40; ++i) {
+    const json a = json::parse(answers[i - 1]);
+    EXPECT_EQ(a["id"], i);
+    EXPECT_EQ(a["ok"], true);
+    EXPECT_EQ(a["seen"], i);
+  }
+}
+
+TEST_F(ServerRig, AnUnfinishedLastLineAtEndOfInputIsNotAnswered) {
+  const std::vector<std::string> answers =
+      converse(path, status_line(1) + R"({"v":1,"cmd":"status","id":2})");
+  ASSERT_EQ(answers.size(), 1u);
+  EXPECT_EQ(json::parse(answers[0])["id"], 1);
+  EXPECT_EQ(handler.seen, 1) << "the unfinished request must not be carried out";
+}
+
+TEST_F(ServerRig, ARefusalKeepsItsCodeAndAnyOtherExceptionIsCodeOne) {
+  const std::vector<std::string> answers =
+      converse(path, R"({"v":1,"cmd":"clear-fault","id":"c"})"
+                     "\n"
+                     R"({"v":1,"cmd":"reload","id":"r","config":""})"
+                     "\n"
+                     "garbage\n");
+  ASSERT_EQ(answers.size(), 3u);
+  const json refused = json::parse(answers[0]), failed = json::parse(answers[1]),
+             malformed = json::parse(answers[2]);
+  EXPECT_EQ(refused["ok"], false);
+  EXPECT_EQ(refused["error"], "no fault to clear");
+  EXPECT_EQ(refused["code"], 1);
+  EXPECT_EQ(failed["error"], "disk on fire");
+  EXPECT_EQ(failed["code"], 1);
+  EXPECT_EQ(failed["id"], "r");
+  EXPECT_EQ(malformed["code"], 2);
+  EXPECT_TRUE(malformed["id"].is_null());
+}
+
+}  // namespace
+}  // namespace hapticd::service
