@@ -21,7 +21,8 @@ struct ControlServer::Client {
   int fd = -1;
   std::string in;
   std::string out;
-  bool closing = false;  // close once `out` is written
+  bool closing = false;  // its input ended: close once every line is answered and written
+  bool gone = false;     // it cannot take answers any more (it closed, or a send failed)
   std::chrono::steady_clock::time_point last_active = std::chrono::steady_clock::now();
 };
 
@@ -170,7 +171,7 @@ void ControlServer::accept_clients(std::vector<Client>& clients) {
       close(fd);
       continue;
     }
-    clients.push_back(Client{fd, {}, {}, false, std::chrono::steady_clock::now()});
+    clients.push_back(Client{fd, {}, {}, false, false, std::chrono::steady_clock::now()});
   }
 }
 
@@ -189,6 +190,9 @@ void ControlServer::serve(Client& c) {
       c.last_active = std::chrono::steady_clock::now();
     } else if (n == 0) {
       c.closing = true;  // end of input: answer what came, then hang up
+    } else if (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) {
+      c.gone = true;
+      return;
     }
   }
   std::size_t nl = 0;
@@ -219,6 +223,10 @@ void ControlServer::serve(Client& c) {
   }
   while (!c.out.empty()) {
     const ssize_t n = send(c.fd, c.out.data(), c.out.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
+    if (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) {
+      c.gone = true;  // EPIPE, ECONNRESET: what it asked can no longer be answered
+      return;
+    }
     if (n <= 0) break;
     c.out.erase(0, static_cast<std::size_t>(n));
   }
@@ -234,7 +242,10 @@ void ControlServer::run() noexcept {
       const bool space = room(clients);
       fds.assign({{stop_fd_, POLLIN, 0}, {listen_fd_, static_cast<short>(space ? POLLIN : 0), 0}});
       for (const Client& c : clients) {
-        fds.push_back({c.fd, static_cast<short>(POLLIN | (c.out.empty() ? 0 : POLLOUT)), 0});
+        // A client whose input ended is not polled for input: its end of file would make
+        // poll return at once, forever, while it does not read its answers.
+        const int in = c.closing ? 0 : POLLIN, out = c.out.empty() ? 0 : POLLOUT;
+        fds.push_back({c.fd, static_cast<short>(in | out), 0});
       }
       // Lines already buffered are answered without waiting for more input.
       const bool queued = std::any_of(clients.begin(), clients.end(), [](const Client& c) {
@@ -251,7 +262,9 @@ void ControlServer::run() noexcept {
         const short ev = i + 2 < fds.size() ? fds[i + 2].revents : 0;
         if ((ev & (POLLIN | POLLOUT)) || c.in.find('\n') != std::string::npos) serve(c);
         const bool idle = now - c.last_active > std::chrono::seconds(kIdleSeconds);
-        const bool gone = (ev & (POLLHUP | POLLERR)) && c.out.empty();
+        // POLLHUP: it closed both ways (not a half-close), so no answer can reach it; kept, it
+        // would hold a slot it can never give up and make poll return at once until idle.
+        const bool gone = c.gone || (ev & (POLLHUP | POLLERR));
         // A client that ended its input is answered every complete line it sent before the
         // hang-up, not only those of the turn its end of input arrived in.
         const bool answered = c.out.empty() && c.in.find('\n') == std::string::npos;

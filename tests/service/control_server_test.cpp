@@ -9,6 +9,7 @@
 #include <sys/un.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <cstring>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
@@ -80,6 +81,30 @@ TEST_F(ServerRig, ManyRequestsInOneWriteThenEndOfInputAreAllAnsweredInOrder) {
     EXPECT_EQ(a["ok"], true);
     EXPECT_EQ(a["seen"], i);
   }
+}
+
+TEST_F(ServerRig, ClientsThatLeaveWithoutTheirAnswersDoNotHoldTheSlots) {
+  // More clients than the server has slots each send requests and close at once: their
+  // answers cannot be delivered. Kept until they went idle, they would lock every other
+  // client (the operator's `stop` among them) out for a minute.
+  std::string requests;
+  for (int i = 1; i <= 20; ++i) requests += status_line(i);
+  for (int i = 0; i < 2 * ControlServer::kMaxClients; ++i) {
+    const int fd = socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    sockaddr_un addr{};
+    addr.sun_family = AF_UNIX;
+    std::strncpy(addr.sun_path, path.c_str(), sizeof addr.sun_path - 1);
+    ASSERT_EQ(connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
+    ASSERT_EQ(send(fd, requests.data(), requests.size(), MSG_NOSIGNAL),
+              static_cast<ssize_t>(requests.size()));
+    close(fd);
+  }
+  const auto start = std::chrono::steady_clock::now();
+  const std::vector<std::string> answers = converse(path, status_line(99));
+  ASSERT_EQ(answers.size(), 1u) << "a client after them was not answered";
+  EXPECT_EQ(json::parse(answers[0])["id"], 99);
+  // A deadline for a lock-out (a minute), not a timing: the answer takes milliseconds.
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(15));
 }
 
 TEST_F(ServerRig, AnUnfinishedLastLineAtEndOfInputIsNotAnswered) {
