@@ -16,6 +16,7 @@
 #include <cerrno>
 #include <cstddef>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -73,7 +74,13 @@ struct Rig {
 };
 
 Rig& rig() {
-  static Rig* r = new Rig;  // lives until exit: the server's thread must outlive every input
+  // Lives until exit: the server's thread must outlive every input. Its socket file goes
+  // with the process.
+  static Rig* r = [] {
+    Rig* made = new Rig;
+    std::atexit([] { unlink(rig().path.c_str()); });
+    return made;
+  }();
   return *r;
 }
 

@@ -59,6 +59,15 @@ std::string group_name(gid_t gid) {
   return std::to_string(gid);
 }
 
+// Whether something accepts connections at addr (a stale socket file refuses them).
+bool socket_answers(const sockaddr_un& addr) {
+  const int fd = socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  if (fd < 0) return false;
+  const bool answers = connect(fd, reinterpret_cast<const sockaddr*>(&addr), sizeof addr) == 0;
+  close(fd);
+  return answers;
+}
+
 }  // namespace
 
 ControlServer::ControlServer(const std::string& path, ControlHandler& handler)
@@ -75,6 +84,10 @@ ControlServer::ControlServer(const std::string& path, ControlHandler& handler)
     if (!S_ISSOCK(st.st_mode)) {
       errno = EEXIST;
       throw failure(path, "something that is not a socket is there");
+    }
+    if (socket_answers(addr)) {  // a live daemon's: taking it over would orphan that one
+      errno = EADDRINUSE;
+      throw failure(path, "another process is serving this socket");
     }
     unlink(path.c_str());  // a stale socket of an earlier run
   }

@@ -107,6 +107,35 @@ TEST_F(ServerRig, ClientsThatLeaveWithoutTheirAnswersDoNotHoldTheSlots) {
   EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(15));
 }
 
+TEST_F(ServerRig, ASecondServerOnALiveSocketIsRefusedAndTheFirstServesOn) {
+  ScriptedHandler other;
+  try {
+    ControlServer second(path, other);
+    ADD_FAILURE() << "a second server took over a live daemon's socket";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("another process is serving this socket"),
+              std::string::npos)
+        << e.what();
+  }
+  const std::vector<std::string> answers = converse(path, status_line(5));
+  ASSERT_EQ(answers.size(), 1u);
+  EXPECT_EQ(handler.seen, 1);
+}
+
+TEST(ControlServer, AStaleSocketFileOfAnEarlierRunIsReplaced) {
+  const std::string path = ::testing::TempDir() + "stale-" + std::to_string(getpid()) + ".sock";
+  ScriptedHandler handler;
+  // A crashed daemon leaves its socket file behind: make one by hand.
+  const int fd = socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  sockaddr_un addr{};
+  addr.sun_family = AF_UNIX;
+  std::strncpy(addr.sun_path, path.c_str(), sizeof addr.sun_path - 1);
+  ASSERT_EQ(bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
+  close(fd);
+  ControlServer again(path, handler);
+  EXPECT_EQ(converse(path, status_line(1)).size(), 1u);
+}
+
 TEST_F(ServerRig, AnUnfinishedLastLineAtEndOfInputIsNotAnswered) {
   const std::vector<std::string> answers =
       converse(path, status_line(1) + R"({"v":1,"cmd":"status","id":2})");
