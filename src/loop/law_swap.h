@@ -41,8 +41,10 @@ class LawSwap {
     return swap_tick_.load(std::memory_order_acquire);
   }
 
-  // RT-safe: called every tick. The offered controller, if any; `current` goes to retire().
-  // The caller continues the new law from the old one and switches to it from `tick` on.
+  // RT-safe: called every tick. The offered controller, if any, already continued from
+  // `current` (its filter histories and delay line); `current` goes to retire(). The caller
+  // switches to it from `tick` on. The continuation happens before the swap is published:
+  // the offering side destroys `current` as soon as it sees the swap.
   control::Controller* take(control::Controller* current, std::uint64_t tick) noexcept {
     control::Controller* next = pending_.load(std::memory_order_acquire);
     if (next == nullptr) return nullptr;  // the usual tick: one load, nothing else
@@ -51,6 +53,7 @@ class LawSwap {
     if (!pending_.compare_exchange_strong(next, nullptr, std::memory_order_acq_rel)) {
       return nullptr;
     }
+    next->continue_from(*current);
     retired_.store(current, std::memory_order_release);
     swap_tick_.store(tick, std::memory_order_release);
     swaps_.fetch_add(1, std::memory_order_acq_rel);

@@ -87,7 +87,6 @@ void ServoLoop::take_reloads(std::uint64_t tick, std::int64_t scheduled_ns, Loop
   marker.tick = tick;
   marker.scheduled_ns = scheduled_ns;
   if (control::Controller* next = options_.law_swap->take(controller_, tick)) {
-    next->continue_from(*controller_);
     controller_ = next;
     ++res.reloads;
     live_.reloads.store(res.reloads, std::memory_order_relaxed);

@@ -139,6 +139,33 @@ TEST(LiveReload, TheNewLawGovernsFromOneTickBoundaryWithoutAllocatingOnTheRtThre
   EXPECT_TRUE(differs);
 }
 
+TEST(LiveReload, TakeContinuesTheNewLawBeforeTheSwapIsPublished) {
+  // The offering side destroys the replaced law as soon as it sees swaps() move
+  // (service/run_control.cpp), so the RT thread must be done reading it by then: take()
+  // continues the new law from it first. (The loop used to do that after take() returned, a
+  // use-after-free window ThreadSanitizer caught in the end-to-end reload tests.)
+  control::Controller old_law(control::make_control_law(demo("2000")));
+  control::Controller ref_old(control::make_control_law(demo("2000")));
+  control::Controller ref_new(control::make_control_law(demo("3000")));
+  for (double x : {-0.001, 0.001, 0.002}) {  // armed, in contact, commands on their way
+    old_law.step(x);
+    ref_old.step(x);
+  }
+  control::Controller next(control::make_control_law(demo("3000")));
+  LawSwap swap;
+  ASSERT_TRUE(swap.offer(&next));
+  ASSERT_EQ(swap.take(&old_law, 7), &next);
+  EXPECT_EQ(swap.swaps(), 1u);
+  EXPECT_EQ(swap.last_swap_tick(), 7u);
+  EXPECT_EQ(swap.retire(), &old_law);
+  ref_new.continue_from(ref_old);
+  for (double x : {0.003, 0.0025, 0.001}) {
+    const control::ControlOutput got = next.step(x), want = ref_new.step(x);
+    EXPECT_EQ(got.force_computed, want.force_computed) << "x " << x;
+    EXPECT_EQ(got.force_commanded, want.force_commanded) << "x " << x;
+  }
+}
+
 TEST(LiveReload, AnOfferTheLoopNeverTookCanBeWithdrawn) {
   const config::Config cfg = demo("2000");
   control::Controller next(control::make_control_law(cfg));
