@@ -275,15 +275,18 @@ TEST(CliRun, ALogThatCannotBeWrittenIsAFaultNotACrash) {
     GTEST_SKIP() << "prlimit (util-linux) not installed: cannot limit the file size";
   }
   // 20 kB holds the header and a few blocks; then every write fails with EFBIG.
-  const std::string log = temp_path("full.hlog");
+  const std::string log = temp_path("full.hlog"), sum = temp_path("full.json");
   const ProcessResult r = run_process({"/usr/bin/prlimit", "--fsize=20000", hapticd_binary(), "run",
-                                       "--duration", "2", "--log", log});
+                                       "--duration", "2", "--log", log, "--summary-json", sum});
   EXPECT_EQ(r.exit_code, 1) << r.err;
   EXPECT_NE(r.err.find("tick log:"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("write errors"), std::string::npos) << r.err;
+  const nlohmann::json s = nlohmann::json::parse(read_file(sum));
+  EXPECT_GT(s["log_records_lost"].get<std::uint64_t>(), 0u) << "the loss is counted";
   const telemetry::LogContents c = telemetry::read_log(log);  // what reached the disk is intact
   EXPECT_GT(c.records.size(), 0u);
-  EXPECT_GT(c.dropped_records + 0, 0u);
+  // The file itself marks the loss only if a later, smaller block still fitted under the
+  // limit (realtime blocks are cut by time): whether one did depends on the timing.
 }
 
 TEST(CliRun, StartingInsideTheWallHoldsTheWallOffUntilTheDeviceLeaves) {

@@ -10,6 +10,7 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -92,7 +93,8 @@ ProcessResult run_process_with_stdout(const std::vector<std::string>& args,
 }
 
 BackgroundProcess::BackgroundProcess(const std::vector<std::string>& args,
-                                     const std::vector<std::string>& env) {
+                                     const std::vector<std::string>& env)
+    : comm_(std::filesystem::path(args.at(0)).filename().string().substr(0, 15)) {
   pid_ = spawn(args, env, out_fd_, err_fd_);
 }
 
@@ -110,8 +112,13 @@ bool BackgroundProcess::wait_until_blocked(int sig, int timeout_ms) const {
   for (int waited = 0; waited < timeout_ms; ++waited) {
     std::ifstream in(status_path);
     std::string line;
+    // Before its exec the child is still the test binary, whose mask may block everything
+    // for a moment (ThreadSanitizer blocks all signals around fork): that is not the daemon.
+    bool execed = false;
     while (std::getline(in, line)) {
-      if (line.rfind("SigBlk:", 0) != 0) continue;
+      if (line.rfind("Name:", 0) == 0)
+        execed = line.substr(line.find_first_not_of(" \t", 5)) == comm_;
+      if (!execed || line.rfind("SigBlk:", 0) != 0) continue;
       const unsigned long long mask = std::stoull(line.substr(7), nullptr, 16);
       if (mask & (1ULL << (sig - 1))) return true;
     }

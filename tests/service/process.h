@@ -31,8 +31,9 @@ class BackgroundProcess {
   void signal(int sig) const;
   ProcessResult wait();
   pid_t pid() const { return pid_; }
-  // Waits (up to `timeout_ms`) until the process blocks `sig`: from then on a signal cannot
-  // kill it, which is when a test may send one. False on time-out or exit.
+  // Waits (up to `timeout_ms`) until the program started (after its exec) blocks `sig`: from
+  // then on a signal cannot kill it, which is when a test may send one. False on time-out or
+  // exit.
   bool wait_until_blocked(int sig, int timeout_ms = 5000) const;
   // Closes the read ends of its stdout and stderr pipes, as `| head` does when it is done.
   void close_output();
@@ -41,6 +42,7 @@ class BackgroundProcess {
   pid_t pid_ = -1;
   int out_fd_ = -1;
   int err_fd_ = -1;
+  std::string comm_;  // the program's name as /proc/PID/status shows it after its exec
 };
 
 // A systemd notify socket the daemon reports to (pass env() to the process): a test waits
