@@ -69,16 +69,49 @@ std::size_t check_block_at(std::span<const std::uint8_t> input, std::size_t offs
   return block_size(h.record_count, rsize);
 }
 
-// Walks the input in file order as the reader reports it: accepted blocks, with the skipped
-// stretches between them, each skipped stretch followed by a block. Returns where it ends.
+// Whether an accepted config block (a live reload's configuration) is at `offset`: its magic,
+// a length within the input and the bound, and a CRC that holds. (A record block cannot pass
+// for one: its magic differs.)
+bool config_block_at(std::span<const std::uint8_t> input, std::size_t offset) {
+  if (offset > input.size() || input.size() - offset < kBlockHeaderSize) return false;
+  const auto block = std::as_bytes(input.subspan(offset));
+  if (std::memcmp(block.data(), kConfigMagic.data(), kConfigMagic.size()) != 0) return false;
+  const BlockHeader h = decode_block_header(block);
+  if (h.record_count > kMaxConfigBytes || block.size() - kBlockHeaderSize < h.record_count) {
+    return false;
+  }
+  const auto text = block.subspan(kBlockHeaderSize, h.record_count);
+  return crc32_update(crc32_update(0, block.first(kBlockCrcOffset)), text) == h.crc;
+}
+
+// Checks the config block at `offset` is returned as c.reloads[reload], with its first tick
+// and text. Returns its size.
+std::size_t check_config_at(std::span<const std::uint8_t> input, std::size_t offset,
+                            const LogContents& c, std::size_t reload) {
+  const std::string at = std::to_string(offset);
+  require(reload < c.reloads.size(), "an intact config block not returned", at);
+  const auto block = std::as_bytes(input.subspan(offset));
+  const BlockHeader h = decode_block_header(block);
+  const ConfigChange& r = c.reloads[reload];
+  require(
+      r.first_tick == h.first_tick && r.config_text.size() == h.record_count &&
+          std::memcmp(r.config_text.data(), block.data() + kBlockHeaderSize, h.record_count) == 0,
+      "a returned configuration differs from its config block", at);
+  return kBlockHeaderSize + h.record_count;
+}
+
+// Walks the input in file order as the reader reports it: accepted record and config blocks,
+// with the skipped stretches between them, each skipped stretch followed by a block. Returns
+// where it ends.
 std::size_t check_file_order(std::span<const std::uint8_t> input, const LogContents& c,
                              std::size_t offset, std::size_t rsize) {
   std::size_t records = 0;
   std::size_t blocks = 0;
   std::size_t next_skip = 0;
+  std::size_t reloads = 0;
   std::uint64_t dropped = 0;
   bool after_skip = false;
-  while (blocks < c.complete_blocks || next_skip < c.skipped.size()) {
+  while (blocks < c.complete_blocks || next_skip < c.skipped.size() || reloads < c.reloads.size()) {
     if (next_skip < c.skipped.size() && c.skipped[next_skip].offset == offset) {
       const SkippedRegion& s = c.skipped[next_skip++];
       require(!after_skip && s.bytes > 0 && !s.reason.empty() && s.bytes <= input.size() - offset,
@@ -88,6 +121,11 @@ std::size_t check_file_order(std::span<const std::uint8_t> input, const LogConte
       after_skip = true;
       continue;
     }
+    if (config_block_at(input, offset)) {
+      offset += check_config_at(input, offset, c, reloads++);
+      after_skip = false;
+      continue;
+    }
     require(blocks < c.complete_blocks, "skipped stretch away from the end of the previous block",
             std::to_string(offset));
     offset += check_block_at(input, offset, rsize, c, records, dropped);
@@ -95,6 +133,7 @@ std::size_t check_file_order(std::span<const std::uint8_t> input, const LogConte
     after_skip = false;
   }
   require(!after_skip, "a skipped stretch must be followed by an accepted block");
+  require(reloads == c.reloads.size(), "configurations returned outside config blocks");
   require(records == c.records.size(), "records returned outside accepted blocks");
   require(dropped == c.dropped_records, "dropped_records is not the sum of dropped_before");
   return offset;
