@@ -66,8 +66,6 @@ std::size_t read_header(std::span<const std::byte> bytes, const std::string& nam
   return crc_at + kCrcSize;
 }
 
-// One block at the start of `block`: its size when it is complete and intact, else 0 with
-// the reason (offset is for the message).
 // A config block at the start of `block`: its size when complete and intact, else 0.
 std::size_t check_config_block(std::span<const std::byte> block, std::size_t offset,
                                std::string& why) {
@@ -93,6 +91,8 @@ std::size_t check_config_block(std::span<const std::byte> block, std::size_t off
   return size;
 }
 
+// One block (records or configuration) at the start of `block`: its size when it is complete
+// and intact, else 0 with the reason (offset is for the message).
 std::size_t check_block(std::span<const std::byte> block, std::size_t offset, std::size_t rsize,
                         std::string& why) {
   if (block.size() >= kConfigMagic.size() &&
