@@ -59,6 +59,9 @@ std::string group_name(gid_t gid) {
   return std::to_string(gid);
 }
 
+// An error that only says "not now" (the socket is non-blocking), not that the client is gone.
+bool not_now(int err) { return err == EAGAIN || err == EWOULDBLOCK || err == EINTR; }
+
 // Whether something accepts connections at addr (a stale socket file refuses them).
 bool socket_answers(const sockaddr_un& addr) {
   const int fd = socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
@@ -203,7 +206,7 @@ void ControlServer::serve(Client& c) {
       c.last_active = std::chrono::steady_clock::now();
     } else if (n == 0) {
       c.closing = true;  // end of input: answer what came, then hang up
-    } else if (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) {
+    } else if (!not_now(errno)) {
       c.gone = true;
       return;
     }
@@ -236,7 +239,7 @@ void ControlServer::serve(Client& c) {
   }
   while (!c.out.empty()) {
     const ssize_t n = send(c.fd, c.out.data(), c.out.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
-    if (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) {
+    if (n < 0 && !not_now(errno)) {
       c.gone = true;  // EPIPE, ECONNRESET: what it asked can no longer be answered
       return;
     }

@@ -16,10 +16,15 @@ bool has(const std::string& text, const std::string& part) {
   return text.find(part) != std::string::npos;
 }
 
+// `cmake --install` of the build into `prefix`.
+ProcessResult install_to(const std::string& prefix) {
+  return run_process(
+      {"/bin/sh", "-c", "cmake --install '" + build_dir() + "' --prefix '" + prefix + "' 2>&1"});
+}
+
 TEST(Install, GivesAStrippedBinaryAManPageAndAUnitThatVerifies) {
   const std::string prefix = temp_path("prefix");
-  const ProcessResult inst = run_process(
-      {"/bin/sh", "-c", "cmake --install '" + build_dir() + "' --prefix '" + prefix + "' 2>&1"});
+  const ProcessResult inst = install_to(prefix);
   ASSERT_EQ(inst.exit_code, 0) << inst.out;
 
   const std::string bin = prefix + "/bin/hapticd";
@@ -62,10 +67,8 @@ TEST(Install, GivesAStrippedBinaryAManPageAndAUnitThatVerifies) {
 // capabilities, devices and scheduling a servo needs and nothing more.
 TEST(Install, TheTemplateUnitsExposureIsAtMostTwo) {
   const std::string prefix = temp_path("prefix-security");
-  ASSERT_EQ(run_process({"/bin/sh", "-c",
-                         "cmake --install '" + build_dir() + "' --prefix '" + prefix + "' 2>&1"})
-                .exit_code,
-            0);
+  const ProcessResult inst = install_to(prefix);
+  ASSERT_EQ(inst.exit_code, 0) << inst.out;
   const std::string unit = prefix + "/lib/systemd/system/hapticd@.service";
   const ProcessResult r = run_process(
       {"/bin/sh", "-c", "systemd-analyze security --offline=true --no-pager '" + unit + "' 2>&1"});
@@ -88,10 +91,8 @@ TEST(Install, TheTemplateUnitsExposureIsAtMostTwo) {
 // The system user the unit runs as, and the udev rules that give its group the devices.
 TEST(Install, CreatesTheSystemUserAndTheUdevRules) {
   const std::string prefix = temp_path("prefix-users");
-  ASSERT_EQ(run_process({"/bin/sh", "-c",
-                         "cmake --install '" + build_dir() + "' --prefix '" + prefix + "' 2>&1"})
-                .exit_code,
-            0);
+  const ProcessResult inst = install_to(prefix);
+  ASSERT_EQ(inst.exit_code, 0) << inst.out;
   const std::string sysusers = prefix + "/lib/sysusers.d/hapticd.conf";
   ASSERT_TRUE(std::filesystem::exists(sysusers));
   const std::string root = temp_path("sysroot");
