@@ -7,6 +7,7 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 
 #include "control/controller.h"
@@ -59,6 +60,14 @@ class LawSwap {
     swaps_.fetch_add(1, std::memory_order_acq_rel);
     return next;
   }
+  // Not RT-safe. A loop is about to run and take offers (before its thread starts, so an
+  // offer made once it runs never sees the previous loop's end).
+  void loop_starting() noexcept { loop_ended_.store(false, std::memory_order_release); }
+  // RT-safe: called once, as the loop returns. No offer is taken after it.
+  void loop_ended() noexcept { loop_ended_.store(true, std::memory_order_release); }
+  // Any thread. Whether no loop is running to take an offer.
+  bool ended() const noexcept { return loop_ended_.load(std::memory_order_acquire); }
+
   // RT-safe: called every tick. Refusals noted since the last call.
   std::uint32_t take_refusals() noexcept {
     if (refused_.load(std::memory_order_acquire) == 0) return 0;
@@ -71,6 +80,21 @@ class LawSwap {
   std::atomic<std::uint32_t> refused_{0};
   std::atomic<std::uint64_t> swaps_{0};
   std::atomic<std::uint64_t> swap_tick_{0};
+  std::atomic<bool> loop_ended_{true};
 };
+
+// How an offer ended for the offering side (await_swap below).
+enum class SwapOutcome {
+  kTaken,      // the RT thread took it: last_swap_tick() is the tick it governs from
+  kLoopEnded,  // the loop ended first; the offer is withdrawn (the caller owns it again)
+  kTimedOut,   // the loop ran on but reached no tick boundary in time; withdrawn too
+};
+
+// Not RT-safe (sleeps). Waits until the offer of `offered` made when swaps() was `before` is
+// taken, or the loop has ended, or `timeout` passes, then withdraws an offer not taken.
+// A swap the RT thread makes while it is being withdrawn is reported as kTaken: the answer
+// never disagrees with what the loop runs.
+SwapOutcome await_swap(LawSwap& swap, control::Controller* offered, std::uint64_t before,
+                       std::chrono::milliseconds timeout);
 
 }  // namespace hapticd::loop

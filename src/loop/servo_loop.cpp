@@ -314,6 +314,7 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
     }
   }
   device_.write(0.0);  // the last command must not outlive the loop that was servoing it
+  if (options_.law_swap != nullptr) options_.law_swap->loop_ended();  // no more takes
   next_tick_ += res.ticks;
   energy_before_ += res.wall_energy_j;
   return res;

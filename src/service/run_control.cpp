@@ -24,6 +24,10 @@ namespace {
 
 using nlohmann::json;
 
+// How long a reload waits for the running loop to take the new law: the loop takes it at its
+// next tick, so only an RT thread starved for this long fails to (then the reload is refused).
+constexpr std::chrono::milliseconds kSwapTimeout{10000};
+
 json percentiles_us(const loop::LatencyHistogram& h) {
   if (h.count() == 0) return nullptr;
   const auto us = [&](double q) { return static_cast<double>(h.percentile_ns(q)) / 1e3; };
@@ -122,7 +126,7 @@ json RunSession::reload(const std::string& text, const std::string& source,
                          refusal != nullptr ? refusal->code() : 1);
   }
   std::optional<std::uint64_t> first_tick;
-  if (phase == Phase::kRunning) first_tick = swap_in(next);
+  if (phase == Phase::kRunning) first_tick = swap_in(next, source);
   const double k = next.cfg.wall.stiffness, b = next.cfg.wall.damping;
   json out = {{"accepted", true},
               {"applied_at_tick", first_tick ? json(*first_tick) : json(nullptr)},
@@ -169,20 +173,26 @@ RunSession::Prepared RunSession::prepare(const config::Config& running, const st
 }
 
 // Offers the new law to the RT thread and waits for the tick boundary it is taken at (none
-// when the loop ended first). The law it replaced is destroyed here, off the RT thread.
-std::optional<std::uint64_t> RunSession::swap_in(Prepared& next) {
+// when the loop ended first). The law it replaced is destroyed here, off the RT thread. An
+// offer the running loop does not take in kSwapTimeout is withdrawn and the reload refused:
+// the answer, the status and the tick log never name a wall the loop is not rendering.
+std::optional<std::uint64_t> RunSession::swap_in(Prepared& next, const std::string& source) {
   const std::uint64_t before = swap_.swaps();
   if (log_.writer) log_.writer->queue_config_change(next.cfg.effective_yaml);
   if (!swap_.offer(next.law.get())) {  // reload_mutex_ serialises offers: not expected
     if (log_.writer) log_.writer->withdraw_config_change();
     throw ControlRefusal("reload refused: a previous reload is still being applied");
   }
-  for (int waited = 0; waited < 2000 && swap_.swaps() == before; ++waited) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  }
-  if (swap_.withdraw(next.law.get())) {  // the loop ended (or stalled) before taking it
+  const loop::SwapOutcome outcome = loop::await_swap(swap_, next.law.get(), before, kSwapTimeout);
+  if (outcome != loop::SwapOutcome::kTaken) {
     if (log_.writer) log_.writer->withdraw_config_change();
-    return std::nullopt;
+    if (outcome == loop::SwapOutcome::kLoopEnded) return std::nullopt;
+    swap_.note_refused();
+    const std::string why = "the servo loop reached no tick boundary in " +
+                            std::to_string(kSwapTimeout.count() / 1000) +
+                            " s (starved of the CPU?); nothing changed";
+    spdlog::warn("reload from {} refused: {}", source, why);
+    throw ControlRefusal("reload refused: " + why);
   }
   const std::uint64_t tick = swap_.last_swap_tick();
   swap_.retire();  // the replaced law: `active_` owns it and lets it go below

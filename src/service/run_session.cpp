@@ -161,6 +161,7 @@ loop::LoopResult RunSession::arm() {
   const bool first = !summary_.output_was_enabled;
   summary_.output_was_enabled = true;
   {
+    swap_.loop_starting();  // before the phase says running: a reload then waits for this loop
     RtThread rt(*servo_, cfg.loop.rt_priority, cfg.loop.cpu, realtime_, rt_);
     if (const std::string error = rt.wait_ready(); !error.empty()) {
       throw config::ConfigError({cfg.locate("loop.cpu") + ": " + error});

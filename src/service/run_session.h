@@ -67,7 +67,7 @@ class RunSession final : public ControlHandler {
                         const std::vector<std::string>& sets);
   Prepared prepare(const config::Config& running, const std::string& text,
                    const std::string& source, const std::vector<std::string>& sets) const;
-  std::optional<std::uint64_t> swap_in(Prepared& next);
+  std::optional<std::uint64_t> swap_in(Prepared& next, const std::string& source);
   config::Config config_snapshot() const;
   nlohmann::json reload_file();
   nlohmann::json clear_fault();

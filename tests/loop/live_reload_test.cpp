@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <chrono>
 #include <memory>
 #include <thread>
 #include <vector>
@@ -176,6 +177,58 @@ TEST(LiveReload, AnOfferTheLoopNeverTookCanBeWithdrawn) {
   EXPECT_EQ(swap.swaps(), 0u);
   EXPECT_EQ(swap.retire(), nullptr);
   EXPECT_EQ(swap.take_refusals(), 0u);
+}
+
+// The offering side's wait (await_swap): a reload is answered "taken at tick N" only when
+// the loop took it. A loop starved past the time-out, or one that ended, gets its offer
+// withdrawn, so the service never reports a wall the loop is not rendering (CI once saw a
+// starved daemon answer "accepted" for a law the loop never took).
+TEST(LiveReload, AnOfferARunningLoopDoesNotTakeInTimeIsWithdrawn) {
+  control::Controller next(control::make_control_law(demo("2000")));
+  LawSwap swap;
+  swap.loop_starting();
+  ASSERT_TRUE(swap.offer(&next));
+  EXPECT_EQ(await_swap(swap, &next, 0, std::chrono::milliseconds(30)), SwapOutcome::kTimedOut);
+  control::Controller current(control::make_control_law(demo("2000")));
+  EXPECT_EQ(swap.take(&current, 5), nullptr) << "withdrawn: a late tick must not take it";
+  EXPECT_EQ(swap.swaps(), 0u);
+}
+
+TEST(LiveReload, AnOfferToALoopThatHasEndedIsWithdrawnWithoutWaiting) {
+  control::Controller next(control::make_control_law(demo("2000")));
+  LawSwap swap;  // no loop has started: as good as ended
+  ASSERT_TRUE(swap.offer(&next));
+  EXPECT_EQ(await_swap(swap, &next, 0, std::chrono::hours(1)), SwapOutcome::kLoopEnded);
+  swap.loop_starting();
+  swap.loop_ended();
+  ASSERT_TRUE(swap.offer(&next));
+  EXPECT_EQ(await_swap(swap, &next, 0, std::chrono::hours(1)), SwapOutcome::kLoopEnded);
+}
+
+TEST(LiveReload, AnOfferTakenByTheLoopIsReportedTakenAndTheLoopMarksItsEnd) {
+  const config::Config cfg = demo("2000");
+  sim::SimDevice device(cfg.device, cfg.loop.sample_period_s());
+  device.configure();
+  device.enable();
+  control::Controller law(control::make_control_law(cfg));
+  control::Controller next(control::make_control_law(demo("3000")));
+  LawSwap swap;
+  LoopOptions o;
+  o.realtime = false;
+  o.law_swap = &swap;
+  o.max_ticks = 2000000;
+  ServoLoop loop(device, law, nullptr, o);
+  std::atomic<bool> stop{false};
+  swap.loop_starting();
+  LoopResult result;
+  std::thread rt([&] { result = loop.run(stop); });
+  ASSERT_TRUE(swap.offer(&next));
+  EXPECT_EQ(await_swap(swap, &next, 0, std::chrono::hours(1)), SwapOutcome::kTaken);
+  EXPECT_EQ(swap.retire(), &law);
+  stop = true;
+  rt.join();
+  EXPECT_EQ(result.reloads, 1u);
+  EXPECT_TRUE(swap.ended());
 }
 
 TEST(LiveReload, ContinuingFromAShorterDelayLineKeepsItsNewestCommands) {

@@ -92,7 +92,9 @@ TEST(ControlSocket, StatusReloadsAndStopThroughHapticctl) {
   EXPECT_EQ(yaml.exit_code, 2) << yaml.err;
   EXPECT_TRUE(has(yaml.err, bad + ":12: wall.stiffness: must be >= 0")) << yaml.err;
 
-  s = d.wait_status([](const json&) { return true; });
+  // Enough ticks under the new wall to check it by (counted in ticks, not in time: a starved
+  // loop skips periods).
+  s = d.wait_status([&](const json& j) { return j["tick"].get<std::uint64_t>() > boundary + 200; });
   EXPECT_EQ(s["state"], "running") << "refusals leave the servo running";
   EXPECT_EQ(s["wall"]["stiffness"], 3000.0) << "the last accepted wall stays";
   EXPECT_EQ(s["reloads"], 1);
@@ -138,6 +140,9 @@ TEST(ControlSocket, SighupReloadsTheFileTheRunWasStartedWith) {
   d.signal(SIGHUP);
   json s = d.wait_status([](const json& j) { return j["reloads"].get<int>() == 1; });
   EXPECT_EQ(s["wall"]["stiffness"], 2500.0) << s.dump();
+  const auto reloaded_at = s["tick"].get<std::uint64_t>();
+  s = d.wait_status(
+      [&](const json& j) { return j["tick"].get<std::uint64_t>() > reloaded_at + 200; });
   write("hup.yaml", pressing_config(9000));  // the gate refuses this one
   d.signal(SIGHUP);
   EXPECT_EQ(d.ctl({"stop"}).exit_code, 0);  // the SIGHUP is taken before the stop
