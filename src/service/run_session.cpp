@@ -9,6 +9,7 @@
 
 #include <cerrno>
 #include <cmath>
+#include <optional>
 #include <system_error>
 #include <thread>
 
@@ -156,16 +157,20 @@ loop::LoopResult RunSession::arm() {
   }
   const config::Config cfg = config_snapshot();  // a reload may replace cfg_ meanwhile
   Device& device = session_->device();
-  const CrashGuard crash_guard(device);  // a crash while enabled still writes zero first
-  device.enable();
-  const bool first = !summary_.output_was_enabled;
-  summary_.output_was_enabled = true;
+  std::optional<CrashGuard> crash_guard;  // outlives the RT thread and the disable below
   {
+    // The RT thread is made, scheduled and pinned before output is enabled, and its loop
+    // started right after: a drive's watchdog sees commands within a period of the enable.
     swap_.loop_starting();  // before the phase says running: a reload then waits for this loop
     RtThread rt(*servo_, cfg.loop.rt_priority, cfg.loop.cpu, realtime_, rt_);
     if (const std::string error = rt.wait_ready(); !error.empty()) {
       throw config::ConfigError({cfg.locate("loop.cpu") + ": " + error});
     }
+    crash_guard.emplace(device);  // a crash while enabled still writes zero first
+    device.enable();
+    rt.start();
+    const bool first = !summary_.output_was_enabled;
+    summary_.output_was_enabled = true;
     spdlog::info("output enabled: {} at {} Hz ({}), wall K {} N/m B {} N s/m",
                  device.info().description, cfg.loop.rate_hz, realtime_ ? "realtime" : "freerun",
                  cfg.wall.stiffness, cfg.wall.damping);

@@ -19,8 +19,11 @@ RtThread::RtThread(loop::ServoLoop& loop, int priority, int cpu, bool realtime, 
     } catch (const std::exception& e) {
       error_ = e.what();  // only a CPU that does not exist; checked earlier too
     }
-    ready_.store(true, std::memory_order_release);  // publishes rt and error_
-    if (error_.empty()) result_ = loop_.run(stop_);
+    ready_.store(true, std::memory_order_release);   // publishes rt and error_
+    gate_.wait(kClosed, std::memory_order_acquire);  // until start() or a stop
+    if (error_.empty() && gate_.load(std::memory_order_acquire) == kOpen) {
+      result_ = loop_.run(stop_);
+    }
     finished_.store(true, std::memory_order_release);
     const std::uint64_t one = 1;
     // Cannot fail short of a bad descriptor; the supervisor's poll time-out is the fallback.
@@ -28,8 +31,21 @@ RtThread::RtThread(loop::ServoLoop& loop, int priority, int cpu, bool realtime, 
   });
 }
 
-RtThread::~RtThread() {
+void RtThread::open_gate(Gate to) noexcept {
+  int closed = kClosed;
+  gate_.compare_exchange_strong(closed, to, std::memory_order_acq_rel);
+  gate_.notify_all();
+}
+
+void RtThread::start() noexcept { open_gate(kOpen); }
+
+void RtThread::request_stop() noexcept {
   stop_.store(true);
+  open_gate(kCancelled);  // no effect once started: the loop sees stop_ at its next tick
+}
+
+RtThread::~RtThread() {
+  request_stop();
   if (thread_.joinable()) thread_.join();
   close(ended_fd_);
 }

@@ -15,29 +15,36 @@ namespace hapticd::service {
 class RtThread {
  public:
   // Starts the RT thread: it configures itself (SCHED_FIFO, CPU) when `realtime`, publishes
-  // `rt`, runs the loop, then wakes the supervisor. Throws std::system_error when the wake-up
-  // channel cannot be created.
+  // `rt`, then waits at its start gate: the loop runs only once start() opens it, so all of
+  // this happens before output is enabled. Throws std::system_error when the wake-up channel
+  // cannot be created.
   RtThread(loop::ServoLoop& loop, int priority, int cpu, bool realtime, loop::RtStatus& rt);
-  // Requests a stop and joins: the loop never outlives its owner.
+  // Requests a stop (or closes the gate unopened) and joins: the loop never outlives its owner.
   ~RtThread();
   RtThread(const RtThread&) = delete;
   RtThread& operator=(const RtThread&) = delete;
 
   // Blocks until the RT thread has configured itself; returns why it could not ("" if it did).
   std::string wait_ready();
-  // Any thread. Asks the loop to stop at its next tick.
-  void request_stop() noexcept { stop_.store(true); }
-  // Any thread. Whether the loop has ended; readable (POLLIN) once it has.
+  // Opens the start gate: the loop's first tick follows at once (output is enabled by now).
+  void start() noexcept;
+  // Any thread. Asks the loop to stop at its next tick; before start(), it never runs.
+  void request_stop() noexcept;
+  // Any thread. Whether the loop has ended (or will never run); readable (POLLIN) once it has.
   bool finished() const noexcept { return finished_.load(std::memory_order_acquire); }
   int ended_fd() const noexcept { return ended_fd_; }
   // Joins the thread (the loop must have ended or been asked to); then what the loop did.
   const loop::LoopResult& join();
 
  private:
+  enum Gate : int { kClosed, kOpen, kCancelled };
+  void open_gate(Gate to) noexcept;
+
   loop::ServoLoop& loop_;
   int ended_fd_ = -1;  // eventfd the RT thread writes once the loop has returned
   std::atomic<bool> stop_{false};
   std::atomic<bool> ready_{false};
+  std::atomic<int> gate_{kClosed};
   std::atomic<bool> finished_{false};
   std::string error_;
   loop::LoopResult result_;
