@@ -108,8 +108,9 @@ stage_asan() {
 stage_tsan() {
   configure_and_build build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -g1 -DNDEBUG" -DHAPTICD_SANITIZE=thread \
-    -DHAPTICD_BUILD_BENCHMARKS=OFF -DHAPTICD_WITH_CAN=OFF -DHAPTICD_WITH_GPIO=OFF -- hapticd hapticd_loop_tests hapticd_telemetry_tests \
-    hapticd_service_tests hapticd_service_unit_tests
+    -DHAPTICD_BUILD_BENCHMARKS=OFF -DHAPTICD_WITH_CAN=OFF -DHAPTICD_WITH_GPIO=OFF \
+    -- hapticd hapticd_loop_tests hapticd_telemetry_tests hapticd_service_tests \
+    hapticd_service_unit_tests
   # Not the random-signal trial: TSan intercepts signals and defers them to its own safe
   # points, and one trial in three loaded runs lost a start-up signal that way (never in the
   # main or asan stage, which run it too). This stage is for data races.
