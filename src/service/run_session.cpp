@@ -169,6 +169,7 @@ loop::LoopResult RunSession::arm() {
     crash_guard.emplace(device);  // a crash while enabled still writes zero first
     device.enable();
     rt.start();
+    rt.wait_running();
     const bool first = !summary_.output_was_enabled;
     summary_.output_was_enabled = true;
     spdlog::info("output enabled: {} at {} Hz ({}), wall K {} N/m B {} N s/m",

@@ -37,7 +37,16 @@ void RtThread::open_gate(Gate to) noexcept {
   gate_.notify_all();
 }
 
-void RtThread::start() noexcept { open_gate(kOpen); }
+void RtThread::start() noexcept {
+  ticks_at_start_ = loop_.ticks_done();  // a re-armed loop counts on from its last run
+  open_gate(kOpen);
+}
+
+void RtThread::wait_running() const {
+  while (loop_.ticks_done() == ticks_at_start_ && !finished()) {
+    std::this_thread::sleep_for(std::chrono::microseconds(100));
+  }
+}
 
 void RtThread::request_stop() noexcept {
   stop_.store(true);

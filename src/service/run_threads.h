@@ -3,6 +3,7 @@
 #pragma once
 
 #include <atomic>
+#include <cstdint>
 #include <string>
 #include <thread>
 
@@ -28,6 +29,9 @@ class RtThread {
   std::string wait_ready();
   // Opens the start gate: the loop's first tick follows at once (output is enabled by now).
   void start() noexcept;
+  // After start(): blocks until the loop has made its first tick or ended (READY=1 means
+  // servoing, not about to).
+  void wait_running() const;
   // Any thread. Asks the loop to stop at its next tick; before start(), it never runs.
   void request_stop() noexcept;
   // Any thread. Whether the loop has ended (or will never run); readable (POLLIN) once it has.
@@ -45,6 +49,7 @@ class RtThread {
   std::atomic<bool> stop_{false};
   std::atomic<bool> ready_{false};
   std::atomic<int> gate_{kClosed};
+  std::uint64_t ticks_at_start_ = 0;  // the loop's ticks_done() when start() was called
   std::atomic<bool> finished_{false};
   std::string error_;
   loop::LoopResult result_;

@@ -49,6 +49,8 @@ TEST(RtThread, TheLoopWaitsAtTheGateUntilStartThenTicks) {
   EXPECT_EQ(rig.loop.ticks_done(), 0u) << "no tick before start()";
   EXPECT_FALSE(thread.finished());
   thread.start();
+  thread.wait_running();  // what READY=1 waits for
+  EXPECT_GT(rig.loop.ticks_done(), 0u) << "wait_running() returns once the loop has ticked";
   EXPECT_TRUE(eventually([&] { return rig.loop.ticks_done() > 100; }));
   thread.request_stop();
   EXPECT_GT(thread.join().ticks, 100u);
@@ -61,7 +63,8 @@ TEST(RtThread, AStopBeforeStartMeansTheLoopNeverRuns) {
   ASSERT_EQ(thread.wait_ready(), "");
   thread.request_stop();
   EXPECT_TRUE(eventually([&] { return thread.finished(); })) << "the supervisor learns of it";
-  thread.start();  // too late: the gate was closed for good
+  thread.start();         // too late: the gate was closed for good
+  thread.wait_running();  // returns: the loop will never tick
   EXPECT_EQ(thread.join().ticks, 0u);
   EXPECT_EQ(rig.loop.ticks_done(), 0u);
 }
