@@ -199,7 +199,8 @@ std::string HidDevice::describe(const DeviceFault& fault) const {
   if (e == ENOBUFS) {
     s = "hid: the device took no output report for " +
         std::to_string(settings_->limits.out_queue_full_fault) + " ticks in a row (OUT queue full)";
-  } else if (e == ENODEV || e == EIO || e == ESHUTDOWN) {
+  } else if (e == ENODEV || e == EIO || e == ESHUTDOWN || e == EPROTO) {
+    // EPROTO: hidraw's write while usbhid tears the unplugged device down.
     s = std::string("hid: the device is gone (") + std::strerror(e) + "): unplugged or reset?";
   } else {
     s = std::string("hid: the transport failed: ") + std::strerror(e);

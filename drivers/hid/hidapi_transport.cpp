@@ -244,8 +244,11 @@ void HidapiTransport::fail(const std::string& what, int code) {
 }
 
 bool HidapiTransport::send(const std::uint8_t* data, std::size_t size) {
+  // hidapi's libusb backend sets no errno of its own (and 0.13's hid_error says only "not
+  // implemented yet"): without this a stale EAGAIN named an unplugged device.
+  errno = 0;
   if (api_.write(dev_, data, size) >= 0) return true;
-  const int e = errno != 0 ? errno : EIO;
+  const int e = errno != 0 && errno != EAGAIN ? errno : EIO;
   fail("hid_write: " + to_utf8(api_.error(dev_)), e);
   return false;
 }
