@@ -56,6 +56,10 @@ void SocketHidPeer::handle(const drivers::hid::FrameView& f) {
 void SocketHidPeer::service() {
   if (vanished_.load()) {
     fw_->lose_host();
+    // What the driver sent before the device vanished is lost with it, but taken off the
+    // socket: the runner stops at the hang-up, and wait_idle() must not see it still unread.
+    while (::recv(fd_.get(), rx_.data(), rx_.size(), MSG_DONTWAIT) > 0) {
+    }
     return;
   }
   while (true) {
@@ -74,9 +78,9 @@ void SocketHidPeer::service() {
 
 bool SocketHidPeer::inject(PeerFault fault) noexcept {
   if (fault != PeerFault::kTransportFault) return fw_->inject(fault);
-  vanished_.store(true);
   fw_->vanish();
   ::shutdown(fd_.get(), SHUT_RDWR);  // the driver's next call sees the device gone
+  vanished_.store(true);             // after it: nothing arrives once service() drains
   return true;
 }
 
