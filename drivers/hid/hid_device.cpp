@@ -29,7 +29,7 @@ DeviceInfo HidDevice::on_configure() {
         &c_.too_long, &c_.output_reports, &c_.out_queue_full, &c_.drain_limit}) {
     c->store(0);
   }
-  logged_out_queue_full_ = 0;
+  logged_ = {};
   decoded_ = {};
   active_ = false;
   transport_ = open_();
@@ -171,22 +171,23 @@ HidCounters HidDevice::counters() const noexcept {
 
 void HidDevice::log_counters() const {
   const HidCounters k = counters();
-  if (k.unknown_id + k.too_short + k.too_long > 0) {
+  const std::uint64_t malformed = k.unknown_id + k.too_short + k.too_long;
+  if (malformed > logged_.unknown_id + logged_.too_short + logged_.too_long) {
     spdlog::warn(
         "hid: {} input reports were malformed: {} of an unknown id, {} too short, {} too "
         "long (of {} samples)",
-        k.unknown_id + k.too_short + k.too_long, k.unknown_id, k.too_short, k.too_long,
-        k.input_reports);
+        malformed, k.unknown_id, k.too_short, k.too_long, k.input_reports);
   }
-  if (k.out_queue_full > 0) {
+  if (k.out_queue_full > logged_.out_queue_full) {
     spdlog::warn(
         "hid: {} output reports were dropped: the device had not taken the previous "
         "ones (OUT queue of {} full)",
         k.out_queue_full, settings_->limits.out_queue);
   }
-  if (k.drain_limit > 0) {
+  if (k.drain_limit > logged_.drain_limit) {
     spdlog::warn("hid: {} ticks stopped draining after {} input reports", k.drain_limit, kMaxDrain);
   }
+  logged_ = k;
 }
 
 std::string HidDevice::describe(const DeviceFault& fault) const {

@@ -77,7 +77,7 @@ class HidDevice final : public Device {
   bool active_ = false;  // output enabled: the fault mask applies
   int queue_full_streak_ = 0;
   Counters c_;
-  std::uint64_t logged_out_queue_full_ = 0;
+  mutable HidCounters logged_;  // what log_counters() last reported: each event is logged once
 };
 
 }  // namespace hapticd::drivers::hid
