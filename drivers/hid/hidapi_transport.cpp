@@ -166,7 +166,6 @@ class HidapiTransport final : public HidTransport {
   void fail(const std::string& what, int code);
 
   const Api& api_;
-  Backend backend_;
   hid_device* dev_;
   std::string path_, description_;
   std::optional<std::vector<std::uint8_t>> descriptor_;
@@ -192,7 +191,6 @@ HidapiTransport::HidapiTransport(const Api& a, Backend b, hid_device* dev, Devic
                                  std::optional<std::vector<std::uint8_t>> descriptor,
                                  const HidSettings& s)
     : api_(a),
-      backend_(b),
       dev_(dev),
       path_(l.path),
       descriptor_(std::move(descriptor)),

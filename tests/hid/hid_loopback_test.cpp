@@ -46,9 +46,10 @@ RunResult run(const config::Config& cfg, double seconds) {
     runner.wait_idle();
     out.peer_on_after = pair.peer->output_on();
     out.peer_force_after = pair.peer->applied_force();
+    // Before the device goes: the sim driver's peer is a view of its device.
+    out.operator_work = pair.peer->plant().operator_work_j();
     device.close();
   }
-  out.operator_work = pair.peer->plant().operator_work_j();
   return out;
 }
 
