@@ -294,10 +294,16 @@ std::int64_t null_value(const Slot& s) noexcept {
   if (s.bit_size == 0 || s.bit_size > 32) return 0;
   const std::int64_t all_ones =
       s.bit_size == 32 ? 0xFFFFFFFFll : (std::int64_t{1} << s.bit_size) - 1;
-  const std::int64_t as_read =
-      field_value(static_cast<std::uint32_t>(all_ones), s.bit_size, s.is_signed);
-  if (as_read < s.logical_min || as_read > s.logical_max) return all_ones;
-  return s.logical_min > 0 ? 0 : all_ones;
+  const auto outside = [&](std::int64_t bits) {
+    const std::int64_t v = field_value(static_cast<std::uint32_t>(bits), s.bit_size, s.is_signed);
+    return v < s.logical_min || v > s.logical_max;
+  };
+  if (outside(all_ones)) return all_ones;
+  // All ones reads inside (-1 of a signed range): an end of the field's width may not.
+  const std::int64_t lowest = s.is_signed ? std::int64_t{1} << (s.bit_size - 1) : 0;
+  if (outside(lowest)) return lowest;
+  if (s.is_signed && outside(lowest - 1)) return lowest - 1;
+  return all_ones;  // every value of the width is in range: there is no null
 }
 
 }  // namespace hapticd::drivers::hid

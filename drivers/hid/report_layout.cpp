@@ -60,17 +60,22 @@ void require_integer(const std::string& where, const FieldSpec& f, bool is_unsig
   }
 }
 
+// A value the field holds exactly. A float must be one too: 0.1 would be sent as
+// 0.100000001, which the device does not compare equal to the configured on value.
 bool raw_fits(double raw, FieldType t) {
   return std::isfinite(raw) && raw >= raw_min(t) && raw <= raw_max(t) &&
-         (!is_integer(t) || raw == std::floor(raw));
+         (is_integer(t) ? raw == std::floor(raw)
+                        : static_cast<double>(static_cast<float>(raw)) == raw);
 }
 
 void check_force(const OutputLayout& o, double max_force, std::vector<std::string>& errors) {
   const FieldSpec& f = o.force;
-  if (!std::isfinite(o.full_scale) || o.full_scale <= 0.0 || o.full_scale > raw_max(f.type)) {
+  // A raw value itself: a fractional limit of an integer field rounds past it (127.5 -> 128).
+  if (!raw_fits(o.full_scale, f.type) || o.full_scale <= 0.0) {
     errors.push_back("output.force.full_scale: must be > 0 and fit the field's type " +
-                     std::string(to_string(f.type)) + " (at most " + num(raw_max(f.type)) +
-                     "), got " + num(o.full_scale));
+                     std::string(to_string(f.type)) + " (" +
+                     (is_integer(f.type) ? "whole counts, " : "") + "at most " +
+                     num(raw_max(f.type)) + "), got " + num(o.full_scale));
     return;
   }
   const double lo_raw = std::max(-o.full_scale, raw_min(f.type));

@@ -155,6 +155,23 @@ TEST(HidDescriptor, FieldsBeforeTheFirstReportIdAreRefusedInANumberedDescriptor)
   EXPECT_NE(parse_error(b.bytes()).find("before any Report ID"), std::string::npos);
 }
 
+// Found by fuzz/hid_codec_fuzzer.cpp: all ones reads -1, inside a signed range such as the
+// reference Magnitude's -10000..10000; an end of the width is outside it.
+TEST(HidDescriptor, NullValueReadsOutsideTheLogicalRangeWheneverAValueDoes) {
+  const auto read_null = [](std::uint32_t bits, std::int64_t min, std::int64_t max) {
+    const Slot s{true, 0, bits, min, max, min < 0};
+    std::vector<std::uint8_t> data(4, 0);
+    set_slot(data, s, null_value(s));
+    return get_slot(data, s);
+  };
+  EXPECT_EQ(read_null(16, 0, 32767), 65535);  // Duration: infinite
+  EXPECT_EQ(read_null(8, 1, 8), 255);         // Trigger Button: none
+  EXPECT_EQ(read_null(8, 1, 255), 0);
+  EXPECT_EQ(read_null(16, -10000, 10000), -32768);
+  EXPECT_EQ(read_null(8, -128, 126), 127);
+  EXPECT_EQ(read_null(8, -128, 127), -1);  // every value is in range: there is no null
+}
+
 TEST(HidDescriptor, BitsPackLittleEndianAndStayInsideTheBuffer) {
   std::vector<std::uint8_t> data(2, 0);
   put_bits(data, 3, 7, 0x55);

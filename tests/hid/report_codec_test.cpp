@@ -96,6 +96,28 @@ TEST(HidReportLayout, AForceScaleThatCannotReachMaxForceIsRefused) {
   EXPECT_TRUE(mentions(validate(l, 10.0), "full_scale: must be > 0 and fit the field's type i16"));
 }
 
+// Found by fuzz/hid_codec_fuzzer.cpp: 127.5 counts of an i16 were sent as 128, past the limit.
+TEST(HidReportLayout, AFractionalFullScaleOfAnIntegerForceIsRefused) {
+  ReportProfileLayout l = ffbeast_like();
+  l.output.full_scale = 10000.5;
+  EXPECT_TRUE(mentions(validate(l, 10.0),
+                       "full_scale: must be > 0 and fit the field's type i16 (whole counts"));
+}
+
+// Found by fuzz/hid_codec_fuzzer.cpp: an f32 value is sent as the nearest float, so 1e-5 never
+// reads back as the on value, and an off of 1e-300 went out as 0.0, the same as an on of 0.
+TEST(HidReportLayout, AnF32SwitchValueMustBeAFloat) {
+  ReportProfileLayout l = ffbeast_like();
+  l.output.enable.reset();
+  l.enable_feature = FeatureLayout{3, 4, {0, FieldType::kF32}, 1e-5, 0.0};
+  EXPECT_TRUE(mentions(validate(l, 10.0), "enable_feature: on/off values must be raw values"));
+  l.enable_feature->on = 0.0;
+  l.enable_feature->off = 1e-300;
+  EXPECT_TRUE(mentions(validate(l, 10.0), "enable_feature: on/off values must be raw values"));
+  l.enable_feature->off = 0.5;
+  EXPECT_TRUE(validate(l, 10.0).empty());
+}
+
 TEST(HidReportLayout, CountersAndStatusMustBeIntegersAndIdsConsistent) {
   ReportProfileLayout l = ffbeast_like();
   l.input.sequence->type = FieldType::kI8;
