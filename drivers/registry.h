@@ -50,6 +50,10 @@ struct DriverEntry {
   // "driver_notes" in --json (e.g. the bus load a CAN configuration needs; a line starting
   // "warning:" is one). Null for a driver with nothing to add.
   std::vector<std::string> (*notes)(const config::Config& cfg) = nullptr;
+  // Not RT-safe. What of this driver's kind is attached, each with the configuration keys
+  // that select it (`hapticd devices`); null for a driver with nothing to list (sim). A
+  // system that cannot be asked is said so in the text, not thrown.
+  std::string (*list_devices)() = nullptr;
 };
 
 // Every driver of this build, the sim first.

@@ -19,9 +19,11 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${HAPTICD_FUZZ_BUILD:-build-fuzz}
-targets=(config_gate set_override log_reader log_reader_crc can_codec gpio_decoder control_socket)
+targets=(config_gate set_override log_reader log_reader_crc can_codec gpio_decoder control_socket
+         hid_codec)
 declare -A dict=([config_gate]=config [set_override]=set_override [log_reader]=log
-                 [log_reader_crc]=log [can_codec]=can [gpio_decoder]=gpio [control_socket]=control)
+                 [log_reader_crc]=log [can_codec]=can [gpio_decoder]=gpio [control_socket]=control
+                 [hid_codec]=hid)
 
 # clang, libFuzzer's runtime and llvm-symbolizer (for readable stacks): Debian 12 packages.
 install_missing() {

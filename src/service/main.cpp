@@ -11,6 +11,7 @@
 #include "config/config_loader.h"
 #include "drivers/device.h"
 #include "service/check_command.h"
+#include "service/devices_command.h"
 #include "service/exit_codes.h"
 #include "service/export_command.h"
 #include "service/peer_command.h"
@@ -151,6 +152,11 @@ int main(int argc, char** argv) {
                      "force_replayed (and force_other)");
   replay->add_flag("--json", replay_opts.json, "Print exactly one JSON object");
 
+  CLI::App* devices = app.add_subcommand(
+      "devices",
+      "List the devices the drivers find attached (HID through hidapi's hidraw and libusb "
+      "backends), each with the configuration keys that select it.");
+
   // Events (gate verdict, faults, lifecycle) go to stderr; stdout carries only the results a
   // script reads (the check table or JSON, the run summary).
   spdlog::set_default_logger(spdlog::stderr_color_mt("hapticd"));
@@ -181,6 +187,7 @@ int main(int argc, char** argv) {
     }
     if (*exp) return hapticd::service::export_command(export_log, export_out);
     if (*replay) return hapticd::service::replay_command(replay_opts);
+    if (*devices) return hapticd::service::devices_command();
   } catch (const hapticd::config::ConfigError& e) {
     for (const std::string& m : e.messages()) std::cerr << "hapticd: " << m << "\n";
     return hapticd::kExitUsage;

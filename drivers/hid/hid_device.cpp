@@ -1,0 +1,213 @@
+#include "drivers/hid/hid_device.h"
+
+#include <spdlog/spdlog.h>
+#include <time.h>
+
+#include <cerrno>
+#include <cstring>
+
+namespace hapticd::drivers::hid {
+namespace {
+
+std::int64_t monotonic_ns() noexcept {
+  timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+}
+
+}  // namespace
+
+HidDevice::HidDevice(std::shared_ptr<const HidSettings> settings,
+                     std::function<std::unique_ptr<HidTransport>()> open, double sample_period_s)
+    : settings_(std::move(settings)), open_(std::move(open)), period_s_(sample_period_s) {}
+
+HidDevice::~HidDevice() { close(); }
+
+DeviceInfo HidDevice::on_configure() {
+  for (auto* c :
+       {&c_.input_reports, &c_.superseded, &c_.state_reports, &c_.unknown_id, &c_.too_short,
+        &c_.too_long, &c_.output_reports, &c_.out_queue_full, &c_.drain_limit}) {
+    c->store(0);
+  }
+  logged_ = {};
+  decoded_ = {};
+  active_ = false;
+  transport_ = open_();
+  profile_ = settings_->profile == Profile::kReport ? make_report_profile(*settings_)
+                                                    : make_pid_profile(*settings_, period_s_);
+  profile_->configure(*transport_);
+  transport_->set_safe_reports(profile_->safe_reports());
+  emergency_.store(transport_.get());
+  return {transport_->describe() + ", " + profile_->summary(),
+          declared_delay_samples(settings_->poll_interval_ms, period_s_),
+          profile_->sequence_modulus()};
+}
+
+// Whatever the device said before output was enabled (a status from before, samples of the
+// plant at rest) is not this run's: drop it, so the first tick judges only what follows.
+void HidDevice::drain_stale() noexcept {
+  for (int i = 0; i < kMaxDrain; ++i) {
+    if (transport_->read(rx_).status != TransportIo::kOk) break;
+  }
+  decoded_.status = 0;
+}
+
+void HidDevice::on_enable() {
+  drain_stale();
+  queue_full_streak_ = 0;
+  profile_->enable(*transport_);
+  transport_->set_safe_reports(profile_->safe_reports());  // now naming the effect it made
+  active_ = true;
+}
+
+void HidDevice::on_disable() noexcept {
+  active_ = false;
+  if (!transport_) return;
+  transport_->write_safe();
+  profile_->disable(*transport_);
+  transport_->flush(std::chrono::milliseconds(static_cast<long>(settings_->limits.timeout_ms)));
+  log_counters();
+}
+
+void HidDevice::on_close() noexcept {
+  active_ = false;
+  emergency_.store(nullptr);
+  if (transport_) log_counters();
+  profile_.reset();
+  transport_.reset();
+}
+
+void HidDevice::emergency_stop() noexcept {
+  if (HidTransport* t = emergency_.load()) t->emergency();
+}
+
+IoStatus HidDevice::on_read(PositionSample& out) noexcept {
+  bool sample = false;
+  int i = 0;
+  for (; i < kMaxDrain; ++i) {
+    const IoResult r = transport_->read(rx_);
+    if (r.status == TransportIo::kEmpty) break;
+    if (r.status == TransportIo::kError) {
+      if (r.error == EMSGSIZE) {
+        bump(c_.too_long);
+        continue;
+      }
+      set_fault_code(static_cast<std::uint32_t>(r.error));
+      return IoStatus::kTransportFault;
+    }
+    switch (profile_->decode({rx_.data(), r.size}, decoded_)) {
+      case InputKind::kPosition:
+        if (sample) bump(c_.superseded);
+        sample = true;
+        bump(c_.input_reports);
+        break;
+      case InputKind::kState:
+        bump(c_.state_reports);
+        break;
+      case InputKind::kOther:
+        bump(c_.unknown_id);
+        break;
+      case InputKind::kTooShort:
+        bump(c_.too_short);
+        break;
+    }
+  }
+  if (i == kMaxDrain) bump(c_.drain_limit);
+  out.status = decoded_.status;
+  if (active_ && profile_->fault_bits(decoded_.status) != 0) {
+    set_fault_code(decoded_.status);
+    return IoStatus::kDeviceFault;
+  }
+  if (!sample) return IoStatus::kNoNewData;
+  out.position = decoded_.position;
+  out.time_ns = monotonic_ns();  // hidapi gives no kernel time stamp: when it was read
+  out.flags = kSampleHasTime;
+  if (decoded_.has_sequence) {
+    out.sequence = decoded_.sequence;
+    out.flags |= kSampleHasSequence;
+  }
+  if (decoded_.has_velocity) {
+    out.velocity = decoded_.velocity;
+    out.flags |= kSampleHasVelocity;
+  }
+  return IoStatus::kOk;
+}
+
+IoStatus HidDevice::send(std::span<const std::uint8_t> report) noexcept {
+  const IoResult r = transport_->write(report);
+  if (r.status == TransportIo::kOk) {
+    queue_full_streak_ = 0;
+    bump(c_.output_reports);
+    return IoStatus::kOk;
+  }
+  if (r.status == TransportIo::kError) {
+    set_fault_code(static_cast<std::uint32_t>(r.error));
+    return IoStatus::kTransportFault;
+  }
+  bump(c_.out_queue_full);
+  if (++queue_full_streak_ >= settings_->limits.out_queue_full_fault) {
+    set_fault_code(ENOBUFS);
+    return IoStatus::kTransportFault;
+  }
+  return IoStatus::kOk;  // this tick's command is lost; the next one follows
+}
+
+IoStatus HidDevice::on_write(double force) noexcept {
+  if (state() == DeviceState::kFaulted) {  // after a fault nothing but zero, ahead of the queue
+    transport_->write_safe();
+    return IoStatus::kOk;
+  }
+  if (const auto extra = profile_->before_force(); !extra.empty()) {
+    if (const IoStatus s = send(extra); s != IoStatus::kOk) return s;
+  }
+  return send(profile_->force_report(force));
+}
+
+HidCounters HidDevice::counters() const noexcept {
+  return {c_.input_reports.load(),  c_.superseded.load(),     c_.state_reports.load(),
+          c_.unknown_id.load(),     c_.too_short.load(),      c_.too_long.load(),
+          c_.output_reports.load(), c_.out_queue_full.load(), c_.drain_limit.load()};
+}
+
+void HidDevice::log_counters() const {
+  const HidCounters k = counters();
+  const std::uint64_t malformed = k.unknown_id + k.too_short + k.too_long;
+  if (malformed > logged_.unknown_id + logged_.too_short + logged_.too_long) {
+    spdlog::warn(
+        "hid: {} input reports were malformed: {} of an unknown id, {} too short, {} too "
+        "long (of {} samples)",
+        malformed, k.unknown_id, k.too_short, k.too_long, k.input_reports);
+  }
+  if (k.out_queue_full > logged_.out_queue_full) {
+    spdlog::warn(
+        "hid: {} output reports were dropped: the device had not taken the previous "
+        "ones (OUT queue of {} full)",
+        k.out_queue_full, settings_->limits.out_queue);
+  }
+  if (k.drain_limit > logged_.drain_limit) {
+    spdlog::warn("hid: {} ticks stopped draining after {} input reports", k.drain_limit, kMaxDrain);
+  }
+  logged_ = k;
+}
+
+std::string HidDevice::describe(const DeviceFault& fault) const {
+  if (fault.fault_class == FaultClass::kDevice) {
+    return "hid: the device reported a fault: " +
+           (profile_ ? profile_->describe_status(fault.code) : std::to_string(fault.code));
+  }
+  const int e = static_cast<int>(fault.code);
+  std::string s;
+  if (e == ENOBUFS) {
+    s = "hid: the device took no output report for " +
+        std::to_string(settings_->limits.out_queue_full_fault) + " ticks in a row (OUT queue full)";
+  } else if (e == ENODEV || e == EIO || e == ESHUTDOWN || e == EPROTO) {
+    // EPROTO: hidraw's write while usbhid tears the unplugged device down.
+    s = std::string("hid: the device is gone (") + std::strerror(e) + "): unplugged or reset?";
+  } else {
+    s = std::string("hid: the transport failed: ") + std::strerror(e);
+  }
+  const std::string detail = transport_ ? transport_->last_error() : "";
+  return detail.empty() ? s : s + " (" + detail + ")";
+}
+
+}  // namespace hapticd::drivers::hid

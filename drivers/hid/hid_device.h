@@ -1,0 +1,83 @@
+// The HID driver's Device: the lifecycle over a HidTransport (hidapi or the loopback
+// socketpair) and a HidProfile (report or pid). Each tick it drains every pending input report
+// and keeps the newest sample; a report's status bits under the fault mask are a device
+// fault; a transport error, a device that is gone, or an output queue full for
+// limits.out_queue_full_fault ticks in a row is a transport fault. Malformed reports (too
+// short, an unknown id, too long) are counted, readable off the RT thread and logged when
+// output is disabled, never a crash and never logged from the tick.
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <functional>
+#include <memory>
+
+#include "drivers/device.h"
+#include "drivers/hid/hid_profile.h"
+#include "drivers/hid/hid_settings.h"
+#include "drivers/hid/hid_transport.h"
+
+namespace hapticd::drivers::hid {
+
+// A snapshot of the driver's counters (since configure).
+struct HidCounters {
+  std::uint64_t input_reports = 0;   // samples received
+  std::uint64_t superseded = 0;      // samples drained in the same tick as a newer one
+  std::uint64_t state_reports = 0;   // status-only reports (PID State)
+  std::uint64_t unknown_id = 0;      // reports of an id the profile does not use
+  std::uint64_t too_short = 0;       // our id, shorter than its layout
+  std::uint64_t too_long = 0;        // longer than any report can be
+  std::uint64_t output_reports = 0;  // handed to the transport
+  std::uint64_t out_queue_full = 0;  // ticks whose report was dropped: the queue was full
+  std::uint64_t drain_limit = 0;     // ticks that stopped draining at the per-tick bound
+};
+
+class HidDevice final : public Device {
+ public:
+  // Not RT-safe. `open` opens the transport (called by configure, again after a close).
+  HidDevice(std::shared_ptr<const HidSettings> settings,
+            std::function<std::unique_ptr<HidTransport>()> open, double sample_period_s);
+  ~HidDevice() override;
+
+  std::string_view driver_name() const noexcept override { return "hid"; }
+  void emergency_stop() noexcept override;
+  // Any thread.
+  HidCounters counters() const noexcept;
+
+ protected:
+  DeviceInfo on_configure() override;
+  void on_enable() override;
+  void on_disable() noexcept override;
+  void on_close() noexcept override;
+  IoStatus on_read(PositionSample& out) noexcept override;
+  IoStatus on_write(double force) noexcept override;
+  std::string describe(const DeviceFault& fault) const override;
+
+ private:
+  static constexpr int kMaxDrain = 256;  // reports per tick: a flooding device cannot stall it
+  struct Counters {
+    std::atomic<std::uint64_t> input_reports{0}, superseded{0}, state_reports{0}, unknown_id{0},
+        too_short{0}, too_long{0}, output_reports{0}, out_queue_full{0}, drain_limit{0};
+  };
+  static void bump(std::atomic<std::uint64_t>& c) noexcept {
+    c.store(c.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);  // one writer
+  }
+  IoStatus send(std::span<const std::uint8_t> report) noexcept;
+  void log_counters() const;
+  void drain_stale() noexcept;
+
+  std::shared_ptr<const HidSettings> settings_;
+  std::function<std::unique_ptr<HidTransport>()> open_;
+  double period_s_;
+  std::unique_ptr<HidTransport> transport_;
+  std::unique_ptr<HidProfile> profile_;
+  std::atomic<HidTransport*> emergency_{nullptr};
+  std::array<std::uint8_t, kMaxReportData + 2> rx_{};
+  Decoded decoded_;
+  bool active_ = false;  // output enabled: the fault mask applies
+  int queue_full_streak_ = 0;
+  Counters c_;
+  mutable HidCounters logged_;  // what log_counters() last reported: each event is logged once
+};
+
+}  // namespace hapticd::drivers::hid

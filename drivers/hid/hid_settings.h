@@ -1,0 +1,64 @@
+// The HID driver's settings, the section device.hid (read and validated by hid_config.cpp;
+// every key is documented in config/hid-report.yaml and config/hid-pid.yaml). Plain values.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "config/config.h"
+#include "drivers/hid/pid_protocol.h"
+#include "drivers/hid/report_layout.h"
+
+namespace hapticd::drivers::hid {
+
+enum class Backend : std::uint8_t { kHidraw, kLibusb };
+enum class Profile : std::uint8_t { kReport, kPid };
+const char* to_string(Backend b) noexcept;
+const char* to_string(Profile p) noexcept;
+
+// Which attached device: every key given must match; `path` alone overrides the rest.
+struct Selector {
+  std::optional<std::uint16_t> vendor_id, product_id;
+  std::string serial;                              // empty: any
+  std::optional<int> interface;                    // USB interface number
+  std::optional<std::uint16_t> usage_page, usage;  // the top-level collection's
+  std::string path;  // a hidapi path (/dev/hidrawN, or bus-port:cfg.intf)
+};
+
+struct PidSettings {
+  std::uint32_t position_usage = kGenericDesktopX;
+  double position_min = 0.0;         // SI position at the axis' logical minimum
+  double position_max = 0.0;         // ... and at its logical maximum
+  std::uint32_t sequence_usage = 0;  // an input usage beside the axis read as a counter; 0: none
+  double force_full_scale = 0.0;     // N (N m) at the Magnitude's logical maximum
+  double gain = 1.0;                 // Device Gain, a fraction of its logical maximum, (0, 1]
+  double direction_deg = 90.0;       // Set Effect Direction: where a positive magnitude pushes
+  double effect_duration_ms = 0.0;   // 0: infinite; else the effect stops unless restarted
+  std::uint32_t fault_mask = kPidDefaultFaultMask;  // PidStatus bits that fault the loop
+};
+
+struct Limits {
+  int out_queue = 8;              // output reports queued between the RT thread and the device
+  int out_queue_full_fault = 10;  // consecutive ticks with that queue full that fault the loop
+  double timeout_ms = 1000.0;     // answers to feature and descriptor requests
+};
+
+struct HidSettings final : config::DriverSettings {
+  Selector select;
+  Backend backend = Backend::kHidraw;
+  Profile profile = Profile::kReport;
+  double poll_interval_ms = 1.0;  // the interrupt endpoints' polling interval (bInterval)
+  Limits limits;
+  ReportProfileLayout report;  // profile report
+  PidSettings pid;             // profile pid
+  int writer_priority = 0;     // SCHED_FIFO of the output thread (loop.rt_priority - 1)
+};
+
+// Whole samples between write() and the force acting, as the gate analyses them: a command
+// waits up to one polling interval to go out and its answer up to one to come back, so the
+// answer to the command of tick k is read at tick k + ceil(2 P / T), one tick later than an
+// in-process device would give it. 1 at 1 kHz with bInterval 1 ms (DESIGN.md §6).
+int declared_delay_samples(double poll_interval_ms, double sample_period_s) noexcept;
+
+}  // namespace hapticd::drivers::hid

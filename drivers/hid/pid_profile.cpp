@@ -1,0 +1,235 @@
+// The `pid` profile: one constant-force effect on the HID PID page (pid_protocol.h), its
+// reports found in the device's report descriptor.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "drivers/device.h"
+#include "drivers/hid/hid_profile.h"
+
+namespace hapticd::drivers::hid {
+namespace {
+
+class PidProfile final : public HidProfile {
+ public:
+  PidProfile(const HidSettings& s, double period_s)
+      : s_(s.pid), timeout_(static_cast<long>(s.limits.timeout_ms)) {
+    if (s_.effect_duration_ms > 0.0) {
+      // Restarted every half duration: a missed restart or two still keeps it playing.
+      refresh_ticks_ = std::max<std::uint64_t>(
+          1, static_cast<std::uint64_t>(s_.effect_duration_ms / 2e3 / period_s));
+    }
+  }
+
+  void configure(HidTransport& t) override {
+    const std::vector<std::uint8_t> bytes = t.report_descriptor();
+    const DescriptorParse p = parse_report_descriptor(bytes);
+    if (!p.descriptor) throw DeviceError("hid: the device's report descriptor: " + p.error);
+    PidFind f = find_pid_layout(*p.descriptor, s_.position_usage, s_.sequence_usage);
+    if (!f.layout) throw DeviceError("hid: this device cannot run the pid profile: " + f.error);
+    l_ = *f.layout;
+    prepare();
+    send_now(t, stop_all_, "Device Control (stop all effects)", timeout_);
+    send_now(t, disable_, "Device Control (disable actuators)", timeout_);
+  }
+
+  std::string summary() const override {
+    char buf[160];
+    std::snprintf(
+        buf, sizeof buf, "pid profile, Set Constant Force report %u, position in input report %u%s",
+        l_.set_constant.id, l_.position_report.id, l_.state.present ? ", PID State report" : "");
+    return buf;
+  }
+
+  std::uint64_t sequence_modulus() const override {
+    return l_.sequence.present && !l_.sequence.is_signed ? std::uint64_t{1} << l_.sequence.bit_size
+                                                         : 0;
+  }
+
+  void enable(HidTransport& t) override {
+    std::vector<std::uint8_t> create = make_report(l_.create_effect, l_.numbered);
+    choose(data(create, l_.create_effect), l_.ce_constant);
+    t.set_feature(create);
+    block_ = load_block(t);
+    std::vector<std::uint8_t> effect = make_report(l_.set_effect, l_.numbered);
+    fill_set_effect(data(effect, l_.set_effect));
+    set_block_everywhere();
+    send_now(t, effect, "Set Effect", timeout_);
+    send_now(t, force_report(0.0), "Set Constant Force", timeout_);
+    if (l_.device_gain.present) {
+      std::vector<std::uint8_t> gain = make_report(l_.device_gain, l_.numbered);
+      set_slot(data(gain, l_.device_gain), l_.dg_gain,
+               std::llround(s_.gain * static_cast<double>(l_.dg_gain.logical_max)));
+      send_now(t, gain, "Device Gain", timeout_);
+    }
+    send_now(t, start_, "Effect Operation (start)", timeout_);
+    confirmed_ = false;
+    send_now(t, enable_, "Device Control (enable actuators)", timeout_);
+    ticks_ = 0;
+  }
+
+  void disable(HidTransport& t) noexcept override {
+    if (block_ == 0 || !l_.block_free.present) return;
+    std::vector<std::uint8_t> free = make_report(l_.block_free, l_.numbered);
+    set_slot(data(free, l_.block_free), l_.bf_block, block_);
+    try {
+      send_now(t, free, "Block Free", timeout_);
+    } catch (const std::exception&) {
+      // Effects are stopped and actuators off already; a device that is gone frees it anyway.
+    }
+    block_ = 0;
+  }
+
+  std::vector<std::vector<std::uint8_t>> safe_reports() const override {
+    std::vector<std::uint8_t> zero = constant_;
+    set_slot(data(zero, l_.set_constant), l_.sc_magnitude, 0);
+    return {zero, stop_all_, disable_};
+  }
+
+  InputKind decode(std::span<const std::uint8_t> report, Decoded& d) noexcept override {
+    if (is_report(report, l_.position_report, l_.numbered)) {
+      const auto in = data_of(report, l_.position_report, l_.numbered);
+      const Slot& p = l_.position;
+      const double raw = static_cast<double>(get_slot(in, p));
+      d.position = s_.position_min + (raw - static_cast<double>(p.logical_min)) * position_scale_;
+      d.has_sequence = l_.sequence.present;
+      if (d.has_sequence) d.sequence = static_cast<std::uint32_t>(get_slot(in, l_.sequence));
+      return InputKind::kPosition;
+    }
+    if (l_.state.present && is_report(report, l_.state, l_.numbered)) {
+      d.status = pid_status(data_of(report, l_.state, l_.numbered), l_);
+      confirmed_ = confirmed_ || (d.status & kPidActuatorsDisabled) == 0;
+      return InputKind::kState;
+    }
+    const bool ours =
+        !report.empty() && l_.numbered &&
+        (report[0] == l_.position_report.id || (l_.state.present && report[0] == l_.state.id));
+    return ours ? InputKind::kTooShort : InputKind::kOther;
+  }
+
+  // "Actuators disabled" counts only once the device has reported them enabled: a state
+  // report sent before it handled the enable (still on its way at the first tick) is history.
+  std::uint32_t fault_bits(std::uint32_t status) const noexcept override {
+    return status & s_.fault_mask & (confirmed_ ? ~0u : ~std::uint32_t{kPidActuatorsDisabled});
+  }
+
+  std::span<const std::uint8_t> before_force() noexcept override {
+    if (refresh_ticks_ == 0 || ++ticks_ % refresh_ticks_ != 0) return {};
+    return start_;  // restarts the finite effect before it runs out
+  }
+
+  std::span<const std::uint8_t> force_report(double force) noexcept override {
+    const Slot& m = l_.sc_magnitude;
+    const double raw =
+        std::nearbyint(force / s_.force_full_scale * static_cast<double>(m.logical_max));
+    const double clamped =
+        std::clamp(raw, static_cast<double>(m.logical_min), static_cast<double>(m.logical_max));
+    set_slot(data(constant_, l_.set_constant), m, static_cast<std::int64_t>(clamped));
+    return constant_;
+  }
+
+  std::string describe_status(std::uint32_t status) const override {
+    static const char* const kNames[] = {"paused",
+                                         "actuators disabled",
+                                         "safety switch off",
+                                         "actuator override",
+                                         "actuator power off",
+                                         "effect not playing"};
+    std::string s;
+    for (unsigned i = 0; i < 6; ++i) {
+      if (status & (1u << i)) s += (s.empty() ? "" : ", ") + std::string(kNames[i]);
+    }
+    char buf[64];
+    std::snprintf(buf, sizeof buf, " (PID State bits 0x%x, fault mask 0x%x)", status,
+                  s_.fault_mask);
+    return "the device reports " + (s.empty() ? std::string("nothing wrong") : s) + buf;
+  }
+
+ private:
+  std::span<std::uint8_t> data(std::vector<std::uint8_t>& r, const ReportRef& ref) const {
+    return data_of(std::span<std::uint8_t>(r), ref, l_.numbered);
+  }
+
+  void prepare() {
+    const Slot& p = l_.position;
+    position_scale_ = (s_.position_max - s_.position_min) /
+                      static_cast<double>(std::max<std::int64_t>(1, p.logical_max - p.logical_min));
+    constant_ = make_report(l_.set_constant, l_.numbered);
+    stop_all_ = make_report(l_.device_control, l_.numbered);
+    choose(data(stop_all_, l_.device_control), l_.dc_stop_all);
+    disable_ = make_report(l_.device_control, l_.numbered);
+    choose(data(disable_, l_.device_control), l_.dc_disable);
+    enable_ = make_report(l_.device_control, l_.numbered);
+    choose(data(enable_, l_.device_control), l_.dc_enable);
+    start_ = make_report(l_.effect_operation, l_.numbered);
+    choose(data(start_, l_.effect_operation), l_.eo_start);
+    set_slot(data(start_, l_.effect_operation), l_.eo_loop_count, 1);
+  }
+
+  // Block Load, read back after Create New Effect: the index the device gave the effect.
+  std::int64_t load_block(HidTransport& t) {
+    const std::vector<std::uint8_t> r = t.get_feature(l_.block_load.id, l_.block_load.wire_size());
+    if (r.size() < l_.block_load.wire_size() || r[0] != l_.block_load.id) {
+      throw DeviceError("hid: Block Load: the device answered " + std::to_string(r.size()) +
+                        " bytes with report id " + std::to_string(r.empty() ? 0 : r[0]) +
+                        ", not feature report " + std::to_string(l_.block_load.id));
+    }
+    const auto in = data_of(std::span<const std::uint8_t>(r), l_.block_load, l_.numbered);
+    const std::int64_t block = get_slot(in, l_.bl_block);
+    if (chosen(in, l_.bl_success) && block >= std::max<std::int64_t>(1, l_.bl_block.logical_min) &&
+        block <= l_.bl_block.logical_max) {
+      return block;
+    }
+    std::string why =
+        chosen(in, l_.bl_full)    ? "the device's effect memory is full"
+        : chosen(in, l_.bl_error) ? "the device reports a load error"
+        : chosen(in, l_.bl_success)
+            ? "success, but effect block index " + std::to_string(block) + " is outside its range"
+            : "status " + std::to_string(get_slot(in, l_.bl_success.slot)) +
+                  " is none of success, full, error";
+    if (l_.bl_ram_pool.present)
+      why += " (RAM pool available " + std::to_string(get_slot(in, l_.bl_ram_pool)) + ")";
+    throw DeviceError("hid: Block Load after Create New Effect: " + why);
+  }
+
+  void fill_set_effect(std::span<std::uint8_t> d) const {
+    set_slot(d, l_.se_block, block_);
+    choose(d, l_.se_constant);
+    const std::int64_t duration = s_.effect_duration_ms > 0.0 ? std::llround(s_.effect_duration_ms)
+                                                              : null_value(l_.se_duration);
+    set_slot(d, l_.se_duration, duration);  // null: infinite
+    set_slot(d, l_.se_gain, l_.se_gain.logical_max);
+    set_slot(d, l_.se_trigger_button, null_value(l_.se_trigger_button));
+    set_slot(d, l_.se_axis_x, 1);
+    set_slot(d, l_.se_direction_enable, 1);
+    // The Direction's logical range is one full turn (0..35999 hundredths of a degree,
+    // 0..255...): where a positive magnitude pushes, polar as DirectInput has it.
+    const Slot& dir = l_.se_direction;
+    if (dir.present) {
+      const double turn = static_cast<double>(dir.logical_max - dir.logical_min + 1);
+      set_slot(d, dir, dir.logical_min + std::llround(s_.direction_deg / 360.0 * turn));
+    }
+  }
+
+  void set_block_everywhere() {
+    set_slot(data(constant_, l_.set_constant), l_.sc_block, block_);
+    set_slot(data(start_, l_.effect_operation), l_.eo_block, block_);
+  }
+
+  PidSettings s_;
+  std::chrono::milliseconds timeout_;
+  PidLayout l_;
+  double position_scale_ = 0.0;
+  std::int64_t block_ = 0;
+  bool confirmed_ = false;  // a state report with the actuators enabled arrived since enable
+  std::uint64_t refresh_ticks_ = 0, ticks_ = 0;
+  std::vector<std::uint8_t> constant_, stop_all_, disable_, enable_, start_;
+};
+
+}  // namespace
+
+std::unique_ptr<HidProfile> make_pid_profile(const HidSettings& s, double sample_period_s) {
+  return std::make_unique<PidProfile>(s, sample_period_s);
+}
+
+}  // namespace hapticd::drivers::hid

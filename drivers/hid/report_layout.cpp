@@ -1,0 +1,267 @@
+#include "drivers/hid/report_layout.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace hapticd::drivers::hid {
+namespace {
+
+struct Named {
+  std::string where;
+  const FieldSpec* field;
+};
+
+std::string bytes_text(const FieldSpec& f) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "bytes %zu..%zu", f.byte, f.end() - 1);
+  return buf;
+}
+
+std::string num(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
+// Length, fit, overlap and scale of the fields of one report.
+void check_report(const std::string& report, std::size_t length, const std::vector<Named>& fields,
+                  std::vector<std::string>& errors) {
+  if (length == 0 || length > kMaxReportData) {
+    errors.push_back(report + ".length: must be 1.." + std::to_string(kMaxReportData) +
+                     " data bytes, got " + std::to_string(length));
+    return;
+  }
+  for (std::size_t i = 0; i < fields.size(); ++i) {
+    const FieldSpec& f = *fields[i].field;
+    if (f.end() > length) {
+      errors.push_back(fields[i].where + ": " + bytes_text(f) + " lie past the report's " +
+                       std::to_string(length) + " data bytes");
+    }
+    if (!std::isfinite(f.scale) || f.scale == 0.0 || !std::isfinite(f.offset)) {
+      errors.push_back(fields[i].where + ": scale must be finite and non-zero, offset finite");
+    }
+    for (std::size_t j = 0; j < i; ++j) {
+      const FieldSpec& g = *fields[j].field;
+      if (f.byte < g.end() && g.byte < f.end()) {
+        errors.push_back(fields[i].where + ": " + bytes_text(f) + " overlap " + fields[j].where +
+                         " (" + bytes_text(g) + ")");
+      }
+    }
+  }
+}
+
+void require_integer(const std::string& where, const FieldSpec& f, bool is_unsigned,
+                     std::vector<std::string>& errors) {
+  if (!is_integer(f.type) || (is_unsigned && counter_modulus(f.type) == 0)) {
+    errors.push_back(where + ": type must be " +
+                     (is_unsigned ? "an unsigned integer (u8, u16, u32)" : "an integer") +
+                     ", got " + std::string(to_string(f.type)));
+  }
+}
+
+// A value the field holds exactly. A float must be one too: 0.1 would be sent as
+// 0.100000001, which the device does not compare equal to the configured on value.
+bool raw_fits(double raw, FieldType t) {
+  return std::isfinite(raw) && raw >= raw_min(t) && raw <= raw_max(t) &&
+         (is_integer(t) ? raw == std::floor(raw)
+                        : static_cast<double>(static_cast<float>(raw)) == raw);
+}
+
+void check_force(const OutputLayout& o, double max_force, std::vector<std::string>& errors) {
+  const FieldSpec& f = o.force;
+  // A raw value itself: a fractional limit of an integer field rounds past it (127.5 -> 128).
+  if (!raw_fits(o.full_scale, f.type) || o.full_scale <= 0.0) {
+    errors.push_back("output.force.full_scale: must be > 0 and fit the field's type " +
+                     std::string(to_string(f.type)) + " (" +
+                     (is_integer(f.type) ? "whole counts, " : "") + "at most " +
+                     num(raw_max(f.type)) + "), got " + num(o.full_scale));
+    return;
+  }
+  const double lo_raw = std::max(-o.full_scale, raw_min(f.type));
+  const double a = lo_raw * f.scale + f.offset;
+  const double b = o.full_scale * f.scale + f.offset;
+  const double lo = std::min(a, b), hi = std::max(a, b);
+  if (lo > -max_force || hi < max_force) {
+    errors.push_back("output.force: counts " + num(lo_raw) + ".." + num(o.full_scale) + " x " +
+                     num(f.scale) + " N + " + num(f.offset) + " N reach only " + num(lo) + ".." +
+                     num(hi) + " N, which cannot represent device.max_force +-" + num(max_force) +
+                     " N");
+  }
+}
+
+void check_switch(const std::string& where, const FieldSpec& f, double on, double off, bool has_off,
+                  std::vector<std::string>& errors) {
+  if (!raw_fits(on, f.type) || (has_off && !raw_fits(off, f.type))) {
+    errors.push_back(where + ": on/off values must be raw values of type " +
+                     std::string(to_string(f.type)));
+  } else if (has_off && on == off) {
+    errors.push_back(where + ": on and off must differ");
+  }
+}
+
+void check_feature(const std::string& where, const FeatureLayout& fl, bool is_switch,
+                   std::vector<std::string>& errors) {
+  check_report(where, fl.length, {{where + ".field", &fl.field}}, errors);
+  check_switch(where, fl.field, fl.on, fl.off, is_switch, errors);
+}
+
+void check_input(const InputLayout& in, std::vector<std::string>& errors) {
+  std::vector<Named> fields{{"input.position", &in.position}};
+  if (in.sequence) {
+    fields.push_back({"input.sequence", &*in.sequence});
+    require_integer("input.sequence", *in.sequence, true, errors);
+  }
+  if (in.status) {
+    fields.push_back({"input.status", &*in.status});
+    require_integer("input.status", *in.status, false, errors);
+    const std::size_t bits = 8 * field_size(in.status->type);
+    if (bits < 32 && (in.fault_mask >> bits) != 0) {
+      errors.push_back("input.status.fault_mask: has bits beyond the field's " +
+                       std::to_string(bits));
+    }
+  }
+  if (in.velocity) fields.push_back({"input.velocity", &*in.velocity});
+  check_report("input", in.length, fields, errors);
+}
+
+}  // namespace
+
+std::vector<std::string> validate(const ReportProfileLayout& l, double max_force) {
+  std::vector<std::string> errors;
+  check_input(l.input, errors);
+  const OutputLayout& o = l.output;
+  std::vector<Named> out{{"output.force", &o.force}};
+  if (o.enable) {
+    out.push_back({"output.enable", &o.enable->field});
+    check_switch("output.enable", o.enable->field, o.enable->on, o.enable->off, true, errors);
+  }
+  if (o.keepalive) {
+    out.push_back({"output.keepalive", &*o.keepalive});
+    require_integer("output.keepalive", *o.keepalive, true, errors);
+  }
+  check_report("output", o.length, out, errors);
+  check_force(o, max_force, errors);
+  if (!o.enable && !l.enable_feature) {
+    errors.push_back(
+        "output: needs an enable field or an enable_feature report, so the "
+        "amplifier is off until the loop enables it");
+  }
+  std::vector<const FeatureLayout*> features;
+  const auto feature = [&](const std::optional<FeatureLayout>& f, const char* name, bool sw) {
+    if (!f) return;
+    check_feature(name, *f, sw, errors);
+    for (const FeatureLayout* g : features) {
+      if (g->report_id == f->report_id) {
+        errors.push_back(std::string(name) + ".report_id: " + std::to_string(f->report_id) +
+                         " is already another feature report's id");
+      }
+    }
+    features.push_back(&*f);
+  };
+  feature(l.enable_feature, "enable_feature", true);
+  feature(l.gain_feature, "gain_feature", false);
+  feature(l.watchdog_feature, "watchdog_feature", false);
+  const bool numbered = l.input.report_id != 0;
+  const auto same_numbering = [&](std::uint8_t id, const char* where) {
+    if ((id != 0) != numbered) {
+      errors.push_back(std::string(where) +
+                       ".report_id: a device numbers all its reports or none (input.report_id "
+                       "is " +
+                       std::to_string(l.input.report_id) + ", this is " + std::to_string(id) + ")");
+    }
+  };
+  same_numbering(o.report_id, "output");
+  for (const FeatureLayout* f : features) {
+    same_numbering(f->report_id, f == &*l.enable_feature ? "enable_feature"
+                                 : f == &*l.gain_feature ? "gain_feature"
+                                                         : "watchdog_feature");
+  }
+  return errors;
+}
+
+std::size_t input_report_size(const InputLayout& layout) noexcept {
+  return layout.length + (layout.report_id != 0 ? 1 : 0);
+}
+
+InputDecode decode_input(std::span<const std::uint8_t> report, const InputLayout& layout,
+                         InputValues& out) noexcept {
+  if (report.empty()) return InputDecode::kEmpty;
+  const bool numbered = layout.report_id != 0;
+  if (numbered && report[0] != layout.report_id) return InputDecode::kOtherReport;
+  const std::span<const std::uint8_t> data = numbered ? report.subspan(1) : report;
+  if (data.size() < layout.length) return InputDecode::kTooShort;
+  out.position = read_si(data.data(), layout.position);
+  if (layout.sequence) {
+    out.sequence = static_cast<std::uint32_t>(read_raw(
+        data.data() + layout.sequence->byte, layout.sequence->type, layout.sequence->endian));
+  }
+  if (layout.status) {
+    const double raw =
+        read_raw(data.data() + layout.status->byte, layout.status->type, layout.status->endian);
+    out.status = static_cast<std::uint32_t>(static_cast<std::int64_t>(raw));
+  }
+  if (layout.velocity) out.velocity = read_si(data.data(), *layout.velocity);
+  return InputDecode::kOk;
+}
+
+void encode_input(const InputValues& in, const InputLayout& layout,
+                  std::span<std::uint8_t> report) noexcept {
+  std::fill(report.begin(), report.end(), std::uint8_t{0});
+  std::uint8_t* data = report.data();
+  if (layout.report_id != 0) *data++ = layout.report_id;
+  write_si(data, layout.position, in.position);
+  if (layout.sequence) {
+    const double wrap = static_cast<double>(counter_modulus(layout.sequence->type));
+    write_raw(data + layout.sequence->byte, layout.sequence->type, layout.sequence->endian,
+              std::fmod(static_cast<double>(in.sequence), wrap));
+  }
+  if (layout.status) {
+    write_raw(data + layout.status->byte, layout.status->type, layout.status->endian,
+              static_cast<double>(in.status));
+  }
+  if (layout.velocity) write_si(data, *layout.velocity, in.velocity);
+}
+
+void encode_force(double force, const OutputLayout& layout,
+                  std::span<std::uint8_t> report) noexcept {
+  const double raw =
+      std::clamp(si_to_raw(force, layout.force), -layout.full_scale, layout.full_scale);
+  write_raw(report.data() + 1 + layout.force.byte, layout.force.type, layout.force.endian, raw);
+}
+
+bool decode_output(std::span<const std::uint8_t> report, const OutputLayout& layout,
+                   OutputValues& out) noexcept {
+  if (report.size() < wire_size(layout.length) || report[0] != layout.report_id) return false;
+  const std::uint8_t* data = report.data() + 1;
+  const double raw = read_raw(data + layout.force.byte, layout.force.type, layout.force.endian);
+  out.force = std::clamp(raw, -layout.full_scale, layout.full_scale) * layout.force.scale +
+              layout.force.offset;
+  out.enable = true;
+  if (layout.enable) {
+    const FieldSpec& e = layout.enable->field;
+    out.enable = read_raw(data + e.byte, e.type, e.endian) == layout.enable->on;
+  }
+  if (layout.keepalive) {
+    out.keepalive =
+        read_raw(data + layout.keepalive->byte, layout.keepalive->type, layout.keepalive->endian);
+  }
+  return true;
+}
+
+void encode_feature(double raw, const FeatureLayout& layout,
+                    std::span<std::uint8_t> report) noexcept {
+  std::fill(report.begin(), report.end(), std::uint8_t{0});
+  report[0] = layout.report_id;
+  write_raw(report.data() + 1 + layout.field.byte, layout.field.type, layout.field.endian, raw);
+}
+
+std::optional<double> decode_feature(std::span<const std::uint8_t> report,
+                                     const FeatureLayout& layout) noexcept {
+  if (report.size() < wire_size(layout.length) || report[0] != layout.report_id) {
+    return std::nullopt;
+  }
+  return read_raw(report.data() + 1 + layout.field.byte, layout.field.type, layout.field.endian);
+}
+
+}  // namespace hapticd::drivers::hid

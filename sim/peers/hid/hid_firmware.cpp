@@ -1,0 +1,80 @@
+#include "sim/peers/hid/hid_firmware.h"
+
+#include <stdexcept>
+
+#include "config/config_loader.h"
+#include "sim/replay_log.h"
+
+namespace hapticd::sim::hid {
+namespace {
+
+SimAxis make_axis(const config::Config& cfg) {
+  std::vector<double> replay;
+  if (cfg.device.sim.op.kind == config::OperatorSpec::Kind::kReplay) {
+    replay = load_replay_positions(cfg);
+  }
+  try {
+    return SimAxis(cfg.device, cfg.loop.sample_period_s(), std::move(replay));
+  } catch (const std::invalid_argument& e) {
+    throw config::ConfigError({cfg.locate("device.sim") + ": device.sim: " + e.what()});
+  }
+}
+
+}  // namespace
+
+HidFirmware::HidFirmware(const config::Config& cfg, int link_delay_samples)
+    : axis_(make_axis(cfg)),
+      fifo_(static_cast<std::size_t>(std::max(0, link_delay_samples)) + 1,
+            axis_.encoder_position()) {}
+
+void HidFirmware::set_output(bool on) noexcept {
+  axis_.set_output(on);
+  on_.store(on, std::memory_order_relaxed);
+  applied_.store(0.0, std::memory_order_relaxed);
+}
+
+void HidFirmware::lose_host() noexcept { set_output(false); }
+
+void HidFirmware::step(double force) noexcept {
+  axis_.hold_force(force);
+  applied_.store(axis_.held_force(), std::memory_order_relaxed);
+  axis_.step();
+  fifo_[fifo_head_] = axis_.encoder_position();  // the newest replaces the oldest
+  fifo_head_ = (fifo_head_ + 1) % fifo_.size();
+}
+
+bool HidFirmware::check_watchdog(std::chrono::steady_clock::time_point now) noexcept {
+  const double silent_ms = std::chrono::duration<double, std::milli>(now - last_heard_).count();
+  const double limit = watchdog_ms();
+  if (!output_on() || limit <= 0.0 || silent_ms <= limit) return false;
+  lose_host();
+  trips_.fetch_add(1);
+  return true;
+}
+
+std::uint32_t HidFirmware::next_sequence() noexcept {
+  // Fifty reports lost on the way: far beyond the one or two a late USB frame costs, so a test
+  // on a jittery machine can set safety.sequence_gap_fault between the two.
+  if (skip_sequence_.exchange(false)) sequence_ += kSkippedReports;
+  return sequence_++;
+}
+
+bool HidFirmware::inject(PeerFault fault) noexcept {
+  switch (fault) {
+    case PeerFault::kStopAnswering:
+      stop_answering_.store(true);
+      return true;
+    case PeerFault::kSkipSequence:
+      skip_sequence_.store(true);
+      return true;
+    case PeerFault::kDeviceFault:
+      device_fault_.store(true);
+      applied_.store(0.0);  // a faulted drive stops driving at once
+      return true;
+    case PeerFault::kTransportFault:
+      return false;
+  }
+  return false;
+}
+
+}  // namespace hapticd::sim::hid

@@ -1,0 +1,108 @@
+// The simulated HID device's firmware: the plant (a SimAxis) behind a USB HID interface that
+// speaks either profile of the HID driver, with the driver's own pure codecs
+// (drivers/hid/report_layout.h, pid_protocol.h). Like firmware it steps the plant when the
+// force command arrives (the output report; for PID, Set Constant Force) and answers with an
+// input report; it answers the enable with its state at rest, without a step. The transport is
+// not its business: SocketHidPeer carries it over the loopback socketpair, HidgPeer over a USB
+// HID gadget's /dev/hidgN.
+//
+// A loopback peer also stands in for the USB link's latency: with link_delay_samples d it
+// answers with the position measured d steps earlier, so a loopback run is the loop the gate
+// analysed with the driver's declared delay (and follows a sim run with wall.delay_samples d).
+// On a real USB gadget the link itself is the delay and d is 0.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "config/config.h"
+#include "drivers/hid/hid_settings.h"
+#include "sim/peers/loopback_peer.h"
+#include "sim/sim_axis.h"
+
+namespace hapticd::sim::hid {
+
+class HidFirmware {
+ public:
+  // How many sequence numbers an injected kSkipSequence skips.
+  static constexpr std::uint32_t kSkippedReports = 50;
+
+  // Sends one input report to the host (report id first when numbered).
+  using Send = std::function<void(std::span<const std::uint8_t>)>;
+
+  virtual ~HidFirmware() = default;
+
+  // What the device declares itself to be.
+  virtual const std::vector<std::uint8_t>& descriptor() const = 0;
+  // Peer thread. An output report from the host (id first).
+  virtual void on_output(std::span<const std::uint8_t> report, const Send& send) = 0;
+  // Peer thread. A feature report set by the host; 0 or the errno the host sees (EPIPE: a
+  // stall, for a report the device does not have).
+  virtual int on_set_feature(std::span<const std::uint8_t> report, const Send& send) = 0;
+  // Peer thread. Feature report `id` as the device answers it (id first), or an errno.
+  virtual int on_get_feature(std::uint8_t id, std::vector<std::uint8_t>& out) = 0;
+  // Peer thread. How long the firmware keeps a force without hearing from the host (its
+  // watchdog), in ms; 0: forever.
+  virtual double watchdog_ms() const noexcept = 0;
+
+  // Peer thread. The host is gone (transport lost, watchdog expired): zero force, output off.
+  void lose_host() noexcept;
+  // Any thread: what the person feels at once when the device vanishes (the peer thread
+  // calls lose_host() when it next runs).
+  void vanish() noexcept {
+    on_.store(false);
+    applied_.store(0.0);
+  }
+  // Any thread.
+  double applied_force() const noexcept { return applied_.load(std::memory_order_relaxed); }
+  bool output_on() const noexcept { return on_.load(std::memory_order_relaxed); }
+  const Plant& plant() const noexcept { return axis_.plant(); }
+  // Any thread. kTransportFault is the transport's to produce (returns false here).
+  virtual bool inject(PeerFault fault) noexcept;
+  // Peer thread, for peers on a real link (HidgPeer, UhidPeer): the host was heard at `now`;
+  // and the firmware's watchdog, which drops the output when the host has been silent longer
+  // than watchdog_ms() while it was on. True when it tripped just now.
+  void heard_host(std::chrono::steady_clock::time_point now) noexcept { last_heard_ = now; }
+  bool check_watchdog(std::chrono::steady_clock::time_point now) noexcept;
+  std::uint64_t watchdog_trips() const noexcept { return trips_.load(); }
+  // Input reports not sent because the host was not taking them (HidgPeer counts).
+  std::uint64_t answers_dropped() const noexcept { return dropped_.load(); }
+  void count_dropped() noexcept { dropped_.fetch_add(1); }
+
+ protected:
+  HidFirmware(const config::Config& cfg, int link_delay_samples);
+  // The amplifier; switching drops the held force to zero.
+  void set_output(bool on) noexcept;
+  // Holds `force` (zero while off) and advances the plant one period.
+  void step(double force) noexcept;
+  // The position the device reports: measured link_delay steps ago.
+  double measured_position() const noexcept { return fifo_[fifo_head_]; }
+  double velocity() const noexcept { return axis_.plant().velocity(); }
+  // Sequence number of the next answer (skips when injected).
+  std::uint32_t next_sequence() noexcept;
+  bool answering() const noexcept { return !stop_answering_.load(std::memory_order_relaxed); }
+  bool device_fault() const noexcept { return device_fault_.load(std::memory_order_relaxed); }
+
+ private:
+  SimAxis axis_;
+  std::vector<double> fifo_;  // the last link_delay + 1 positions; fifo_head_ the oldest
+  std::size_t fifo_head_ = 0;
+  std::uint32_t sequence_ = 0;
+  std::atomic<double> applied_{0.0};
+  std::atomic<bool> on_{false};
+  std::atomic<bool> stop_answering_{false}, skip_sequence_{false}, device_fault_{false};
+  std::atomic<std::uint64_t> dropped_{0};
+  std::chrono::steady_clock::time_point last_heard_ = std::chrono::steady_clock::now();
+  std::atomic<std::uint64_t> trips_{0};
+};
+
+// Not RT-safe. The firmware for `cfg`'s device.hid profile. Throws config::ConfigError for a
+// plant that cannot be simulated.
+std::unique_ptr<HidFirmware> make_firmware(const config::Config& cfg, int link_delay_samples);
+
+}  // namespace hapticd::sim::hid

@@ -1,0 +1,238 @@
+// The firmware of a force-feedback device on the HID PID page (profile pid): effect blocks
+// created by feature report, Set Effect / Effect Operation / Device Control / Device Gain /
+// Block Free, and the plant stepped by every Set Constant Force. It describes itself with
+// pid_reference_descriptor() and finds its own fields in it with the driver's parser.
+#include <algorithm>
+#include <array>
+#include <cerrno>
+#include <cmath>
+
+#include "config/config_loader.h"
+#include "drivers/hid/descriptor_builder.h"
+#include "sim/peers/hid/hid_firmwares.h"
+
+namespace hapticd::sim::hid {
+namespace {
+
+using namespace drivers::hid;
+
+struct Effect {
+  bool allocated = false, playing = false;
+  std::int64_t magnitude = 0;
+  double duration_ms = 0.0;   // 0: infinite
+  std::uint64_t started = 0;  // plant step at Op Effect Start
+  double gain = 1.0, dir_x = 1.0;
+};
+
+PidLayout own_layout(const std::vector<std::uint8_t>& descriptor, const config::Config& cfg,
+                     const PidSettings& p) {
+  const DescriptorParse parsed = parse_report_descriptor(descriptor);
+  const PidFind f = find_pid_layout(*parsed.descriptor, p.position_usage, p.sequence_usage);
+  if (!f.layout) {
+    throw config::ConfigError({cfg.locate("device.hid.pid") +
+                               ": device.hid.pid: the simulated PID device cannot serve this "
+                               "configuration: " +
+                               f.error});
+  }
+  return *f.layout;
+}
+
+class PidFirmware final : public HidFirmware {
+ public:
+  PidFirmware(const config::Config& cfg, const HidSettings& s, int link_delay)
+      : HidFirmware(cfg, link_delay),
+        p_(s.pid),
+        period_ms_(cfg.loop.sample_period_s() * 1e3),
+        descriptor_(pid_reference_descriptor(
+            {p_.sequence_usage == kReferenceSequenceUsage, true, PidReferenceIds{}})),
+        l_(own_layout(descriptor_, cfg, p_)),
+        position_(make_report(l_.position_report, l_.numbered)),
+        state_(make_report(l_.state, l_.numbered)) {}
+
+  const std::vector<std::uint8_t>& descriptor() const override { return descriptor_; }
+  // A playing effect with a finite duration stops when it runs out: in wall time on a gadget,
+  // where the plant does not step without the host.
+  double watchdog_ms() const noexcept override {
+    double ms = 0.0;
+    for (const Effect& e : effects_) {
+      if (e.playing && e.duration_ms > 0.0 && (ms == 0.0 || e.duration_ms < ms)) ms = e.duration_ms;
+    }
+    return ms;
+  }
+
+  void on_output(std::span<const std::uint8_t> r, const Send& send) override {
+    if (is_report(r, l_.set_constant, l_.numbered)) {
+      const auto d = data_of(r, l_.set_constant, l_.numbered);
+      if (Effect* e = effect(get_slot(d, l_.sc_block))) e->magnitude = get_slot(d, l_.sc_magnitude);
+      if (output_on()) {
+        step(force());
+        answer(send);
+      }
+    } else if (is_report(r, l_.set_effect, l_.numbered)) {
+      set_effect(data_of(r, l_.set_effect, l_.numbered));
+    } else if (is_report(r, l_.effect_operation, l_.numbered)) {
+      const auto d = data_of(r, l_.effect_operation, l_.numbered);
+      if (Effect* e = effect(get_slot(d, l_.eo_block))) {
+        if (chosen(d, l_.eo_start)) e->started = plant().steps();
+        e->playing = chosen(d, l_.eo_start) || (e->playing && !chosen(d, l_.eo_stop));
+      }
+    } else if (is_report(r, l_.device_control, l_.numbered)) {
+      device_control(data_of(r, l_.device_control, l_.numbered), send);
+    } else if (is_report(r, l_.device_gain, l_.numbered)) {
+      const auto d = data_of(r, l_.device_gain, l_.numbered);
+      device_gain_ = static_cast<double>(get_slot(d, l_.dg_gain)) /
+                     static_cast<double>(l_.dg_gain.logical_max);
+    } else if (is_report(r, l_.block_free, l_.numbered)) {
+      if (Effect* e = effect(get_slot(data_of(r, l_.block_free, l_.numbered), l_.bf_block)))
+        *e = {};
+    }
+    send_state(send);
+  }
+
+  int on_set_feature(std::span<const std::uint8_t> r, const Send&) override {
+    if (!is_report(r, l_.create_effect, l_.numbered)) return EPIPE;
+    load_status_ = l_.bl_error;
+    load_block_ = 0;
+    if (chosen(data_of(r, l_.create_effect, l_.numbered), l_.ce_constant)) {
+      load_status_ = l_.bl_full;
+      for (std::size_t i = 0; i < effects_.size(); ++i) {
+        if (effects_[i].allocated) continue;
+        effects_[i] = {};
+        effects_[i].allocated = true;
+        load_block_ = static_cast<std::int64_t>(i) + 1;
+        load_status_ = l_.bl_success;
+        break;
+      }
+    }
+    return 0;
+  }
+
+  int on_get_feature(std::uint8_t id, std::vector<std::uint8_t>& out) override {
+    if (id != l_.block_load.id) return EPIPE;
+    out = make_report(l_.block_load, l_.numbered);
+    const auto d = data_of(std::span<std::uint8_t>(out), l_.block_load, l_.numbered);
+    set_slot(d, l_.bl_block, load_block_);
+    choose(d, load_status_);
+    const auto used = std::count_if(effects_.begin(), effects_.end(),
+                                    [](const Effect& e) { return e.allocated; });
+    set_slot(d, l_.bl_ram_pool, static_cast<std::int64_t>(effects_.size()) - used);
+    return 0;
+  }
+
+  bool inject(PeerFault fault) noexcept override {
+    if (fault == PeerFault::kSkipSequence && !l_.sequence.present) return false;
+    return HidFirmware::inject(fault);
+  }
+
+ private:
+  Effect* effect(std::int64_t block) {
+    if (block < 1 || block > static_cast<std::int64_t>(effects_.size())) return nullptr;
+    Effect& e = effects_[static_cast<std::size_t>(block - 1)];
+    return e.allocated ? &e : nullptr;
+  }
+
+  void set_effect(std::span<const std::uint8_t> d) {
+    Effect* e = effect(get_slot(d, l_.se_block));
+    if (e == nullptr) return;
+    const std::int64_t dur = get_slot(d, l_.se_duration);
+    const Slot& ds = l_.se_duration;
+    e->duration_ms = !ds.present || dur < ds.logical_min || dur > ds.logical_max
+                         ? 0.0  // the null value: infinite
+                         : static_cast<double>(dur);
+    if (l_.se_gain.present) {
+      e->gain = static_cast<double>(get_slot(d, l_.se_gain)) /
+                static_cast<double>(l_.se_gain.logical_max);
+    }
+    const Slot& dir = l_.se_direction;
+    if (dir.present) {
+      const double turn = static_cast<double>(dir.logical_max - dir.logical_min + 1);
+      const double angle = static_cast<double>(get_slot(d, dir) - dir.logical_min) / turn;
+      e->dir_x = std::sin(2.0 * M_PI * angle);  // polar: 90 degrees is +X
+    }
+  }
+
+  void device_control(std::span<const std::uint8_t> d, const Send& send) {
+    if (chosen(d, l_.dc_stop_all) || chosen(d, l_.dc_reset)) {
+      for (Effect& e : effects_) e.playing = false;
+    }
+    if (chosen(d, l_.dc_reset)) effects_.fill({});
+    if (chosen(d, l_.dc_disable) || chosen(d, l_.dc_reset)) set_output(false);
+    if (chosen(d, l_.dc_enable) && !output_on() && !device_fault()) {
+      set_output(true);
+      send_state(send);
+      answer(send);  // enabled: report the state at rest
+    }
+  }
+
+  // The force of every playing effect, as the amplifier makes it.
+  double force() {
+    if (device_fault()) return 0.0;
+    double f = 0.0;
+    for (Effect& e : effects_) {
+      if (e.playing && e.duration_ms > 0.0 &&
+          static_cast<double>(plant().steps() - e.started) * period_ms_ >= e.duration_ms) {
+        e.playing = false;  // ran out: the firmware's own watchdog
+      }
+      if (!e.playing) continue;
+      f += static_cast<double>(e.magnitude) / static_cast<double>(l_.sc_magnitude.logical_max) *
+           p_.force_full_scale * e.gain * e.dir_x;
+    }
+    return f * device_gain_;
+  }
+
+  void answer(const Send& send) {
+    if (!answering()) return;
+    const Slot& s = l_.position;
+    const double span = static_cast<double>(s.logical_max - s.logical_min);
+    const double raw =
+        static_cast<double>(s.logical_min) +
+        (measured_position() - p_.position_min) / (p_.position_max - p_.position_min) * span;
+    const auto d = data_of(std::span<std::uint8_t>(position_), l_.position_report, l_.numbered);
+    set_slot(d, s,
+             static_cast<std::int64_t>(std::clamp(std::nearbyint(raw),
+                                                  static_cast<double>(s.logical_min),
+                                                  static_cast<double>(s.logical_max))));
+    if (l_.sequence.present) set_slot(d, l_.sequence, next_sequence());
+    send(position_);
+  }
+
+  void send_state(const Send& send) {
+    if (!l_.state.present || !answering()) return;
+    const bool playing =
+        std::any_of(effects_.begin(), effects_.end(), [](const Effect& e) { return e.playing; });
+    const auto d = data_of(std::span<std::uint8_t>(state_), l_.state, l_.numbered);
+    set_slot(d, l_.st_actuators_enabled, output_on() ? 1 : 0);
+    set_slot(d, l_.st_safety_switch, device_fault() ? 0 : 1);
+    set_slot(d, l_.st_power, 1);
+    set_slot(d, l_.st_playing, playing ? 1 : 0);
+    if (state_ == sent_state_) return;  // only changes are reported
+    sent_state_ = state_;
+    send(state_);
+  }
+
+  PidSettings p_;
+  double period_ms_;
+  std::vector<std::uint8_t> descriptor_;
+  PidLayout l_;
+  std::vector<std::uint8_t> position_, state_, sent_state_;
+  std::array<Effect, 8> effects_{};
+  double device_gain_ = 1.0;
+  Choice load_status_;
+  std::int64_t load_block_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<HidFirmware> make_pid_firmware(const config::Config& cfg,
+                                               const drivers::hid::HidSettings& s, int link_delay) {
+  return std::make_unique<PidFirmware>(cfg, s, link_delay);
+}
+
+std::unique_ptr<HidFirmware> make_firmware(const config::Config& cfg, int link_delay) {
+  const auto* s = dynamic_cast<const drivers::hid::HidSettings*>(cfg.device.settings.get());
+  if (s == nullptr) throw std::logic_error("make_firmware: the configuration has no device.hid");
+  return s->profile == drivers::hid::Profile::kReport ? make_report_firmware(cfg, *s, link_delay)
+                                                      : make_pid_firmware(cfg, *s, link_delay);
+}
+
+}  // namespace hapticd::sim::hid

@@ -1,0 +1,159 @@
+// device.hid as a person writes it: the example configurations load, and every mistake is
+// reported at its line with the key that must change.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <fstream>
+#include <sstream>
+
+#include "config/config_loader.h"
+#include "drivers/hid/hid_settings.h"
+#include "drivers/registry.h"
+
+namespace hapticd::drivers::hid {
+namespace {
+
+std::string file(const char* name) {
+  std::ifstream in(std::string(HAPTICD_SOURCE_DIR) + "/config/" + name);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+config::Config load(const std::string& text, std::vector<std::string> sets = {}) {
+  std::vector<config::Override> o;
+  for (const std::string& s : sets) o.push_back(config::parse_override(s));
+  return config::load_config_text(text, "hid.yaml", o, ".", driver_schemas());
+}
+
+// The messages of a load that must fail.
+std::vector<std::string> errors(const std::string& text, std::vector<std::string> sets = {}) {
+  try {
+    load(text, std::move(sets));
+  } catch (const config::ConfigError& e) {
+    return e.messages();
+  }
+  ADD_FAILURE() << "loaded without error";
+  return {};
+}
+
+bool has(const std::vector<std::string>& msgs, const std::string& text) {
+  for (const std::string& m : msgs) {
+    if (m.find(text) != std::string::npos) return true;
+  }
+  return false;
+}
+
+std::string all(const std::vector<std::string>& msgs) {
+  std::string s;
+  for (const std::string& m : msgs) s += m + "\n";
+  return s;
+}
+
+const HidSettings& hid(const config::Config& c) {
+  return dynamic_cast<const HidSettings&>(*c.device.settings);
+}
+
+TEST(HidConfig, TheExampleConfigurationsLoad) {
+  const config::Config r = load(file("hid-report.yaml"));
+  const HidSettings& s = hid(r);
+  EXPECT_EQ(s.profile, Profile::kReport);
+  EXPECT_EQ(*s.select.vendor_id, 0x1209);
+  EXPECT_EQ(s.report.input.report_id, 1);
+  EXPECT_EQ(s.report.input.fault_mask, 0x01u);
+  EXPECT_DOUBLE_EQ(s.report.output.full_scale, 10000);
+  EXPECT_TRUE(s.report.output.keepalive);
+  EXPECT_EQ(s.writer_priority, 79);
+  const config::Config p = load(file("hid-pid.yaml"));
+  EXPECT_EQ(hid(p).profile, Profile::kPid);
+  EXPECT_EQ(hid(p).pid.sequence_usage, 0xFF000020u);
+  EXPECT_DOUBLE_EQ(hid(p).pid.effect_duration_ms, 100);
+}
+
+TEST(HidConfig, TheDeclaredDelayFollowsThePollingIntervalAndT) {
+  EXPECT_EQ(declared_delay_samples(1.0, 1e-3), 1);    // bInterval 1 at 1 kHz
+  EXPECT_EQ(declared_delay_samples(1.0, 4e-3), 0);    // 250 Hz: the round trip fits a period
+  EXPECT_EQ(declared_delay_samples(4.0, 4e-3), 1);    // a wheel polled at 250 Hz
+  EXPECT_EQ(declared_delay_samples(0.125, 1e-3), 0);  // high speed, one microframe
+  EXPECT_EQ(declared_delay_samples(1.0, 0.5e-3), 3);  // 2 kHz over 1 ms polling
+  const config::Config c = load(file("hid-report.yaml"), {"device.hid.poll_interval_ms=4"});
+  EXPECT_EQ(find_driver("hid").declared_delay(c), 7);
+}
+
+TEST(HidConfig, OverlappingFieldsAreReportedAtTheirLine) {
+  const auto e =
+      errors(file("hid-report.yaml"), {"device.hid.report.input.sequence={byte: 1, type: u8}"});
+  EXPECT_TRUE(has(e, "device.hid.report.input.sequence: bytes 1..1 overlap input.position"))
+      << all(e);
+  EXPECT_TRUE(has(e, "--set device.hid.report.input.sequence")) << all(e);
+}
+
+TEST(HidConfig, AFieldPastTheReportIsReportedInTheFile) {
+  std::string text = file("hid-report.yaml");
+  const std::string from = "keepalive: {byte: 3, type: u8}";
+  text.replace(text.find(from), from.size(), "keepalive: {byte: 8, type: u8}");
+  const auto line = 1 + std::count(text.begin(), text.begin() + text.find("keepalive:"), '\n');
+  const auto e = errors(text);
+  ASSERT_EQ(e.size(), 1u) << all(e);
+  EXPECT_EQ(e[0].rfind("hid.yaml:" + std::to_string(line) +
+                           ": device.hid.report.output.keepalive: bytes 8..8 lie past the "
+                           "report's 8 data bytes",
+                       0),
+            0u)
+      << e[0];
+}
+
+TEST(HidConfig, AForceThatCannotReachMaxForceIsRefused) {
+  auto e = errors(file("hid-report.yaml"), {"device.max_force=20"});
+  EXPECT_TRUE(has(e,
+                  "device.hid.report.output.force: counts -10000..10000 x 0.001 N + 0 N "
+                  "reach only -10..10 N, which cannot represent device.max_force +-20 N"))
+      << all(e);
+  e = errors(file("hid-pid.yaml"), {"device.max_force=20"});
+  EXPECT_TRUE(has(e, "device.hid.pid.force_full_scale: cannot represent device.max_force 20 N"))
+      << all(e);
+}
+
+TEST(HidConfig, MistakesAreNamed) {
+  const auto e =
+      errors(file("hid-report.yaml"),
+             {"device.hid.select={vendor_id: 0x1ffff}", "device.hid.backend=usb",
+              "device.hid.report.input.position.type=i64", "device.hid.report.output.force.scael=1",
+              "device.hid.pid={}", "device.hid.limits.out_queue=0"});
+  EXPECT_TRUE(has(e, "device.hid.select.vendor_id: must be an integer in 0..65535 (0xFFFF)"))
+      << all(e);
+  EXPECT_TRUE(has(e, "device.hid.backend: must be one of hidraw, libusb; got 'usb'")) << all(e);
+  EXPECT_TRUE(has(e, "device.hid.report.input.position.type: must be one of u8")) << all(e);
+  EXPECT_TRUE(has(e, "device.hid.report.output.force.scael: unknown key")) << all(e);
+  EXPECT_TRUE(has(e, "device.hid.pid: not used by profile report")) << all(e);
+  EXPECT_TRUE(has(e, "device.hid.limits.out_queue: must be")) << all(e);
+}
+
+TEST(HidConfig, ASelectorThatMatchesEverythingIsRefused) {
+  const auto e = errors(file("hid-report.yaml"), {"device.hid.select={interface: 0}"});
+  EXPECT_TRUE(has(e, "device.hid.select: selects every HID device")) << all(e);
+}
+
+TEST(HidConfig, PidSettingsAreChecked) {
+  const auto e = errors(
+      file("hid-pid.yaml"),
+      {"device.hid.pid.position={usage_page: 1, usage: 0x30, min: 1, max: 1}",
+       "device.hid.pid.effect_duration_ms=1", "device.hid.pid.gain=0", "device.hid.pid.report={}"});
+  EXPECT_TRUE(has(e, "device.hid.pid.position: min and max must differ")) << all(e);
+  EXPECT_TRUE(has(e, "device.hid.pid.effect_duration_ms: must be 0 (infinite) or at least two"))
+      << all(e);
+  EXPECT_TRUE(has(e, "device.hid.pid.gain: must be in (0, 1]")) << all(e);
+  EXPECT_TRUE(has(e, "device.hid.pid.report: unknown key")) << all(e);
+}
+
+TEST(HidConfig, MissingLayoutPartsAreNamed) {
+  const auto e =
+      errors(file("hid-report.yaml"), {"device.hid.report.output.force={byte: 0, type: i16}",
+                                       "device.hid.report.input={report_id: 1, length: 8}"});
+  EXPECT_TRUE(has(e, "device.hid.report.output.force.scale: missing")) << all(e);
+  EXPECT_TRUE(has(e, "device.hid.report.output.force.full_scale: missing")) << all(e);
+  EXPECT_TRUE(has(e, "device.hid.report.input.position: missing")) << all(e);
+}
+
+}  // namespace
+}  // namespace hapticd::drivers::hid
