@@ -82,6 +82,13 @@ void check_force(const OutputLayout& o, double max_force, std::vector<std::strin
   const double a = lo_raw * f.scale + f.offset;
   const double b = o.full_scale * f.scale + f.offset;
   const double lo = std::min(a, b), hi = std::max(a, b);
+  // A scale so large that full scale is no finite force: +-inf would decode as inf.
+  if (!std::isfinite(lo) || !std::isfinite(hi)) {
+    errors.push_back("output.force: counts " + num(lo_raw) + ".." + num(o.full_scale) + " x " +
+                     num(f.scale) + " N is no finite force; use a scale that makes full_scale "
+                     "a force in newtons");
+    return;
+  }
   if (lo > -max_force || hi < max_force) {
     errors.push_back("output.force: counts " + num(lo_raw) + ".." + num(o.full_scale) + " x " +
                      num(f.scale) + " N + " + num(f.offset) + " N reach only " + num(lo) + ".." +

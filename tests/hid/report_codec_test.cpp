@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "drivers/hid/report_layout.h"
@@ -102,6 +103,15 @@ TEST(HidReportLayout, AFractionalFullScaleOfAnIntegerForceIsRefused) {
   l.output.full_scale = 10000.5;
   EXPECT_TRUE(mentions(validate(l, 10.0),
                        "full_scale: must be > 0 and fit the field's type i16 (whole counts"));
+}
+
+// Found by the hid_codec fuzz target: a force scale of DBL_MAX passed (it reaches any
+// max_force), but full scale is then no finite force, and +inf commanded decoded as inf.
+TEST(HidReportLayout, AForceScaleWhoseFullScaleIsNoFiniteForceIsRefused) {
+  ReportProfileLayout l = ffbeast_like();
+  l.output.force.type = FieldType::kI32;
+  l.output.force.scale = std::numeric_limits<double>::max();
+  EXPECT_TRUE(mentions(validate(l, 10.0), "is no finite force"));
 }
 
 // Found by fuzz/hid_codec_fuzzer.cpp: an f32 value is sent as the nearest float, so 1e-5 never
