@@ -10,6 +10,7 @@
 #include "drivers/hid/hidapi_transport.h"
 #include "drivers/hid/socket_transport.h"
 #include "sim/peers/hid/hidg_peer.h"
+#include "sim/peers/hid/raw_gadget_peer.h"
 #include "sim/peers/hid/socket_hid_peer.h"
 #include "sim/peers/hid/uhid_peer.h"
 
@@ -49,19 +50,28 @@ Loopback make_loopback(const config::Config& cfg) {
   return {std::move(device), std::move(peer)};
 }
 
-// /dev/hidgN (a USB HID gadget: usbhid, hidraw and libusb see a USB device) or /dev/uhid (a
-// HID device made by the kernel's uhid: hidraw only, but with feature reports).
+bool ends_with(const std::string& s, const std::string& tail) {
+  return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
+}
+
+// /dev/hidgN (a USB HID gadget: usbhid, hidraw and libusb see a USB device, but f_hid answers
+// no feature report), /dev/raw-gadget (a USB device this process answers for entirely,
+// feature reports included) or /dev/uhid (a HID device made by the kernel's uhid: hidraw only,
+// with feature reports).
 std::unique_ptr<sim::LoopbackPeer> make_peer_on(const config::Config& cfg,
                                                 const std::string& endpoint) {
   const auto s = settings_of(cfg);
   // On a real link the link is the delay: the simulated firmware adds none.
   auto firmware = sim::hid::make_firmware(cfg, 0);
-  if (endpoint.size() >= 4 && endpoint.compare(endpoint.size() - 4, 4, "uhid") == 0) {
-    sim::hid::UhidIdentity id;
-    id.vendor_id = s->select.vendor_id.value_or(id.vendor_id);
-    id.product_id = s->select.product_id.value_or(id.product_id);
-    if (!s->select.serial.empty()) id.serial = s->select.serial;
+  sim::hid::DeviceIdentity id;
+  id.vendor_id = s->select.vendor_id.value_or(id.vendor_id);
+  id.product_id = s->select.product_id.value_or(id.product_id);
+  if (!s->select.serial.empty()) id.serial = s->select.serial;
+  if (ends_with(endpoint, "uhid")) {
     return std::make_unique<sim::hid::UhidPeer>(endpoint, id, std::move(firmware));
+  }
+  if (ends_with(endpoint, "raw-gadget")) {
+    return std::make_unique<sim::hid::RawGadgetPeer>(endpoint, id, std::move(firmware));
   }
   return std::make_unique<sim::hid::HidgPeer>(endpoint, std::move(firmware));
 }

@@ -123,7 +123,8 @@ int main(int argc, char** argv) {
   CLI::App* peer = app.add_subcommand(
       "peer",
       "Run the configured driver's simulated device (the plant of device.sim) on a real kernel "
-      "endpoint - a USB HID gadget's /dev/hidgN, a CAN interface, a gpio-sim chip - until "
+      "endpoint - a USB HID gadget's /dev/hidgN, /dev/raw-gadget or /dev/uhid, a CAN interface, a "
+      "gpio-sim chip - until "
       "SIGINT/SIGTERM or --duration, so `hapticd run` (or another master) can drive it through "
       "the kernel as it would hardware.");
   add_config_options(peer, peer_opts.config);

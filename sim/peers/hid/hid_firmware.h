@@ -4,7 +4,7 @@
 // force command arrives (the output report; for PID, Set Constant Force) and answers with an
 // input report; it answers the enable with its state at rest, without a step. The transport is
 // not its business: SocketHidPeer carries it over the loopback socketpair, HidgPeer over a USB
-// HID gadget's /dev/hidgN.
+// HID gadget's /dev/hidgN, UhidPeer over /dev/uhid, RawGadgetPeer as a USB device of its own.
 //
 // A loopback peer also stands in for the USB link's latency: with link_delay_samples d it
 // answers with the position measured d steps earlier, so a loopback run is the loop the gate

@@ -27,7 +27,7 @@ void copy_text(std::uint8_t* to, std::size_t capacity, const std::string& s) {
 
 }  // namespace
 
-UhidPeer::UhidPeer(const std::string& path, const UhidIdentity& id,
+UhidPeer::UhidPeer(const std::string& path, const DeviceIdentity& id,
                    std::unique_ptr<HidFirmware> firmware)
     : fd_(::open(path.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC)), fw_(std::move(firmware)) {
   if (!fd_) {

@@ -11,21 +11,16 @@
 #include <string>
 
 #include "drivers/io/unique_fd.h"
+#include "sim/peers/hid/device_identity.h"
 #include "sim/peers/hid/hid_firmware.h"
 
 namespace hapticd::sim::hid {
-
-struct UhidIdentity {
-  std::uint16_t vendor_id = 0x1209, product_id = 0x0001;
-  std::string serial = "hapticd-sim";
-  std::string name = "hapticd simulated HID device";
-};
 
 class UhidPeer final : public LoopbackPeer {
  public:
   // Creates the device (UHID_CREATE2 with the firmware's descriptor). Throws DeviceError when
   // /dev/uhid cannot be used.
-  UhidPeer(const std::string& path, const UhidIdentity& id, std::unique_ptr<HidFirmware> firmware);
+  UhidPeer(const std::string& path, const DeviceIdentity& id, std::unique_ptr<HidFirmware> firmware);
   ~UhidPeer() override;  // UHID_DESTROY: the device disappears like an unplugged one
 
   void service() override;

@@ -1,0 +1,95 @@
+#include "kernel_rig.h"
+
+#include <gtest/gtest.h>
+
+#include <iostream>
+#include <regex>
+
+#include "drivers/hid/hidapi_transport.h"
+
+namespace hapticd::drivers::hid::testing {
+
+std::string example(const char* name) {
+  return std::string(HAPTICD_SOURCE_DIR) + "/config/" + name;
+}
+
+std::vector<std::string> sets_for(const char* backend, std::vector<std::string> more) {
+  std::vector<std::string> s = kKernelRate;
+  s.push_back(std::string("device.hid.backend=") + backend);
+  s.push_back("device.hid.select.serial=" + kKernelSerial);
+  s.insert(s.end(), more.begin(), more.end());
+  return s;
+}
+
+std::string faults(const Hapticd& h) {
+  if (!h.summary.is_object()) return "(no summary: exit status " + std::to_string(h.status) + ")";
+  return h.summary.value("faults", nlohmann::json::array()).dump();
+}
+
+bool wait_listed(bool present) {
+  return KernelPeer::wait_for([present] {
+    bool listed = false;
+    for (const DeviceListing& d : enumerate_devices(Backend::kHidraw)) {
+      listed = listed || d.serial == kKernelSerial;
+    }
+    return listed == present;
+  });
+}
+
+void expect_the_sim_drivers_wall(const char* config, const std::vector<std::string>& sets,
+                                 const sim::LoopbackPeer& peer) {
+  const config::Config cfg = load_example(config, sets);
+  const int delay = find_driver("hid").declared_delay(cfg);
+  const Hapticd hid =
+      run_hapticd(with_sets({"run", "--config", example(config), "--duration", "4"}, sets));
+  ASSERT_EQ(hid.status, 0) << hid.stderr_text;
+  std::vector<std::string> twin = sets;
+  twin.insert(twin.end(), {"device.driver=sim", "device.hid=", "loop.clock=freerun",
+                           "wall.delay_samples=" + std::to_string(delay)});
+  const Hapticd sim =
+      run_hapticd(with_sets({"run", "--config", example(config), "--duration", "4"}, twin));
+  ASSERT_EQ(sim.status, 0) << sim.stderr_text;
+  EXPECT_EQ(faults(hid), "[]");
+  const double p_hid = hid.summary["max_penetration"].get<double>();
+  const double p_sim = sim.summary["max_penetration"].get<double>();
+  EXPECT_GT(hid.summary["contact_ticks"].get<std::uint64_t>(), 50u) << "contact reached";
+  EXPECT_GT(p_sim, 0.002);
+  EXPECT_NEAR(p_hid, p_sim, 0.1 * p_sim)
+      << "hid " << p_hid * 1e3 << " mm, sim " << p_sim * 1e3 << " mm with " << delay
+      << " samples of delay; " << hid.stderr_text;
+  std::cout << config << ": hid " << p_hid * 1e3 << " mm, sim " << p_sim * 1e3 << " mm, delay "
+            << delay << ", stale ticks " << hid.summary["stale_ticks"] << ", sequence gaps "
+            << hid.summary["sequence_gaps"] << "\n";
+  EXPECT_FALSE(peer.output_on()) << "the run left the simulated amplifier on";
+  EXPECT_EQ(peer.applied_force(), 0.0);
+}
+
+void expect_fault_exit(const char* config, const std::vector<std::string>& sets,
+                       sim::LoopbackPeer& peer, sim::PeerFault fault, const std::string& words) {
+  const Hapticd h = run_hapticd(
+      with_sets({"run", "--config", example(config), "--duration", "30"}, sets), [&](pid_t) {
+        ASSERT_TRUE(KernelPeer::wait_for([&] { return peer.applied_force() < -0.2; }))
+            << "the wall never pushed";
+        ASSERT_TRUE(peer.inject(fault));
+      });
+  EXPECT_EQ(h.status, 1) << h.stderr_text;
+  EXPECT_TRUE(std::regex_search(faults(h), std::regex(words))) << words << ": " << faults(h);
+  EXPECT_TRUE(KernelPeer::wait_for([&] { return peer.applied_force() == 0.0 && !peer.output_on(); },
+                                   std::chrono::seconds(2)))
+      << "force " << peer.applied_force();
+}
+
+void expect_no_force_after_sigkill(const char* config, const std::vector<std::string>& sets,
+                                   sim::LoopbackPeer& peer) {
+  const Hapticd h = run_hapticd(
+      with_sets({"run", "--config", example(config), "--duration", "30"}, sets), [&](pid_t pid) {
+        ASSERT_TRUE(KernelPeer::wait_for([&] { return peer.applied_force() < -0.2; }));
+        ::kill(pid, SIGKILL);
+      });
+  EXPECT_EQ(h.status, 128 + SIGKILL);
+  EXPECT_TRUE(KernelPeer::wait_for([&] { return peer.applied_force() == 0.0; },
+                                   std::chrono::milliseconds(1000)))
+      << "the device's watchdog did not drop the force";
+}
+
+}  // namespace hapticd::drivers::hid::testing
