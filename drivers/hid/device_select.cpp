@@ -105,7 +105,18 @@ Selection select_one(const Selector& s, const std::vector<DeviceListing>& all,
 
 std::string format_listing(const std::vector<DeviceListing>& all, const char* backend) {
   std::string out;
-  for (const DeviceListing& d : all) {
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    const DeviceListing& d = all[i];
+    // hidapi lists a device once per top-level collection (a PID device: six or more): one
+    // entry per path, naming every usage.
+    bool seen = false;
+    std::string more;
+    for (std::size_t j = 0; j < all.size(); ++j) {
+      if (all[j].path != d.path) continue;
+      seen = seen || j < i;
+      if (j > i) more += ", " + hex4(all[j].usage_page) + ":" + hex4(all[j].usage);
+    }
+    if (seen) continue;
     Selector s;
     s.vendor_id = d.vendor_id;
     s.product_id = d.product_id;
@@ -119,7 +130,9 @@ std::string format_listing(const std::vector<DeviceListing>& all, const char* ba
     if (s.usage_page) sel += ", usage_page: " + hex4(d.usage_page);
     if (matching(s, all).size() > 1) sel = "{path: \"" + d.path + "\"";
     sel += "}";
-    out += "  " + one_line(d) + (d.bus.empty() ? "" : " (" + d.bus + ")") + "\n";
+    std::string line = one_line(d);
+    if (!more.empty()) line.insert(line.find(" at " + d.path), more);
+    out += "  " + line + (d.bus.empty() ? "" : " (" + d.bus + ")") + "\n";
     out += "    device.hid: {backend: " + std::string(backend) + ", select: " + sel + "}\n";
   }
   if (out.empty()) out = "  (none)\n";

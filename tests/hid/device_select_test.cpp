@@ -53,6 +53,20 @@ TEST(HidSelect, TheListingGivesEachDeviceTheKeysThatPickItOut) {
   EXPECT_EQ(format_listing({}, "libusb"), "  (none)\n");
 }
 
+// hidapi lists a PID device once per top-level collection: one device, one entry.
+TEST(HidSelect, ADeviceListedOncePerCollectionIsOneEntryNamingEachUsage) {
+  std::vector<DeviceListing> all = attached();
+  DeviceListing pid_collection = all[2];
+  pid_collection.usage_page = 0x0f;
+  pid_collection.usage = 0x7d;
+  all.push_back(pid_collection);
+  const std::string text = format_listing(all, "hidraw");
+  EXPECT_NE(text.find("usage 0x0001:0x0006, 0x000f:0x007d at /dev/hidraw2"), std::string::npos)
+      << text;
+  EXPECT_EQ(text.find("/dev/hidraw2", text.find("/dev/hidraw2") + 1), std::string::npos) << text;
+  EXPECT_NE(text.find("{vendor_id: 0x046d, product_id: 0xc31c}"), std::string::npos) << text;
+}
+
 TEST(HidSelect, TheDevicesCommandAsksBothBackends) {
   const DriverEntry& hid = find_driver("hid");
   ASSERT_NE(hid.list_devices, nullptr);
