@@ -184,13 +184,16 @@ bool ServoLoop::sense(std::uint64_t tick, std::int64_t wake_ns, PositionSample& 
     set_fault({FaultCause::kNonFinitePosition, tick, sample.position}, rec, res);
     return false;
   }
-  // Judge the speed over the time that really passed: the samples' own times when both have
-  // one, else the periods since the last new sample (stale reads, skipped periods).
+  // Judge the speed over the time that really passed: the periods since the last new sample
+  // (stale reads, skipped periods), or the samples' own times when they span more. Never
+  // less: an encoder's sample time is its last edge's, and one count between two edges
+  // microseconds apart (a line dithering at a count boundary, or edge times an interrupt
+  // thread stamped late together) is quantisation, not an impossible speed.
   const double jump = std::abs(sample.position - st.last_x);
   double spanned = static_cast<double>(st.periods_since_x);
   if (options_.realtime && has_time && st.last_time_ns > 0 && sample.time_ns > st.last_time_ns) {
-    spanned = static_cast<double>(sample.time_ns - st.last_time_ns) /
-              static_cast<double>(options_.period_ns);
+    spanned = std::max(spanned, static_cast<double>(sample.time_ns - st.last_time_ns) /
+                                    static_cast<double>(options_.period_ns));
   }
   if (st.have_x && jump > max_step_ * spanned) {
     set_fault({FaultCause::kEncoderJump, tick,

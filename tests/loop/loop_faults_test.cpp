@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <ctime>
 #include <limits>
 
 #include "control/controller.h"
@@ -198,6 +199,34 @@ TEST(LoopFaults, NothingIsCommandedBeforeTheFirstPosition) {
   EXPECT_EQ(r.fault.cause, FaultCause::kNone);
   EXPECT_EQ(r.contact_ticks, 0u);
   for (double f : dev.writes) EXPECT_EQ(f, 0.0);
+}
+
+// Found in the GPIO kernel runs: one encoder count between two samples whose edge times were
+// 48 us apart read as 10 m/s and faulted the run. The samples' times may lengthen the span a
+// jump is judged over, never shorten it below the periods that passed.
+TEST(LoopFaults, OneCountBetweenEdgesMicrosecondsApartIsNoImpossibleSpeed) {
+  ScriptedDevice dev;
+  std::int64_t last_edge = 0;
+  dev.script = [&](std::uint64_t k, PositionSample& s) {
+    timespec now{};
+    clock_gettime(CLOCK_MONOTONIC, &now);
+    // Until tick 10 an edge just now; then one count more, 20 us after the previous edge.
+    last_edge = k == 10 ? last_edge + 20'000 : now.tv_sec * 1'000'000'000LL + now.tv_nsec;
+    s.position = k < 10 ? 0.0 : 0.0005;  // 0.5 mm: 25 m/s over 20 us, 0.5 m/s over 1 ms
+    s.time_ns = last_edge;
+    s.flags |= kSampleHasTime;
+    return IoStatus::kOk;
+  };
+  LoopOptions o;
+  o.realtime = true;
+  o.period_ns = 1'000'000;
+  o.max_ticks = 15;
+  o.overrun_fault_streak = 1000;  // the host may be slow; only the speed judgement is tested
+  o.stale_fault_ticks = 1000;
+  o.max_speed = 10.0;
+  const LoopResult r = run(dev, o);
+  EXPECT_EQ(r.fault.cause, FaultCause::kNone) << r.fault.value;
+  EXPECT_EQ(r.ticks, 15u);
 }
 
 TEST(LoopFaults, AJumpAfterStaleReadsIsJudgedOverTheTimeThatPassed) {
