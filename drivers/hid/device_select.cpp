@@ -131,7 +131,7 @@ std::string format_listing(const std::vector<DeviceListing>& all, const char* ba
     if (matching(s, all).size() > 1) sel = "{path: \"" + d.path + "\"";
     sel += "}";
     std::string line = one_line(d);
-    if (!more.empty()) line.insert(line.find(" at " + d.path), more);
+    if (!more.empty()) line.insert(line.rfind(" at " + d.path), more);
     out += "  " + line + (d.bus.empty() ? "" : " (" + d.bus + ")") + "\n";
     out += "    device.hid: {backend: " + std::string(backend) + ", select: " + sel + "}\n";
   }

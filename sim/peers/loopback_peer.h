@@ -42,6 +42,10 @@ class LoopbackPeer {
   // After the run (the peer thread joined): the plant, for the operator's work.
   virtual const Plant& plant() const noexcept = 0;
 
+  // Not RT-safe. For a peer with threads of its own (the raw USB gadget): ends them, so the
+  // device is gone and plant() may be read; the others have nothing to stop.
+  virtual void stop() noexcept {}
+
   // Any thread. Produce `fault` from now on (kSkipSequence: once). False when the protocol has
   // no way to express it (e.g. a transport without sequence numbers).
   virtual bool inject(PeerFault fault) noexcept = 0;

@@ -37,6 +37,7 @@ int peer_command(const PeerOptions& options, SignalWatch& signals) {
       poll(fds, 2, 20);
     }
     runner.stop();
+    peer->stop();  // a peer's own threads too, before its plant is read
     error = runner.error();
   }
   std::ostringstream os;

@@ -3,6 +3,7 @@
 // it, in its own process, through hidapi and the kernel's usbhid/hidraw or libusb.
 #pragma once
 
+#include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
 
@@ -84,6 +85,13 @@ inline std::vector<std::string> with_sets(std::vector<std::string> args,
 struct KernelPeer {
   KernelPeer(const config::Config& cfg, const std::string& endpoint)
       : peer(find_driver("hid").make_peer_on(cfg, endpoint)), runner(*peer, 70) {}
+  // The simulated device must not have failed on its side (a transfer error, a thread that
+  // died): its watchdog would have stopped with it.
+  ~KernelPeer() {
+    runner.stop();
+    EXPECT_EQ(runner.error(), "") << "the simulated device failed";
+    peer->stop();
+  }
   // Waits (up to `timeout`) until `predicate` holds; false if it never did.
   static bool wait_for(const std::function<bool()>& predicate,
                        std::chrono::milliseconds timeout = std::chrono::seconds(20)) {

@@ -1,7 +1,6 @@
 #include "sim/peers/hid/raw_gadget_peer.h"
 
 #include <fcntl.h>
-#include <linux/hid.h>
 #include <linux/usb/ch9.h>
 #include <linux/usb/raw_gadget.h>
 #include <pthread.h>
@@ -17,30 +16,17 @@
 #include <filesystem>
 
 #include "drivers/device.h"
+#include "sim/peers/hid/raw_gadget_io.h"
 
 namespace hapticd::sim::hid {
+
+using raw_gadget_io::gadget_broken;
+using raw_gadget_io::kMaxTransfer;
+using raw_gadget_io::Transfer;
+
 namespace {
 
-constexpr std::size_t kMaxTransfer = 4096;  // a report, a descriptor: far below this
-constexpr std::size_t kInQueue = 4;         // input reports waiting for IN polls; older drop
-constexpr std::uint8_t kOutputReport = 2, kFeatureReport = 3;  // HID 1.11 7.2.1
-
-// A raw gadget transfer as the ioctls take it: the kernel's header (which ends in a flexible
-// array) followed by the data, in one block. The header is copied in, never aliased.
-class Transfer {
- public:
-  Transfer(int ep, std::size_t length) {
-    const usb_raw_ep_io h{static_cast<__u16>(ep), 0,
-                          static_cast<__u32>(std::min(length, kMaxTransfer))};
-    std::memcpy(bytes_.data(), &h, sizeof h);
-  }
-  void* arg() noexcept { return bytes_.data(); }
-  std::uint8_t* data() noexcept { return bytes_.data() + sizeof(usb_raw_ep_io); }
-  std::size_t capacity() const noexcept { return kMaxTransfer; }
-
- private:
-  alignas(usb_raw_ep_io) std::array<std::uint8_t, sizeof(usb_raw_ep_io) + kMaxTransfer> bytes_{};
-};
+constexpr std::size_t kInQueue = 4;  // input reports waiting for IN polls; older drop
 
 void on_wake(int) {}  // only interrupts the ioctl
 
@@ -114,6 +100,7 @@ RawGadgetPeer::RawGadgetPeer(const std::string& path, const DeviceIdentity& id,
     throw DeviceError("hid peer: cannot open " + path + ": " + std::strerror(errno) +
                       " (the raw_gadget module, and root)");
   }
+  if (!timer_) throw DeviceError(std::string("hid peer: eventfd: ") + std::strerror(errno));
   const auto [udc, driver] = first_udc();
   usb_raw_init init{};
   copy_name(init.driver_name, driver);
@@ -132,14 +119,24 @@ RawGadgetPeer::~RawGadgetPeer() { unplug(); }
 
 void RawGadgetPeer::unplug() noexcept {
   if (unplugged_.exchange(true)) return;
-  fw_->vanish();
-  stopping_.store(true);
+  fw_->vanish();  // what the person feels at once
+  {
+    // Under the lock the data threads wait with: a notify between their check and their
+    // wait would otherwise be lost (SIGURG does not end a condition variable's wait).
+    const std::lock_guard lock(queue_mutex_);
+    stopping_.store(true);
+  }
   queue_ready_.notify_all();
   stop_thread(control_, control_done_);  // it started the other two; it has ended now
   stop_thread(in_, in_done_);
   stop_thread(out_, out_done_);
   gadget_.reset();  // the gadget driver unregisters: a disconnect on the host's side
+  const std::lock_guard lock(fw_mutex_);
+  fw_->lose_host();  // an output report handled while the threads stopped set nothing again
+  fw_->vanish();
 }
+
+void RawGadgetPeer::stop() noexcept { unplug(); }
 
 bool RawGadgetPeer::inject(PeerFault fault) noexcept {
   if (fault != PeerFault::kTransportFault) return fw_->inject(fault);
@@ -190,129 +187,30 @@ void RawGadgetPeer::control_loop() {
   control_done_.store(true);
 }
 
-void RawGadgetPeer::reply(const usb_ctrlrequest& r, std::span<const std::uint8_t> data) {
-  const std::size_t n = std::min({data.size(), std::size_t{r.wLength}, kMaxTransfer});
-  Transfer t(0, n);
-  std::memcpy(t.data(), data.data(), n);
-  if (ioctl(gadget_.get(), USB_RAW_IOCTL_EP0_WRITE, t.arg()) < 0 && errno != EINTR) {
-    fail("ep0 write");
-  }
-}
-
-void RawGadgetPeer::acknowledge() {
-  Transfer t(0, 0);
-  if (ioctl(gadget_.get(), USB_RAW_IOCTL_EP0_READ, t.arg()) < 0 && errno != EINTR) fail("ep0 ack");
-}
-
-bool RawGadgetPeer::answer_standard(const usb_ctrlrequest& r) {
-  static constexpr std::uint8_t kZeros[2] = {0, 0};
-  const unsigned kind = r.wValue >> 8, index = r.wValue & 0xFF;
-  switch (r.bRequest) {
-    case USB_REQ_GET_DESCRIPTOR: {
-      const std::vector<std::uint8_t>* d = kind == USB_DT_DEVICE   ? &usb_.device
-                                           : kind == USB_DT_CONFIG ? &usb_.configuration
-                                           : kind == HID_DT_HID    ? &usb_.hid
-                                           : kind == HID_DT_REPORT ? &usb_.report
-                                                                   : nullptr;
-      if (kind == USB_DT_STRING) {
-        const auto s = usb_.string(static_cast<std::uint8_t>(index));
-        if (!s) return false;
-        reply(r, *s);
-        return true;
-      }
-      if (d == nullptr) return false;  // a device qualifier: a full-speed device has none
-      reply(r, *d);
-      return true;
-    }
-    case USB_REQ_SET_CONFIGURATION:
-      if (r.wValue != UsbHidDescriptors::kConfiguration || !configure()) return false;
-      acknowledge();
-      return true;
-    case USB_REQ_GET_CONFIGURATION: {
-      const std::uint8_t c = configured_.load() ? UsbHidDescriptors::kConfiguration : 0;
-      reply(r, {&c, 1});
-      return true;
-    }
-    case USB_REQ_GET_STATUS:
-    case USB_REQ_GET_INTERFACE:
-      reply(r, {kZeros, r.bRequest == USB_REQ_GET_STATUS ? 2u : 1u});
-      return true;
-    case USB_REQ_SET_INTERFACE:
-    case USB_REQ_CLEAR_FEATURE:
-    case USB_REQ_SET_FEATURE:
-      if (r.bRequestType & USB_DIR_IN) return false;
-      acknowledge();
-      return true;
-    default:
-      return false;
-  }
-}
-
-bool RawGadgetPeer::answer_class(const usb_ctrlrequest& r) {
-  const std::uint8_t report_type = static_cast<std::uint8_t>(r.wValue >> 8);
-  const std::uint8_t report_id = static_cast<std::uint8_t>(r.wValue & 0xFF);
-  const auto to_host = [this](std::span<const std::uint8_t> in) { queue_input(in); };
-  switch (r.bRequest) {
-    case HID_REQ_GET_REPORT: {
-      if (report_type != kFeatureReport) return false;  // input reports go by interrupt IN
-      std::vector<std::uint8_t> report;
-      {
-        const std::lock_guard lock(fw_mutex_);
-        fw_->heard_host(std::chrono::steady_clock::now());
-        if (fw_->on_get_feature(report_id, report) != 0) return false;
-      }
-      reply(r, report);
-      return true;
-    }
-    case HID_REQ_SET_REPORT: {
-      if (report_type != kOutputReport && report_type != kFeatureReport) return false;
-      Transfer t(0, r.wLength);
-      const int n = ioctl(gadget_.get(), USB_RAW_IOCTL_EP0_READ, t.arg());
-      if (n < 0) {
-        if (errno != EINTR) fail("ep0 read");
-        return true;  // the data stage was taken: too late to stall
-      }
-      const std::span<const std::uint8_t> report(t.data(), static_cast<std::size_t>(n));
-      const std::lock_guard lock(fw_mutex_);
-      fw_->heard_host(std::chrono::steady_clock::now());
-      // A refused feature report cannot be stalled after its data stage; the firmware has
-      // counted it, and the host reads the device's state back where it matters (Block Load).
-      if (report_type == kOutputReport) {
-        fw_->on_output(report, to_host);
-      } else {
-        fw_->on_set_feature(report, to_host);
-      }
-      return true;
-    }
-    case HID_REQ_SET_IDLE:
-    case HID_REQ_SET_PROTOCOL:
-      acknowledge();
-      return true;
-    case HID_REQ_GET_IDLE:
-    case HID_REQ_GET_PROTOCOL: {
-      const std::uint8_t v =
-          r.bRequest == HID_REQ_GET_PROTOCOL ? 1 : 0;  // report protocol; no idle
-      reply(r, {&v, 1});
-      return true;
-    }
-    default:
-      return false;
-  }
-}
-
 bool RawGadgetPeer::configure() {
-  if (configured_.load()) return true;  // the host may set it again after a reset
+  if (configured_.load()) {
+    // Again, after a bus reset or a configuration 0: the endpoints stay enabled; the data
+    // threads, parked since their transfers were cancelled, may queue again.
+    {
+      const std::lock_guard lock(queue_mutex_);
+      generation_.fetch_add(1);
+      link_up_.store(true);
+    }
+    queue_ready_.notify_all();
+    return true;
+  }
   in_handle_ = enable_endpoint(gadget_.get(), usb_.in_endpoint);
   out_handle_ = enable_endpoint(gadget_.get(), usb_.out_endpoint);
   if (in_handle_ < 0 || out_handle_ < 0) {
     fail("enabling the interrupt endpoints");
     return false;
   }
-  ioctl(gadget_.get(), USB_RAW_IOCTL_VBUS_DRAW, 100);
+  ioctl(gadget_.get(), USB_RAW_IOCTL_VBUS_DRAW, 50);  // units of 2 mA: bMaxPower's 100 mA
   if (ioctl(gadget_.get(), USB_RAW_IOCTL_CONFIGURE, 0) < 0) {
     fail("configure");
     return false;
   }
+  link_up_.store(true);
   in_ = std::thread([this] { in_loop(); });
   out_ = std::thread([this] { out_loop(); });
   configured_.store(true);
@@ -331,24 +229,37 @@ void RawGadgetPeer::queue_input(std::span<const std::uint8_t> report) {
   queue_ready_.notify_one();
 }
 
+void RawGadgetPeer::link_lost(std::uint64_t generation) {
+  // A transfer queued while the controller is still resetting fails the whole raw gadget
+  // (dummy_hcd refuses for 50 ms, and raw_gadget marks itself failed): wait for the host's
+  // next SET_CONFIGURATION, unless it came already while this transfer was being cancelled.
+  std::unique_lock lock(queue_mutex_);
+  if (generation_.load() == generation) link_up_.store(false);
+  queue_ready_.wait(lock, [&] { return stopping_.load() || generation_.load() != generation; });
+}
+
 void RawGadgetPeer::in_loop() {
   unblock_wake_signal();
   while (!stopping_.load()) {
     std::vector<std::uint8_t> next;
     {
       std::unique_lock lock(queue_mutex_);
-      queue_ready_.wait(lock, [this] { return stopping_.load() || !queue_.empty(); });
+      queue_ready_.wait(
+          lock, [this] { return stopping_.load() || (link_up_.load() && !queue_.empty()); });
       if (stopping_.load()) break;
       next = std::move(queue_.front());
       queue_.pop_front();
     }
+    const std::uint64_t generation = generation_.load();
     Transfer t(in_handle_, next.size());
     std::memcpy(t.data(), next.data(), std::min(next.size(), kMaxTransfer));
     // Blocks until the host's next IN poll takes it (only while the device is open).
-    if (ioctl(gadget_.get(), USB_RAW_IOCTL_EP_WRITE, t.arg()) < 0 && errno != EINTR &&
-        errno != ESHUTDOWN) {
-      fail("interrupt IN");
-      break;
+    if (ioctl(gadget_.get(), USB_RAW_IOCTL_EP_WRITE, t.arg()) < 0 && errno != EINTR) {
+      if (gadget_broken(errno)) {
+        fail("interrupt IN");
+        break;
+      }
+      link_lost(generation);  // ESHUTDOWN, ECONNRESET: a reset or a disconnect cancelled it
     }
   }
   in_done_.store(true);
@@ -358,16 +269,17 @@ void RawGadgetPeer::out_loop() {
   unblock_wake_signal();
   const auto to_host = [this](std::span<const std::uint8_t> in) { queue_input(in); };
   while (!stopping_.load()) {
+    const std::uint64_t generation = generation_.load();
     Transfer t(out_handle_, UsbHidDescriptors::kMaxPacket);
     const int n = ioctl(gadget_.get(), USB_RAW_IOCTL_EP_READ, t.arg());
     if (n < 0) {
       if (errno == EINTR) continue;
-      if (errno == ESHUTDOWN) {  // the host has gone (unbound, reset): wait for it
-        usleep(5000);
-        continue;
+      if (gadget_broken(errno)) {
+        fail("interrupt OUT");
+        break;
       }
-      fail("interrupt OUT");
-      break;
+      link_lost(generation);  // queue again only once the host has configured it again
+      continue;
     }
     const std::lock_guard lock(fw_mutex_);
     fw_->heard_host(std::chrono::steady_clock::now());

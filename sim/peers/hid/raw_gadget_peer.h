@@ -7,12 +7,14 @@
 // which the pid profile's Block Load and the report profile's feature keys need.
 //
 // Three threads: ep0 (control requests: descriptors, configuration, GET/SET_REPORT), the
-// interrupt OUT endpoint (output reports) and the interrupt IN endpoint (input reports, one per
-// host poll). Each blocks in the raw gadget's ioctls, which have no poll(2); stopping them
-// sends SIGURG to each (a no-op handler installed without SA_RESTART, so the ioctl returns
-// EINTR; SIGURG is not one of hapticd's stop signals and its default action is to ignore it).
-// The firmware is not thread-safe: one mutex serialises every call into it. Not RT code: this
-// is the device's side.
+// interrupt OUT endpoint (output reports of up to 64 bytes, one packet each) and the interrupt
+// IN endpoint (input reports, one per host poll). A bus reset cancels the data transfers;
+// those threads then wait for the host to configure the device again (Linux 6.1's raw gadget
+// reports no reset, and a transfer queued too early would fail the gadget for good). Each blocks in
+// the raw gadget's ioctls, which have no poll(2); stopping them sends SIGURG to each (a no-op
+// handler installed without SA_RESTART, so the ioctl returns EINTR; SIGURG is not one of hapticd's
+// stop signals and its default action is to ignore it). The firmware is not thread-safe: one mutex
+// serialises every call into it. Not RT code: this is the device's side.
 #pragma once
 
 #include <atomic>
@@ -37,7 +39,9 @@ namespace hapticd::sim::hid {
 class RawGadgetPeer final : public LoopbackPeer {
  public:
   // Opens `path` (/dev/raw-gadget), binds to the first USB device controller in
-  // /sys/class/udc and starts the threads; the host enumerates the device shortly after.
+  // /sys/class/udc (its driver's name taken as its gadget name, which holds for dummy_hcd,
+  // the one this is tested on) and starts the threads; the host enumerates the device
+  // shortly after.
   // Throws DeviceError when the raw gadget or a controller is missing.
   RawGadgetPeer(const std::string& path, const DeviceIdentity& id,
                 std::unique_ptr<HidFirmware> firmware);
@@ -55,10 +59,15 @@ class RawGadgetPeer final : public LoopbackPeer {
   const Plant& plant() const noexcept override { return fw_->plant(); }
   // kTransportFault: the device is unplugged (its threads stopped, the gadget released).
   bool inject(PeerFault fault) noexcept override;
+  // The device is unplugged: its threads end, so plant() may be read.
+  void stop() noexcept override;
 
   // Any thread. Control requests stalled because the device has no answer (for a test's
   // diagnostics: usbhid asks for things a HID device may refuse).
   std::uint64_t stalls() const noexcept { return stalls_.load(); }
+  // Any thread. Control transfers that failed as one transfer (the host gave up on it, reset
+  // the bus): counted, the device goes on.
+  std::uint64_t ep0_errors() const noexcept { return ep0_errors_.load(); }
   bool configured() const noexcept { return configured_.load(); }
 
  private:
@@ -71,6 +80,8 @@ class RawGadgetPeer final : public LoopbackPeer {
   bool configure();
   void reply(const usb_ctrlrequest& r, std::span<const std::uint8_t> data);
   void acknowledge();
+  void ep0_error(const char* what);
+  void link_lost(std::uint64_t generation);
   void queue_input(std::span<const std::uint8_t> report);
   void fail(const std::string& what);
   void unplug() noexcept;
@@ -84,7 +95,9 @@ class RawGadgetPeer final : public LoopbackPeer {
   std::deque<std::vector<std::uint8_t>> queue_;  // input reports waiting for an IN poll
   int in_handle_ = -1, out_handle_ = -1;
   std::atomic<bool> stopping_{false}, configured_{false}, unplugged_{false};
-  std::atomic<std::uint64_t> stalls_{0};
+  std::atomic<bool> link_up_{false};          // configured and not reset since: data may be queued
+  std::atomic<std::uint64_t> generation_{0};  // SET_CONFIGURATIONs seen (after the first)
+  std::atomic<std::uint64_t> stalls_{0}, ep0_errors_{0};
   std::mutex error_mutex_;
   std::string error_;
   std::thread control_, in_, out_;
