@@ -18,26 +18,17 @@
 #include "drivers/gpio/quadrature_decoder.h"
 #include "drivers/gpio/sysfs_pwm.h"
 #include "drivers/registry.h"
+#include "example_config.h"
 
 namespace {
 
 using namespace hapticd;
 
-config::Config load_gpio(const std::vector<std::string>& sets) {
-  std::ifstream in(HAPTICD_SOURCE_DIR "/config/gpio.yaml");
-  std::stringstream text;
-  text << in.rdbuf();
-  std::vector<config::Override> o;
-  for (const auto& s : sets) o.push_back(config::parse_override(s));
-  o.push_back(config::parse_override("loop.clock=freerun"));
-  return config::load_config_text(text.str(), "gpio.yaml", o, HAPTICD_SOURCE_DIR "/config",
-                                  drivers::driver_schemas());
-}
-
 // A tick: read, write a force, the peer steps the plant and answers. The plant is moved
 // (imposed motion, 5 mm at 2 Hz: up to 6 counts a tick), so edges flow every tick.
 void BM_GpioLoopbackTick(benchmark::State& state) {
-  const config::Config cfg = load_gpio(
+  const config::Config cfg = bench::load_example(
+      "gpio.yaml",
       {"device.sim.operator={kind: motion, offset: -0.02, amplitude: 0.005, frequency_hz: 2}"});
   drivers::Loopback pair = drivers::find_driver("gpio").make_loopback(cfg);
   Device& d = *pair.device;
@@ -88,7 +79,8 @@ BENCHMARK(BM_DecoderEdge);
 // unchanged one (none).
 void BM_SysfsPwmWrite(benchmark::State& state) {
   namespace fs = std::filesystem;
-  const fs::path root = fs::temp_directory_path() / ("hapticd-pwm-bench-" + std::to_string(getpid()));
+  const fs::path root =
+      fs::temp_directory_path() / ("hapticd-pwm-bench-" + std::to_string(getpid()));
   fs::create_directories(root / "pwmchip0" / "pwm0");
   for (const char* f : {"export"}) std::ofstream(root / "pwmchip0" / f);
   for (const char* f : {"period", "duty_cycle", "enable", "polarity"}) {

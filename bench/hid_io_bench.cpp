@@ -8,30 +8,18 @@
 #include <benchmark/benchmark.h>
 
 #include <chrono>
-#include <fstream>
-#include <sstream>
 
-#include "config/config_loader.h"
 #include "drivers/hid/hid_device.h"
 #include "drivers/registry.h"
+#include "example_config.h"
 #include "sim/peers/peer_runner.h"
 
 namespace {
 
 using namespace hapticd;
 
-config::Config load(const char* name) {
-  const std::string path = std::string(HAPTICD_SOURCE_DIR) + "/config/" + name;
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  const std::vector<config::Override> o = {config::parse_override("loop.clock=freerun")};
-  return config::load_config_text(text.str(), path, o, HAPTICD_SOURCE_DIR "/config",
-                                  drivers::driver_schemas());
-}
-
 void tick_bench(benchmark::State& state, const char* example, bool driver_only) {
-  const config::Config cfg = load(example);
+  const config::Config cfg = bench::load_example(example);
   drivers::Loopback pair = drivers::find_driver("hid").make_loopback(cfg);
   {
     sim::PeerRunner runner(*pair.peer);  // answers configure's feature reports and the enable
