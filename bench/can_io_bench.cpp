@@ -7,11 +7,9 @@
 // read+write alone; the full tick adds the simulated drive's own work.
 #include <benchmark/benchmark.h>
 
-#include <chrono>
-
+#include "bench_support.h"
 #include "drivers/can/can_device_base.h"
 #include "drivers/registry.h"
-#include "example_config.h"
 #include "sim/peers/peer_runner.h"
 
 namespace {
@@ -29,17 +27,7 @@ void tick_bench(benchmark::State& state, const char* example, bool driver_only) 
   auto& can = dynamic_cast<drivers::can::CanDeviceBase&>(*pair.device);
   const std::uint64_t sent0 = can.counters().frames_sent.load();
   const std::uint64_t received0 = can.counters().frames_received.load();
-  PositionSample s;
-  double force = 0.5;
-  for (auto _ : state) {
-    const auto t0 = std::chrono::steady_clock::now();
-    benchmark::DoNotOptimize(pair.device->read(s));
-    benchmark::DoNotOptimize(pair.device->write(force));
-    const auto t1 = std::chrono::steady_clock::now();
-    pair.peer->service();
-    force = -force;
-    if (driver_only) state.SetIterationTime(std::chrono::duration<double>(t1 - t0).count());
-  }
+  bench::run_ticks(state, *pair.device, *pair.peer, driver_only);
   const double ticks = static_cast<double>(state.iterations());
   const double sent = static_cast<double>(can.counters().frames_sent.load() - sent0) / ticks;
   const double received =

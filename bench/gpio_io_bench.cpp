@@ -14,11 +14,11 @@
 #include <sstream>
 #include <thread>
 
+#include "bench_support.h"
 #include "config/config_loader.h"
 #include "drivers/gpio/quadrature_decoder.h"
 #include "drivers/gpio/sysfs_pwm.h"
 #include "drivers/registry.h"
-#include "example_config.h"
 
 namespace {
 

@@ -7,11 +7,9 @@
 // device's own work (its codec and the plant step).
 #include <benchmark/benchmark.h>
 
-#include <chrono>
-
+#include "bench_support.h"
 #include "drivers/hid/hid_device.h"
 #include "drivers/registry.h"
-#include "example_config.h"
 #include "sim/peers/peer_runner.h"
 
 namespace {
@@ -30,17 +28,7 @@ void tick_bench(benchmark::State& state, const char* example, bool driver_only) 
   pair.peer->service();  // the enable's answer, so the first tick has a sample
   auto& hid = dynamic_cast<drivers::hid::HidDevice&>(*pair.device);
   const drivers::hid::HidCounters before = hid.counters();
-  PositionSample s;
-  double force = 0.5;
-  for (auto _ : state) {
-    const auto t0 = std::chrono::steady_clock::now();
-    benchmark::DoNotOptimize(pair.device->read(s));
-    benchmark::DoNotOptimize(pair.device->write(force));
-    const auto t1 = std::chrono::steady_clock::now();
-    pair.peer->service();
-    force = -force;
-    if (driver_only) state.SetIterationTime(std::chrono::duration<double>(t1 - t0).count());
-  }
+  bench::run_ticks(state, *pair.device, *pair.peer, driver_only);
   const drivers::hid::HidCounters after = hid.counters();
   const double ticks = static_cast<double>(state.iterations());
   const double in = static_cast<double>(after.input_reports + after.state_reports -

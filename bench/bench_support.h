@@ -1,0 +1,48 @@
+// What the driver benchmarks share: an example configuration from config/, in freerun (the
+// benchmark is the clock), with the benchmark's own overrides applied after; and the timed
+// ticks through a driver and its peer.
+#pragma once
+
+#include <benchmark/benchmark.h>
+
+#include <chrono>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "config/config_loader.h"
+#include "drivers/registry.h"
+#include "sim/peers/loopback_peer.h"
+
+namespace hapticd::bench {
+
+inline config::Config load_example(const char* name, const std::vector<std::string>& sets = {}) {
+  const std::string path = std::string(HAPTICD_SOURCE_DIR) + "/config/" + name;
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  std::vector<config::Override> o = {config::parse_override("loop.clock=freerun")};
+  for (const std::string& s : sets) o.push_back(config::parse_override(s));
+  return config::load_config_text(text.str(), path, o, HAPTICD_SOURCE_DIR "/config",
+                                  drivers::driver_schemas());
+}
+
+// One tick per iteration: the device's read and a write of +-`force` (alternating), then the
+// peer answers in this thread. With `driver_only` the iteration's time is read and write
+// alone (use ->UseManualTime()); otherwise it includes the peer's own work.
+inline void run_ticks(benchmark::State& state, Device& device, sim::LoopbackPeer& peer,
+                      bool driver_only, double force = 0.5) {
+  PositionSample s;
+  for (auto _ : state) {
+    const auto t0 = std::chrono::steady_clock::now();
+    benchmark::DoNotOptimize(device.read(s));
+    benchmark::DoNotOptimize(device.write(force));
+    const auto t1 = std::chrono::steady_clock::now();
+    peer.service();
+    force = -force;
+    if (driver_only) state.SetIterationTime(std::chrono::duration<double>(t1 - t0).count());
+  }
+}
+
+}  // namespace hapticd::bench
