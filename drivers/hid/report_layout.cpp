@@ -85,7 +85,8 @@ void check_force(const OutputLayout& o, double max_force, std::vector<std::strin
   // A scale so large that full scale is no finite force: +-inf would decode as inf.
   if (!std::isfinite(lo) || !std::isfinite(hi)) {
     errors.push_back("output.force: counts " + num(lo_raw) + ".." + num(o.full_scale) + " x " +
-                     num(f.scale) + " N is no finite force; use a scale that makes full_scale "
+                     num(f.scale) +
+                     " N is no finite force; use a scale that makes full_scale "
                      "a force in newtons");
     return;
   }

@@ -101,6 +101,19 @@ class HidFirmware {
   std::atomic<std::uint64_t> trips_{0};
 };
 
+// A peer that carries a HidFirmware over one transport (socketpair, gadget, uhid, raw gadget):
+// what the person feels is the firmware's. Subclasses move bytes; the firmware decides.
+class FirmwarePeer : public LoopbackPeer {
+ public:
+  double applied_force() const noexcept final { return fw_->applied_force(); }
+  bool output_on() const noexcept final { return fw_->output_on(); }
+  const Plant& plant() const noexcept final { return fw_->plant(); }
+
+ protected:
+  explicit FirmwarePeer(std::unique_ptr<HidFirmware> firmware) : fw_(std::move(firmware)) {}
+  std::unique_ptr<HidFirmware> fw_;
+};
+
 // Not RT-safe. The firmware for `cfg`'s device.hid profile. Throws config::ConfigError for a
 // plant that cannot be simulated.
 std::unique_ptr<HidFirmware> make_firmware(const config::Config& cfg, int link_delay_samples);

@@ -19,9 +19,9 @@ constexpr int kSendWaitMs = 50;
 }  // namespace
 
 HidgPeer::HidgPeer(const std::string& path, std::unique_ptr<HidFirmware> firmware)
-    : path_(path),
-      fd_(::open(path.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC)),
-      fw_(std::move(firmware)) {
+    : FirmwarePeer(std::move(firmware)),
+      path_(path),
+      fd_(::open(path.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC)) {
   if (!fd_) {
     throw DeviceError("hid peer: cannot open the gadget endpoint " + path + ": " +
                       std::strerror(errno) + " (a USB HID gadget's /dev/hidgN)");

@@ -21,7 +21,7 @@
 
 namespace hapticd::sim::hid {
 
-class HidgPeer final : public LoopbackPeer {
+class HidgPeer final : public FirmwarePeer {
  public:
   // Throws DeviceError when the endpoint cannot be opened.
   HidgPeer(const std::string& path, std::unique_ptr<HidFirmware> firmware);
@@ -29,22 +29,15 @@ class HidgPeer final : public LoopbackPeer {
   void service() override;
   int fd() const noexcept override { return fd_.get(); }
   int service_interval_ms() const noexcept override { return 5; }  // the watchdog's tick
-  double applied_force() const noexcept override { return fw_->applied_force(); }
-  bool output_on() const noexcept override { return fw_->output_on(); }
-  const Plant& plant() const noexcept override { return fw_->plant(); }
   // The gadget cannot vanish from this side (the test unbinds it instead): kTransportFault
   // is refused.
   bool inject(PeerFault fault) noexcept override;
-
-  std::uint64_t watchdog_trips() const noexcept { return fw_->watchdog_trips(); }
-  std::uint64_t answers_dropped() const noexcept { return fw_->answers_dropped(); }
 
  private:
   void send(std::span<const std::uint8_t> report);
 
   std::string path_;
   io::UniqueFd fd_;
-  std::unique_ptr<HidFirmware> fw_;
   std::vector<std::uint8_t> rx_ = std::vector<std::uint8_t>(1025);
 };
 

@@ -32,11 +32,7 @@ void RawGadgetPeer::reply(const usb_ctrlrequest& r, std::span<const std::uint8_t
 }
 
 void RawGadgetPeer::ep0_error(const char* what) {
-  if (gadget_broken(errno)) {
-    fail(what);
-  } else if (errno != EINTR) {
-    ep0_errors_.fetch_add(1);
-  }
+  if (gadget_broken(errno)) fail(what);
 }
 
 void RawGadgetPeer::acknowledge() {

@@ -92,10 +92,10 @@ int enable_endpoint(int fd, const std::vector<std::uint8_t>& d) {
 
 RawGadgetPeer::RawGadgetPeer(const std::string& path, const DeviceIdentity& id,
                              std::unique_ptr<HidFirmware> firmware)
-    : usb_(make_usb_hid_descriptors(id, firmware->descriptor())),
+    : FirmwarePeer(std::move(firmware)),
+      usb_(make_usb_hid_descriptors(id, fw_->descriptor())),
       gadget_(::open(path.c_str(), O_RDWR | O_CLOEXEC)),
-      timer_(eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK)),
-      fw_(std::move(firmware)) {
+      timer_(eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK)) {
   if (!gadget_) {
     throw DeviceError("hid peer: cannot open " + path + ": " + std::strerror(errno) +
                       " (the raw_gadget module, and root)");
@@ -179,10 +179,7 @@ void RawGadgetPeer::control_loop() {
     const bool answered = type == USB_TYPE_STANDARD ? answer_standard(r)
                           : type == USB_TYPE_CLASS  ? answer_class(r)
                                                     : false;
-    if (!answered) {
-      stalls_.fetch_add(1);
-      ioctl(gadget_.get(), USB_RAW_IOCTL_EP0_STALL, 0);
-    }
+    if (!answered) ioctl(gadget_.get(), USB_RAW_IOCTL_EP0_STALL, 0);  // nothing to answer
   }
   control_done_.store(true);
 }

@@ -36,7 +36,7 @@ struct usb_ctrlrequest;
 
 namespace hapticd::sim::hid {
 
-class RawGadgetPeer final : public LoopbackPeer {
+class RawGadgetPeer final : public FirmwarePeer {
  public:
   // Opens `path` (/dev/raw-gadget), binds to the first USB device controller in
   // /sys/class/udc (its driver's name taken as its gadget name, which holds for dummy_hcd,
@@ -54,21 +54,10 @@ class RawGadgetPeer final : public LoopbackPeer {
   void service() override;
   int fd() const noexcept override { return timer_.get(); }  // never readable: a timer tick
   int service_interval_ms() const noexcept override { return 5; }
-  double applied_force() const noexcept override { return fw_->applied_force(); }
-  bool output_on() const noexcept override { return fw_->output_on(); }
-  const Plant& plant() const noexcept override { return fw_->plant(); }
   // kTransportFault: the device is unplugged (its threads stopped, the gadget released).
   bool inject(PeerFault fault) noexcept override;
   // The device is unplugged: its threads end, so plant() may be read.
   void stop() noexcept override;
-
-  // Any thread. Control requests stalled because the device has no answer (for a test's
-  // diagnostics: usbhid asks for things a HID device may refuse).
-  std::uint64_t stalls() const noexcept { return stalls_.load(); }
-  // Any thread. Control transfers that failed as one transfer (the host gave up on it, reset
-  // the bus): counted, the device goes on.
-  std::uint64_t ep0_errors() const noexcept { return ep0_errors_.load(); }
-  bool configured() const noexcept { return configured_.load(); }
 
  private:
   void control_loop();
@@ -80,6 +69,8 @@ class RawGadgetPeer final : public LoopbackPeer {
   bool configure();
   void reply(const usb_ctrlrequest& r, std::span<const std::uint8_t> data);
   void acknowledge();
+  // A control transfer that failed: the peer's end when the gadget itself is broken; else
+  // that one request's (the host gave up on it, reset the bus), and the device goes on.
   void ep0_error(const char* what);
   void link_lost(std::uint64_t generation);
   void queue_input(std::span<const std::uint8_t> report);
@@ -88,7 +79,6 @@ class RawGadgetPeer final : public LoopbackPeer {
 
   UsbHidDescriptors usb_;
   io::UniqueFd gadget_, timer_;
-  std::unique_ptr<HidFirmware> fw_;
   std::mutex fw_mutex_;  // every call into fw_
   std::mutex queue_mutex_;
   std::condition_variable queue_ready_;
@@ -97,7 +87,6 @@ class RawGadgetPeer final : public LoopbackPeer {
   std::atomic<bool> stopping_{false}, configured_{false}, unplugged_{false};
   std::atomic<bool> link_up_{false};          // configured and not reset since: data may be queued
   std::atomic<std::uint64_t> generation_{0};  // SET_CONFIGURATIONs seen (after the first)
-  std::atomic<std::uint64_t> stalls_{0}, ep0_errors_{0};
   std::mutex error_mutex_;
   std::string error_;
   std::thread control_, in_, out_;

@@ -12,16 +12,13 @@
 
 namespace hapticd::sim::hid {
 
-class SocketHidPeer final : public LoopbackPeer {
+class SocketHidPeer final : public FirmwarePeer {
  public:
   SocketHidPeer(io::UniqueFd fd, std::unique_ptr<HidFirmware> firmware)
-      : fd_(std::move(fd)), fw_(std::move(firmware)) {}
+      : FirmwarePeer(std::move(firmware)), fd_(std::move(fd)) {}
 
   void service() override;
   int fd() const noexcept override { return fd_.get(); }
-  double applied_force() const noexcept override { return fw_->applied_force(); }
-  bool output_on() const noexcept override { return fw_->output_on(); }
-  const Plant& plant() const noexcept override { return fw_->plant(); }
   // kTransportFault: the device vanishes (its end shut down; the firmware, host gone, zeroes).
   bool inject(PeerFault fault) noexcept override;
 
@@ -30,7 +27,6 @@ class SocketHidPeer final : public LoopbackPeer {
   void send(const std::vector<std::uint8_t>& message);
 
   io::UniqueFd fd_;
-  std::unique_ptr<HidFirmware> fw_;
   std::array<std::uint8_t, drivers::hid::kMaxFrame> rx_{};
   std::atomic<bool> vanished_{false};
 };

@@ -29,7 +29,8 @@ void copy_text(std::uint8_t* to, std::size_t capacity, const std::string& s) {
 
 UhidPeer::UhidPeer(const std::string& path, const DeviceIdentity& id,
                    std::unique_ptr<HidFirmware> firmware)
-    : fd_(::open(path.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC)), fw_(std::move(firmware)) {
+    : FirmwarePeer(std::move(firmware)),
+      fd_(::open(path.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC)) {
   if (!fd_) {
     throw DeviceError("hid peer: cannot open " + path + ": " + std::strerror(errno) +
                       " (the uhid module, and root or the uhid group)");

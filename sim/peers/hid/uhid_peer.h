@@ -16,19 +16,17 @@
 
 namespace hapticd::sim::hid {
 
-class UhidPeer final : public LoopbackPeer {
+class UhidPeer final : public FirmwarePeer {
  public:
   // Creates the device (UHID_CREATE2 with the firmware's descriptor). Throws DeviceError when
   // /dev/uhid cannot be used.
-  UhidPeer(const std::string& path, const DeviceIdentity& id, std::unique_ptr<HidFirmware> firmware);
+  UhidPeer(const std::string& path, const DeviceIdentity& id,
+           std::unique_ptr<HidFirmware> firmware);
   ~UhidPeer() override;  // UHID_DESTROY: the device disappears like an unplugged one
 
   void service() override;
   int fd() const noexcept override { return fd_.get(); }
   int service_interval_ms() const noexcept override { return 5; }  // the watchdog's tick
-  double applied_force() const noexcept override { return fw_->applied_force(); }
-  bool output_on() const noexcept override { return fw_->output_on(); }
-  const Plant& plant() const noexcept override { return fw_->plant(); }
   // kTransportFault: the device is destroyed, as if unplugged.
   bool inject(PeerFault fault) noexcept override;
 
@@ -36,7 +34,6 @@ class UhidPeer final : public LoopbackPeer {
   void send_input(std::span<const std::uint8_t> report);
 
   io::UniqueFd fd_;
-  std::unique_ptr<HidFirmware> fw_;
   std::atomic<bool> destroyed_{false};
 };
 
