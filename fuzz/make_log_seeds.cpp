@@ -44,6 +44,9 @@ std::vector<tel::TickRecord> records(std::size_t n) {
     r.flags = r.penetration > 0.0 ? tel::kFlagContact : 0u;
     r.sample_time_ns = r.scheduled_ns - 20000;
     r.sequence = static_cast<std::uint32_t>(i + 1);
+    r.observer_energy_j = 1e-4 * static_cast<double>(i);
+    r.passivity_damping = i == 3 ? 4.5 : 0.0;
+    if (i == 3) r.flags |= tel::kFlagPassivityDamped;
   }
   return out;
 }
@@ -89,7 +92,7 @@ void expect_repaired(const std::string& name, const Bytes& valid, std::size_t at
 // On a valid log the repair changes nothing; every CRC it covers and every payload byte
 // it protects, once broken, is repaired.
 void check_fixer(const std::string& name, const Bytes& valid) {
-  const std::size_t rsize = le32(valid, 8) == 1 ? tel::kRecordSizeV1 : tel::kRecordSize;
+  const std::size_t rsize = tel::record_size_of_version(le32(valid, 8));
   const long blocks = blocks_read(valid);
   expect(blocks >= 0, name + ": the writer's log must read back");
   Bytes copy = valid;
@@ -122,27 +125,27 @@ fs::path write_seed(const fs::path& dir, const std::string& name, const std::str
   return path;
 }
 
-// The same log in format version 1, which the reader still accepts: 72-byte records (the
-// first 72 bytes of version 2's), CRCs recomputed.
-Bytes to_version1(const Bytes& v2) {
-  const std::size_t header = tel::file_header_size(le32(v2, 36));
-  Bytes v1(v2.begin(), v2.begin() + static_cast<std::ptrdiff_t>(header));
-  const std::uint32_t version = 1, record_size = tel::kRecordSizeV1;
-  std::memcpy(v1.data() + 8, &version, sizeof version);
-  std::memcpy(v1.data() + 12, &record_size, sizeof record_size);
-  for (std::size_t at = header; at < v2.size();) {
-    const std::size_t n = le32(v2, at + 4);
-    v1.insert(v1.end(), v2.begin() + static_cast<std::ptrdiff_t>(at),
-              v2.begin() + static_cast<std::ptrdiff_t>(at + tel::kBlockHeaderSize));
+// The same log in an older format version, which the reader still accepts: shorter records
+// (the first bytes of the current version's), CRCs recomputed.
+Bytes to_version(const Bytes& current, std::uint32_t version) {
+  const std::size_t header = tel::file_header_size(le32(current, 36));
+  Bytes old(current.begin(), current.begin() + static_cast<std::ptrdiff_t>(header));
+  const auto record_size = static_cast<std::uint32_t>(tel::record_size_of_version(version));
+  std::memcpy(old.data() + 8, &version, sizeof version);
+  std::memcpy(old.data() + 12, &record_size, sizeof record_size);
+  for (std::size_t at = header; at < current.size();) {
+    const std::size_t n = le32(current, at + 4);
+    old.insert(old.end(), current.begin() + static_cast<std::ptrdiff_t>(at),
+               current.begin() + static_cast<std::ptrdiff_t>(at + tel::kBlockHeaderSize));
     for (std::size_t i = 0; i < n; ++i) {
-      const auto record = v2.begin() + static_cast<std::ptrdiff_t>(at + tel::kBlockHeaderSize +
-                                                                   i * tel::kRecordSize);
-      v1.insert(v1.end(), record, record + tel::kRecordSizeV1);
+      const auto record = current.begin() + static_cast<std::ptrdiff_t>(at + tel::kBlockHeaderSize +
+                                                                        i * tel::kRecordSize);
+      old.insert(old.end(), record, record + record_size);
     }
     at += tel::block_size(n);
   }
-  hapticd::fuzz::fix_log_crcs(v1);
-  return v1;
+  hapticd::fuzz::fix_log_crcs(old);
+  return old;
 }
 
 }  // namespace
@@ -162,9 +165,12 @@ int main(int argc, char** argv) {
   const Bytes full = read_bytes(three);
   write_bytes(dir / "cut_in_block.hlog", Bytes(full.begin(), full.end() - 30));
   write_bytes(dir / "cut_in_header.hlog", Bytes(full.begin(), full.begin() + 20));
-  const Bytes v1 = to_version1(full);
-  expect(blocks_read(v1) == blocks_read(full), "v1_three_blocks: a version 1 log must read back");
-  check_fixer("v1_three_blocks", v1);
-  write_bytes(dir / "v1_three_blocks.hlog", v1);
+  for (std::uint32_t version : {1u, 2u}) {
+    const std::string name = "v" + std::to_string(version) + "_three_blocks";
+    const Bytes old = to_version(full, version);
+    expect(blocks_read(old) == blocks_read(full), name + ": an older version's log must read back");
+    check_fixer(name, old);
+    write_bytes(dir / (name + ".hlog"), old);
+  }
   return g_failures == 0 ? 0 : 1;
 }

@@ -32,7 +32,7 @@ std::uint32_t crc_of(std::span<const std::uint8_t> bytes) {
   return crc32_update(0, std::as_bytes(bytes));
 }
 
-// Whether record r is the rsize bytes at `at`, zero-extended (version 1 records are shorter).
+// Whether record r is the rsize bytes at `at`, zero-extended (version 1 and 2 records are shorter).
 bool record_is(const TickRecord& r, const std::byte* at, std::size_t rsize) {
   const auto* bytes = reinterpret_cast<const std::byte*>(&r);
   for (std::size_t i = rsize; i < sizeof r; ++i) {
@@ -172,8 +172,9 @@ std::size_t fix_log_crcs(std::span<std::uint8_t> bytes) {
   const std::size_t config_len = load_u32(bytes, kConfigLenOffset);
   if (config_len > bytes.size() - file_header_size(0)) return 0;
   const std::size_t header_crc_at = kFileHeaderFixedSize + config_len;
-  // The version decides the record size, as in the reader (version 1: 72 bytes).
-  const std::size_t rsize = load_u32(bytes, kVersionOffset) == 1 ? kRecordSizeV1 : kRecordSize;
+  // The version decides the record size, as in the reader; an unknown one: the newest.
+  std::size_t rsize = record_size_of_version(load_u32(bytes, kVersionOffset));
+  if (rsize == 0) rsize = kRecordSize;
   store_u32(bytes, header_crc_at, crc_of(bytes.first(header_crc_at)));
   std::size_t fixed = 1;
   std::size_t offset = header_crc_at + kCrcSize;

@@ -15,7 +15,12 @@ namespace hapticd::config {
 
 enum class ClockMode { kRealtime, kFreerun };
 enum class Discretization { kBackward, kTustin };
-enum class GateMode { kEnforce, kWarn };
+// enforce: refuse a failing gate; warn: run anyway, loudly; derate: run with the largest
+// stiffness that passes (the gate's max_stiffness), loudly, or refuse when none does.
+enum class GateMode { kEnforce, kWarn, kDerate };
+// The runtime passivity observer (control/passivity_observer.h): off; observe (energy logged);
+// damp (also the passivity controller: damping that dissipates a negative energy).
+enum class PassivityControl { kOff, kObserve, kDamp };
 
 // Polynomial coefficients in ascending powers of z^-1: {a0, a1, ...} means a0 + a1 z^-1 + ...
 using Coefficients = std::vector<double>;
@@ -132,6 +137,9 @@ struct SafetyConfig {
   // A gap of this many samples or more in the device's own sequence counter faults the loop
   // (the loop ran on data older than it knew); 0: gaps are counted and logged only.
   std::uint32_t sequence_gap_fault = 1;
+  PassivityControl passivity_controller = PassivityControl::kObserve;
+  // The most damping (N s/m) the passivity controller adds; > 0.
+  double passivity_max_damping = 20.0;
 };
 
 struct AnalysisConfig {

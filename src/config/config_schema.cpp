@@ -41,7 +41,11 @@ const Options<ClockMode> kClocks{{"realtime", ClockMode::kRealtime},
                                  {"freerun", ClockMode::kFreerun}};
 const Options<Discretization> kDiscretizations{{"backward", Discretization::kBackward},
                                                {"tustin", Discretization::kTustin}};
-const Options<GateMode> kGates{{"enforce", GateMode::kEnforce}, {"warn", GateMode::kWarn}};
+const Options<GateMode> kGates{
+    {"enforce", GateMode::kEnforce}, {"warn", GateMode::kWarn}, {"derate", GateMode::kDerate}};
+const Options<PassivityControl> kPassivityControls{{"off", PassivityControl::kOff},
+                                                   {"observe", PassivityControl::kObserve},
+                                                   {"damp", PassivityControl::kDamp}};
 using Kind = OperatorSpec::Kind;
 const Options<Kind> kKinds{{"hand", Kind::kHand},
                            {"force", Kind::kForce},
@@ -329,6 +333,10 @@ void read_safety(MapReader& top, SafetyConfig& safety) {
           read_integer(m.diag(), m.take("sequence_gap_fault"), IntRange::between(0, 65535))) {
     safety.sequence_gap_fault = static_cast<std::uint32_t>(*v);
   }
+  if (const auto v = choice(m.diag(), m.take("passivity_controller"), kPassivityControls)) {
+    safety.passivity_controller = *v;
+  }
+  number(m, "passivity_max_damping", Range::greater_than(0.0), safety.passivity_max_damping);
   m.finish();
 }
 

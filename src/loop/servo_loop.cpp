@@ -49,6 +49,11 @@ std::int32_t clamp_i32(std::int64_t v) noexcept {
   return static_cast<std::int32_t>(std::clamp<std::int64_t>(v, INT32_MIN, INT32_MAX));
 }
 
+control::ObserverParams with_period(control::ObserverParams p, std::int64_t period_ns) {
+  p.sample_period = static_cast<double>(period_ns) / kNsPerS;
+  return p;
+}
+
 }  // namespace
 
 ServoLoop::ServoLoop(Device& device, control::Controller& controller,
@@ -57,7 +62,8 @@ ServoLoop::ServoLoop(Device& device, control::Controller& controller,
       controller_(&controller),
       ring_(ring),
       options_(options),
-      max_step_(options.max_speed * static_cast<double>(options.period_ns) / kNsPerS) {}
+      max_step_(options.max_speed * static_cast<double>(options.period_ns) / kNsPerS),
+      observer_(with_period(options.observer, options.period_ns)) {}
 
 void ServoLoop::set_fault(Fault f, telemetry::TickRecord& rec, LoopResult& res) const noexcept {
   res.fault = f;
@@ -117,7 +123,45 @@ void ServoLoop::publish(const telemetry::TickRecord& rec, const LoopResult& res)
   live_.position.store(rec.position, r);
   live_.penetration.store(rec.penetration, r);
   live_.force_commanded.store(rec.force_commanded, r);
-  live_.wall_energy_j.store(energy_before_ + res.wall_energy_j, r);
+  live_.wall_energy_j.store(observer_.wall_work_j(), r);
+  live_.observer_energy_j.store(observer_.energy_j(), r);
+  live_.damped_ticks.store(observer_.damped_ticks(), r);
+}
+
+PassivityResult ServoLoop::passivity() const noexcept {
+  PassivityResult p;
+  p.observed = observer_.enabled();
+  p.energy_j = observer_.energy_j();
+  p.min_energy_j = observer_.min_energy_j();
+  p.negative_ticks = observer_.negative_ticks();
+  p.damped_ticks = observer_.damped_ticks();
+  p.max_damping = observer_.max_alpha();
+  p.damping_work_j = observer_.damping_work_j();
+  return p;
+}
+
+control::Damping ServoLoop::control(std::uint64_t tick, const PositionSample& sample, bool fresh,
+                                    std::uint32_t periods, telemetry::TickRecord& rec,
+                                    LoopResult& res) noexcept {
+  observer_.observe(sample.position, fresh, periods);
+  const control::ControlOutput out = controller_->step(sample.position);
+  rec.position = sample.position;
+  rec.penetration = out.penetration;
+  rec.velocity = out.velocity;
+  rec.force_computed = out.force_computed;
+  rec.flags |= out.flags;
+  rec.observer_energy_j = observer_.energy_j();
+  if (out.flags & control::kControlNonFinite) {
+    set_fault({FaultCause::kNonFiniteForce, tick, out.force_computed}, rec, res);
+    return {};
+  }
+  const control::Damping d = observer_.damp(out.force_commanded, controller_->law().max_force);
+  if (d.alpha > 0.0) {
+    rec.flags |= telemetry::kFlagPassivityDamped;
+    rec.passivity_damping = d.alpha;
+    if (d.saturated) rec.flags |= telemetry::kFlagSaturated;
+  }
+  return d;
 }
 
 bool ServoLoop::check_sequence(std::uint64_t tick, const PositionSample& sample, SenseState& st,
@@ -160,6 +204,7 @@ bool ServoLoop::sense(std::uint64_t tick, std::int64_t wake_ns, PositionSample& 
     // position yet there is nothing to hold, and nothing is commanded.
     ++res.stale_ticks;
     ++st.periods_since_x;
+    st.fresh = false;
     rec.flags |= telemetry::kFlagStale;
     sample.position = st.last_x;
     if (++st.stale_streak >= options_.stale_fault_ticks) {
@@ -168,6 +213,7 @@ bool ServoLoop::sense(std::uint64_t tick, std::int64_t wake_ns, PositionSample& 
     return st.have_x && res.fault.cause == FaultCause::kNone;
   }
   st.stale_streak = 0;
+  st.fresh = true;
   const bool has_time = (sample.flags & kSampleHasTime) != 0 && sample.time_ns > 0;
   if (has_time) rec.sample_time_ns = sample.time_ns;
   // A sample measured long ago is as stale as none (realtime: freerun has no real clock).
@@ -216,7 +262,9 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
   std::int64_t deadline = start;  // the first tick is due at once
   int overrun_streak = 0;
   SenseState st;
-  double last_command = 0.0;  // u_{k-1}, for the wall's work over the period just ended
+  std::int64_t last_scheduled = -1;
+  observer_.restart();  // nothing in flight from an earlier run
+  const double work_before = observer_.wall_work_j();
   if (next_tick_ > 0) mark_rearmed(stop);  // enabled again after a fault
 
   for (std::uint64_t n = 0;; ++n) {
@@ -238,25 +286,19 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
     }
 
     take_reloads(tick, rec.scheduled_ns, res, stop);
+    // Sample periods since the previous tick: more than one after skipped periods.
+    const auto periods = static_cast<std::uint32_t>(
+        last_scheduled < 0
+            ? 1
+            : std::max<std::int64_t>(1, (rec.scheduled_ns - last_scheduled) / period));
+    last_scheduled = rec.scheduled_ns;
     PositionSample sample;
-    double command = 0.0;
     const bool stepped = sense(tick, wake, sample, st, rec, res);
     if (!stepped && res.fault.cause == FaultCause::kNone) rec.flags |= telemetry::kFlagNoPosition;
-    if (stepped) {
-      if (st.have_work_x) res.wall_energy_j += last_command * (sample.position - st.work_x);
-      st.work_x = sample.position;
-      st.have_work_x = true;
-      const control::ControlOutput out = controller_->step(sample.position);
-      command = out.force_commanded;
-      rec.position = sample.position;
-      rec.penetration = out.penetration;
-      rec.velocity = out.velocity;
-      rec.force_computed = out.force_computed;
-      rec.flags |= out.flags;
-      if (out.flags & control::kControlNonFinite) {
-        set_fault({FaultCause::kNonFiniteForce, tick, out.force_computed}, rec, res);
-      }
-    }
+    const control::Damping d =
+        stepped ? control(tick, sample, st.fresh, periods, rec, res) : control::Damping{};
+    double command = d.command;
+    double added = d.added;
     if (res.fault.cause == FaultCause::kNone) {
       const IoStatus ws = device_.write(command);
       if (ws == IoStatus::kTransportFault || ws == IoStatus::kDeviceFault) {
@@ -268,10 +310,11 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
     }
     if (res.fault.cause != FaultCause::kNone) {
       command = 0.0;
+      added = 0.0;
       device_.write(0.0);  // zero force at once; the service then disables output
     }
     rec.force_commanded = command;
-    last_command = command;
+    observer_.commanded(command, added);
 
     // Bookkeeping after the timed window.
     const std::int64_t done = now_ns();
@@ -319,7 +362,8 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
   device_.write(0.0);  // the last command must not outlive the loop that was servoing it
   if (options_.law_swap != nullptr) options_.law_swap->loop_ended();  // no more takes
   next_tick_ += res.ticks;
-  energy_before_ += res.wall_energy_j;
+  res.wall_energy_j = observer_.wall_work_j() - work_before;
+  res.passivity = passivity();
   return res;
 }
 

@@ -8,6 +8,7 @@
 #include <cstdint>
 
 #include "control/controller.h"
+#include "control/passivity_observer.h"
 #include "drivers/device.h"
 #include "loop/latency_histogram.h"
 #include "loop/law_swap.h"
@@ -33,6 +34,9 @@ struct LoopOptions {
   bool wait_for_ring = false;
   // Live reload: the mailbox a new control law arrives through (null: none).
   LawSwap* law_swap = nullptr;
+  // The runtime passivity observer and controller; its sample_period is the loop's. The
+  // default observes with no damping credited (b = 0) and never damps.
+  control::ObserverParams observer;
 };
 
 // What the loop is doing, readable from any thread while it runs (relaxed atomics, stored
@@ -46,7 +50,20 @@ struct LiveStatus {
   std::atomic<double> position{0.0};
   std::atomic<double> penetration{0.0};
   std::atomic<double> force_commanded{0.0};
-  std::atomic<double> wall_energy_j{0.0};  // LoopResult::wall_energy_j, over every run()
+  std::atomic<double> wall_energy_j{0.0};      // LoopResult::wall_energy_j, over every run()
+  std::atomic<double> observer_energy_j{0.0};  // PassivityResult::energy_j
+  std::atomic<std::uint64_t> damped_ticks{0};  // PassivityResult::damped_ticks
+};
+
+// What the passivity observer saw, over every run() of the loop so far.
+struct PassivityResult {
+  bool observed = false;             // false: safety.passivity_controller off
+  double energy_j = 0.0;             // E at the end (J)
+  double min_energy_j = 0.0;         // its minimum (J), <= 0
+  std::uint64_t negative_ticks = 0;  // ticks that ended with E < 0
+  std::uint64_t damped_ticks = 0;    // ticks the controller added damping
+  double max_damping = 0.0;          // the most it added (N s/m)
+  double damping_work_j = 0.0;       // energy its force took out of the device (J)
 };
 
 struct LoopResult {
@@ -61,10 +78,12 @@ struct LoopResult {
   std::uint64_t sequence_gaps = 0;   // times the device's sequence skipped
   std::uint64_t samples_missed = 0;  // samples those gaps skipped in all
   double max_penetration = 0.0;
-  // Work the commanded force did on the device, sum of u_{k-1} (x_k - x_{k-1}) over the
-  // ticks with a position (J): negative while the wall takes energy in (pressing into it),
+  // Work the commanded force did on the device, sum of u (x_k - x_{k-1}) over the ticks with
+  // a position, u the force that acted over the period (the ZOH's, written the device's
+  // declared delay earlier) (J): negative while the wall takes energy in (pressing into it),
   // positive when it hands energy back; above the energy its spring holds, the wall was active.
   double wall_energy_j = 0.0;
+  PassivityResult passivity;
   Fault fault;
 };
 
@@ -113,8 +132,7 @@ class ServoLoop {
     std::int64_t last_time_ns = 0;     // the last sample's own time (0: it had none)
     std::uint64_t last_sequence = 0;
     bool have_sequence = false;
-    double work_x = 0.0;  // the position the last step was taken at (the wall's work)
-    bool have_work_x = false;
+    bool fresh = false;  // the last sense() took a new sample
   };
   bool sense(std::uint64_t tick, std::int64_t wake_ns, PositionSample& sample, SenseState& st,
              telemetry::TickRecord& rec, LoopResult& res) noexcept;
@@ -134,11 +152,18 @@ class ServoLoop {
   // Stores what `hapticctl status` reads (LiveStatus). RT-safe: called every tick.
   void publish(const telemetry::TickRecord& rec, const LoopResult& res) noexcept;
 
+  // Steps the controller and the passivity observer on a tick with a position; returns the
+  // command. RT-safe: called every tick.
+  control::Damping control(std::uint64_t tick, const PositionSample& sample, bool fresh,
+                           std::uint32_t periods, telemetry::TickRecord& rec,
+                           LoopResult& res) noexcept;
+  PassivityResult passivity() const noexcept;
+
+  control::PassivityObserver observer_;
   LatencyHistogram wake_latency_;
   LatencyHistogram compute_time_;
   std::atomic<std::uint64_t> ticks_done_{0};
   std::uint64_t next_tick_ = 0;  // the first tick of the next run()
-  double energy_before_ = 0.0;   // wall_energy_j of the earlier run()s
   LiveStatus live_;
 };
 

@@ -6,6 +6,8 @@
 #include <memory>
 
 #include "control/controller.h"
+#include "control/passivity_observer.h"
+#include "drivers/registry.h"
 #include "service/config_source.h"
 
 namespace hapticd::service {
@@ -13,37 +15,60 @@ namespace {
 
 using telemetry::TickRecord;
 
-// One configuration's controller walking the log, with its series.
+// The driver's declared delay, which places the force acting over each period; 0 for a
+// driver this build does not have (only the observer's figures depend on it, and the
+// controller's forces only in damp mode: a difference then shows as one).
+int device_delay(const config::Config& cfg) {
+  for (const drivers::DriverEntry& d : drivers::registered_drivers()) {
+    if (d.name == cfg.device.driver) return d.declared_delay(cfg);
+  }
+  return 0;
+}
+
+// Sample periods between two records (more than one after the loop skipped periods).
+std::uint32_t periods_between(std::int64_t from_ns, std::int64_t to_ns, double period_s) {
+  const double n = std::round(static_cast<double>(to_ns - from_ns) * 1e-9 / period_s);
+  return n >= 1.0 ? static_cast<std::uint32_t>(n) : 1u;
+}
+
+// One configuration's controller and passivity observer walking the log, with its series.
 struct Walker {
   std::unique_ptr<control::Controller> law;
+  std::unique_ptr<control::PassivityObserver> observer;  // built once: it spans re-armings
   ForceSeries series;
-  double last_command = 0.0;  // u_{k-1}
-  double work_x = 0.0;        // where the last step was taken
-  bool have_work_x = false;
 
   void restart(const config::Config& cfg) {
     law = std::make_unique<control::Controller>(control::make_control_law(cfg));
-    last_command = 0.0;
-    have_work_x = false;
+    if (!observer) {
+      observer = std::make_unique<control::PassivityObserver>(
+          control::observer_params(cfg, device_delay(cfg)));
+    }
+    observer->restart();
   }
   void swap_to(const config::Config& cfg) {
     auto next = std::make_unique<control::Controller>(control::make_control_law(cfg));
     next->continue_from(*law);
     law = std::move(next);
   }
-  // One ordinary record; the output when the controller is stepped.
-  std::optional<control::ControlOutput> step(bool stepped, double x) {
+  // One ordinary record; the output when the controller is stepped, its force_commanded the
+  // command written (the passivity controller's damping included).
+  std::optional<control::ControlOutput> step(bool stepped, bool fresh, std::uint32_t periods,
+                                             double x) {
     std::optional<control::ControlOutput> out;
+    control::Damping d;
     if (stepped) {
-      if (have_work_x) series.wall_energy_j += last_command * (x - work_x);
-      work_x = x;
-      have_work_x = true;
+      observer->observe(x, fresh, periods);
       out = law->step(x);
-      add(out->force_commanded, out->penetration, out->flags & control::kControlContact,
-          out->flags & control::kControlSaturated);
+      d = observer->damp(out->force_commanded, law->law().max_force);
+      out->force_commanded = d.command;
+      add(d.command, out->penetration, out->flags & control::kControlContact,
+          (out->flags & control::kControlSaturated) || d.saturated);
     }
-    last_command = out ? out->force_commanded : 0.0;
-    series.commanded.push_back(last_command);
+    observer->commanded(d.command, d.added);
+    series.commanded.push_back(d.command);
+    series.wall_energy_j = observer->wall_work_j();
+    series.min_observer_energy_j = observer->min_energy_j();
+    series.damped_ticks = observer->damped_ticks();
     return out;
   }
   void add(double u, double p, bool contact, bool saturated) {
@@ -58,15 +83,15 @@ bool same_bits(double a, double b) {
   return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b);
 }
 
-// The logged series, counted the way the loop counts (from the records alone).
-void log_tick(ForceSeries& s, const TickRecord& r, bool stepped, double& last_u, double& last_x,
-              bool& have_x) {
-  if (stepped) {
-    if (have_x) s.wall_energy_j += last_u * (r.position - last_x);
-    last_x = r.position;
-    have_x = true;
-  }
-  last_u = r.force_commanded;
+// The logged series, counted the way the loop counts (from the records alone): the work with
+// an observer fed the logged commands, the observer's figures as recorded.
+void log_tick(ForceSeries& s, control::PassivityObserver& work, const TickRecord& r, bool stepped,
+              std::uint32_t periods) {
+  if (stepped) work.observe(r.position, (r.flags & telemetry::kFlagStale) == 0, periods);
+  work.commanded(r.force_commanded, 0.0);
+  s.wall_energy_j = work.wall_work_j();
+  s.min_observer_energy_j = std::min(s.min_observer_energy_j, r.observer_energy_j);
+  s.damped_ticks += (r.flags & telemetry::kFlagPassivityDamped) ? 1 : 0;
   s.commanded.push_back(r.force_commanded);
   s.max_abs_force = std::max(s.max_abs_force, std::abs(r.force_commanded));
   s.max_penetration = std::max(s.max_penetration, r.penetration);
@@ -80,9 +105,8 @@ struct State {
   const config::Config* other_cfg;
   config::Config own_cfg;
   Walker own, other;
-  std::size_t next_change = 0;  // into log.reloads
-  double last_u = 0.0, last_x = 0.0;
-  bool have_x = false;
+  std::size_t next_change = 0;                              // into log.reloads
+  std::unique_ptr<control::PassivityObserver> logged_work;  // of the logged commands
 };
 
 // A marker record: a reload swaps the own law (continuing it), a re-arming starts both afresh.
@@ -112,8 +136,7 @@ bool take_marker(State& st, const TickRecord& r, ReplayResult& out) {
   }
   st.own.restart(st.own_cfg);
   if (st.other_cfg != nullptr) st.other.restart(*st.other_cfg);
-  st.last_u = 0.0;
-  st.have_x = false;
+  st.logged_work->restart();
   ++out.rearms;
   return true;
 }
@@ -139,11 +162,15 @@ ReplayResult replay_log(const telemetry::LogContents& log, const std::string& lo
   State st{log,   log_name,
            other, config_from_log(log.header.config_text, log_name + " (its configuration)"),
            {},    {},
-           0,     0.0,
-           0.0,   false};
+           0,     {}};
   st.own.restart(st.own_cfg);
   if (other != nullptr) st.other.restart(*other);
+  control::ObserverParams work = control::observer_params(st.own_cfg, device_delay(st.own_cfg));
+  work.mode = config::PassivityControl::kObserve;
+  st.logged_work = std::make_unique<control::PassivityObserver>(work);
+  const double period = st.own_cfg.loop.sample_period_s();
   std::optional<std::uint64_t> last_tick;
+  std::int64_t last_scheduled = 0;
   for (const TickRecord& r : log.records) {
     if (r.marker != telemetry::kMarkerNone) {
       if (!take_marker(st, r, out)) break;
@@ -154,15 +181,19 @@ ReplayResult replay_log(const telemetry::LogContents& log, const std::string& lo
                     std::to_string(r.tick - 1) + " are missing from the log";
       break;
     }
+    const std::uint32_t periods =
+        last_tick ? periods_between(last_scheduled, r.scheduled_ns, period) : 1u;
     last_tick = r.tick;
+    last_scheduled = r.scheduled_ns;
     // The loop steps the controller unless it had no position (none yet, or a fault before
     // the step); a faulted tick ends its run, so whether it stepped does not reach later ticks.
     const bool stepped = (r.flags & (telemetry::kFlagNoPosition | telemetry::kFlagFault)) == 0;
+    const bool fresh = (r.flags & telemetry::kFlagStale) == 0;
     out.ticks.push_back(r.tick);
     out.positions.push_back(r.position);
-    log_tick(out.logged, r, stepped, st.last_u, st.last_x, st.have_x);
-    if (const auto o = st.own.step(stepped, r.position)) compare(r, *o, out);
-    if (other != nullptr) st.other.step(stepped, r.position);
+    log_tick(out.logged, *st.logged_work, r, stepped, periods);
+    if (const auto o = st.own.step(stepped, fresh, periods, r.position)) compare(r, *o, out);
+    if (other != nullptr) st.other.step(stepped, fresh, periods, r.position);
   }
   out.own = std::move(st.own.series);
   if (other != nullptr) out.other = std::move(st.other.series);

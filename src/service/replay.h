@@ -1,8 +1,9 @@
 // The engine of `hapticd replay` (DESIGN.md §8, §12): a tick log's positions fed through a
 // controller built from the log's own configuration - switching law at every reload marker,
-// starting afresh at every re-arming, as the run did - must reproduce the logged forces bit
-// for bit; fed through another configuration's controller they show what that wall would have
-// done on the same motion (open loop: the positions are the logged ones). Not RT-safe.
+// starting afresh at every re-arming, as the run did, with the passivity observer and
+// controller the run had - must reproduce the logged forces bit for bit; fed through another
+// configuration's controller they show what that wall would have done on the same motion (open
+// loop: the positions are the logged ones). Not RT-safe.
 #pragma once
 
 #include <cstdint>
@@ -22,8 +23,13 @@ struct ForceSeries {
   double max_penetration = 0.0;   // m, as this configuration places the wall
   std::uint64_t contact_ticks = 0;
   std::uint64_t saturated_ticks = 0;
-  // Sum of u_{k-1} (x_k - x_{k-1}) over the stepped ticks, as the loop counts it (J).
+  // Sum of u (x_k - x_{k-1}) over the stepped ticks, u the force that acted over the period,
+  // as the loop counts it (J).
   double wall_energy_j = 0.0;
+  // The passivity observer's minimum energy (J) and the ticks its controller damped, as the
+  // loop would have seen them on these positions (the logged series: from the records).
+  double min_observer_energy_j = 0.0;
+  std::uint64_t damped_ticks = 0;
 };
 
 struct ReplayResult {

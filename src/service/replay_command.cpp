@@ -29,11 +29,10 @@ using gate::format_number;
 using nlohmann::json;
 
 json series_json(const ForceSeries& s) {
-  return {{"max_abs_force", s.max_abs_force},
-          {"max_penetration", s.max_penetration},
-          {"contact_ticks", s.contact_ticks},
-          {"saturated_ticks", s.saturated_ticks},
-          {"wall_energy_j", s.wall_energy_j}};
+  return {{"max_abs_force", s.max_abs_force}, {"max_penetration", s.max_penetration},
+          {"contact_ticks", s.contact_ticks}, {"saturated_ticks", s.saturated_ticks},
+          {"wall_energy_j", s.wall_energy_j}, {"min_observer_energy_j", s.min_observer_energy_j},
+          {"damped_ticks", s.damped_ticks}};
 }
 
 struct WhatIf {
@@ -96,13 +95,14 @@ std::string result_text(const std::string& log, const telemetry::LogSet& set, co
        << " ticks differ, the first at tick " << *r.first_difference << "\n";
   }
   const auto col = [](const ForceSeries& s) {
-    return std::array<std::string, 5>{
+    return std::array<std::string, 7>{
         format_number(s.max_abs_force) + " N", format_number(s.max_penetration * 1e3) + " mm",
-        std::to_string(s.contact_ticks), std::to_string(s.saturated_ticks),
-        format_number(s.wall_energy_j) + " J"};
+        std::to_string(s.contact_ticks),       std::to_string(s.saturated_ticks),
+        format_number(s.wall_energy_j) + " J", format_number(s.min_observer_energy_j) + " J",
+        std::to_string(s.damped_ticks)};
   };
   const auto logged = col(r.logged);
-  const auto other = what_if ? col(*r.other) : std::array<std::string, 5>{};
+  const auto other = what_if ? col(*r.other) : std::array<std::string, 7>{};
   if (what_if) {
     os << "what-if: " << what_if->cfg.source_name << "\n  gate               "
        << (what_if->gate.pass ? "pass" : "FAIL") << "\n";
@@ -110,8 +110,8 @@ std::string result_text(const std::string& log, const telemetry::LogSet& set, co
   }
   os << row("", "logged", what_if ? "what-if" : "");
   const char* names[] = {"max |force|", "max penetration", "contact ticks", "saturated ticks",
-                         "wall energy"};
-  for (std::size_t i = 0; i < 5; ++i) os << row(names[i], logged[i], other[i]);
+                         "wall energy", "min observer E",  "damped ticks"};
+  for (std::size_t i = 0; i < 7; ++i) os << row(names[i], logged[i], other[i]);
   return os.str();
 }
 

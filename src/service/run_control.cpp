@@ -16,6 +16,7 @@
 #include "gate/number_format.h"
 #include "service/config_source.h"
 #include "service/exit_codes.h"
+#include "service/gate_derate.h"
 #include "service/reload_check.h"
 #include "service/run_session.h"
 
@@ -130,13 +131,17 @@ json RunSession::reload(const std::string& text, const std::string& source,
   const double k = next.cfg.wall.stiffness, b = next.cfg.wall.damping;
   json out = {{"accepted", true},
               {"applied_at_tick", first_tick ? json(*first_tick) : json(nullptr)},
-              {"gate", gate::gate_to_json(next.report)}};
+              {"gate", gate::gate_to_json(next.report)},
+              {"derated", next.derated ? json{{"configured", next.derated->first},
+                                              {"ran", next.derated->second}}
+                                       : json(nullptr)}};
   {
     std::lock_guard lock(mutex_);
     cfg_ = std::move(next.cfg);
     ++reloads_;
     gate_ = out["gate"];
     summary_.gate = gate_;
+    summary_.derated_stiffness = next.derated;
   }
   spdlog::info("reload from {} accepted: wall K {} N/m B {} N s/m {}", source, k, b,
                first_tick ? "from tick " + std::to_string(*first_tick) : "for the next arming");
@@ -158,8 +163,17 @@ RunSession::Prepared RunSession::prepare(const config::Config& running, const st
   if (const auto blockers = reload_blockers(running, p.cfg); !blockers.empty()) {
     throw ControlRefusal(joined(blockers), kExitUsage);
   }
-  p.report = gate::evaluate_gate(p.cfg, session_->device().info().transport_delay_samples);
-  if (!p.report.pass && p.cfg.safety.gate == config::GateMode::kEnforce) {
+  const int delay = session_->device().info().transport_delay_samples;
+  p.report = gate::evaluate_gate(p.cfg, delay);
+  const gate::GateReport configured = p.report;
+  if (const auto derated = (p.derated = derate_stiffness(p.cfg, delay, p.report))) {
+    spdlog::warn(
+        "reload from {}: DERATED (safety.gate: derate): wall.stiffness {} N/m fails the gate ({}), "
+        "swapping in {} N/m, the largest that passes",
+        source, gate::format_number(derated->first), joined(configured.reasons),
+        gate::format_number(derated->second));
+  }
+  if (!gate_allows(p.report, p.cfg)) {
     throw ControlRefusal("the gate refuses it: " + joined(p.report.reasons), kExitGateRefused);
   }
   if (!p.report.pass) {
@@ -290,7 +304,7 @@ std::string RunSession::try_clear() {
   }
   Device& device = session_->device();
   const gate::GateReport report = gate::evaluate_gate(cfg, device.info().transport_delay_samples);
-  if (!report.pass && cfg.safety.gate == config::GateMode::kEnforce) {
+  if (!gate_allows(report, cfg)) {
     return "the gate refuses the configuration: " + joined(report.reasons);
   }
   try {

@@ -53,6 +53,7 @@ RunSession::RunSession(const RunOptions& options, config::Config cfg, SignalWatc
   summary_.sample_period_s = cfg_.loop.sample_period_s();
   summary_.stop_reason = "duration";
   summary_.device_name = cfg_.device.driver;
+  summary_.passivity_mode = control::passivity_mode_name(cfg_.safety.passivity_controller);
 }
 
 RunSession::~RunSession() {
@@ -250,6 +251,7 @@ void RunSession::accumulate(const loop::LoopResult& r) {
   t.samples_missed += r.samples_missed;
   t.max_penetration = std::max(t.max_penetration, r.max_penetration);
   t.wall_energy_j += r.wall_energy_j;
+  t.passivity = r.passivity;  // already over every run
   t.fault = r.fault;
 }
 

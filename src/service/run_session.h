@@ -60,6 +60,7 @@ class RunSession final : public ControlHandler {
     config::Config cfg;
     gate::GateReport report;
     std::unique_ptr<control::Controller> law;
+    std::optional<std::pair<double, double>> derated;  // safety.gate: derate lowered K
   };
 
   nlohmann::json status() const;

@@ -24,6 +24,32 @@ std::string line_us(const json& p) {
          " us";
 }
 
+json passivity_json(const RunSummary& s) {
+  const loop::PassivityResult& p = s.loop.passivity;
+  if (!p.observed) return {{"mode", s.passivity_mode}};
+  return {{"mode", s.passivity_mode},          {"energy_j", p.energy_j},
+          {"min_energy_j", p.min_energy_j},    {"negative_ticks", p.negative_ticks},
+          {"damped_ticks", p.damped_ticks},    {"max_damping", p.max_damping},
+          {"damping_work_j", p.damping_work_j}};
+}
+
+void passivity_text(const RunSummary& s, std::ostream& os) {
+  using gate::format_number;
+  const loop::PassivityResult& p = s.loop.passivity;
+  if (!p.observed) {
+    os << "  passivity      observer off (safety.passivity_controller: off)\n";
+    return;
+  }
+  os << "  passivity      observed energy " << format_number(p.energy_j) << " J, min "
+     << format_number(p.min_energy_j) << " J, " << p.negative_ticks << " ticks below zero"
+     << (p.negative_ticks > 0 ? " (THE LOOP PUT ENERGY INTO THE HAND)" : "") << "\n";
+  if (s.passivity_mode == "damp") {
+    os << "                 controller damped " << p.damped_ticks << " ticks, up to "
+       << format_number(p.max_damping) << " N s/m, taking out " << format_number(p.damping_work_j)
+       << " J\n";
+  }
+}
+
 }  // namespace
 
 json summary_to_json(const RunSummary& s) {
@@ -75,6 +101,11 @@ json summary_to_json(const RunSummary& s) {
              {"others_off_rt_cpu", s.rt.others_off_rt_cpu},
              {"warnings", s.rt.warnings}};
   j["gate"] = s.gate;
+  j["passivity"] = passivity_json(s);
+  j["derated"] = s.derated_stiffness ? json{{"key", "wall.stiffness"},
+                                            {"configured", s.derated_stiffness->first},
+                                            {"ran", s.derated_stiffness->second}}
+                                     : json(nullptr);
   return j;
 }
 
@@ -87,6 +118,11 @@ std::string summary_to_text(const RunSummary& s) {
      << format_number(1.0 / s.sample_period_s) << " Hz (" << j["clock"].get<std::string>()
      << "), stopped by " << s.stop_reason
      << (s.output_was_enabled ? "" : " before output was enabled") << "\n";
+  if (s.derated_stiffness) {
+    os << "  DERATED        wall.stiffness " << format_number(s.derated_stiffness->first)
+       << " N/m configured, ran at " << format_number(s.derated_stiffness->second)
+       << " N/m: the largest that passes the gate (safety.gate: derate)\n";
+  }
   if (s.realtime) {
     os << "  RT             "
        << (s.rt.fifo ? "SCHED_FIFO " + std::to_string(s.rt.priority) : "SCHED_OTHER")
@@ -102,6 +138,7 @@ std::string summary_to_text(const RunSummary& s) {
      << " ticks\n";
   os << "  wall energy    " << format_number(s.loop.wall_energy_j)
      << " J (work the wall did on the device)\n";
+  passivity_text(s, os);
   if (s.loop.reloads > 0) {
     os << "  reloads        " << s.loop.reloads << " swapped in at a tick boundary\n";
   }

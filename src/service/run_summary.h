@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "loop/latency_histogram.h"
@@ -44,6 +45,9 @@ struct RunSummary {
   double peer_applied_force = 0.0;    // what the peer's plant felt last (loopback)
   bool peer_output_on = false;
   nlohmann::json gate;
+  std::string passivity_mode;  // safety.passivity_controller: "off", "observe", "damp"
+  // safety.gate: derate ran the wall at a lower stiffness than configured: {configured, ran}.
+  std::optional<std::pair<double, double>> derated_stiffness;
 };
 
 nlohmann::json summary_to_json(const RunSummary& s);

@@ -10,7 +10,9 @@
 
 #include "config/config_loader.h"
 #include "gate/gate_report_format.h"
+#include "gate/number_format.h"
 #include "service/exit_codes.h"
+#include "service/gate_derate.h"
 #include "service/result_output.h"
 #include "telemetry/log_path.h"
 
@@ -35,7 +37,7 @@ bool announce_gate(const gate::GateReport& report, const config::Config& cfg) {
                  report.delay_samples);
   } else {
     for (const std::string& r : report.reasons) spdlog::error("gate: {}", r);
-    if (cfg.safety.gate == config::GateMode::kEnforce) {
+    if (!gate_allows(report, cfg)) {
       std::cerr << gate::gate_to_text(report, cfg);
       return false;
     }
@@ -95,6 +97,7 @@ loop::LoopOptions loop_options(const RunOptions& options, const config::Config& 
   lo.stale_fault_ticks = cfg.safety.stale_fault_ticks;
   lo.max_speed = cfg.safety.max_speed;
   lo.wait_for_ring = !realtime && logging;  // a simulation logs every tick
+  lo.observer = control::observer_params(cfg, info.transport_delay_samples);
   if (options.duration_s) {
     lo.max_ticks = std::max<std::uint64_t>(
         1, static_cast<std::uint64_t>(std::llround(*options.duration_s * cfg.loop.rate_hz)));
@@ -190,7 +193,7 @@ void check_clock(const config::Config& cfg, bool simulated) {
   }
 }
 
-bool configure_and_gate(const config::Config& cfg, DeviceSession& session, RunSummary& s,
+bool configure_and_gate(config::Config& cfg, DeviceSession& session, RunSummary& s,
                         gate::GateReport& report) {
   Device& device = session.device();
   device.configure();
@@ -203,6 +206,15 @@ bool configure_and_gate(const config::Config& cfg, DeviceSession& session, RunSu
                       std::to_string(declared) + "; `hapticd check` would analyse another loop");
   }
   report = gate::evaluate_gate(cfg, declared);
+  const gate::GateReport configured = report;
+  if ((s.derated_stiffness = derate_stiffness(cfg, declared, report))) {
+    for (const std::string& r : configured.reasons) spdlog::error("gate: {}", r);
+    spdlog::warn(
+        "gate: DERATED (safety.gate: derate): wall.stiffness {} N/m fails, running at {} N/m, the "
+        "largest that passes",
+        gate::format_number(s.derated_stiffness->first),
+        gate::format_number(s.derated_stiffness->second));
+  }
   s.gate = gate::gate_to_json(report);
   return announce_gate(report, cfg);
 }

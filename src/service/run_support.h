@@ -18,7 +18,8 @@
 
 namespace hapticd::service {
 
-// The gate's verdict, logged; false when the run must not start (safety.gate: enforce).
+// The gate's verdict, logged; false when the run must not start (a failing gate that
+// safety.gate: warn does not override).
 bool announce_gate(const gate::GateReport& report, const config::Config& cfg);
 void announce_rt(const loop::RtStatus& rt);
 
@@ -47,8 +48,9 @@ int report(const RunOptions& options, RunSummary& s);
 bool stop_requested(SignalWatch& signals, RunSummary& s, const char* when, bool& reload);
 // Free-running ticks have no real time base, which only a simulated device tolerates.
 void check_clock(const config::Config& cfg, bool simulated);
-// Configures the device and runs the gate on what it declares; false when the gate refuses.
-bool configure_and_gate(const config::Config& cfg, DeviceSession& session, RunSummary& s,
+// Configures the device and runs the gate on what it declares (derating cfg's stiffness under
+// safety.gate: derate, recorded in the summary); false when the gate refuses.
+bool configure_and_gate(config::Config& cfg, DeviceSession& session, RunSummary& s,
                         gate::GateReport& report);
 
 }  // namespace hapticd::service

@@ -1,11 +1,11 @@
-// The binary tick log, format version 2. Everything is little-endian, with no padding and
-// no alignment between fields; offsets below are in bytes. Version 1 differs only in its
-// record: 72 bytes, the first 72 of version 2's (record_size says which).
+// The binary tick log, format version 3. Everything is little-endian, with no padding and
+// no alignment between fields; offsets below are in bytes. Versions 1 and 2 differ only in
+// their records: 72 and 96 bytes, the first bytes of version 3's (record_size says which).
 //
 // File header (44 + config_len bytes):
 //   0   u8[8]  magic "HAPTLOG\0" (48 41 50 54 4C 4F 47 00)
-//   8   u32    version = 2 (1 is still read)
-//   12  u32    record_size = 96 (72 in version 1)
+//   8   u32    version = 3 (1 and 2 are still read)
+//   12  u32    record_size = 112 (72 in version 1, 96 in version 2)
 //   16  f64    sample_period_s (IEEE-754 binary64)
 //   24  i64    start_unix_ns: wall-clock time of tick 0 in ns since the Unix epoch, 0 = unknown
 //   32  u32    clock_mode: 0 = realtime, 1 = freerun
@@ -13,7 +13,7 @@
 //   40  u8[config_len]  the whole effective configuration as UTF-8 YAML (not NUL-terminated)
 //   40+config_len  u32  CRC-32 of bytes [0, 40+config_len)
 //
-// Then zero or more blocks, back to back until the end of the file. Block (28 + 96*n bytes):
+// Then zero or more blocks, back to back until the end of the file. Block (28 + 112*n bytes):
 //   0   u8[4]  magic "HBLK" (48 42 4C 4B)
 //   4   u32    record_count n, 0..kMaxBlockRecords
 //   8   u64    first_tick: the tick of the first record. In a block with n = 0 it is the tick
@@ -21,15 +21,16 @@
 //   16  u64    dropped_before: records the RT ring dropped (or that failed to reach the
 //              disk) between the previous block's last record and this block's first one.
 //              A block with n = 0 and dropped_before > 0 is a pure loss marker.
-//   24  u32    CRC-32 of block bytes [0, 24) followed by the n*96 record bytes
-//   28  n records of 96 bytes:
+//   24  u32    CRC-32 of block bytes [0, 24) followed by the n*112 record bytes
+//   28  n records of 112 bytes:
 //        0 u64 tick, 8 i64 scheduled_ns, 16 i32 wake_latency_ns, 20 i32 compute_ns,
 //        24 f64 position, 32 f64 penetration, 40 f64 velocity, 48 f64 force_computed,
 //        56 f64 force_commanded, 64 u32 flags (TickFlag bits), 68 u32 device_status,
 //        72 i64 sample_time_ns, 80 u32 sequence, 84 u8 fault_cause, 85 u8 fault_class,
 //        86 u16 sequence_gap, 88 u32 fault_code, 92 u32 marker (TickMarker: 0 for a tick,
 //        1 reload accepted, 2 reload refused, 3 re-armed after a cleared fault: an event at a
-//        tick boundary, not a tick)
+//        tick boundary, not a tick), 96 f64 observer_energy_j (the passivity observer's
+//        energy, J), 104 f64 passivity_damping (N s/m the passivity controller added)
 //
 // A live reload that swapped a new control law in (marker 1), and a re-arming (marker 3, a
 // law started afresh), add a config block right after the block holding their marker record,
@@ -66,9 +67,10 @@ namespace hapticd::telemetry {
 static_assert(std::endian::native == std::endian::little, "the tick log is little-endian");
 
 inline constexpr std::array<char, 8> kFileMagic = {'H', 'A', 'P', 'T', 'L', 'O', 'G', '\0'};
-inline constexpr std::uint32_t kFormatVersion = 2;
-inline constexpr std::uint32_t kRecordSize = 96;
+inline constexpr std::uint32_t kFormatVersion = 3;
+inline constexpr std::uint32_t kRecordSize = 112;
 inline constexpr std::uint32_t kRecordSizeV1 = 72;       // version 1: the first 72 bytes
+inline constexpr std::uint32_t kRecordSizeV2 = 96;       // version 2: the first 96 bytes
 inline constexpr std::size_t kFileHeaderFixedSize = 40;  // bytes before the config text
 inline constexpr std::size_t kCrcSize = 4;
 inline constexpr std::uint32_t kMaxConfigBytes = 16u << 20;  // a sanity bound, not a YAML limit
@@ -94,7 +96,8 @@ static_assert(offsetof(TickRecord, scheduled_ns) == 8 &&
               offsetof(TickRecord, sample_time_ns) == 72 && offsetof(TickRecord, sequence) == 80 &&
               offsetof(TickRecord, fault_cause) == 84 && offsetof(TickRecord, fault_class) == 85 &&
               offsetof(TickRecord, sequence_gap) == 86 && offsetof(TickRecord, fault_code) == 88 &&
-              offsetof(TickRecord, marker) == 92);
+              offsetof(TickRecord, marker) == 92 && offsetof(TickRecord, observer_energy_j) == 96 &&
+              offsetof(TickRecord, passivity_damping) == 104);
 
 // What the file header carries besides the constants.
 struct LogHeader {
@@ -111,6 +114,14 @@ struct BlockHeader {
   std::uint64_t dropped_before = 0;
   std::uint32_t crc = 0;
 };
+
+// The record size of a format version, 0 for a version this reader does not know.
+constexpr std::size_t record_size_of_version(std::uint32_t version) {
+  return version == 1                ? kRecordSizeV1
+         : version == 2              ? kRecordSizeV2
+         : version == kFormatVersion ? kRecordSize
+                                     : 0;
+}
 
 constexpr std::size_t file_header_size(std::size_t config_len) {
   return kFileHeaderFixedSize + config_len + kCrcSize;

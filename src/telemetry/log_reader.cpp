@@ -28,10 +28,6 @@ bool magic_prefix_matches(std::span<const std::byte> bytes, const std::array<cha
 
 std::string at_byte(std::size_t offset) { return " at byte " + std::to_string(offset); }
 
-std::size_t record_size_of(std::uint32_t version) {
-  return version == 1 ? kRecordSizeV1 : kRecordSize;
-}
-
 // Parses the file header into out and returns its size in bytes.
 std::size_t read_header(std::span<const std::byte> bytes, const std::string& name, LogHeader& out,
                         std::uint32_t& version_out) {
@@ -40,7 +36,7 @@ std::size_t read_header(std::span<const std::byte> bytes, const std::string& nam
   // The version decides the rest of the layout, so it is checked before anything else.
   if (bytes.size() < 12) fail("truncated header");
   const auto version = load<std::uint32_t>(bytes.data() + 8);
-  if (version != 1 && version != kFormatVersion) {
+  if (record_size_of_version(version) == 0) {
     fail("unsupported log version " + std::to_string(version));
   }
   version_out = version;
@@ -56,7 +52,7 @@ std::size_t read_header(std::span<const std::byte> bytes, const std::string& nam
     fail("header CRC mismatch");
   }
   const auto record_size = load<std::uint32_t>(p + 12);
-  if (record_size != record_size_of(version)) {
+  if (record_size != record_size_of_version(version)) {
     fail("unsupported record size " + std::to_string(record_size));
   }
   out.sample_period_s = load<double>(p + 16);
@@ -152,7 +148,7 @@ void accept_block(std::span<const std::byte> block, std::size_t rsize, LogConten
   // A loss marker has no records: nothing is copied (no memcpy into a null vector).
   const std::byte* p = block.data() + kBlockHeaderSize;
   for (std::uint32_t i = 0; i < h.record_count; ++i, p += rsize) {
-    TickRecord r{};  // version 1: the fields after its 72 bytes stay zero
+    TickRecord r{};  // versions 1 and 2: the fields after their records' bytes stay zero
     std::memcpy(&r, p, rsize);
     contents.records.push_back(r);
   }
@@ -165,7 +161,7 @@ void accept_block(std::span<const std::byte> block, std::size_t rsize, LogConten
 LogContents read_log_bytes(std::span<const std::byte> bytes, const std::string& name) {
   LogContents contents;
   std::size_t offset = read_header(bytes, name, contents.header, contents.version);
-  const std::size_t rsize = record_size_of(contents.version);
+  const std::size_t rsize = record_size_of_version(contents.version);
   contents.records.reserve((bytes.size() - offset) / rsize);
   while (offset < bytes.size()) {
     std::string why;

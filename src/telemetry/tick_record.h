@@ -1,7 +1,7 @@
 // One fixed-size record per tick, written by the RT thread into the SPSC ring and appended
-// to the binary log by the writer thread. The layout is part of the log format (version 2):
-// little-endian, no padding, 96 bytes. Version 1 logs (72-byte records, the first 72 bytes of
-// this layout) are still read, with the later fields zero.
+// to the binary log by the writer thread. The layout is part of the log format (version 3):
+// little-endian, no padding, 112 bytes. Version 1 and 2 logs (72- and 96-byte records, the
+// first bytes of this layout) are still read, with the later fields zero.
 #pragma once
 
 #include <cstdint>
@@ -20,6 +20,7 @@ enum TickFlag : std::uint32_t {
   kFlagNonFinite = 1u << 7,    // the controller computed a non-finite force: zero commanded, fault
   kFlagSequenceGap = 1u << 8,  // the device's sequence skipped samples before this one
   kFlagNoPosition = 1u << 9,   // no position to act on yet: the controller was not stepped
+  kFlagPassivityDamped = 1u << 10,  // the passivity controller added damping on this tick
 };
 
 // A record that is not a tick but an event at a tick boundary (TickRecord::marker): `tick` is
@@ -51,9 +52,12 @@ struct TickRecord {
   std::uint16_t sequence_gap = 0;   // samples missing before this one (saturates at 65535)
   std::uint32_t fault_code = 0;     // the driver's code of that fault (errno, EMCY, axis error)
   std::uint32_t marker = 0;         // TickMarker: 0 for a tick, else an event record
+  // Version 3.
+  double observer_energy_j = 0.0;  // the passivity observer's energy E_k (J), 0 when off
+  double passivity_damping = 0.0;  // damping the passivity controller added (N s/m), 0: none
 };
 
 static_assert(std::is_trivially_copyable_v<TickRecord>);
-static_assert(sizeof(TickRecord) == 96, "TickRecord is part of the log format");
+static_assert(sizeof(TickRecord) == 112, "TickRecord is part of the log format");
 
 }  // namespace hapticd::telemetry

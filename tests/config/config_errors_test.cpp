@@ -26,7 +26,7 @@ TEST(ConfigErrors, UnknownKeyWithoutNeighbourListsTheAllowedKeys) {
   EXPECT_EQ(errors_of("safety:\n  colour: red\n"),
             Lines{"t.yaml:2: safety.colour: unknown key; expected one of: gate, "
                   "operator_passivity_shortage, passivity_margin, max_speed, stale_fault_ticks, "
-                  "sequence_gap_fault"});
+                  "sequence_gap_fault, passivity_controller, passivity_max_damping"});
   EXPECT_EQ(errors_of("plugins: []\n"),
             Lines{"t.yaml:1: plugins: unknown key; expected one of: loop, device, wall, safety, "
                   "analysis, telemetry"});
@@ -66,7 +66,7 @@ TEST(ConfigErrors, EnumerationsListTheAllowedValues) {
   EXPECT_EQ(errors_of("device:\n  driver: usb\n"),
             Lines{"t.yaml:2: device.driver: must be one of sim; got 'usb'"});
   EXPECT_EQ(errors_of("safety:\n  gate: off\n"),
-            Lines{"t.yaml:2: safety.gate: must be one of enforce, warn; got 'off'"});
+            Lines{"t.yaml:2: safety.gate: must be one of enforce, warn, derate; got 'off'"});
 }
 
 TEST(ConfigErrors, RangesSayWhatIsAllowed) {

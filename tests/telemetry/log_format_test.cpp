@@ -42,12 +42,12 @@ TEST(LogFormat, FileMatchesTheDocumentedLayout) {
 
   const std::size_t len = header.config_text.size();
   const std::size_t header_size = 44 + len;
-  const std::size_t block0 = header_size, block1 = block0 + 28 + 3 * 96;
-  ASSERT_EQ(b.size(), block1 + 28 + 2 * 96);
+  const std::size_t block0 = header_size, block1 = block0 + 28 + 3 * 112;
+  ASSERT_EQ(b.size(), block1 + 28 + 2 * 112);
 
   EXPECT_EQ(std::memcmp(b.data(), "HAPTLOG\0", 8), 0);
-  EXPECT_EQ(at<std::uint32_t>(b, 8), 2u);
-  EXPECT_EQ(at<std::uint32_t>(b, 12), 96u);
+  EXPECT_EQ(at<std::uint32_t>(b, 8), 3u);
+  EXPECT_EQ(at<std::uint32_t>(b, 12), 112u);
   EXPECT_EQ(at<double>(b, 16), header.sample_period_s);
   EXPECT_EQ(at<std::int64_t>(b, 24), header.start_unix_ns);
   EXPECT_EQ(at<std::uint32_t>(b, 32), 1u);  // freerun
@@ -64,10 +64,10 @@ TEST(LogFormat, FileMatchesTheDocumentedLayout) {
     EXPECT_EQ(at<std::uint32_t>(b, o + 4), n);
     EXPECT_EQ(at<std::uint64_t>(b, o + 8), records[k * 3].tick);  // first_tick
     EXPECT_EQ(at<std::uint64_t>(b, o + 16), 0u);                  // dropped_before
-    const std::uint32_t crc = zlib_crc(b, o + 28, n * 96, zlib_crc(b, o, 24));
+    const std::uint32_t crc = zlib_crc(b, o + 28, n * 112, zlib_crc(b, o, 24));
     EXPECT_EQ(at<std::uint32_t>(b, o + 24), crc) << "block " << k;
     for (std::uint32_t i = 0; i < n; ++i) {
-      const std::size_t r = o + 28 + i * 96;
+      const std::size_t r = o + 28 + i * 112;
       const TickRecord& want = records[k * 3 + i];
       // A few fields at their documented offsets, then the whole record bytewise.
       EXPECT_EQ(at<std::uint64_t>(b, r + 0), want.tick);
@@ -80,7 +80,9 @@ TEST(LogFormat, FileMatchesTheDocumentedLayout) {
       EXPECT_EQ(at<std::uint8_t>(b, r + 84), want.fault_cause);
       EXPECT_EQ(at<std::uint16_t>(b, r + 86), want.sequence_gap);
       EXPECT_EQ(at<std::uint32_t>(b, r + 88), want.fault_code);
-      EXPECT_EQ(std::memcmp(b.data() + r, &want, 96), 0);
+      EXPECT_EQ(at<double>(b, r + 96), want.observer_energy_j);
+      EXPECT_EQ(at<double>(b, r + 104), want.passivity_damping);
+      EXPECT_EQ(std::memcmp(b.data() + r, &want, 112), 0);
     }
   }
 }

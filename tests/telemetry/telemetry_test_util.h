@@ -60,6 +60,8 @@ inline TickRecord make_record(std::uint64_t tick) {
   r.fault_class = static_cast<std::uint8_t>(tick % 3);
   r.sequence_gap = static_cast<std::uint16_t>(tick % 5);
   r.fault_code = static_cast<std::uint32_t>(tick * 40503u);
+  r.observer_energy_j = 0.25 - 1e-3 * static_cast<double>(tick);
+  r.passivity_damping = static_cast<double>(tick % 4);
   return r;
 }
 

@@ -1,0 +1,131 @@
+#include "control/passivity_observer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace hapticd::control {
+namespace {
+constexpr std::uint32_t kMask = kMaxObserverDelay;  // history size - 1
+static_assert(((kMaxObserverDelay + 1) & kMaxObserverDelay) == 0, "history indexes with a mask");
+}  // namespace
+
+const char* passivity_mode_name(config::PassivityControl mode) noexcept {
+  switch (mode) {
+    case config::PassivityControl::kOff:
+      return "off";
+    case config::PassivityControl::kObserve:
+      return "observe";
+    case config::PassivityControl::kDamp:
+      return "damp";
+  }
+  return "unknown";
+}
+
+ObserverParams observer_params(const config::Config& cfg, int device_delay_samples) {
+  ObserverParams p;
+  p.mode = cfg.safety.passivity_controller;
+  p.device_damping = cfg.device.damping;
+  p.sample_period = cfg.loop.sample_period_s();
+  p.device_delay = device_delay_samples;
+  p.max_damping = std::min(cfg.safety.passivity_max_damping,
+                           kStableDampingFraction * 2.0 * cfg.device.mass / p.sample_period);
+  return p;
+}
+
+PassivityObserver::PassivityObserver(const ObserverParams& params) : params_(params) {
+  if (params.device_delay < 0 || params.device_delay > kMaxObserverDelay) {
+    throw std::invalid_argument("the passivity observer holds a device delay of 0 to " +
+                                std::to_string(kMaxObserverDelay) + " samples, not " +
+                                std::to_string(params.device_delay));
+  }
+  if (!(params.sample_period > 0.0)) {
+    throw std::invalid_argument("the passivity observer needs a sample period > 0");
+  }
+  inv_period_ = 1.0 / params.sample_period;
+}
+
+std::uint32_t PassivityObserver::acting() const noexcept {
+  return (head_ - static_cast<std::uint32_t>(params_.device_delay)) & kMask;
+}
+
+void PassivityObserver::observe(double position, bool fresh, std::uint32_t periods) noexcept {
+  if (!have_x_) {
+    last_x_ = position;
+    have_x_ = true;
+    return;
+  }
+  const std::uint32_t slot = acting();
+  const double n_periods = static_cast<double>(periods);
+  pending_force_ += history_[slot] * n_periods;
+  pending_damping_ += damping_history_[slot] * n_periods;
+  pending_periods_ += periods;
+  if (!fresh) {
+    if (energy_ < 0.0) ++negative_ticks_;
+    return;  // the held position: the motion shows in the next sample
+  }
+  const double dx = position - last_x_;
+  const double n = static_cast<double>(pending_periods_);
+  const double force = pending_force_ / n;
+  wall_work_ += force * dx;
+  if (enabled()) {
+    const double v = dx * inv_period_ / n;
+    energy_ += params_.device_damping * v * dx - force * dx;
+    damping_work_ -= pending_damping_ / n * dx;
+    previous_velocity_ = velocity_;
+    velocity_ = v;
+    min_energy_ = std::min(min_energy_, energy_);
+    if (energy_ < 0.0) ++negative_ticks_;
+  }
+  last_x_ = position;
+  pending_force_ = 0.0;
+  pending_damping_ = 0.0;
+  pending_periods_ = 0;
+}
+
+Damping PassivityObserver::damp(double wall, double max_force) noexcept {
+  Damping out;
+  out.command = wall;
+  if (params_.mode != config::PassivityControl::kDamp || !(energy_ < 0.0) || velocity_ == 0.0) {
+    return out;
+  }
+  // alpha v^2 T = -E: the damping that would dissipate the deficit over one period.
+  const double alpha =
+      std::min(-energy_ * inv_period_ / (velocity_ * velocity_), params_.max_damping);
+  // The force acts over the coming period: against the velocity expected there. A motion
+  // that reversed over the last period is taken to reverse again (the sampled loop's
+  // oscillation near the Nyquist rate, which a damper on the last velocity would feed).
+  const double expected = velocity_ * previous_velocity_ < 0.0 ? -velocity_ : velocity_;
+  double u = wall - alpha * expected;
+  if (!std::isfinite(u)) return out;  // nothing to add that can be trusted
+  if (std::abs(u) > max_force) {
+    u = std::copysign(max_force, u);
+    out.saturated = true;
+  }
+  out.command = u;
+  out.added = u - wall;
+  out.alpha = alpha;
+  ++damped_ticks_;
+  max_alpha_ = std::max(max_alpha_, alpha);
+  return out;
+}
+
+void PassivityObserver::commanded(double force, double added) noexcept {
+  head_ = (head_ + 1) & kMask;
+  history_[head_] = force;
+  damping_history_[head_] = added;
+}
+
+void PassivityObserver::restart() noexcept {
+  history_.fill(0.0);
+  damping_history_.fill(0.0);
+  have_x_ = false;
+  pending_force_ = 0.0;
+  pending_damping_ = 0.0;
+  pending_periods_ = 0;
+  velocity_ = 0.0;
+  previous_velocity_ = 0.0;
+}
+
+}  // namespace hapticd::control
