@@ -1,7 +1,8 @@
-// Cost of one tick: the controller alone (bare wall, wall behind a third-order coupling) and
-// the whole tick through the in-process sim device (read, step, write, log record push) as
-// the servo loop runs it in freerun. Reports ns per tick, the loop's own compute-time
-// percentiles, and heap allocations per tick (replaced operator new, see tests/support).
+// Cost of one tick: the controller alone (bare wall, wall behind a third-order coupling), the
+// passivity observer alone (observing, damping), and the whole tick through the in-process sim
+// device (read, step, write, log record push) as the servo loop runs it in freerun. Reports ns per
+// tick, the loop's own compute-time percentiles, and heap allocations per tick (replaced operator
+// new, see tests/support).
 #include <benchmark/benchmark.h>
 
 #include <array>
@@ -10,6 +11,7 @@
 #include "alloc_counter.h"
 #include "config/config_loader.h"
 #include "control/controller.h"
+#include "control/passivity_observer.h"
 #include "loop/servo_loop.h"
 #include "sim/sim_device.h"
 
@@ -50,16 +52,48 @@ void BM_ControllerStep_ThirdOrderCoupling(benchmark::State& state) {
   controller_step(state, demo(kCoupled));
 }
 
+// The passivity observer alone, as the loop calls it every tick: observe the period just
+// ended, let the controller add its damping, record the command. `range(0)`: 1 observe (b
+// credited, the energy stays positive: no damping), 2 damp with b = 0 (the energy goes
+// negative at once and the controller computes its damping on every tick that moves).
+void BM_PassivityObserver(benchmark::State& state) {
+  hapticd::control::ObserverParams p;
+  p.mode = state.range(0) == 2 ? hapticd::config::PassivityControl::kDamp
+                               : hapticd::config::PassivityControl::kObserve;
+  p.device_damping = state.range(0) == 2 ? 0.0 : 2.0;
+  p.sample_period = 1e-3;
+  p.max_damping = 20.0;
+  hapticd::control::PassivityObserver observer(p);
+  const auto x = positions();
+  std::size_t i = 0;
+  hapticd::testing::AllocationScope allocs;
+  for (auto _ : state) {
+    const double xi = x[i++ & 1023];
+    observer.observe(xi, true, 1);
+    const hapticd::control::Damping d = observer.damp(-2000.0 * std::max(xi, 0.0), 10.0);
+    observer.commanded(d.command, d.added);
+    benchmark::DoNotOptimize(d);
+  }
+  state.counters["allocs_per_tick"] =
+      benchmark::Counter(static_cast<double>(allocs.count()), benchmark::Counter::kAvgIterations);
+  state.counters["damped_fraction"] = static_cast<double>(observer.damped_ticks()) /
+                                      static_cast<double>(std::max<std::size_t>(i, 1));
+}
+
 // The servo loop in freerun over the sim device, with the tick log ring: exactly the code
 // of a realtime tick without the sleep. Each iteration runs `range(0)` ticks.
 void BM_FullTick_SimDevice(benchmark::State& state) {
   const Config cfg = demo();
   const auto ticks = static_cast<std::uint64_t>(state.range(0));
+  // range(1): safety.passivity_controller 0 off, 1 observe (the default).
   hapticd::telemetry::SpscRing<hapticd::telemetry::TickRecord> ring(ticks + 1);
   std::vector<hapticd::telemetry::TickRecord> drained(ticks + 1);
   hapticd::loop::LoopOptions lo;
   lo.realtime = false;
   lo.max_ticks = ticks;
+  lo.observer = hapticd::control::observer_params(cfg, 0);
+  lo.observer.mode = state.range(1) == 0 ? hapticd::config::PassivityControl::kOff
+                                         : hapticd::config::PassivityControl::kObserve;
   std::uint64_t allocations = 0, total = 0;
   std::int64_t p50 = 0, p99 = 0, p999 = 0, max = 0;
   for (auto _ : state) {
@@ -97,7 +131,12 @@ void BM_FullTick_SimDevice(benchmark::State& state) {
 
 BENCHMARK(BM_ControllerStep_BareWall);
 BENCHMARK(BM_ControllerStep_ThirdOrderCoupling);
-BENCHMARK(BM_FullTick_SimDevice)->Arg(100000)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PassivityObserver)->Arg(1)->Arg(2)->ArgName("mode");
+BENCHMARK(BM_FullTick_SimDevice)
+    ->Args({100000, 0})
+    ->Args({100000, 1})
+    ->ArgNames({"ticks", "observer"})
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

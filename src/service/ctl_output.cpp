@@ -53,6 +53,10 @@ std::string status_text(const json& s) {
   out << "  position      " << num(s["position"], 1e3) << " mm, penetration "
       << num(s["penetration"], 1e3) << " mm, force " << num(s["force_commanded"]) << " N\n";
   out << "  wall energy   " << num(s["wall_energy_j"]) << " J (work the wall did on the device)\n";
+  if (s.contains("observer_energy_j")) {
+    out << "  passivity     observed energy " << num(s["observer_energy_j"]) << " J, damped "
+        << num(s["passivity_damped_ticks"]) << " ticks\n";
+  }
   out << "  wake latency  " << percentiles(s["wake_latency_us"]) << "\n";
   out << "  compute       " << percentiles(s["compute_us"]) << "\n";
   out << "  overruns      " << num(s["overruns"]) << " (missed ticks " << num(s["missed_ticks"])

@@ -96,6 +96,8 @@ json RunSession::status() const {
     j["penetration"] = live.penetration.load(r);
     j["force_commanded"] = live.force_commanded.load(r);
     j["wall_energy_j"] = live.wall_energy_j.load(r);
+    j["observer_energy_j"] = live.observer_energy_j.load(r);
+    j["passivity_damped_ticks"] = live.damped_ticks.load(r);
     j["wake_latency_us"] = realtime_ ? percentiles_us(servo_->wake_latency()) : json(nullptr);
     j["compute_us"] = percentiles_us(servo_->compute_time());
   }

@@ -56,6 +56,23 @@ TEST(ServoLoop, NoHeapAllocationPerTickFreerun) {
   EXPECT_EQ(ring.dropped(), 20000u - 4096u);  // a full ring counts losses, never blocks
 }
 
+TEST(ServoLoop, NoHeapAllocationWhileThePassivityControllerDamps) {
+  // A wall the gate refuses (K T / 2 = 10 N s/m against b = 2): the observer goes negative
+  // and the controller acts on most ticks, inside the allocation scope.
+  Rig rig(config::load_embedded_default({{"wall.stiffness", "20000", "--set"}}));
+  SpscRing<TickRecord> ring(4096);
+  LoopOptions o = freerun(5000);
+  o.observer = control::observer_params(rig.cfg, 0);
+  o.observer.mode = config::PassivityControl::kDamp;
+  ServoLoop loop(rig.device, rig.controller, &ring, o);
+  const std::atomic<bool> stop{false};
+  hapticd::testing::AllocationScope scope;
+  const LoopResult r = loop.run(stop);
+  EXPECT_EQ(scope.count(), 0u) << "allocations on the RT path over " << r.ticks << " ticks";
+  EXPECT_GT(r.passivity.damped_ticks, 100u);
+  EXPECT_TRUE(r.passivity.observed);
+}
+
 TEST(ServoLoop, NoHeapAllocationPerTickRealtime) {
   Rig rig(config::load_embedded_default({{"loop.rate_hz", "5000", "--set loop.rate_hz=5000"}}));
   SpscRing<TickRecord> ring(1 << 12);
