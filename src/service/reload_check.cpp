@@ -47,6 +47,13 @@ std::vector<std::string> reload_blockers(const config::Config& running,
   differs(s.max_speed != t.max_speed || s.stale_fault_ticks != t.stale_fault_ticks ||
               s.sequence_gap_fault != t.sequence_gap_fault,
           "safety.max_speed/stale_fault_ticks/sequence_gap_fault", "new fault checks in the loop");
+  // The passivity observer credits b and bounds its damping by m; it spans the whole run.
+  differs(running.device.mass != next.device.mass ||
+              running.device.damping != next.device.damping ||
+              s.passivity_controller != t.passivity_controller ||
+              s.passivity_max_damping != t.passivity_max_damping,
+          "device.mass/damping, safety.passivity_controller/passivity_max_damping",
+          "new passivity observer settings");
   differs(running.telemetry.log_path != next.telemetry.log_path ||
               running.telemetry.ring_capacity != next.telemetry.ring_capacity,
           "telemetry", "a different tick log");

@@ -65,10 +65,13 @@ TEST(ControlSocket, StatusReloadsAndStopThroughHapticctl) {
   EXPECT_TRUE(s["wake_latency_us"]["p99"].is_number());
   EXPECT_TRUE(s["compute_us"]["max"].is_number());
   EXPECT_LT(s["wall_energy_j"].get<double>(), 0.0) << "pressed into: the wall took energy in";
+  EXPECT_GE(s["observer_energy_j"].get<double>(), 0.0) << "a wall the gate passes";
+  EXPECT_EQ(s["passivity_damped_ticks"], 0);
   const ProcessResult human = d.ctl({"status"});
   EXPECT_EQ(human.exit_code, 0) << human.err;
   EXPECT_TRUE(has(human.out, "hapticd running")) << human.out;
   EXPECT_TRUE(has(human.out, "K 2000 N/m")) << human.out;
+  EXPECT_TRUE(has(human.out, "passivity     observed energy")) << human.out;
 
   // A passing reload: the new wall governs from the tick the daemon names.
   const ProcessResult ok = d.ctl({"--json", "reload", write("k3000.yaml", pressing_config(3000))});
