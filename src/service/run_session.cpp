@@ -212,6 +212,7 @@ void RunSession::supervise(RtThread& rt) {
   std::uint64_t watchdog_usec = 0;
   const bool watchdog = sd_watchdog_enabled(0, &watchdog_usec) > 0;
   std::uint64_t last_ticks = servo_->ticks_done();
+  PassivityWatch passivity;
   pollfd fds[4] = {{signals_.fd(), POLLIN, 0},
                    {signals_.pipe_fd(), POLLIN, 0},
                    {rt.ended_fd(), POLLIN, 0},
@@ -234,6 +235,7 @@ void RunSession::supervise(RtThread& rt) {
     const std::uint64_t ticks = servo_->ticks_done();
     if (watchdog && ticks != last_ticks) sd_notify(0, "WATCHDOG=1");
     last_ticks = ticks;
+    watch_passivity(servo_->live(), passivity, 20);  // damping reported once a second at most
   }
 }
 

@@ -184,6 +184,26 @@ void summarise_peer(DeviceSession& session, RunSummary& s) {
   }
 }
 
+void watch_passivity(const loop::LiveStatus& live, PassivityWatch& w, int every) {
+  const double e = live.observer_energy_j.load(std::memory_order_relaxed);
+  if (e < 0.0 && !w.negative) {
+    spdlog::warn(
+        "passivity observer: energy {} J, below zero: the loop is putting energy into the hand",
+        gate::format_number(e));
+  } else if (e >= 0.0 && w.negative) {
+    spdlog::info("passivity observer: energy back at {} J", gate::format_number(e));
+  }
+  w.negative = e < 0.0;
+  if (++w.polls < every) return;
+  w.polls = 0;
+  const std::uint64_t damped = live.damped_ticks.load(std::memory_order_relaxed);
+  if (damped > w.damped_reported) {
+    spdlog::warn("passivity controller: damped {} ticks ({} in all), energy {} J",
+                 damped - w.damped_reported, damped, gate::format_number(e));
+    w.damped_reported = damped;
+  }
+}
+
 void check_clock(const config::Config& cfg, bool simulated) {
   if (cfg.loop.clock == config::ClockMode::kFreerun && !simulated) {
     throw config::ConfigError({cfg.locate("loop.clock") +

@@ -46,6 +46,16 @@ int report(const RunOptions& options, RunSummary& s);
 // Whether a stop was requested; logs it and records it in the summary. A SIGHUP is no stop:
 // it sets `reload` (the configuration file is read again once the servo runs).
 bool stop_requested(SignalWatch& signals, RunSummary& s, const char* when, bool& reload);
+// Events for the passivity observer while the loop runs, from the live status the
+// supervisor polls: when its energy goes below zero (and back), and how many ticks the
+// controller damped since the last report (at most one report per `every` polls).
+struct PassivityWatch {
+  bool negative = false;
+  std::uint64_t damped_reported = 0;
+  int polls = 0;
+};
+void watch_passivity(const loop::LiveStatus& live, PassivityWatch& w, int every);
+
 // Free-running ticks have no real time base, which only a simulated device tolerates.
 void check_clock(const config::Config& cfg, bool simulated);
 // Configures the device and runs the gate on what it declares (derating cfg's stiffness under
