@@ -119,6 +119,10 @@ TEST(CliPassivity, DerateRunsTheLargestPassingStiffnessAndSaysSo) {
   ASSERT_EQ(r.process.exit_code, 0) << r.process.err;
   EXPECT_EQ(r.summary["derated"]["configured"].get<double>(), 20000.0);
   EXPECT_EQ(r.summary["derated"]["ran"].get<double>(), k_max);
+  const ProcessResult told = run_process({hapticd_binary(), "check", "--json", "--set",
+                                          "wall.stiffness=20000", "--set", "safety.gate=derate"});
+  EXPECT_EQ(told.exit_code, 3) << "check judges the configured wall";
+  EXPECT_EQ(json::parse(told.out)["derated"]["ran"].get<double>(), k_max);
   EXPECT_EQ(r.summary["gate"]["verdict"], "pass");
   EXPECT_NE(r.process.out.find("DERATED"), std::string::npos) << r.process.out;
   EXPECT_NE(r.process.err.find("DERATED"), std::string::npos) << r.process.err;
