@@ -30,20 +30,8 @@ static_assert(same_bit(control::kControlNonFinite, telemetry::kFlagNonFinite));
 
 constexpr std::int64_t kNsPerS = 1'000'000'000;
 
-std::int64_t now_ns() noexcept {
-  timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * kNsPerS + ts.tv_nsec;
-}
-
-void sleep_until(std::int64_t deadline_ns) noexcept {
-  timespec ts;
-  ts.tv_sec = static_cast<time_t>(deadline_ns / kNsPerS);
-  ts.tv_nsec = static_cast<long>(deadline_ns % kNsPerS);
-  // Absolute time: a signal interrupting the sleep does not move the deadline.
-  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
-  }
-}
+std::int64_t now_ns() noexcept { return monotonic_ns(); }
+void sleep_until(std::int64_t deadline_ns) noexcept { sleep_until_ns(deadline_ns); }
 
 std::int32_t clamp_i32(std::int64_t v) noexcept {
   return static_cast<std::int32_t>(std::clamp<std::int64_t>(v, INT32_MIN, INT32_MAX));

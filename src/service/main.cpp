@@ -14,6 +14,7 @@
 #include "service/devices_command.h"
 #include "service/exit_codes.h"
 #include "service/export_command.h"
+#include "service/identify_command.h"
 #include "service/peer_command.h"
 #include "service/replay_command.h"
 #include "service/result_output.h"
@@ -153,6 +154,29 @@ int main(int argc, char** argv) {
                      "force_replayed (and force_other)");
   replay->add_flag("--json", replay_opts.json, "Print exactly one JSON object");
 
+  hapticd::service::IdentifyOptions id_opts;
+  CLI::App* identify = app.add_subcommand(
+      "identify",
+      "With the device held free (no wall), drive it with a multisine force within "
+      "device.max_force and fit its mass m and viscous damping b (and Coulomb friction where it "
+      "fits better) on the exact ZOH model; print them with 95 % intervals and the YAML to "
+      "paste. The sim, and --loopback, run the simulated device with no operator. Exit 0, 1 a "
+      "fault during the excitation, 2 bad input, 4 device error.");
+  add_config_options(identify, id_opts.config);
+  identify->add_flag("--json", id_opts.json, "Print exactly one JSON object");
+  identify->add_flag("--loopback", id_opts.loopback,
+                     "The configured driver against its simulated peer instead of hardware");
+  identify->add_flag("--yes-the-device-is-free", id_opts.device_free,
+                     "Required on real hardware: nothing holds the device and its travel is clear");
+  identify->add_option("--amplitude", id_opts.amplitude,
+                       "Peak force (N), at most device.max_force (default 0.4 device.max_force)");
+  identify->add_option("--f-low", id_opts.f_low, "Lowest frequency (Hz) of the multisine");
+  identify->add_option("--f-high", id_opts.f_high, "Highest frequency (Hz), below Nyquist");
+  identify->add_option("--duration", id_opts.duration_s, "Seconds of excitation (default 8)");
+  identify->add_option("--max-travel", id_opts.max_travel,
+                       "Metres from the start the device may move before the excitation stops "
+                       "as a fault (default 0.1)");
+
   CLI::App* devices = app.add_subcommand(
       "devices",
       "List the devices the drivers find attached (HID through hidapi's hidraw and libusb "
@@ -171,7 +195,7 @@ int main(int argc, char** argv) {
 
   // Only `run` and `peer` supervise the stop signals; the others die of them (they enable
   // nothing).
-  if (!*run && !*peer) hapticd::service::release_stop_signals();
+  if (!*run && !*peer && !*identify) hapticd::service::release_stop_signals();
   try {
     if (*check) return hapticd::service::check_command(check_cfg, check_json);
     if (*run) {
@@ -189,6 +213,10 @@ int main(int argc, char** argv) {
     if (*exp) return hapticd::service::export_command(export_log, export_out);
     if (*replay) return hapticd::service::replay_command(replay_opts);
     if (*devices) return hapticd::service::devices_command();
+    if (*identify) {
+      hapticd::service::SignalWatch signals;
+      return hapticd::service::identify_command(id_opts, signals);
+    }
   } catch (const hapticd::config::ConfigError& e) {
     for (const std::string& m : e.messages()) std::cerr << "hapticd: " << m << "\n";
     return hapticd::kExitUsage;

@@ -1,0 +1,253 @@
+#include "service/identify_command.h"
+
+#include <spdlog/spdlog.h>
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <stdexcept>
+
+#include "analysis/free_motion_fit.h"
+#include "config/config_loader.h"
+#include "drivers/registry.h"
+#include "gate/number_format.h"
+#include "loop/rt_setup.h"
+#include "service/device_session.h"
+#include "service/exit_codes.h"
+#include "service/result_output.h"
+
+namespace hapticd::service {
+namespace {
+
+using gate::format_number;
+
+struct Excitation {
+  double amplitude = 0.0, f_low = 0.0, f_high = 0.0, duration = 0.0;
+  std::vector<double> force;
+};
+
+// The excitation asked for, checked against the device; config::ConfigError (exit 2) when not.
+Excitation plan(const IdentifyOptions& o, const config::Config& cfg) {
+  const double rate = cfg.loop.rate_hz,
+               corner = cfg.device.damping / (2.0 * M_PI * cfg.device.mass);
+  Excitation e;
+  e.duration = o.duration_s;
+  // Defaults: enough force that a drive's command resolution (a CiA 402 drive's per mille of
+  // rated torque) is small beside it, and a band from the mechanical corner b / (2 pi m), where
+  // mass and damping weigh alike, up a decade and more, so the travel stays a few cm.
+  e.amplitude = o.amplitude.value_or(0.4 * cfg.device.max_force);
+  e.f_high = o.f_high.value_or(std::min(corner * 20.0, rate / 8.0));
+  e.f_low = o.f_low.value_or(std::max(std::min(corner, e.f_high / 4.0), 2.0 / e.duration));
+  std::vector<std::string> errors;
+  const auto bad = [&](bool wrong, const std::string& what) {
+    if (wrong) errors.push_back(what);
+  };
+  bad(!std::isfinite(e.duration) || e.duration < 1.0 || e.duration > 600.0,
+      "--duration: must be 1 to 600 s, got " + format_number(e.duration));
+  bad(!(e.amplitude > 0.0) || e.amplitude > cfg.device.max_force,
+      "--amplitude: must be > 0 and at most device.max_force = " +
+          format_number(cfg.device.max_force) + " N, got " + format_number(e.amplitude));
+  bad(!(e.f_high < rate / 2.0), "--f-high: must be below the Nyquist frequency " +
+                                    format_number(rate / 2.0) + " Hz, got " +
+                                    format_number(e.f_high));
+  bad(!(e.f_low * e.duration >= 1.0) || !(e.f_low < e.f_high),
+      "--f-low: must be at least one cycle over --duration (" + format_number(1.0 / e.duration) +
+          " Hz) and below --f-high, got " + format_number(e.f_low));
+  bad(!(o.max_travel > 0.0) || !std::isfinite(o.max_travel),
+      "--max-travel: must be > 0 m, got " + format_number(o.max_travel));
+  if (!errors.empty()) throw config::ConfigError(errors);
+  e.force = analysis::multisine(e.amplitude, e.f_low, e.f_high, e.duration, 1.0 / rate);
+  if (!o.amplitude) {
+    // Less force where the configured m and b say the default would take the device past half
+    // of --max-travel (a light, little damped device moves far at low frequencies).
+    double travel = 0.0;
+    for (const double x :
+         analysis::free_motion_response(e.force, cfg.device.mass, cfg.device.damping, 1.0 / rate)) {
+      travel = std::max(travel, std::abs(x));
+    }
+    if (travel > 0.5 * o.max_travel) {
+      const double scale = 0.5 * o.max_travel / travel;
+      e.amplitude *= scale;
+      for (double& u : e.force) u *= scale;
+    }
+  }
+  return e;
+}
+
+struct Recording {
+  std::vector<double> position;
+  std::vector<bool> valid;
+  std::size_t ticks = 0;
+  std::string fault;  // "" when the excitation ran to its end
+
+  double start = 0.0;  // the first position read
+  bool started = false;
+
+  // The farthest the device went from where it started (m).
+  double travel() const {
+    double t = 0.0;
+    for (std::size_t k = 0; k < ticks; ++k) {
+      if (valid[k]) t = std::max(t, std::abs(position[k] - start));
+    }
+    return t;
+  }
+};
+
+// One tick: read, check, write the planned force. RT-safe: called every tick (no allocation:
+// the recording is sized before the first). False when the excitation must stop.
+bool tick(Device& device, double force, std::size_t k, double max_travel, int& stale,
+          Recording& rec) noexcept {
+  PositionSample s;
+  const IoStatus st = device.read(s);
+  if (st == IoStatus::kTransportFault || st == IoStatus::kDeviceFault) return false;
+  rec.valid[k] = st == IoStatus::kOk && std::isfinite(s.position);
+  if (st == IoStatus::kOk && !std::isfinite(s.position)) return false;
+  stale = rec.valid[k] ? 0 : stale + 1;
+  if (stale >= 3) return false;
+  rec.position[k] = rec.valid[k] ? s.position : (k > 0 ? rec.position[k - 1] : 0.0);
+  if (rec.valid[k] && !rec.started) {
+    rec.start = s.position;
+    rec.started = true;
+  }
+  if (rec.started && std::abs(rec.position[k] - rec.start) > max_travel) return false;
+  const IoStatus ws = device.write(force);
+  return ws != IoStatus::kTransportFault && ws != IoStatus::kDeviceFault;
+}
+
+// Drives the excitation; always ends with zero force written. Realtime: an absolute schedule.
+Recording excite(Device& device, const Excitation& e, double period_s, bool realtime,
+                 double max_travel, SignalWatch& signals) {
+  Recording rec;
+  rec.position.assign(e.force.size(), 0.0);
+  rec.valid.assign(e.force.size(), false);
+  const auto period = static_cast<std::int64_t>(std::llround(period_s * 1e9));
+  std::int64_t deadline = loop::monotonic_ns();
+  int stale = 0;
+  for (std::size_t k = 0; k < e.force.size(); ++k, deadline += period) {
+    if (realtime) loop::sleep_until_ns(deadline);
+    if (k % 64 == 0 && signals.take_pending()) {
+      rec.fault = "stopped by a signal";
+      break;
+    }
+    if (!tick(device, e.force[k], k, max_travel, stale, rec)) {
+      rec.fault = device.fault().fault_class != FaultClass::kNone ? device.describe_fault()
+                  : stale >= 3                                    ? "no new position for 3 ticks"
+                  : std::abs(rec.position[k] - rec.start) > max_travel
+                      ? "the device moved more than --max-travel " + format_number(max_travel) +
+                            " m from where it started"
+                      : "a non-finite position";
+      break;
+    }
+    rec.ticks = k + 1;
+  }
+  device.write(0.0);
+  device.disable();
+  return rec;
+}
+
+nlohmann::json to_json(const analysis::FreeMotionFit& f, const Excitation& e,
+                       const config::Config& cfg, bool loopback, double travel) {
+  const auto est = [](const analysis::Estimate& x) {
+    return nlohmann::json{{"value", x.value}, {"ci95", x.ci95}};
+  };
+  return {{"mass", f.mass.value},
+          {"damping", f.damping.value},
+          {"mass_ci95", f.mass.ci95},
+          {"damping_ci95", f.damping.ci95},
+          {"coulomb_friction", f.coulomb_kept ? est(f.coulomb) : nlohmann::json(nullptr)},
+          {"delay_samples", f.delay},
+          {"rms_residual_m", f.rms_residual},
+          {"rms_residual_counts", f.rms_residual * cfg.device.sim.counts_per_unit},
+          {"samples", f.samples},
+          {"ticks", e.force.size()},
+          {"travel_m", travel},
+          {"driver", cfg.device.driver},
+          {"loopback", loopback},
+          {"excitation",
+           {{"kind", "multisine"},
+            {"amplitude", e.amplitude},
+            {"f_low", e.f_low},
+            {"f_high", e.f_high},
+            {"duration_s", e.duration}}}};
+}
+
+std::string to_text(const analysis::FreeMotionFit& f, const Excitation& e,
+                    const config::Config& cfg, bool simulated, double travel) {
+  std::ostringstream os;
+  const auto pm = [](const analysis::Estimate& x, int digits) {
+    return format_number(x.value, digits) + " +- " + format_number(x.ci95, 2);
+  };
+  os << "hapticd identify: " << cfg.source_name << " (" << cfg.device.driver
+     << (simulated ? ", simulated device held free: no operator" : "") << ")\n"
+     << "  excitation     multisine " << format_number(e.amplitude) << " N peak, "
+     << format_number(e.f_low) << " to " << format_number(e.f_high) << " Hz, "
+     << format_number(e.duration) << " s (" << e.force.size() << " ticks), travel "
+     << format_number(travel * 1e3) << " mm\n"
+     << "  mass m         " << pm(f.mass, 6) << " kg (95 % interval)\n"
+     << "  damping b      " << pm(f.damping, 6) << " N s/m\n"
+     << "  Coulomb        "
+     << (f.coulomb_kept ? pm(f.coulomb, 4) + " N" : std::string("not significant (left out)"))
+     << "\n  delay          " << f.delay << " samples between command and force\n"
+     << "  residual       " << format_number(f.rms_residual * 1e6, 3) << " um RMS over "
+     << f.samples << " samples\n"
+     << "paste into the configuration:\ndevice:\n  mass: " << format_number(f.mass.value, 6)
+     << "\n  damping: " << format_number(f.damping.value, 6) << "\n";
+  return os.str();
+}
+
+}  // namespace
+
+int identify_command(const IdentifyOptions& options, SignalWatch& signals) {
+  config::Config cfg = load_config(options.config);
+  const bool simulated = options.loopback || cfg.device.driver == "sim";
+  if (!simulated && !options.device_free) {
+    throw config::ConfigError(
+        {"identify drives device." + cfg.device.driver +
+         " with a force and no wall: hold nothing, clear its travel, then say so with "
+         "--yes-the-device-is-free (or try it with --loopback)"});
+  }
+  // A simulated device is held free whatever its operator, and runs as fast as it can.
+  if (simulated) {
+    cfg.device.sim.op = config::OperatorSpec{};
+    cfg.device.sim.op.kind = config::OperatorSpec::Kind::kNone;
+    cfg.loop.clock = config::ClockMode::kFreerun;
+  }
+  const bool realtime = !simulated;
+  const Excitation e = plan(options, cfg);
+  DeviceSession session(cfg, simulated, realtime);
+  Device& device = session.device();
+  device.configure();
+  const int delay = session.driver().declared_delay(cfg);
+  loop::RtStatus rt;
+  if (realtime) {
+    loop::lock_process_memory(rt);
+    loop::configure_rt_thread(cfg.loop.rt_priority, cfg.loop.cpu, rt);
+    for (const std::string& w : rt.warnings) spdlog::warn("rt: {}", w);
+  }
+  spdlog::info("identify: exciting {} with up to {} N for {} s", device.info().description,
+               format_number(e.amplitude), format_number(e.duration));
+  device.enable();
+  const Recording rec =
+      excite(device, e, cfg.loop.sample_period_s(), realtime, options.max_travel, signals);
+  session.shut_down();
+  if (!rec.fault.empty()) {
+    spdlog::error("identify: {} after {} ticks; zero force commanded, output disabled", rec.fault,
+                  rec.ticks);
+    return kExitRuntimeFault;
+  }
+  analysis::FreeMotionData data{cfg.loop.sample_period_s(), e.force, rec.position, rec.valid,
+                                delay};
+  analysis::FreeMotionFit fit;
+  try {
+    fit = analysis::fit_free_motion(data);
+  } catch (const std::invalid_argument& err) {
+    spdlog::error("identify: {}", err.what());
+    return kExitRuntimeFault;
+  }
+  const std::string text = options.json
+                               ? to_json(fit, e, cfg, options.loopback, rec.travel()).dump(2) + "\n"
+                               : to_text(fit, e, cfg, simulated, rec.travel());
+  return write_stdout(text) ? kExitOk : kExitRuntimeFault;
+}
+
+}  // namespace hapticd::service
