@@ -3,6 +3,7 @@
 # packages that are missing (as root, or through sudo), (re)builds incrementally, then
 #   tools/quickstart.sh demo   runs `hapticd run` on the embedded config/sim.yaml
 #   tools/quickstart.sh test   runs every test, what .ci/run does (stages below)
+#   tools/quickstart.sh build  builds the daemon only (what tools/hapticd-plot calls)
 # The test command's stages, each timed, all run even when one fails:
 #   main    Release build (warnings are errors) and the whole suite, the kernel tests in the
 #           kernel test machine included (HAPTICD_KERNEL_TESTS=0 skips those, and says so)
@@ -22,6 +23,7 @@ packages=(
   libhidapi-dev libusb-1.0-0-dev libgpiod-dev    # the hardware transports
   libgtest-dev libgmock-dev libbenchmark-dev     # tests and benchmarks
   rt-tests python3 util-linux                    # cyclictest and tools/jitter_bench.py; prlimit
+  python3-matplotlib                             # tools/hapticd-plot
   qemu-system-x86 busybox-static cpio kmod xz-utils  # tools/kernel-vm, the kernel test machine
   clang libclang-rt-14-dev llvm                  # the asan stage: libFuzzer, llvm-symbolizer
 )
@@ -60,9 +62,12 @@ case "${1:-}" in
     configure_and_build build -DCMAKE_BUILD_TYPE=Release
     echo "quickstart: the daemon is build/src/service/hapticd; running the 3 s demo"
     exec build/src/service/hapticd run --duration 3 --log build/demo.hlog ;;
+  build)
+    configure_and_build build -DCMAKE_BUILD_TYPE=Release -- hapticd
+    exit 0 ;;
   test) ;;
   *)
-    echo "usage: tools/quickstart.sh demo|test" >&2
+    echo "usage: tools/quickstart.sh demo|test|build" >&2
     exit 2 ;;
 esac
 

@@ -7,6 +7,7 @@
 #include "analysis/oscillation.h"
 #include "analysis/wall_model.h"
 #include "control/control_law.h"
+#include "gate/curves.h"
 #include "gate/number_format.h"
 
 namespace hapticd::gate {
@@ -51,18 +52,11 @@ void analyse_oscillation(const config::Config& cfg, const TransferFunction& e,
                          const std::optional<TransferFunction>& c, GateReport& r) {
   const double t = r.sample_period_s;
   if (c && r.coupling.admissible && analysis::poly_has_root_at(c->den, 1.0)) {
-    r.oscillation.note =
-        "not applicable: the coupling's pole at z = 1 makes the loop gain unbounded at DC; "
-        "Naghshtabrizi and Hespanha's Theorem 1 (the DSPR check) covers oscillation instead";
+    r.oscillation.note = kCouplingPoleNote;
     return;
   }
-  // The loop seen by xi(.): E (z^-d G + C), which is DESIGN.md's E z^-d G without coupling.
-  const TransferFunction g = analysis::device_operator_zoh(cfg.device.mass, cfg.device.damping,
-                                                           cfg.analysis.operator_stiffness,
-                                                           cfg.analysis.operator_damping, t);
-  TransferFunction path = analysis::tf_delay(g, r.delay_samples);
-  if (c) path = analysis::tf_sum(path, *c);
-  const analysis::OscillationCheck o = analysis::oscillation_check(analysis::tf_product(e, path));
+  const analysis::OscillationCheck o =
+      analysis::oscillation_check(oscillation_loop(cfg, e, c, r.delay_samples));
   r.oscillation = {o.applicable,          o.note,           o.tsai_colgate,         o.tsypkin,
                    o.tsai_colgate_margin, o.tsypkin_margin, to_hz(o.worst_theta, t)};
 }
@@ -86,7 +80,8 @@ GateReport evaluate_gate(const config::Config& cfg, int device_delay_samples) {
   const TransferFunction h = analysis::contact_map(e, c);
   r.static_stiffness = analysis::static_stiffness(e, c);
 
-  // Passivity (Roberts, Moore & Colgate) of what will run: H delayed by the wall's and the driver's samples.
+  // Passivity (Roberts, Moore & Colgate) of what will run: H delayed by the wall's and the driver's
+  // samples.
   const analysis::PassivityBound pb = analysis::passivity_bound(h, t, r.delay_samples, eta);
   PassivityReport& p = r.passivity;
   p.required_damping = pb.required_damping;
@@ -130,12 +125,14 @@ GateReport evaluate_gate(const config::Config& cfg, int device_delay_samples) {
   r.pass = r.reasons.empty();
 
   if (c && r.coupling.admissible && !r.coupling.dspr) {
-    r.warnings.push_back("coupling: Naghshtabrizi and Hespanha's Theorem 1 does not hold (" + r.coupling.note + ")");
+    r.warnings.push_back("coupling: Naghshtabrizi and Hespanha's Theorem 1 does not hold (" +
+                         r.coupling.note + ")");
   }
   if (c && r.delay_samples > 0) {
-    r.warnings.push_back("coupling: Naghshtabrizi and Hespanha's Theorem 1 assumes no delay; with " +
-                         std::to_string(r.delay_samples) +
-                         " samples the passivity bound is what guarantees the loop");
+    r.warnings.push_back(
+        "coupling: Naghshtabrizi and Hespanha's Theorem 1 assumes no delay; with " +
+        std::to_string(r.delay_samples) +
+        " samples the passivity bound is what guarantees the loop");
   }
   if (!r.oscillation.applicable && !r.oscillation.note.empty() && !c) {
     r.warnings.push_back("oscillation: " + r.oscillation.note);

@@ -101,8 +101,9 @@ std::string gate_to_text(const GateReport& r, const config::Config& cfg) {
   row("static stiffness H(1)",
       format_number(r.static_stiffness) + " N/m (what a steady push feels)");
   const OscillationReport& o = r.oscillation;
-  os << "oscillation (Tsai & Colgate; operator k_h " + format_number(cfg.analysis.operator_stiffness) +
-            " N/m, b_h " + format_number(cfg.analysis.operator_damping) + " N s/m)\n";
+  os << "oscillation (Tsai & Colgate; operator k_h " +
+            format_number(cfg.analysis.operator_stiffness) + " N/m, b_h " +
+            format_number(cfg.analysis.operator_damping) + " N s/m)\n";
   if (o.applicable) {
     row("Tsai-Colgate", std::string(o.tsai_colgate ? "holds" : "fails") + " (margin " +
                             format_number(o.tsai_colgate_margin, 3) + ", worst at " +

@@ -11,6 +11,7 @@
 #include "config/config_loader.h"
 #include "drivers/device.h"
 #include "service/check_command.h"
+#include "service/curves_command.h"
 #include "service/devices_command.h"
 #include "service/exit_codes.h"
 #include "service/export_command.h"
@@ -154,6 +155,18 @@ int main(int argc, char** argv) {
                      "force_replayed (and force_other)");
   replay->add_flag("--json", replay_opts.json, "Print exactly one JSON object");
 
+  ConfigOptions curves_cfg;
+  bool curves_no_measure = false;
+  CLI::App* curves = app.add_subcommand(
+      "curves",
+      "The gate's analysis as curves, one JSON object (what tools/hapticd-plot draws): the "
+      "Z-width (largest passing stiffness for each wall damping) with the configured point and "
+      "points measured on the simulated loop, and the Nyquist plot of the oscillation check's "
+      "loop gain L with its criteria. Exit 0, 2 bad input.");
+  add_config_options(curves, curves_cfg);
+  curves->add_flag("--no-measure", curves_no_measure,
+                   "Leave out the measured points (they take a few seconds of simulation)");
+
   hapticd::service::IdentifyOptions id_opts;
   CLI::App* identify = app.add_subcommand(
       "identify",
@@ -213,6 +226,7 @@ int main(int argc, char** argv) {
     if (*exp) return hapticd::service::export_command(export_log, export_out);
     if (*replay) return hapticd::service::replay_command(replay_opts);
     if (*devices) return hapticd::service::devices_command();
+    if (*curves) return hapticd::service::curves_command(curves_cfg, !curves_no_measure);
     if (*identify) {
       hapticd::service::SignalWatch signals;
       return hapticd::service::identify_command(id_opts, signals);
