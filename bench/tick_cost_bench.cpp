@@ -64,13 +64,15 @@ void BM_PassivityObserver(benchmark::State& state) {
   p.sample_period = 1e-3;
   p.max_damping = 20.0;
   hapticd::control::PassivityObserver observer(p);
+  hapticd::control::ControlLaw law;
+  law.max_force = 10.0;
   const auto x = positions();
   std::size_t i = 0;
   hapticd::testing::AllocationScope allocs;
   for (auto _ : state) {
     const double xi = x[i++ & 1023];
     observer.observe(xi, true, 1);
-    const hapticd::control::Damping d = observer.damp(-2000.0 * std::max(xi, 0.0), 10.0);
+    const hapticd::control::Damping d = observer.damp(-2000.0 * std::max(xi, 0.0), law);
     observer.commanded(d.command, d.added);
     benchmark::DoNotOptimize(d);
   }

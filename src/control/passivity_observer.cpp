@@ -6,11 +6,6 @@
 #include <string>
 
 namespace hapticd::control {
-namespace {
-constexpr std::uint32_t kMask = kMaxObserverDelay;  // history size - 1
-static_assert(((kMaxObserverDelay + 1) & kMaxObserverDelay) == 0, "history indexes with a mask");
-}  // namespace
-
 const char* passivity_mode_name(config::PassivityControl mode) noexcept {
   switch (mode) {
     case config::PassivityControl::kOff:
@@ -27,7 +22,9 @@ ObserverParams observer_params(const config::Config& cfg, int device_delay_sampl
   ObserverParams p;
   p.mode = cfg.safety.passivity_controller;
   p.device_damping = cfg.device.damping;
-  p.sample_period = cfg.loop.sample_period_s();
+  // The period the loop runs at: whole nanoseconds (loop options), so the loop and replay
+  // compute with the same T to the last bit.
+  p.sample_period = static_cast<double>(std::llround(1e9 / cfg.loop.rate_hz)) * 1e-9;
   p.device_delay = device_delay_samples;
   p.max_damping = std::min(cfg.safety.passivity_max_damping,
                            kStableDampingFraction * 2.0 * cfg.device.mass / p.sample_period);
@@ -35,19 +32,23 @@ ObserverParams observer_params(const config::Config& cfg, int device_delay_sampl
 }
 
 PassivityObserver::PassivityObserver(const ObserverParams& params) : params_(params) {
-  if (params.device_delay < 0 || params.device_delay > kMaxObserverDelay) {
-    throw std::invalid_argument("the passivity observer holds a device delay of 0 to " +
-                                std::to_string(kMaxObserverDelay) + " samples, not " +
+  if (params.device_delay < 0) {
+    throw std::invalid_argument("the passivity observer needs a device delay >= 0, not " +
                                 std::to_string(params.device_delay));
   }
+  std::size_t size = 1;
+  while (size < static_cast<std::size_t>(params.device_delay) + 1) size *= 2;
+  history_.assign(size, 0.0);
+  damping_history_.assign(size, 0.0);
+  mask_ = size - 1;
   if (!(params.sample_period > 0.0)) {
     throw std::invalid_argument("the passivity observer needs a sample period > 0");
   }
   inv_period_ = 1.0 / params.sample_period;
 }
 
-std::uint32_t PassivityObserver::acting() const noexcept {
-  return (head_ - static_cast<std::uint32_t>(params_.device_delay)) & kMask;
+std::size_t PassivityObserver::acting() const noexcept {
+  return (head_ - static_cast<std::size_t>(params_.device_delay)) & mask_;
 }
 
 void PassivityObserver::observe(double position, bool fresh, std::uint32_t periods) noexcept {
@@ -56,7 +57,7 @@ void PassivityObserver::observe(double position, bool fresh, std::uint32_t perio
     have_x_ = true;
     return;
   }
-  const std::uint32_t slot = acting();
+  const std::size_t slot = acting();
   const double n_periods = static_cast<double>(periods);
   pending_force_ += history_[slot] * n_periods;
   pending_damping_ += damping_history_[slot] * n_periods;
@@ -77,6 +78,8 @@ void PassivityObserver::observe(double position, bool fresh, std::uint32_t perio
     velocity_ = v;
     min_energy_ = std::min(min_energy_, energy_);
     if (energy_ < 0.0) ++negative_ticks_;
+    if (energy_ < 0.0 && !in_deficit_) deficit_start_work_ = damping_work_;
+    in_deficit_ = energy_ < 0.0;
   }
   last_x_ = position;
   pending_force_ = 0.0;
@@ -84,12 +87,14 @@ void PassivityObserver::observe(double position, bool fresh, std::uint32_t perio
   pending_periods_ = 0;
 }
 
-Damping PassivityObserver::damp(double wall, double max_force) noexcept {
+Damping PassivityObserver::damp(double wall, const ControlLaw& law) noexcept {
   Damping out;
   out.command = wall;
   if (params_.mode != config::PassivityControl::kDamp || !(energy_ < 0.0) || velocity_ == 0.0) {
     return out;
   }
+  // The governor: in this deficit the controller's forces have put in more than they took out.
+  if (damping_work_ < deficit_start_work_) return out;
   // alpha v^2 T = -E: the damping that would dissipate the deficit over one period.
   const double alpha =
       std::min(-energy_ * inv_period_ / (velocity_ * velocity_), params_.max_damping);
@@ -99,10 +104,12 @@ Damping PassivityObserver::damp(double wall, double max_force) noexcept {
   const double expected = velocity_ * previous_velocity_ < 0.0 ? -velocity_ : velocity_;
   double u = wall - alpha * expected;
   if (!std::isfinite(u)) return out;  // nothing to add that can be trusted
-  if (std::abs(u) > max_force) {
-    u = std::copysign(max_force, u);
+  if (std::abs(u) > law.max_force) {
+    u = std::copysign(law.max_force, u);
     out.saturated = true;
   }
+  if (law.no_pull && -law.normal * u < 0.0) u = 0.0;  // the wall's force along n stays >= 0
+  if (u == wall) return Damping{wall, 0.0, 0.0, out.saturated};  // nothing was added
   out.command = u;
   out.added = u - wall;
   out.alpha = alpha;
@@ -112,14 +119,14 @@ Damping PassivityObserver::damp(double wall, double max_force) noexcept {
 }
 
 void PassivityObserver::commanded(double force, double added) noexcept {
-  head_ = (head_ + 1) & kMask;
+  head_ = (head_ + 1) & mask_;
   history_[head_] = force;
   damping_history_[head_] = added;
 }
 
 void PassivityObserver::restart() noexcept {
-  history_.fill(0.0);
-  damping_history_.fill(0.0);
+  std::fill(history_.begin(), history_.end(), 0.0);
+  std::fill(damping_history_.begin(), damping_history_.end(), 0.0);
   have_x_ = false;
   pending_force_ = 0.0;
   pending_damping_ = 0.0;

@@ -19,24 +19,30 @@
 // is what the gate's theorem says stays >= 0 for every motion when the gate passes, and a
 // negative E_k is energy the sampled loop put into the hand that b cannot have taken out.
 // Across stale ticks and skipped periods the motion is spread evenly over the periods it
-// spans (the credit b dx^2 / (n T), the work with the mean of the forces that acted).
+// spans (the credit b dx^2 / (n T), the work with the mean of the forces that acted; over
+// skipped periods, where nothing was written, the one acting at the last tick).
 //
 // The controller (safety.passivity_controller: damp): while E_k < 0 it adds the damping
 // alpha = -E_k / (v^2 T) (v = dx / (n T) of the last sample) that would dissipate the deficit
 // over the next period, as a force -alpha v' on top of the wall's command (saturated again to
-// device.max_force). Two things differ from the continuous-time controller, both because the
-// force is held over the NEXT period: v' is the velocity expected there (v, or -v when the
-// last period reversed the motion: a damper on the last velocity feeds the Nyquist-rate
-// oscillation a failing sampled wall falls into, measured in the coupling paper's example),
-// and alpha is bounded by safety.passivity_max_damping and by 0.9 * 2m/T, below which a
-// damper held over a period slows the mass m without reversing it (v_{k+1} = (1 - alpha T/m)
-// v_k). Its own work is observed like the wall's, so it cannot hide energy it adds.
+// device.max_force; under wall.no_pull never pulling). The force is held over the NEXT period,
+// where the velocity is not known yet: v' is v, or -v when the last period reversed the
+// motion (a damper on the last velocity feeds the Nyquist-rate bounce a failing sampled wall
+// falls into, measured on the coupling paper's example). A wrong guess makes that force push
+// along the motion, so a governor watches the controller's own work, which the observer
+// measures like the wall's: within one deficit (E_k < 0 from when it went negative) the
+// controller acts only while its forces have taken out at least what they put in, and stops
+// for the rest of the deficit once they have not. alpha is also bounded by
+// safety.passivity_max_damping and by 0.9 * 2m/T: a damper held over a period changes a free
+// mass's velocity by the factor 1 - alpha T/m, which overshoots (reverses it) above m/T and
+// grows it above 2m/T.
 #pragma once
 
-#include <array>
 #include <cstdint>
+#include <vector>
 
 #include "config/config.h"
+#include "control/control_law.h"
 
 namespace hapticd::control {
 
@@ -58,9 +64,6 @@ const char* passivity_mode_name(config::PassivityControl mode) noexcept;
 // safety.passivity_max_damping or 0.9 * 2m/T, whichever is smaller.
 ObserverParams observer_params(const config::Config& cfg, int device_delay_samples);
 
-// The longest driver delay the observer's command history holds.
-inline constexpr int kMaxObserverDelay = 127;
-
 // What one observation and the controller did.
 struct Damping {
   double command = 0.0;    // the force to write: the wall's plus the controller's, saturated
@@ -71,8 +74,8 @@ struct Damping {
 
 class PassivityObserver {
  public:
-  // Not RT-safe. Throws std::invalid_argument for a delay above kMaxObserverDelay or a
-  // non-positive period.
+  // Not RT-safe: sizes the command history for the delay. Throws std::invalid_argument for a
+  // negative delay or a non-positive period.
   explicit PassivityObserver(const ObserverParams& params);
 
   // RT-safe: called every tick that has a position (the held one on a stale tick), before
@@ -82,9 +85,9 @@ class PassivityObserver {
 
   // RT-safe: called every tick that has a position, after observe(). The command to write:
   // `wall` (the controller's, already saturated) plus, in damp mode while the energy is
-  // negative, the controller's damping force, the sum saturated to `max_force` (the law's,
-  // which a live reload may change).
-  Damping damp(double wall, double max_force) noexcept;
+  // negative, the controller's damping force; the sum saturated to the law's max_force and,
+  // under its no_pull, never pulling (the law in force: a live reload may change them).
+  Damping damp(double wall, const ControlLaw& law) noexcept;
 
   // RT-safe: called every tick with the force really written (0 when none was) and the
   // controller's part of it (Damping::added, 0 when the wall's alone was written): the
@@ -109,13 +112,14 @@ class PassivityObserver {
 
  private:
   // The slot of the command that acted over the period just ended.
-  std::uint32_t acting() const noexcept;
+  std::size_t acting() const noexcept;
 
   ObserverParams params_;
   double inv_period_ = 0.0;
-  std::array<double, kMaxObserverDelay + 1> history_{};          // commands, newest at head_
-  std::array<double, kMaxObserverDelay + 1> damping_history_{};  // their damping part
-  std::uint32_t head_ = 0;
+  std::vector<double> history_;          // commands, newest at head_; a power-of-two size
+  std::vector<double> damping_history_;  // their damping part
+  std::size_t mask_ = 0;
+  std::size_t head_ = 0;
   double last_x_ = 0.0;
   bool have_x_ = false;
   double pending_force_ = 0.0;    // sum over pending periods of the acting force
@@ -130,6 +134,8 @@ class PassivityObserver {
   std::uint64_t negative_ticks_ = 0;
   std::uint64_t damped_ticks_ = 0;
   double max_alpha_ = 0.0;
+  bool in_deficit_ = false;          // E < 0 since it last went negative
+  double deficit_start_work_ = 0.0;  // damping_work_ when it did
 };
 
 }  // namespace hapticd::control

@@ -132,6 +132,7 @@ control::Damping ServoLoop::control(std::uint64_t tick, const PositionSample& sa
                                     std::uint32_t periods, telemetry::TickRecord& rec,
                                     LoopResult& res) noexcept {
   observer_.observe(sample.position, fresh, periods);
+  rec.flags |= telemetry::kFlagStepped;
   const control::ControlOutput out = controller_->step(sample.position);
   rec.position = sample.position;
   rec.penetration = out.penetration;
@@ -143,7 +144,7 @@ control::Damping ServoLoop::control(std::uint64_t tick, const PositionSample& sa
     set_fault({FaultCause::kNonFiniteForce, tick, out.force_computed}, rec, res);
     return {};
   }
-  const control::Damping d = observer_.damp(out.force_commanded, controller_->law().max_force);
+  const control::Damping d = observer_.damp(out.force_commanded, controller_->law());
   if (d.alpha > 0.0) {
     rec.flags |= telemetry::kFlagPassivityDamped;
     rec.passivity_damping = d.alpha;

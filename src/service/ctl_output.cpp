@@ -50,6 +50,10 @@ std::string status_text(const json& s) {
   out << "  wall          K " << num(s["wall"]["stiffness"]) << " N/m  B "
       << num(s["wall"]["damping"]) << " N s/m\n";
   out << "  gate          " << gate_line(s["gate"]) << "\n";
+  if (s.contains("derated") && s["derated"].is_object()) {
+    out << "  DERATED       wall.stiffness " << num(s["derated"]["configured"])
+        << " N/m configured, running at " << num(s["derated"]["ran"]) << " N/m\n";
+  }
   out << "  position      " << num(s["position"], 1e3) << " mm, penetration "
       << num(s["penetration"], 1e3) << " mm, force " << num(s["force_commanded"]) << " N\n";
   out << "  wall energy   " << num(s["wall_energy_j"]) << " J (work the wall did on the device)\n";
@@ -76,6 +80,11 @@ std::string reload_text(const json& r) {
     out << "the new configuration applies when output is next enabled";
   }
   out << "\n  gate          " << gate_line(r["gate"]) << "\n";
+  if (r.contains("derated") && r["derated"].is_object()) {
+    out << "  DERATED       wall.stiffness " << num(r["derated"]["configured"])
+        << " N/m configured, running at " << num(r["derated"]["ran"])
+        << " N/m (safety.gate: derate)\n";
+  }
   return out.str();
 }
 

@@ -1,11 +1,13 @@
 #include "service/identify_command.h"
 
+#include <poll.h>
 #include <spdlog/spdlog.h>
 
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
+#include <thread>
 
 #include "analysis/free_motion_fit.h"
 #include "config/config_loader.h"
@@ -14,6 +16,7 @@
 #include "loop/rt_setup.h"
 #include "service/device_session.h"
 #include "service/exit_codes.h"
+#include "service/identify_run.h"
 #include "service/result_output.h"
 
 namespace hapticd::service {
@@ -74,79 +77,62 @@ Excitation plan(const IdentifyOptions& o, const config::Config& cfg) {
   return e;
 }
 
-struct Recording {
-  std::vector<double> position;
-  std::vector<bool> valid;
-  std::size_t ticks = 0;
-  std::string fault;  // "" when the excitation ran to its end
-
-  double start = 0.0;  // the first position read
-  bool started = false;
-
-  // The farthest the device went from where it started (m).
-  double travel() const {
-    double t = 0.0;
-    for (std::size_t k = 0; k < ticks; ++k) {
-      if (valid[k]) t = std::max(t, std::abs(position[k] - start));
-    }
-    return t;
+// Why an excitation that did not run to its end stopped.
+std::string describe_end(const ExcitationRecord& rec, const Device& device, double max_travel) {
+  switch (rec.end) {
+    case ExcitationEnd::kDone:
+      return "";
+    case ExcitationEnd::kDeviceFault:
+      return device.describe_fault();
+    case ExcitationEnd::kStale:
+      return "no new position for 3 ticks";
+    case ExcitationEnd::kNonFinite:
+      return "a non-finite position";
+    case ExcitationEnd::kTravel:
+      return "the device moved more than --max-travel " + format_number(max_travel) +
+             " m from where it started";
+    case ExcitationEnd::kStopped:
+      return "stopped by a signal";
   }
-};
-
-// One tick: read, check, write the planned force. RT-safe: called every tick (no allocation:
-// the recording is sized before the first). False when the excitation must stop.
-bool tick(Device& device, double force, std::size_t k, double max_travel, int& stale,
-          Recording& rec) noexcept {
-  PositionSample s;
-  const IoStatus st = device.read(s);
-  if (st == IoStatus::kTransportFault || st == IoStatus::kDeviceFault) return false;
-  rec.valid[k] = st == IoStatus::kOk && std::isfinite(s.position);
-  if (st == IoStatus::kOk && !std::isfinite(s.position)) return false;
-  stale = rec.valid[k] ? 0 : stale + 1;
-  if (stale >= 3) return false;
-  rec.position[k] = rec.valid[k] ? s.position : (k > 0 ? rec.position[k - 1] : 0.0);
-  if (rec.valid[k] && !rec.started) {
-    rec.start = s.position;
-    rec.started = true;
-  }
-  if (rec.started && std::abs(rec.position[k] - rec.start) > max_travel) return false;
-  const IoStatus ws = device.write(force);
-  return ws != IoStatus::kTransportFault && ws != IoStatus::kDeviceFault;
+  return "stopped";
 }
 
-// Drives the excitation; always ends with zero force written. Realtime: an absolute schedule.
-Recording excite(Device& device, const Excitation& e, double period_s, bool realtime,
-                 double max_travel, SignalWatch& signals) {
-  Recording rec;
-  rec.position.assign(e.force.size(), 0.0);
-  rec.valid.assign(e.force.size(), false);
-  const auto period = static_cast<std::int64_t>(std::llround(period_s * 1e9));
-  std::int64_t deadline = loop::monotonic_ns();
-  int stale = 0;
-  for (std::size_t k = 0; k < e.force.size(); ++k, deadline += period) {
-    if (realtime) loop::sleep_until_ns(deadline);
-    if (k % 64 == 0 && signals.take_pending()) {
-      rec.fault = "stopped by a signal";
-      break;
+// The excitation on this thread, a stop signal watched on another (the tick loop only reads
+// an atomic): the one place identify runs the device.
+ExcitationRecord excite(Device& device, const Excitation& e, double period_s, bool realtime,
+                        double max_travel, SignalWatch& signals) {
+  ExcitationRecord rec(e.force.size());
+  std::atomic<bool> stop{false}, done{false};
+  std::thread watch([&] {
+    pollfd fds[2] = {{signals.fd(), POLLIN, 0}, {signals.pipe_fd(), POLLIN, 0}};
+    while (!done.load()) {
+      poll(fds, 2, 20);
+      if (signals.take_pending()) stop.store(true);
     }
-    if (!tick(device, e.force[k], k, max_travel, stale, rec)) {
-      rec.fault = device.fault().fault_class != FaultClass::kNone ? device.describe_fault()
-                  : stale >= 3                                    ? "no new position for 3 ticks"
-                  : std::abs(rec.position[k] - rec.start) > max_travel
-                      ? "the device moved more than --max-travel " + format_number(max_travel) +
-                            " m from where it started"
-                      : "a non-finite position";
-      break;
-    }
-    rec.ticks = k + 1;
-  }
-  device.write(0.0);
-  device.disable();
+  });
+  run_excitation(device, e.force, period_s, realtime, max_travel, stop, rec);
+  done.store(true);
+  watch.join();
   return rec;
 }
 
+// The encoder's count (m) of a simulated device; 0 when unknown (real hardware).
+double count_of(const config::Config& cfg, bool simulated) {
+  const double c = cfg.device.sim.counts_per_unit;
+  return simulated && c > 0.0 ? 1.0 / c : 0.0;
+}
+
+// Said when the fit misses the data by more than a count's quantisation (0.29 counts RMS).
+std::string residual_note(const analysis::FreeMotionFit& f, double count) {
+  if (count <= 0.0 || f.rms_residual <= 1.5 * count) return "";
+  return "the residual (" + format_number(f.rms_residual / count, 3) +
+         " counts RMS) is above the encoder's quantisation: something the model leaves out "
+         "(the drive's force resolution, friction, compliance) limits the fit, and the "
+         "intervals understate the error";
+}
+
 nlohmann::json to_json(const analysis::FreeMotionFit& f, const Excitation& e,
-                       const config::Config& cfg, bool loopback, double travel) {
+                       const config::Config& cfg, bool loopback, double travel, double count) {
   const auto est = [](const analysis::Estimate& x) {
     return nlohmann::json{{"value", x.value}, {"ci95", x.ci95}};
   };
@@ -157,7 +143,9 @@ nlohmann::json to_json(const analysis::FreeMotionFit& f, const Excitation& e,
           {"coulomb_friction", f.coulomb_kept ? est(f.coulomb) : nlohmann::json(nullptr)},
           {"delay_samples", f.delay},
           {"rms_residual_m", f.rms_residual},
-          {"rms_residual_counts", f.rms_residual * cfg.device.sim.counts_per_unit},
+          {"rms_residual_counts",
+           count > 0.0 ? nlohmann::json(f.rms_residual / count) : nlohmann::json(nullptr)},
+          {"note", residual_note(f, count)},
           {"samples", f.samples},
           {"ticks", e.force.size()},
           {"travel_m", travel},
@@ -172,7 +160,7 @@ nlohmann::json to_json(const analysis::FreeMotionFit& f, const Excitation& e,
 }
 
 std::string to_text(const analysis::FreeMotionFit& f, const Excitation& e,
-                    const config::Config& cfg, bool simulated, double travel) {
+                    const config::Config& cfg, bool simulated, double travel, double count) {
   std::ostringstream os;
   const auto pm = [](const analysis::Estimate& x, int digits) {
     return format_number(x.value, digits) + " +- " + format_number(x.ci95, 2);
@@ -189,8 +177,11 @@ std::string to_text(const analysis::FreeMotionFit& f, const Excitation& e,
      << (f.coulomb_kept ? pm(f.coulomb, 4) + " N" : std::string("not significant (left out)"))
      << "\n  delay          " << f.delay << " samples between command and force\n"
      << "  residual       " << format_number(f.rms_residual * 1e6, 3) << " um RMS over "
-     << f.samples << " samples\n"
-     << "paste into the configuration:\ndevice:\n  mass: " << format_number(f.mass.value, 6)
+     << f.samples << " samples\n";
+  if (const std::string note = residual_note(f, count); !note.empty()) {
+    os << "  note           " << note << "\n";
+  }
+  os << "paste into the configuration:\ndevice:\n  mass: " << format_number(f.mass.value, 6)
      << "\n  damping: " << format_number(f.damping.value, 6) << "\n";
   return os.str();
 }
@@ -227,11 +218,12 @@ int identify_command(const IdentifyOptions& options, SignalWatch& signals) {
   spdlog::info("identify: exciting {} with up to {} N for {} s", device.info().description,
                format_number(e.amplitude), format_number(e.duration));
   device.enable();
-  const Recording rec =
+  const ExcitationRecord rec =
       excite(device, e, cfg.loop.sample_period_s(), realtime, options.max_travel, signals);
+  const std::string why = describe_end(rec, device, options.max_travel);
   session.shut_down();
-  if (!rec.fault.empty()) {
-    spdlog::error("identify: {} after {} ticks; zero force commanded, output disabled", rec.fault,
+  if (rec.end != ExcitationEnd::kDone) {
+    spdlog::error("identify: {} after {} ticks; zero force commanded, output disabled", why,
                   rec.ticks);
     return kExitRuntimeFault;
   }
@@ -244,9 +236,11 @@ int identify_command(const IdentifyOptions& options, SignalWatch& signals) {
     spdlog::error("identify: {}", err.what());
     return kExitRuntimeFault;
   }
-  const std::string text = options.json
-                               ? to_json(fit, e, cfg, options.loopback, rec.travel()).dump(2) + "\n"
-                               : to_text(fit, e, cfg, simulated, rec.travel());
+  const std::string text =
+      options.json
+          ? to_json(fit, e, cfg, options.loopback, rec.travel(), count_of(cfg, simulated)).dump(2) +
+                "\n"
+          : to_text(fit, e, cfg, simulated, rec.travel(), count_of(cfg, simulated));
   return write_stdout(text) ? kExitOk : kExitRuntimeFault;
 }
 

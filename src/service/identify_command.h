@@ -14,13 +14,13 @@ namespace hapticd::service {
 struct IdentifyOptions {
   ConfigOptions config;
   bool json = false;
-  bool loopback = false;            // the configured driver against its simulated peer
-  bool device_free = false;         // --yes-the-device-is-free: required on a real driver
+  bool loopback = false;     // the configured driver against its simulated peer
+  bool device_free = false;  // --yes-the-device-is-free: required on a real driver
   // N; default 0.4 device.max_force, less when the configured m and b predict that it would
   // take the device past half of max_travel.
   std::optional<double> amplitude;
-  std::optional<double> f_low;      // Hz; default from the configured m and b
-  std::optional<double> f_high;     // Hz
+  std::optional<double> f_low;   // Hz; default from the configured m and b
+  std::optional<double> f_high;  // Hz
   double duration_s = 8.0;
   double max_travel = 0.1;  // m from the start before the excitation stops as a fault
 };

@@ -25,11 +25,26 @@ int device_delay(const config::Config& cfg) {
   return 0;
 }
 
+bool driver_known(const config::Config& cfg) {
+  for (const drivers::DriverEntry& d : drivers::registered_drivers()) {
+    if (d.name == cfg.device.driver) return true;
+  }
+  return false;
+}
+
 // Sample periods between two records (more than one after the loop skipped periods).
 std::uint32_t periods_between(std::int64_t from_ns, std::int64_t to_ns, double period_s) {
   const double n = std::round(static_cast<double>(to_ns - from_ns) * 1e-9 / period_s);
   return n >= 1.0 ? static_cast<std::uint32_t>(n) : 1u;
 }
+
+// What a replayed tick computed: the controller's output (the command with the passivity
+// controller's damping) and the observer's energy and added damping.
+struct Stepped {
+  control::ControlOutput out;
+  double energy_j = 0.0;
+  double damping = 0.0;
+};
 
 // One configuration's controller and passivity observer walking the log, with its series.
 struct Walker {
@@ -50,20 +65,24 @@ struct Walker {
     next->continue_from(*law);
     law = std::move(next);
   }
-  // One ordinary record; the output when the controller is stepped, its force_commanded the
-  // command written (the passivity controller's damping included).
-  std::optional<control::ControlOutput> step(bool stepped, bool fresh, std::uint32_t periods,
-                                             double x) {
-    std::optional<control::ControlOutput> out;
+  // One ordinary record; the output when the controller is stepped on a tick that did not
+  // fault, its force_commanded the command written (the passivity controller's included). A
+  // tick that faulted after the step was observed (the energy carries over a re-arming) and
+  // wrote zero.
+  std::optional<Stepped> step(bool stepped, bool faulted, bool fresh, std::uint32_t periods,
+                              double x) {
+    std::optional<Stepped> out;
     control::Damping d;
-    if (stepped) {
-      observer->observe(x, fresh, periods);
-      out = law->step(x);
-      d = observer->damp(out->force_commanded, law->law().max_force);
-      out->force_commanded = d.command;
-      add(d.command, out->penetration, out->flags & control::kControlContact,
-          (out->flags & control::kControlSaturated) || d.saturated);
+    if (stepped) observer->observe(x, fresh, periods);
+    if (stepped && !faulted) {
+      control::ControlOutput o = law->step(x);
+      d = observer->damp(o.force_commanded, law->law());
+      o.force_commanded = d.command;
+      add(d.command, o.penetration, o.flags & control::kControlContact,
+          (o.flags & control::kControlSaturated) || d.saturated);
+      out = Stepped{o, observer->energy_j(), d.alpha};
     }
+    if (faulted) d = control::Damping{};
     observer->commanded(d.command, d.added);
     series.commanded.push_back(d.command);
     series.wall_energy_j = observer->wall_work_j();
@@ -141,10 +160,13 @@ bool take_marker(State& st, const TickRecord& r, ReplayResult& out) {
   return true;
 }
 
-void compare(const TickRecord& r, const control::ControlOutput& o, ReplayResult& out) {
+// Forces bit for bit; from format 3 on, the observer's energy and damping too.
+void compare(const TickRecord& r, const Stepped& s, std::uint32_t version, ReplayResult& out) {
   ++out.compared;
-  if (same_bits(o.force_computed, r.force_computed) &&
-      same_bits(o.force_commanded, r.force_commanded)) {
+  const bool observer_same = version < 3 || (same_bits(s.energy_j, r.observer_energy_j) &&
+                                             same_bits(s.damping, r.passivity_damping));
+  if (same_bits(s.out.force_computed, r.force_computed) &&
+      same_bits(s.out.force_commanded, r.force_commanded) && observer_same) {
     return;
   }
   if (out.differing++ == 0) out.first_difference = r.tick;
@@ -165,6 +187,12 @@ ReplayResult replay_log(const telemetry::LogContents& log, const std::string& lo
            0,     {}};
   st.own.restart(st.own_cfg);
   if (other != nullptr) st.other.restart(*other);
+  if (!driver_known(st.own_cfg)) {
+    out.note = "device.driver " + st.own_cfg.device.driver +
+               " is not in this build: its declared delay is taken as 0, so the passivity "
+               "observer's figures (and, with safety.passivity_controller: damp, the forces) "
+               "may not reproduce";
+  }
   control::ObserverParams work = control::observer_params(st.own_cfg, device_delay(st.own_cfg));
   work.mode = config::PassivityControl::kObserve;
   st.logged_work = std::make_unique<control::PassivityObserver>(work);
@@ -185,15 +213,21 @@ ReplayResult replay_log(const telemetry::LogContents& log, const std::string& lo
         last_tick ? periods_between(last_scheduled, r.scheduled_ns, period) : 1u;
     last_tick = r.tick;
     last_scheduled = r.scheduled_ns;
-    // The loop steps the controller unless it had no position (none yet, or a fault before
-    // the step); a faulted tick ends its run, so whether it stepped does not reach later ticks.
-    const bool stepped = (r.flags & (telemetry::kFlagNoPosition | telemetry::kFlagFault)) == 0;
+    // The loop steps the controller (and observes) when it has a position; format 3 says so
+    // per tick. Before it, a faulted tick counts as not stepped: it ends its run, and nothing
+    // but the observer (which those logs do not carry) outlives a run.
+    const bool faulted = (r.flags & telemetry::kFlagFault) != 0;
+    const bool stepped =
+        log.version >= 3 ? (r.flags & telemetry::kFlagStepped) != 0
+                         : (r.flags & (telemetry::kFlagNoPosition | telemetry::kFlagFault)) == 0;
     const bool fresh = (r.flags & telemetry::kFlagStale) == 0;
     out.ticks.push_back(r.tick);
     out.positions.push_back(r.position);
     log_tick(out.logged, *st.logged_work, r, stepped, periods);
-    if (const auto o = st.own.step(stepped, fresh, periods, r.position)) compare(r, *o, out);
-    if (other != nullptr) st.other.step(stepped, fresh, periods, r.position);
+    if (const auto o = st.own.step(stepped, faulted, fresh, periods, r.position)) {
+      compare(r, *o, log.version, out);
+    }
+    if (other != nullptr) st.other.step(stepped, faulted, fresh, periods, r.position);
   }
   out.own = std::move(st.own.series);
   if (other != nullptr) out.other = std::move(st.other.series);

@@ -47,6 +47,9 @@ struct ReplayResult {
   // ticks (records dropped or a damaged block skipped), a reload whose configuration the log
   // does not hold.
   std::string stopped;
+  // Said when the replay cannot be exact about the passivity observer: the log's driver is not
+  // in this build, so its declared delay is unknown and taken as 0 ("" otherwise).
+  std::string note;
 };
 
 // Loads a configuration recorded in a log (`name` in messages). Throws config::ConfigError.

@@ -18,6 +18,7 @@
 #include "gate/gate_report_format.h"
 #include "gate/number_format.h"
 #include "service/exit_codes.h"
+#include "service/gate_derate.h"
 #include "service/replay.h"
 #include "service/result_output.h"
 #include "telemetry/log_set.h"
@@ -51,6 +52,7 @@ json result_json(const std::string& log, const telemetry::LogSet& set, const Rep
   j["reloads"] = r.reloads;
   j["rearms"] = r.rearms;
   j["stopped"] = r.stopped.empty() ? json(nullptr) : json(r.stopped);
+  j["note"] = r.note.empty() ? json(nullptr) : json(r.note);
   j["reproduced"] = {
       {"identical", r.differing == 0 && r.compared > 0},
       {"compared", r.compared},
@@ -86,6 +88,7 @@ std::string result_text(const std::string& log, const telemetry::LogSet& set, co
      << r.reloads << (r.reloads == 1 ? " reload, " : " reloads, ") << r.rearms
      << (r.rearms == 1 ? " re-arming\n" : " re-armings\n");
   if (!r.stopped.empty()) os << "  stopped early  " << r.stopped << "\n";
+  if (!r.note.empty()) os << "  note           " << r.note << "\n";
   os << "  forces         ";
   if (r.differing == 0) {
     os << "reproduced bit for bit by the log's own configuration (" << r.compared
@@ -149,6 +152,12 @@ std::optional<WhatIf> what_if(const ReplayOptions& o, const telemetry::LogConten
               : load_config(o.other);
   const drivers::DriverEntry& driver = drivers::find_driver(w.cfg.device.driver);
   w.gate = gate::evaluate_gate(w.cfg, driver.declared_delay(w.cfg));
+  // Under safety.gate: derate the what-if runs the stiffness `run` would (and says so).
+  if (const auto d = derate_stiffness(w.cfg, driver.declared_delay(w.cfg), w.gate)) {
+    std::cerr << "hapticd: what-if: DERATED (safety.gate: derate): wall.stiffness "
+              << format_number(d->first) << " N/m replayed at " << format_number(d->second)
+              << " N/m, the largest that passes\n";
+  }
   return w;
 }
 

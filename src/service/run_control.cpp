@@ -81,6 +81,8 @@ json RunSession::status() const {
       {"output_enabled", d.output_enabled()},
       {"last_command", d.last_command()}};
   j["wall"] = {{"stiffness", cfg_.wall.stiffness}, {"damping", cfg_.wall.damping}};
+  j["derated"] =
+      derated_ ? json{{"configured", derated_->first}, {"ran", derated_->second}} : json(nullptr);
   j["fault"] = fault_.empty() ? json(nullptr) : json(fault_);
   j["gate"] = gate_;
   if (servo_) {
@@ -143,7 +145,10 @@ json RunSession::reload(const std::string& text, const std::string& source,
     ++reloads_;
     gate_ = out["gate"];
     summary_.gate = gate_;
-    summary_.derated_stiffness = next.derated;
+    if (next.derated) {  // the last derating stays said
+      summary_.derated_stiffness = next.derated;
+      derated_ = next.derated;
+    }
   }
   spdlog::info("reload from {} accepted: wall K {} N/m B {} N s/m {}", source, k, b,
                first_tick ? "from tick " + std::to_string(*first_tick) : "for the next arming");

@@ -68,9 +68,13 @@ void RunSession::set_phase(Phase p) {
 
 // Configures the device and gates it, opens the log, builds the law and the loop.
 bool RunSession::start_up(gate::GateReport& report) {
-  const bool pass = configure_and_gate(cfg_, *session_, summary_, report);
+  // On a copy: the control socket may already read cfg_ (and safety.gate: derate changes it).
+  config::Config cfg = config_snapshot();
+  const bool pass = configure_and_gate(cfg, *session_, summary_, report);
   {
     std::lock_guard lock(mutex_);
+    cfg_ = std::move(cfg);
+    derated_ = summary_.derated_stiffness;
     gate_ = summary_.gate;
   }
   if (!pass) return false;

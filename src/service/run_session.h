@@ -78,6 +78,8 @@ class RunSession final : public ControlHandler {
   SignalWatch& signals_;
   const bool realtime_;
   RunSummary summary_;
+  // What safety.gate: derate last did, for `status` (guarded by mutex_).
+  std::optional<std::pair<double, double>> derated_;
   std::optional<DeviceSession> session_;
   TickLog log_;
   loop::RtStatus rt_;

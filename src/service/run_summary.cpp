@@ -121,7 +121,8 @@ std::string summary_to_text(const RunSummary& s) {
   if (s.derated_stiffness) {
     os << "  DERATED        wall.stiffness " << format_number(s.derated_stiffness->first)
        << " N/m configured, ran at " << format_number(s.derated_stiffness->second)
-       << " N/m: the largest that passes the gate (safety.gate: derate)\n";
+       << " N/m: the largest that passes the gate (safety.gate: derate; the last derating of "
+          "the run, at start or by a reload)\n";
   }
   if (s.realtime) {
     os << "  RT             "

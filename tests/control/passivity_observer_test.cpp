@@ -23,6 +23,13 @@ ObserverParams params(config::PassivityControl mode, double b, int delay = 0,
   return p;
 }
 
+// A law with this saturation (and no no_pull) for damp().
+ControlLaw law(double max_force) {
+  ControlLaw l;
+  l.max_force = max_force;
+  return l;
+}
+
 // A tick that writes `u` whatever the controller would add.
 void write(PassivityObserver& o, double x, double u) {
   o.observe(x, true, 1);
@@ -33,7 +40,7 @@ void write(PassivityObserver& o, double x, double u) {
 double tick(PassivityObserver& o, double x, double wall, bool fresh = true,
             std::uint32_t periods = 1) {
   o.observe(x, fresh, periods);
-  const Damping d = o.damp(wall, 100.0);
+  const Damping d = o.damp(wall, law(100.0));
   o.commanded(d.command, d.added);
   return d.command;
 }
@@ -100,7 +107,7 @@ TEST(PassivityObserver, DampAddsTheDampingThatDissipatesTheDeficitAgainstTheMoti
   o.observe(0.002, true, 1);            // E = -20 mJ, v still +1 m/s
   const double e = o.energy_j();
   ASSERT_DOUBLE_EQ(e, -0.02);
-  const Damping d = o.damp(4.0, 100.0);
+  const Damping d = o.damp(4.0, law(100.0));
   const double alpha = -e / (1.0 * 1.0 * kT);  // alpha v^2 T = -E
   EXPECT_DOUBLE_EQ(d.alpha, alpha);
   EXPECT_DOUBLE_EQ(d.command, 4.0 - alpha * 1.0);  // against the motion (+x)
@@ -113,10 +120,10 @@ TEST(PassivityObserver, DampIsBoundedAndSaturatedToTheLawsMaximum) {
   PassivityObserver o(params(config::PassivityControl::kDamp, 0.0, 0, 3.0));
   tick(o, 0.0, 10.0);
   o.observe(0.001, true, 1);  // E = -10 mJ at 1 m/s would ask for 10 N s/m
-  Damping d = o.damp(0.0, 100.0);
+  Damping d = o.damp(0.0, law(100.0));
   EXPECT_DOUBLE_EQ(d.alpha, 3.0);
   EXPECT_DOUBLE_EQ(d.command, -3.0);
-  d = o.damp(-9.0, 10.0);  // -9 - 3 is beyond the law's 10 N
+  d = o.damp(-9.0, law(10.0));  // -9 - 3 is beyond the law's 10 N
   EXPECT_EQ(d.command, -10.0);
   EXPECT_TRUE(d.saturated);
   EXPECT_DOUBLE_EQ(o.max_alpha(), 3.0);
@@ -124,13 +131,14 @@ TEST(PassivityObserver, DampIsBoundedAndSaturatedToTheLawsMaximum) {
 
 TEST(PassivityObserver, AReversedMotionIsExpectedToReverseAgain) {
   PassivityObserver o(params(config::PassivityControl::kDamp, 0.0, 0, 1e6));
-  tick(o, 0.0, 10.0);
-  tick(o, 0.001, -10.0);    // +1 m/s under +10 N: E = -10 mJ; the controller pushes -x
-  o.observe(0.0, true, 1);  // then -1 m/s: the motion reversed
-  ASSERT_LT(o.energy_j(), 0.0);
-  const Damping d = o.damp(0.0, 1e9);
+  write(o, 0.0, 10.0);
+  write(o, 0.001, -10.0);   // +1 m/s under +10 N: E = -10 mJ
+  o.observe(0.0, true, 1);  // then -1 m/s under -10 N: E = -20 mJ, the motion reversed
+  ASSERT_DOUBLE_EQ(o.energy_j(), -0.02);
+  const Damping d = o.damp(0.0, law(1e9));
   // Held over the coming period, where the motion is expected at +1 m/s again: against +x.
   EXPECT_LT(d.command, 0.0);
+  // A damper on the last velocity (-1 m/s) would have pushed +x: along the expected motion.
 }
 
 TEST(PassivityObserver, NoDampingWhilePassiveOrAtRest) {
@@ -142,7 +150,7 @@ TEST(PassivityObserver, NoDampingWhilePassiveOrAtRest) {
   tick(at_rest, 0.0, 1.0);
   tick(at_rest, 0.001, 1.0);
   at_rest.observe(0.001, true, 1);  // E < 0 but no motion: nothing to damp
-  EXPECT_EQ(at_rest.damp(2.0, 10.0).command, 2.0);
+  EXPECT_EQ(at_rest.damp(2.0, law(10.0)).command, 2.0);
 }
 
 TEST(PassivityObserver, RestartKeepsTheEnergyAndForgetsTheForceInFlight) {
@@ -157,16 +165,50 @@ TEST(PassivityObserver, RestartKeepsTheEnergyAndForgetsTheForceInFlight) {
   EXPECT_EQ(o.energy_j(), e);
 }
 
-TEST(PassivityObserver, RefusesADelayItCannotHold) {
-  EXPECT_THROW(
-      PassivityObserver(params(config::PassivityControl::kObserve, 1.0, kMaxObserverDelay + 1)),
-      std::invalid_argument);
+TEST(PassivityObserver, HoldsAnyDelayTheDriverDeclares) {
+  // A slow HID poll declares hundreds of samples: the history is sized for it.
+  PassivityObserver o(params(config::PassivityControl::kObserve, 0.0, 300));
+  tick(o, 0.0, 7.0);
+  for (int k = 1; k <= 300; ++k) tick(o, 0.0, 0.0);
+  EXPECT_EQ(o.wall_work_j(), 0.0);
+  tick(o, 0.001, 0.0);  // the 7 N written 301 ticks ago acts over this period
+  EXPECT_DOUBLE_EQ(o.wall_work_j(), 0.007);
+  EXPECT_THROW(PassivityObserver(params(config::PassivityControl::kObserve, 1.0, -1)),
+               std::invalid_argument);
   ObserverParams p = params(config::PassivityControl::kObserve, 1.0);
   p.sample_period = 0.0;
   EXPECT_THROW(PassivityObserver{p}, std::invalid_argument);
 }
 
-TEST(PassivityObserver, TheControllersBoundStaysBelowWhatReversesTheMass) {
+TEST(PassivityObserver, TheGovernorStopsAControllerWhoseForcesPutEnergyIn) {
+  PassivityObserver o(params(config::PassivityControl::kDamp, 0.0, 0, 1e6));
+  write(o, 0.0, 10.0);
+  write(o, 0.001, 10.0);  // E = -10 mJ at +1 m/s
+  const Damping first = o.damp(0.0, law(1e9));
+  ASSERT_LT(first.command, 0.0);  // against the expected +x motion
+  o.commanded(first.command, first.added);
+  o.observe(0.0, true, 1);  // but the device went -x: that force pushed along the motion
+  EXPECT_LT(o.damping_work_j(), 0.0);
+  ASSERT_LT(o.energy_j(), 0.0);
+  EXPECT_EQ(o.damp(0.0, law(1e9)).command, 0.0) << "stopped for the rest of this deficit";
+  EXPECT_EQ(o.damped_ticks(), 1u);
+}
+
+TEST(PassivityObserver, UnderNoPullTheControllerNeverPulls) {
+  PassivityObserver o(params(config::PassivityControl::kDamp, 0.0, 0, 1e6));
+  write(o, 0.0, 10.0);
+  o.observe(0.001, true, 1);  // E < 0 at +1 m/s: the damping force points -x
+  ControlLaw l = law(100.0);
+  l.no_pull = true;
+  l.normal = -1.0;  // the wall occupies x < x0: a force toward -x pulls into it
+  const Damping d = o.damp(0.0, l);
+  EXPECT_EQ(d.command, 0.0);
+  EXPECT_EQ(d.alpha, 0.0);
+  l.normal = 1.0;  // now -x pushes out of the wall: allowed
+  EXPECT_LT(o.damp(0.0, l).command, 0.0);
+}
+
+TEST(PassivityObserver, TheControllersBoundIsTheSmallerOfTheSettingAndNineTenthsOf2mOverT) {
   config::Config cfg;
   cfg.device.mass = 0.1;
   cfg.loop.rate_hz = 50.0;
@@ -174,6 +216,12 @@ TEST(PassivityObserver, TheControllersBoundStaysBelowWhatReversesTheMass) {
   EXPECT_DOUBLE_EQ(observer_params(cfg, 0).max_damping, 0.9 * 2.0 * 0.1 / 0.02);
   cfg.safety.passivity_max_damping = 3.0;
   EXPECT_DOUBLE_EQ(observer_params(cfg, 0).max_damping, 3.0);
+}
+
+TEST(PassivityObserver, ThePeriodIsTheLoopsWholeNanoseconds) {
+  config::Config cfg;
+  cfg.loop.rate_hz = 1024.0;  // 976562.5 ns: the loop runs 976563
+  EXPECT_EQ(observer_params(cfg, 0).sample_period, 976563e-9);
 }
 
 }  // namespace
