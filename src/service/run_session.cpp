@@ -239,7 +239,7 @@ void RunSession::supervise(RtThread& rt) {
     const std::uint64_t ticks = servo_->ticks_done();
     if (watchdog && ticks != last_ticks) sd_notify(0, "WATCHDOG=1");
     last_ticks = ticks;
-    watch_passivity(servo_->live(), passivity, 20);  // damping reported once a second at most
+    watch_passivity(servo_->live(), passivity, 20);  // damping: every 20 polls (about 1 s)
   }
 }
 

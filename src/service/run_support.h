@@ -48,7 +48,7 @@ int report(const RunOptions& options, RunSummary& s);
 bool stop_requested(SignalWatch& signals, RunSummary& s, const char* when, bool& reload);
 // Events for the passivity observer while the loop runs, from the live status the
 // supervisor polls: when its energy goes below zero (and back), and how many ticks the
-// controller damped since the last report (at most one report per `every` polls).
+// controller damped since the last report (one report per `every` polls at most).
 struct PassivityWatch {
   bool negative = false;
   std::uint64_t damped_reported = 0;
