@@ -182,7 +182,7 @@ void check(const FreeMotionData& d) {
   }
   const auto valid = static_cast<std::size_t>(std::count(d.valid.begin(), d.valid.end(), true));
   if (valid < 50) throw std::invalid_argument("fewer than 50 valid samples to fit");
-  double lo = INFINITY, hi = -INFINITY;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   for (std::size_t k = 0; k < d.position.size(); ++k) {
     if (d.valid[k]) lo = std::min(lo, d.position[k]), hi = std::max(hi, d.position[k]);
   }

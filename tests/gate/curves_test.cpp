@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "gate/gate.h"
 
@@ -61,7 +62,7 @@ TEST(Nyquist, ThePlottedLoopIsTheOneTheGateJudged) {
   ASSERT_EQ(curve.size(), 800u);
   EXPECT_TRUE(note.empty());
   // The Tsai-Colgate margin from the plotted points, as eq. 25 states it.
-  double margin = INFINITY, tsypkin = INFINITY;
+  double margin = std::numeric_limits<double>::infinity(), tsypkin = margin;
   for (const NyquistPoint& p : curve) {
     const double m = std::sin(p.theta) / (1.0 - std::cos(p.theta));
     margin =

@@ -74,13 +74,17 @@ TEST(CliIdentify, RecoversThroughTheGpioPeer) {
 }
 #endif
 
+#if HAPTICD_TEST_WITH_HID || HAPTICD_TEST_WITH_CAN || HAPTICD_TEST_WITH_GPIO
 TEST(CliIdentify, RefusesARealDriverWithoutBeingToldTheDeviceIsFree) {
-  const ProcessResult r =
-      run_process({hapticd_binary(), "identify", "--config", example("hid-report.yaml")});
+  const std::string config = example(HAPTICD_TEST_WITH_HID   ? "hid-report.yaml"
+                                     : HAPTICD_TEST_WITH_CAN ? "can-odrive.yaml"
+                                                             : "gpio.yaml");
+  const ProcessResult r = run_process({hapticd_binary(), "identify", "--config", config});
   EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
   EXPECT_TRUE(has(r.err, "--yes-the-device-is-free")) << r.err;
   EXPECT_TRUE(r.out.empty());
 }
+#endif
 
 TEST(CliIdentify, RefusesAnExcitationOutsideTheDevice) {
   ProcessResult r = run_process({hapticd_binary(), "identify", "--amplitude", "12"});
@@ -98,8 +102,8 @@ TEST(CliIdentify, RefusesAnExcitationOutsideTheDevice) {
 }
 
 TEST(CliIdentify, ADeviceThatWandersTooFarStopsAsAFaultWithZeroForce) {
-  const ProcessResult r = run_process(
-      {hapticd_binary(), "identify", "--amplitude", "4", "--max-travel", "0.002"});
+  const ProcessResult r =
+      run_process({hapticd_binary(), "identify", "--amplitude", "4", "--max-travel", "0.002"});
   EXPECT_EQ(r.exit_code, 1) << r.out << r.err;
   EXPECT_TRUE(has(r.err, "moved more than --max-travel 0.002 m")) << r.err;
   EXPECT_TRUE(has(r.err, "zero force commanded, output disabled")) << r.err;
