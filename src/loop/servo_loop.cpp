@@ -1,9 +1,10 @@
 // The tick, and everything it touches. The RT working set is kept small and listed here, so a
 // change that adds to it is seen: the Device (its state, the driver's buffers), the
-// Controller (ControlLaw and three 16-tap histories, the delay line), this ServoLoop (options,
-// two 4 KB LatencyHistograms, counters, the LiveStatus atomics), the LawSwap mailbox (one
-// atomic load a tick), the SenseState and TickRecord on the stack, and one slot of the SPSC
-// ring. Nothing else: no allocation, no lock, no log, no throw.
+// Controller (ControlLaw and three 16-tap histories, the delay line), the PassivityObserver
+// (two command histories as long as the device's delay, allocated before the loop), this
+// ServoLoop (options, two 4 KB LatencyHistograms, counters, the LiveStatus atomics), the
+// LawSwap mailbox (one atomic load a tick), the SenseState and TickRecord on the stack, and
+// one slot of the SPSC ring. Nothing else: no allocation, no lock, no log, no throw.
 #include "loop/servo_loop.h"
 
 #include <sched.h>

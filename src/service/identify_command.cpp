@@ -1,6 +1,8 @@
 #include "service/identify_command.h"
 
 #include <poll.h>
+#include <pthread.h>
+#include <sched.h>
 #include <spdlog/spdlog.h>
 
 #include <cmath>
@@ -104,6 +106,9 @@ ExcitationRecord excite(Device& device, const Excitation& e, double period_s, bo
   ExcitationRecord rec(e.force.size());
   std::atomic<bool> stop{false}, done{false};
   std::thread watch([&] {
+    // Not the excitation's real-time priority, which this thread inherits.
+    const sched_param normal{};
+    pthread_setschedparam(pthread_self(), SCHED_OTHER, &normal);
     pollfd fds[2] = {{signals.fd(), POLLIN, 0}, {signals.pipe_fd(), POLLIN, 0}};
     while (!done.load()) {
       poll(fds, 2, 20);
