@@ -33,7 +33,7 @@ void expect_recovers(const std::vector<std::string>& args, double mass, double d
 std::string example(const std::string& name) { return source_dir() + "/config/" + name; }
 
 TEST(CliIdentify, RecoversTheSimsMassAndDamping) {
-  expect_recovers({}, 0.1, 2.0);
+  expect_recovers({"--config", example("sim.yaml")}, 0.1, 2.0);
   // Not the defaults by accident: another device, and the operator of the config ignored.
   expect_recovers({"--set", "device.mass=0.35", "--set", "device.damping=0.9"}, 0.35, 0.9);
 }
