@@ -10,20 +10,13 @@
 #include <limits>
 
 #include "gate/gate.h"
+#include "gate_configs.h"
 
 namespace hapticd::gate {
 namespace {
 
-config::Config demo() {  // the numbers of config/sim.yaml
-  config::Config c;
-  c.loop.rate_hz = 1000;
-  c.device.mass = 0.1;
-  c.device.damping = 2.0;
-  c.wall.stiffness = 2000;
-  c.wall.damping = 0.2;
-  c.safety.passivity_margin = 0.1;
-  return c;
-}
+using test::demo;
+using test::example1;
 
 TEST(Zwidth, BackwardDifferenceWithoutDelayIsTheLineKTOver2PlusBEqualsB) {
   const config::Config cfg = demo();
@@ -81,10 +74,7 @@ TEST(Nyquist, ThePlottedLoopIsTheOneTheGateJudged) {
 }
 
 TEST(Nyquist, BehindACouplingWithAPoleAtOneThereIsNothingToPlotAndItSaysWhy) {
-  config::Config cfg = demo();
-  cfg.loop.rate_hz = 50;
-  cfg.device.damping = 10;
-  cfg.wall.coupling = {true, {0.1, -0.0752, 0.0016, -0.0101}, {1, -1.8407, 0.8444, -0.0037}};
+  const config::Config cfg = example1(true);
   std::string note;
   EXPECT_TRUE(nyquist_curve(cfg, 0, note).empty());
   EXPECT_EQ(note, kCouplingPoleNote);
