@@ -67,13 +67,15 @@ void PassivityObserver::observe(double position, bool fresh, std::uint32_t perio
     return;  // the held position: the motion shows in the next sample
   }
   const double dx = position - last_x_;
+  // The usual case, one period since the last sample, divides nothing.
+  const bool spread = pending_periods_ != 1;
   const double n = static_cast<double>(pending_periods_);
-  const double force = pending_force_ / n;
+  const double force = spread ? pending_force_ / n : pending_force_;
   wall_work_ += force * dx;
   if (enabled()) {
-    const double v = dx * inv_period_ / n;
+    const double v = spread ? dx * inv_period_ / n : dx * inv_period_;
     energy_ += params_.device_damping * v * dx - force * dx;
-    damping_work_ -= pending_damping_ / n * dx;
+    damping_work_ -= (spread ? pending_damping_ / n : pending_damping_) * dx;
     previous_velocity_ = velocity_;
     velocity_ = v;
     min_energy_ = std::min(min_energy_, energy_);

@@ -15,22 +15,17 @@ namespace {
 
 using telemetry::TickRecord;
 
-// The driver's declared delay, which places the force acting over each period; 0 for a
-// driver this build does not have (only the observer's figures depend on it, and the
-// controller's forces only in damp mode: a difference then shows as one).
-int device_delay(const config::Config& cfg) {
+// The driver's declared delay, which places the force acting over each period; none for a
+// driver this build does not have (replay then takes 0 and says so: only the observer's
+// figures depend on it, and the controller's forces only in damp mode).
+std::optional<int> declared_delay(const config::Config& cfg) {
   for (const drivers::DriverEntry& d : drivers::registered_drivers()) {
     if (d.name == cfg.device.driver) return d.declared_delay(cfg);
   }
-  return 0;
+  return std::nullopt;
 }
 
-bool driver_known(const config::Config& cfg) {
-  for (const drivers::DriverEntry& d : drivers::registered_drivers()) {
-    if (d.name == cfg.device.driver) return true;
-  }
-  return false;
-}
+int device_delay(const config::Config& cfg) { return declared_delay(cfg).value_or(0); }
 
 // Sample periods between two records (more than one after the loop skipped periods).
 std::uint32_t periods_between(std::int64_t from_ns, std::int64_t to_ns, double period_s) {
@@ -187,7 +182,7 @@ ReplayResult replay_log(const telemetry::LogContents& log, const std::string& lo
            0,     {}};
   st.own.restart(st.own_cfg);
   if (other != nullptr) st.other.restart(*other);
-  if (!driver_known(st.own_cfg)) {
+  if (!declared_delay(st.own_cfg)) {
     out.note = "device.driver " + st.own_cfg.device.driver +
                " is not in this build: its declared delay is taken as 0, so the passivity "
                "observer's figures (and, with safety.passivity_controller: damp, the forces) "

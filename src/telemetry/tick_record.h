@@ -21,7 +21,7 @@ enum TickFlag : std::uint32_t {
   kFlagSequenceGap = 1u << 8,  // the device's sequence skipped samples before this one
   kFlagNoPosition = 1u << 9,   // no position to act on yet: the controller was not stepped
   kFlagPassivityDamped = 1u << 10,  // the passivity controller added damping on this tick
-  kFlagStepped = 1u << 11,  // the controller and the passivity observer ran on this tick
+  kFlagStepped = 1u << 11,          // the controller and the passivity observer ran on this tick
 };
 
 // A record that is not a tick but an event at a tick boundary (TickRecord::marker): `tick` is

@@ -80,7 +80,8 @@ TEST(IdentifyRun, AStopEndsItAtZeroForce) {
 TEST(IdentifyRun, ANonFiniteCommandFaultsTheDeviceAndEndsIt) {
   Rig rig;
   std::vector<double> u = sine(100, 1.0);
-  u[40] = std::numeric_limits<double>::quiet_NaN();  // the device refuses it: zero written, fault latched
+  u[40] = std::numeric_limits<double>::quiet_NaN();  // the device refuses it: zero written, fault
+                                                     // latched
   ExcitationRecord rec(u.size());
   const std::atomic<bool> stop{false};
   run_excitation(rig.device, u, 1e-3, false, 0.1, stop, rec);

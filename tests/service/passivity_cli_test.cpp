@@ -114,32 +114,29 @@ TEST(CliPassivity, TheControllersOwnForcesNeverPutEnergyInWhateverTheHandDoes) {
   }
 }
 
-TEST(CliPassivity, ReplayReproducesTheObserverAtARateWithoutWholeNanoseconds) {
-  // 1024 Hz: 976562.5 ns, which the loop runs as 976563; replay must use the same T.
-  const std::string log = temp_path("r1024.hlog");
-  ASSERT_EQ(run_process({hapticd_binary(), "run", "--duration", "3", "--log", log, "--set",
-                         "loop.clock=freerun", "--set", "loop.rate_hz=1024", "--set",
-                         "wall.stiffness=20000", "--set", "safety.gate=warn", "--set",
-                         "safety.passivity_controller=damp"})
-                .exit_code,
-            0);
+// `hapticd run` with `args` and the controller damping, then `hapticd replay --json` of its log.
+json run_and_replay(const std::string& name, std::vector<std::string> args) {
+  const std::string log = temp_path(name + ".hlog");
+  args.insert(args.begin(), {hapticd_binary(), "run", "--log", log});
+  args.insert(args.end(),
+              {"--set", "safety.gate=warn", "--set", "safety.passivity_controller=damp"});
+  EXPECT_EQ(run_process(args).exit_code, 0);
   const ProcessResult r = run_process({hapticd_binary(), "replay", log, "--json"});
   EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
-  const json j = json::parse(r.out);
+  return json::parse(r.out);
+}
+
+TEST(CliPassivity, ReplayReproducesTheObserverAtARateWithoutWholeNanoseconds) {
+  // 1024 Hz: 976562.5 ns, which the loop runs as 976563; replay must use the same T.
+  const json j = run_and_replay("r1024", {"--duration", "3", "--set", "loop.clock=freerun", "--set",
+                                          "loop.rate_hz=1024", "--set", "wall.stiffness=20000"});
   EXPECT_EQ(j["reproduced"]["differing"], 0);
   EXPECT_GT(j["logged"]["damped_ticks"].get<int>(), 0);
 }
 
 TEST(CliPassivity, ReplayReproducesTheControllersForcesBitForBit) {
-  const std::string log = temp_path("damp_replay.hlog");
-  ASSERT_EQ(run_process({hapticd_binary(), "run", "--config", example(), "--duration", "5", "--log",
-                         log, "--set", "wall.coupling=", "--set", "safety.gate=warn", "--set",
-                         "safety.passivity_controller=damp"})
-                .exit_code,
-            0);
-  const ProcessResult r = run_process({hapticd_binary(), "replay", log, "--json"});
-  EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
-  const json j = json::parse(r.out);
+  const json j = run_and_replay(
+      "damp_replay", {"--config", example(), "--duration", "5", "--set", "wall.coupling="});
   EXPECT_EQ(j["reproduced"]["differing"], 0);
   EXPECT_EQ(j["reproduced"]["identical"], true);
   EXPECT_GT(j["logged"]["damped_ticks"].get<int>(), 0);
