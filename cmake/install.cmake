@@ -39,8 +39,11 @@ set(HAPTICD_UDEV_RULES_DIR "lib/udev/rules.d" CACHE STRING
     "udev rules directory, relative to the install prefix unless absolute")
 install(FILES ${PROJECT_SOURCE_DIR}/systemd/hapticd.sysusers DESTINATION ${HAPTICD_SYSUSERS_DIR}
         RENAME hapticd.conf)
-file(GLOB _udev_rules ${PROJECT_SOURCE_DIR}/udev/*.rules)
-install(FILES ${_udev_rules} DESTINATION ${HAPTICD_UDEV_RULES_DIR})
+# One rule, for /dev/cpu_dma_latency. No device rule is installed: an instance's rules (its CAN
+# interface, GPIO chip and PWM channel, HID device) are written from its configuration by
+# `hapticd udev-rules` (docs/operations.md lists everything installing changes, and a test
+# holds this file to that list).
+install(FILES ${PROJECT_SOURCE_DIR}/udev/60-hapticd-rt.rules DESTINATION ${HAPTICD_UDEV_RULES_DIR})
 install(CODE "
   set(HAPTICD_UNIT_TEMPLATE \"${PROJECT_SOURCE_DIR}/systemd/hapticd@.service.in\")
   set(HAPTICD_UNIT_DIR \"${HAPTICD_SYSTEMD_UNIT_DIR}\")
