@@ -16,6 +16,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <mutex>
 #include <thread>
 
 #include "gpio_sim_chip.h"
@@ -118,7 +119,8 @@ TEST(PeerOnKernel, VxcanIsASimulatedBusToo) {
 
 // slcan on a pseudo-terminal: what the kernel makes of a serial-line CAN adapter, a real
 // controller's driver (can-dev, link kind "can"). What it sends comes out on the terminal's
-// master side in slcan's ASCII.
+// master side in slcan's ASCII, which a thread reads as the adapter would: slcan waits for its
+// commands (bitrate, open) to drain before `ip link set up` returns.
 class Slcan {
  public:
   Slcan() {
@@ -132,24 +134,38 @@ class Slcan {
       return;
     }
     name_ = name;
+    reader_ = std::thread([this] {
+      char buf[1024];
+      while (!stop_.load()) {
+        const ssize_t n = ::read(master_, buf, sizeof buf);
+        if (n > 0) {
+          const std::lock_guard lock(mutex_);
+          written_.append(buf, static_cast<std::size_t>(n));
+        } else {
+          std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        }
+      }
+    });
   }
   ~Slcan() {
+    stop_.store(true);
+    if (reader_.joinable()) reader_.join();
     if (slave_ >= 0) ::close(slave_);  // the line discipline goes, and the interface with it
     if (master_ >= 0) ::close(master_);
   }
   const std::string& name() const { return name_; }
   std::string written() {
-    std::string out;
-    char buf[1024];
-    for (ssize_t n; (n = ::read(master_, buf, sizeof buf)) > 0;) {
-      out.append(buf, static_cast<std::size_t>(n));
-    }
-    return out;
+    const std::lock_guard lock(mutex_);
+    return written_;
   }
 
  private:
   int master_ = -1, slave_ = -1;
   std::string name_;
+  std::atomic<bool> stop_{false};
+  std::mutex mutex_;
+  std::string written_;
+  std::thread reader_;
 };
 
 TEST(PeerOnKernel, ACanControllerIsRefusedUnlessTheFlagSaysToImpersonateThere) {
@@ -174,7 +190,8 @@ TEST(PeerOnKernel, ACanControllerIsRefusedUnlessTheFlagSaysToImpersonateThere) {
   EXPECT_EQ(told.exit_code, 0) << told.err;
   EXPECT_TRUE(has(told.err, "impersonating a device on real hardware")) << told.err;
   // Its question to node 1 went out on the line: an SDO read of 0x1000.
-  EXPECT_TRUE(has(slcan.written(), std::string("t601") + "8" + "4000100000000000")) << "slcan";
+  EXPECT_TRUE(has(slcan.written(), std::string("t601") + "8" + "4000100000000000"))
+      << slcan.written();
 }
 
 TEST(PeerOnKernel, ANodeThatSendsHeartbeatsAtTheIdIsHeardAndRefused) {
