@@ -47,21 +47,35 @@ std::string hex4(unsigned v) {
 
 std::string group_mode() { return std::string(", GROUP=\"") + kServiceGroup + "\", MODE=\"0660\""; }
 
+// `text` as comment lines of at most 99 columns.
+void comment(std::ostream& out, const std::string& text) {
+  std::istringstream words(text);
+  std::string line;
+  for (std::string word; words >> word;) {
+    if (!line.empty() && line.size() + 1 + word.size() > 97) {
+      out << "# " << line << "\n";
+      line.clear();
+    }
+    line += (line.empty() ? "" : " ") + word;
+  }
+  if (!line.empty()) out << "# " << line << "\n";
+}
+
 #if HAPTICD_WITH_CAN
 void can_rules(const config::Config& cfg, std::ostream& out) {
   const auto& s = drivers::can::can_settings(cfg);
   require_literal(cfg, "device.can.interface", s.interface);
   if (s.interface.rfind("vcan", 0) == 0 || s.interface.rfind("vxcan", 0) == 0) {
-    out << "# device.can.interface "
-        << s.interface << " is a virtual bus: it has no bitrate, and udev has nothing to set.\n";
+    comment(out, "device.can.interface " + s.interface +
+                     " is a virtual bus: it has no bitrate, and udev has nothing to set.");
     return;
   }
   const std::string rate = std::to_string(s.bitrate);
-  out << "# device.can: " << s.interface << " (and no other interface) at " << rate
-      << " bit/s (device.can.bitrate), restart-ms 100 so the controller\n"
-      << "# recovers by itself after bus-off (hapticd still faults on the bus-off), brought up "
-         "when it appears.\n"
-      << "ACTION==\"add\", SUBSYSTEM==\"net\", KERNEL==\""
+  comment(out, "device.can: " + s.interface + ", and no other interface, at " + rate +
+                   " bit/s (device.can.bitrate) with restart-ms 100 (the controller recovers "
+                   "from bus-off by itself; hapticd still faults on it), brought up as it "
+                   "appears.");
+  out << "ACTION==\"add\", SUBSYSTEM==\"net\", KERNEL==\""
       << s.interface << "\", ATTR{type}==\"280\", RUN+=\"/sbin/ip link set "
       << s.interface << " type can bitrate " << rate
       << " restart-ms 100\", RUN+=\"/sbin/ip link set " << s.interface << " up\"\n";
@@ -83,27 +97,28 @@ std::string chip_kernel_name(const config::Config& cfg, const std::string& chip)
 void gpio_rules(const config::Config& cfg, std::ostream& out) {
   const auto& s = drivers::gpio::gpio_settings(cfg);
   const std::string chip = chip_kernel_name(cfg, s.chip);
-  out << "# device.gpio.chip: " << chip
-      << ". The GPIO character device is granted per chip: whoever opens it may request\n"
-      << "# any of its lines that no one holds. This instance uses lines " << s.line_a << ", "
-      << s.line_b << ", " << s.line_direction;
-  if (s.line_index) out << ", " << *s.line_index;
-  if (s.line_fault) out << ", " << *s.line_fault;
-  out << " (docs/operations.md).\n"
-      << "SUBSYSTEM==\"gpio\", KERNEL==\"" << chip << "\"" << group_mode() << "\n";
+  std::string lines = std::to_string(s.line_a) + ", " + std::to_string(s.line_b) + ", " +
+                      std::to_string(s.line_direction);
+  if (s.line_index) lines += ", " + std::to_string(*s.line_index);
+  if (s.line_fault) lines += ", " + std::to_string(*s.line_fault);
+  comment(out, "device.gpio.chip: " + chip +
+                   ". A GPIO chip is granted whole: whoever opens it may request any of its "
+                   "lines no one holds. This instance uses lines " +
+                   lines + " (docs/operations.md).");
+  out << "SUBSYSTEM==\"gpio\", KERNEL==\"" << chip << "\"" << group_mode() << "\n";
   if (s.pwm_sysfs_root != "/sys/class/pwm") {
-    out << "# device.gpio.pwm.sysfs_root is " << s.pwm_sysfs_root
-        << ", not /sys/class/pwm: udev has no PWM chip to set up there.\n";
+    comment(out, "device.gpio.pwm.sysfs_root is " + s.pwm_sysfs_root +
+                     ", not /sys/class/pwm: udev has no PWM chip to set up there.");
     return;
   }
   const std::string pwmchip = "pwmchip" + std::to_string(s.pwm_chip);
   const std::string ch = "pwm" + std::to_string(s.pwm_channel);
   const std::string files = "period duty_cycle polarity enable";
-  out << "# device.gpio.pwm: channel " << s.pwm_channel << " of " << pwmchip
-      << ", exported by udev (as root) and its " << files << "\n"
-      << "# given to the group; the chip's export and unexport stay root's, so no other "
-         "channel can be taken or released.\n"
-      << "ACTION==\"add|change\", SUBSYSTEM==\"pwm\", KERNEL==\"" << pwmchip
+  comment(out, "device.gpio.pwm: channel " + std::to_string(s.pwm_channel) + " of " + pwmchip +
+                   ", exported by udev as root; the group gets its period, duty_cycle, "
+                   "polarity and enable. The chip's export and unexport stay root's: no other "
+                   "channel can be taken or released.");
+  out << "ACTION==\"add|change\", SUBSYSTEM==\"pwm\", KERNEL==\"" << pwmchip
       << "\", ENV{UNEXPORT}==\"\", RUN+=\"/bin/sh -c 'test -d %S%p/" << ch << " || echo "
       << s.pwm_channel << " >%S%p/export; cd %S%p/" << ch << " && chgrp " << kServiceGroup << " "
       << files << " && chmod g+w " << files << "'\"\n";
@@ -116,7 +131,7 @@ void hid_rules(const config::Config& cfg, std::ostream& out) {
   if (s == nullptr) return;
   const auto& sel = s->select;
   const bool libusb = s->backend == drivers::hid::Backend::kLibusb;
-  const char* node = libusb ? "the USB device node" : "the hidraw node";
+  const std::string node = libusb ? "the USB device node" : "the hidraw node";
   const std::string head =
       libusb ? "SUBSYSTEM==\"usb\", ENV{DEVTYPE}==\"usb_device\", " : "SUBSYSTEM==\"hidraw\", ";
   if (!sel.path.empty()) {
@@ -124,8 +139,8 @@ void hid_rules(const config::Config& cfg, std::ostream& out) {
     std::string name = sel.path.rfind("/dev/", 0) == 0 ? sel.path.substr(5) : sel.path;
     if (libusb) name = name.substr(0, name.find(':'));
     require_literal(cfg, "device.hid.select.path", name);
-    out << "# device.hid.select.path: " << node << " " << name << ", whatever is plugged there.\n"
-        << head << "KERNEL==\"" << name << "\"" << group_mode() << "\n";
+    comment(out, "device.hid.select.path: " + node + " " + name + ", whatever is plugged there.");
+    out << head << "KERNEL==\"" << name << "\"" << group_mode() << "\n";
     return;
   }
   if (!sel.vendor_id || !sel.product_id) {
@@ -134,17 +149,15 @@ void hid_rules(const config::Config& cfg, std::ostream& out) {
          ": device.hid.select: udev can give the group exactly this device only by its vendor "
          "and product id (or its path): set vendor_id and product_id"});
   }
+  if (!sel.serial.empty()) require_literal(cfg, "device.hid.select.serial", sel.serial);
+  const std::string vid = hex4(*sel.vendor_id), pid = hex4(*sel.product_id);
+  comment(out, "device.hid.select: " + node + " of USB device " + vid + ":" + pid +
+                   (sel.serial.empty() ? "" : ", serial " + sel.serial) +
+                   " (every HID interface of it), and of no other device.");
   const char* attr = libusb ? "ATTR" : "ATTRS";  // a hidraw node's USB device is a parent
-  out << "# device.hid.select: " << node << " of USB device " << hex4(*sel.vendor_id) << ":"
-      << hex4(*sel.product_id);
-  if (!sel.serial.empty()) out << ", serial " << sel.serial;
-  out << " (every HID interface of it), and of no other device.\n"
-      << head << attr << "{idVendor}==\"" << hex4(*sel.vendor_id) << "\", " << attr
-      << "{idProduct}==\"" << hex4(*sel.product_id) << "\"";
-  if (!sel.serial.empty()) {
-    require_literal(cfg, "device.hid.select.serial", sel.serial);
-    out << ", " << attr << "{serial}==\"" << sel.serial << "\"";
-  }
+  out << head << attr << "{idVendor}==\"" << vid << "\", " << attr << "{idProduct}==\"" << pid
+      << "\"";
+  if (!sel.serial.empty()) out << ", " << attr << "{serial}==\"" << sel.serial << "\"";
   out << group_mode() << "\n";
 }
 #endif
@@ -153,12 +166,12 @@ void hid_rules(const config::Config& cfg, std::ostream& out) {
 
 std::string instance_udev_rules(const config::Config& cfg, const std::string& instance) {
   std::ostringstream out;
-  out << "# udev rules of hapticd instance " << instance << ", written by `hapticd udev-rules` "
-      << "from " << cfg.source_name << ".\n"
-      << "# Install as /etc/udev/rules.d/70-hapticd-" << instance
-      << ".rules; then `udevadm control --reload` and\n"
-      << "# `udevadm trigger --action=add` (docs/operations.md). Written again, not edited, "
-         "when the configuration changes.\n";
+  comment(out, "udev rules of hapticd instance " + instance +
+                   ", written by `hapticd udev-rules` from " + cfg.source_name +
+                   ". Install as /etc/udev/rules.d/70-hapticd-" + instance +
+                   ".rules, then `udevadm control --reload` and `udevadm trigger --action=add` "
+                   "(docs/operations.md). When the configuration changes, write them again "
+                   "rather than edit them.");
   const std::string& d = cfg.device.driver;
 #if HAPTICD_WITH_CAN
   if (d == "can") can_rules(cfg, out);
@@ -169,7 +182,7 @@ std::string instance_udev_rules(const config::Config& cfg, const std::string& in
 #if HAPTICD_WITH_HID
   if (d == "hid") hid_rules(cfg, out);
 #endif
-  if (d == "sim") out << "# device.driver sim: no device, nothing for udev to do.\n";
+  if (d == "sim") comment(out, "device.driver sim: no device, nothing for udev to do.");
   return out.str();
 }
 
