@@ -5,18 +5,12 @@
 // replies, an ODrive's heartbeat, a second peer) is heard and refused; a gpio-sim chip passes
 // and a sysfs device that is no GPIO chip is refused; the USB device controller here is
 // dummy_hcd's. Real GPIO chips and UDCs: peer_guard_test.cpp feeds their facts.
-#include <fcntl.h>
 #include <gtest/gtest.h>
-#include <linux/tty.h>
-#include <net/if.h>
-#include <sys/ioctl.h>
-#include <unistd.h>
 
 #include <atomic>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
-#include <mutex>
 #include <thread>
 
 #include "gpio_sim_chip.h"
@@ -24,6 +18,7 @@
 #include "pwm_sim.h"
 #include "service/peer_endpoint.h"
 #include "service/peer_guard.h"
+#include "slcan_tty.h"
 #include "vcan_interface.h"
 
 namespace hapticd::service {
@@ -116,57 +111,6 @@ TEST(PeerOnKernel, VxcanIsASimulatedBusToo) {
   EXPECT_EQ(r.exit_code, 0) << r.err;
   ip("link del hkt-vx0");
 }
-
-// slcan on a pseudo-terminal: what the kernel makes of a serial-line CAN adapter, a real
-// controller's driver (can-dev, link kind "can"). What it sends comes out on the terminal's
-// master side in slcan's ASCII, which a thread reads as the adapter would: slcan waits for its
-// commands (bitrate, open) to drain before `ip link set up` returns.
-class Slcan {
- public:
-  Slcan() {
-    master_ = ::posix_openpt(O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
-    if (master_ < 0 || ::grantpt(master_) != 0 || ::unlockpt(master_) != 0) return;
-    slave_ = ::open(::ptsname(master_), O_RDWR | O_NOCTTY | O_CLOEXEC);
-    int disc = N_SLCAN;
-    char name[IFNAMSIZ] = {};
-    if (slave_ < 0 || ::ioctl(slave_, TIOCSETD, &disc) != 0 ||
-        ::ioctl(slave_, SIOCGIFNAME, name) != 0) {
-      return;
-    }
-    name_ = name;
-    reader_ = std::thread([this] {
-      char buf[1024];
-      while (!stop_.load()) {
-        const ssize_t n = ::read(master_, buf, sizeof buf);
-        if (n > 0) {
-          const std::lock_guard lock(mutex_);
-          written_.append(buf, static_cast<std::size_t>(n));
-        } else {
-          std::this_thread::sleep_for(std::chrono::milliseconds(5));
-        }
-      }
-    });
-  }
-  ~Slcan() {
-    stop_.store(true);
-    if (reader_.joinable()) reader_.join();
-    if (slave_ >= 0) ::close(slave_);  // the line discipline goes, and the interface with it
-    if (master_ >= 0) ::close(master_);
-  }
-  const std::string& name() const { return name_; }
-  std::string written() {
-    const std::lock_guard lock(mutex_);
-    return written_;
-  }
-
- private:
-  int master_ = -1, slave_ = -1;
-  std::string name_;
-  std::atomic<bool> stop_{false};
-  std::mutex mutex_;
-  std::string written_;
-  std::thread reader_;
-};
 
 TEST(PeerOnKernel, ACanControllerIsRefusedUnlessTheFlagSaysToImpersonateThere) {
   Slcan slcan;
