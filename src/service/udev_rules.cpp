@@ -32,20 +32,23 @@ bool literal(const std::string& s) {
   return true;
 }
 
-void require_literal(const config::Config& cfg, const std::string& key, const std::string& value) {
+[[maybe_unused]] void require_literal(const config::Config& cfg, const std::string& key,
+                                      const std::string& value) {
   if (literal(value)) return;
   throw config::ConfigError({cfg.locate(key) + ": " + key + ": '" + value +
                              "' cannot go into a udev rule as it is (only letters, digits and "
                              "_ - . : are matched literally); write that rule by hand"});
 }
 
-std::string hex4(unsigned v) {
+[[maybe_unused]] std::string hex4(unsigned v) {
   char buf[8];
   std::snprintf(buf, sizeof buf, "%04x", v & 0xFFFFu);
   return buf;
 }
 
-std::string group_mode() { return std::string(", GROUP=\"") + kServiceGroup + "\", MODE=\"0660\""; }
+[[maybe_unused]] std::string group_mode() {
+  return std::string(", GROUP=\"") + kServiceGroup + "\", MODE=\"0660\"";
+}
 
 // `text` as comment lines of at most 99 columns.
 void comment(std::ostream& out, const std::string& text) {
