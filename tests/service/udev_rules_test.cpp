@@ -33,7 +33,7 @@ std::vector<std::string> rule_lines(const std::string& text) {
   return rules;
 }
 
-std::string refusal(const config::Config& cfg) {
+[[maybe_unused]] std::string refusal(const config::Config& cfg) {
   try {
     instance_udev_rules(cfg, "arm");
   } catch (const config::ConfigError& e) {
