@@ -25,6 +25,7 @@ packages=(
   rt-tests python3 util-linux                    # cyclictest and tools/jitter_bench.py; prlimit
   python3-matplotlib                             # tools/hapticd-plot
   qemu-system-x86 busybox-static cpio kmod xz-utils  # tools/kernel-vm, the kernel test machine
+  udev iproute2                                  # udevd applying an instance's rules there; ip
   clang libclang-rt-14-dev llvm                  # the asan stage: libFuzzer, llvm-symbolizer
 )
 missing=()

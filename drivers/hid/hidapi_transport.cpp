@@ -380,8 +380,8 @@ std::unique_ptr<HidTransport> open_hidapi(const HidSettings& s) {
   hid_device* dev = a.open_path(path.c_str());
   if (dev == nullptr) {
     throw DeviceError("hid: cannot open " + path + " (" + to_utf8(a.error(nullptr)) +
-                      "): is the user in group hapticd, and does udev/60-hapticd-hid.rules "
-                      "list this device's ids?");
+                      "): is the user in group hapticd, and are the rules `hapticd udev-rules` "
+                      "writes for this configuration installed?");
   }
   try {
     return std::make_unique<HidapiTransport>(a, s.backend, dev, *sel.device, std::move(descriptor),
