@@ -21,6 +21,7 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace hapticd {
 
@@ -67,6 +68,9 @@ struct DeviceInfo {
   std::string description;             // "sim", "hid 1209:ffb0 serial 42", "cia402 node 3 on can0"
   int transport_delay_samples = 0;     // whole samples between write() and the force acting
   std::uint64_t sequence_modulus = 0;  // where the device's sequence wraps (2^8, 2^16...); 0: none
+  // What configure found that the person running it should know but that does not stop it
+  // (an optional object the device lacks, a setting seen on the wire), one sentence each.
+  std::vector<std::string> notices;
 };
 
 // Thrown by the non-RT lifecycle calls. The service maps it to exit code 4.

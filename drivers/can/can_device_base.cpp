@@ -248,6 +248,14 @@ std::string CanDeviceBase::counter_summary() const {
   add(counters_.controller_restarts, "controller restarts");
   add(counters_.emcy_resets, "EMCY error resets");
   add(counters_.sdo_aborts, "SDO aborts");
+  add(counters_.over_vel_limit,
+      "ticks above the axis's torque-mode velocity limit (controller.config.vel_limit: the "
+      "firmware braked)");
+  add(counters_.internal_limit,
+      "ticks with the drive's internal limit active (statusword bit 11: it limited the torque "
+      "itself)");
+  add(counters_.unsolicited_estimates,
+      "encoder estimates the axis sent by itself (not answers; its encoder rate is not 0)");
   return out;
 }
 

@@ -32,6 +32,10 @@ struct CanCounters {
   std::atomic<std::uint64_t> controller_restarts{0};
   std::atomic<std::uint64_t> emcy_resets{0};  // EMCY 0x0000: the drive's error cleared
   std::atomic<std::uint64_t> sdo_aborts{0};
+  // Forces the drive applied that hapticd did not command, and messages it did not ask for.
+  std::atomic<std::uint64_t> over_vel_limit{0};  // ODrive: ticks above controller.config.vel_limit
+  std::atomic<std::uint64_t> internal_limit{0};  // CiA 402: ticks with statusword bit 11
+  std::atomic<std::uint64_t> unsolicited_estimates{0};  // ODrive: cyclic estimates, not answers
 };
 
 // Why a CAN device latched (its describe() sentence); the fault code holds the detail.

@@ -52,7 +52,9 @@ std::unique_ptr<sim::LoopbackPeer> can_peer_on(const config::Config& cfg,
 }
 
 std::vector<std::string> can_notes(const config::Config& cfg) {
-  return bus_load_notes(can_settings(cfg), cfg.loop.rate_hz);
+  std::vector<std::string> notes = bus_load_notes(can_settings(cfg), cfg.loop.rate_hz);
+  if (const std::string v = odrive_speed_note(can_settings(cfg)); !v.empty()) notes.push_back(v);
+  return notes;
 }
 
 }  // namespace
@@ -83,7 +85,9 @@ std::unique_ptr<Device> make_can_device(const config::Config& cfg,
   const double period = cfg.loop.sample_period_s();
   if (s.profile == Profile::kOdrive)
     return std::make_unique<OdriveDevice>(s, period, std::move(open));
-  return std::make_unique<Cia402Device>(s, period, std::move(open));
+  // A stop keeps SYNC going on the loop's clock: at its priority where the loop runs in real time.
+  const int keeper = realtime_clock(cfg) ? cfg.loop.rt_priority : 0;
+  return std::make_unique<Cia402Device>(s, period, std::move(open), keeper);
 }
 
 std::unique_ptr<sim::LoopbackPeer> make_can_peer(const config::Config& cfg, CanSocket socket,
