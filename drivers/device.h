@@ -68,9 +68,6 @@ struct DeviceInfo {
   std::string description;             // "sim", "hid 1209:ffb0 serial 42", "cia402 node 3 on can0"
   int transport_delay_samples = 0;     // whole samples between write() and the force acting
   std::uint64_t sequence_modulus = 0;  // where the device's sequence wraps (2^8, 2^16...); 0: none
-  // What configure found that the person running it should know but that does not stop it
-  // (an optional object the device lacks, a setting seen on the wire), one sentence each.
-  std::vector<std::string> notices;
 };
 
 // Thrown by the non-RT lifecycle calls. The service maps it to exit code 4.
@@ -111,6 +108,10 @@ class Device {
   // Not RT-safe. One sentence about the latched fault, naming its cause and code.
   std::string describe_fault() const;
   virtual std::string_view driver_name() const noexcept = 0;
+  // Not RT-safe, valid from CONFIGURED on. What configure found that the person running it
+  // should know but that does not stop it (an optional object the device lacks, a setting seen
+  // on the wire), one sentence each.
+  virtual std::vector<std::string> notices() const { return {}; }
 
   // RT-safe: called every tick. The newest sample, draining whatever the transport queued.
   // Allowed in CONFIGURED (output off) and ACTIVE; a fault latches FAULTED and commands zero.

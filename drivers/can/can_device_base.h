@@ -11,6 +11,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "drivers/can/can_settings.h"
 #include "drivers/can/can_socket.h"
@@ -63,6 +64,7 @@ class CanDeviceBase : public Device {
   // Async-signal-safe: write(2) of the profile's prebuilt zero-torque and disable frames.
   void emergency_stop() noexcept override;
   const CanCounters& counters() const noexcept { return counters_; }
+  std::vector<std::string> notices() const override { return notices_; }
   // Not RT-safe: "3 wrong-length frames, 1 unknown id" (empty when nothing was unusual).
   std::string counter_summary() const;
 
@@ -112,6 +114,7 @@ class CanDeviceBase : public Device {
   const double period_s_;
   CanCounters counters_;
   std::optional<CanSocket> socket_;
+  std::vector<std::string> notices_;  // configure's (notices())
 
  private:
   void on_bus_event(const BusEvent& e) noexcept;

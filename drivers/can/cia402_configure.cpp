@@ -328,7 +328,6 @@ DeviceInfo Cia402Device::on_configure() {
                      " (vendor " + hex(vendor, 8) + ", rated torque " +
                      std::to_string(rated_torque_mnm_) + " mN m)";
   info.transport_delay_samples = 1;
-  info.notices = notices_;
   return info;
 }
 

@@ -103,7 +103,6 @@ class Cia402Device final : public CanDeviceBase {
   bool has_cycle_period_ = false;  // 0x1006 exists (optional: CiA 301 requires it of SYNC
                                    // producers only)
   bool stopped_ = true;            // the stop went out since the last enable
-  std::vector<std::string> notices_;
   PeriodicSender keeper_;
   std::atomic<std::int64_t> last_sync_ns_{0};  // the RT thread's last SYNC (CLOCK_MONOTONIC)
 

@@ -143,6 +143,7 @@ DeviceInfo OdriveDevice::on_configure() {
   firmware_ = settings_.odrive.firmware;
   unsolicited_estimates_ = 0;
   controller_error_.reset();
+  notices_.clear();
   stopped_ = true;
   open_transport();
   feed_watchdog();
@@ -174,7 +175,7 @@ DeviceInfo OdriveDevice::on_configure() {
       "odrive node " + std::to_string(node) + " on " + socket_->description() + " (" + fw + ")";
   info.transport_delay_samples = delay_samples(settings_, 1.0 / period_s_);
   if (settings_.odrive.position_source == PositionSource::kRequest && unsolicited_estimates_ > 0) {
-    info.notices.push_back(
+    notices_.push_back(
         node_name() + ": the axis sends encoder estimates by itself (" +
         std::to_string(unsolicited_estimates_) + " while configuring: " +
         (firmware_ == odrive::Firmware::k05 ? "axis.config.can.encoder_rate_ms, 10 ms by default "
