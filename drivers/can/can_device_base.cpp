@@ -33,6 +33,15 @@ void CanDeviceBase::open_transport() {
   socket_.emplace(open_());
   emergency_fd_.store(socket_->fd(), std::memory_order_release);
   clear_pending();
+  // What waited before this configure (a transport kept across configures, a socketpair) is
+  // older than anything configure may judge the device by: an ODrive's heartbeat from before
+  // an error, an SDO answer to an earlier question.
+  CanSocket::Received rx;
+  int error = 0;
+  for (int i = 0; i < 1024; ++i) {
+    const CanSocket::Io r = socket_->receive(rx, error);
+    if (r != CanSocket::Io::kDone && r != CanSocket::Io::kMalformed) break;
+  }
 }
 
 void CanDeviceBase::close_transport() noexcept {

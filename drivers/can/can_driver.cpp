@@ -32,8 +32,11 @@ Loopback can_loopback(const config::Config& cfg) {
     if (fd < 0) throw DeviceError(std::string("can: loopback: dup: ") + std::strerror(errno));
     return CanSocket::adopt(io::UniqueFd(fd), "loopback");
   });
-  auto peer = make_can_peer(cfg, CanSocket::adopt(std::move(peer_end), "loopback peer"),
-                            realtime_clock(cfg));
+  // In the same process the simulated drive's clock is its protocol trigger (SYNC, the
+  // encoder request) in real-time runs too: its heartbeats and watchdogs count those, so a
+  // host that holds every thread up (sim/peers/peer_runner.h) cannot make it see a lost
+  // master. `hapticd peer` on a real interface keeps wall-clock watchdogs (can_peer_on).
+  auto peer = make_can_peer(cfg, CanSocket::adopt(std::move(peer_end), "loopback peer"), false);
   return {std::move(device), std::move(peer)};
 }
 

@@ -10,9 +10,9 @@
 #include <thread>
 
 #include "child_process.h"
-#include "sysfs.h"
 #include "reference/can/cia402_drive.h"
 #include "reference/can/odrive_056.h"
+#include "sysfs.h"
 #include "vcan_interface.h"
 
 namespace hapticd::drivers::can::testing {
@@ -29,13 +29,14 @@ constexpr double kStiffness = 50.0;
 
 std::vector<std::string> run_args(const std::string& profile, double duration,
                                   std::vector<std::string> sets) {
-  std::vector<std::string> a = {kBin,       "run",
-                                "--config", std::string(HAPTICD_SOURCE_DIR) + "/config/can-" + profile + ".yaml",
-                                "--duration", std::to_string(duration)};
-  for (const char* s : {"loop.rate_hz=50", "safety.stale_fault_ticks=10",
-                        "loop.overrun_fault_streak=100", "device.can.interface=vcan0",
-                        "device.can.sdo_timeout_ms=1000", "device.can.state_timeout_ms=2000",
-                        "device.can.heartbeat_timeout_ms=1000"}) {
+  std::vector<std::string> a = {
+      kBin,         "run",
+      "--config",   std::string(HAPTICD_SOURCE_DIR) + "/config/can-" + profile + ".yaml",
+      "--duration", std::to_string(duration)};
+  for (const char* s :
+       {"loop.rate_hz=50", "safety.stale_fault_ticks=10", "loop.overrun_fault_streak=100",
+        "device.can.interface=vcan0", "device.can.sdo_timeout_ms=1000",
+        "device.can.state_timeout_ms=2000", "device.can.heartbeat_timeout_ms=1000"}) {
     sets.push_back(s);
   }
   sets.push_back("wall.stiffness=" + std::to_string(kStiffness));
@@ -73,9 +74,10 @@ TEST(CanReferenceOnVcan, Odrive05WithItsWatchdogOnRendersTheWallAndIdlesWhenHapt
   reference::ReferenceRunner runner(axis, reference::CanPort::open("vcan0"));
   std::this_thread::sleep_for(milliseconds(1200));  // power-on, nobody talking: expired
   ASSERT_EQ(axis.axis_error(), reference::Odrive056::kWatchdogExpired);
-  ChildProcess run(run_args("odrive", 60, {"device.can.odrive.watchdog_timeout_s=1",
-                                           "device.can.odrive.vel_limit=2"}),
-                   "/tmp/hapticd-ref-odrive.out");
+  ChildProcess run(
+      run_args("odrive", 60,
+               {"device.can.odrive.watchdog_timeout_s=1", "device.can.odrive.vel_limit=2"}),
+      "/tmp/hapticd-ref-odrive.out");
   kernel_test::wait_until([&] { return axis.armed(); }, milliseconds(60'000),
                           "the axis in closed loop");
   std::this_thread::sleep_for(milliseconds(3000));
@@ -120,11 +122,11 @@ TEST(CanReferenceOnVcan, Cia402DrivesAsTheyAreStartAndRenderTheWall) {
          b.has_60c2 = true;
        }),
        {}},
-      {"watching SYNC (0x1006) and hapticd's heartbeat", with([](reference::Cia402Behaviour&) {}),
+      {"watching SYNC (0x1006) and hapticd's heartbeat",
+       with([](reference::Cia402Behaviour&) {}),
        {}},
-      {"no 0x6007, comm_loss_reaction none", with([](reference::Cia402Behaviour& b) {
-         b.has_6007 = false;
-       }),
+      {"no 0x6007, comm_loss_reaction none",
+       with([](reference::Cia402Behaviour& b) { b.has_6007 = false; }),
        {"device.can.cia402.comm_loss_reaction=none"}},
   };
   for (const Cia402Case& k : cases) {
@@ -145,8 +147,8 @@ TEST(CanReferenceOnVcan, Cia402DrivesAsTheyAreStartAndRenderTheWall) {
     EXPECT_FALSE(drive.torque_on());
     for (const reference::LoggedFrame& l : runner.log()) {
       if (l.sent && l.frame.id == 0x081) {
-        EXPECT_EQ(l.frame.u16(0), 0u) << "EMCY " << std::hex << l.frame.u16(0) << ": "
-                                       << run.output();
+        EXPECT_EQ(l.frame.u16(0), 0u)
+            << "EMCY " << std::hex << l.frame.u16(0) << ": " << run.output();
       }
     }
   }

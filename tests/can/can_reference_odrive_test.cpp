@@ -28,9 +28,9 @@ reference::PlantParameters still_axis() {
 // the driver clears exactly that, and feeds the watchdog across the gate's time to enable.
 TEST(CanReferenceOdrive, Firmware05WithTheWatchdogOnStartsStraightAfterPowerOn) {
   Odrive056 axis({}, still_axis(), reference::monotonic_ns());
+  ReferenceRig rig(odrive_config(), axis);  // powered on, on the bus
   sleep_ms(300);  // nobody talked to it since power-on: the watchdog has expired
   ASSERT_EQ(axis.axis_error(), Odrive056::kWatchdogExpired);
-  ReferenceRig rig(odrive_config(), axis);
   ASSERT_NO_THROW(rig.device->configure());
   EXPECT_EQ(axis.axis_error(), 0u) << "cleared at configure";
   sleep_ms(700);  // the gate's analysis between configure and enable
@@ -44,9 +44,9 @@ TEST(CanReferenceOdrive, Firmware05WithTheWatchdogOnStartsStraightAfterPowerOn) 
 
 TEST(CanReferenceOdrive, AnyOtherAxisErrorIsStillRefused) {
   Odrive056 axis({}, still_axis(), reference::monotonic_ns());
+  ReferenceRig rig(odrive_config({"device.can.odrive.firmware=0.5"}), axis);
   sleep_ms(300);
   axis.raise_axis_error(Odrive056::kMotorFailed);  // and the watchdog's
-  ReferenceRig rig(odrive_config({"device.can.odrive.firmware=0.5"}), axis);
   try {
     rig.device->configure();
     FAIL() << "configured an axis with MOTOR_FAILED";
@@ -77,10 +77,10 @@ TEST(CanReferenceOdrive, AHeldFaultKeepsTheWatchdogFed) {
 // vel_limit_tolerance faults it with CONTROLLER_FAILED; the fault says why.
 TEST(CanReferenceOdrive, TheOverspeedOfTheTorqueModeVelocityLimitIsNamed) {
   reference::PlantParameters fast;
-  fast.hand_force = 5.0;  // 2.5 m/s if nothing held it: 25 turn/s
-  fast.hand_start_s = 0.0;
+  fast.hand_force = 5.0;    // 2.5 m/s if nothing held it: 25 turn/s
+  fast.hand_start_s = 0.6;  // once enabled
   fast.hand_ramp_s = 0.05;
-  Odrive056 axis({}, fast, reference::monotonic_ns() + 500'000'000);
+  Odrive056 axis({}, fast, reference::monotonic_ns());
   ReferenceRig rig(odrive_config({"device.can.odrive.firmware=0.5"}), axis);
   rig.device->configure();
   rig.device->enable();

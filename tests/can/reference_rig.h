@@ -4,6 +4,9 @@
 // run. The kernel tests run the same drives on vcan.
 #pragma once
 
+#include <pthread.h>
+#include <sched.h>
+
 #include <chrono>
 #include <memory>
 #include <string>
@@ -15,13 +18,29 @@
 
 namespace hapticd::drivers::can::testing {
 
+// SCHED_FIFO for the scope (best effort; restored after), as the loop's thread runs.
+class RealTime {
+ public:
+  RealTime() {
+    pthread_getschedparam(pthread_self(), &policy_, &param_);
+    sched_param p{};
+    p.sched_priority = 80;
+    pthread_setschedparam(pthread_self(), SCHED_FIFO, &p);
+  }
+  ~RealTime() { pthread_setschedparam(pthread_self(), policy_, &param_); }
+
+ private:
+  int policy_ = SCHED_OTHER;
+  sched_param param_{};
+};
+
 struct ReferenceRig {
   ReferenceRig(const config::Config& c, reference::ReferenceDevice& drive) : cfg(c) {
     auto [mine, theirs] = io::seqpacket_pair();
     auto fd = std::make_shared<io::UniqueFd>(std::move(mine));
     device = make_can_device(cfg, [fd] { return CanSocket::adopt(std::move(*fd), "pair"); });
     runner = std::make_unique<reference::ReferenceRunner>(
-        drive, reference::CanPort::adopt(theirs.release()));
+        drive, reference::CanPort::adopt(theirs.release()), 70);
   }
   ~ReferenceRig() {
     device->close();
@@ -31,6 +50,7 @@ struct ReferenceRig {
   // Ticks for `ms` at the configured period, as the loop would (read, then write `force`);
   // the first fault status, or kOk.
   IoStatus run(double force, int ms) {
+    RealTime rt;  // ticks as the loop's thread would: SCHED_FIFO where allowed
     const auto period =
         std::chrono::nanoseconds(static_cast<std::int64_t>(cfg.loop.sample_period_s() * 1e9));
     const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(ms);
