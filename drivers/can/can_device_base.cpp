@@ -3,6 +3,7 @@
 #include <time.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 
 namespace hapticd::drivers::can {
@@ -12,15 +13,21 @@ namespace {
 // babbling bus can keep the RT thread in the drain.
 constexpr int kMaxFramesPerDrain = 64;
 
-std::int64_t now_ms() {
+void bump(std::atomic<std::uint64_t>& c) noexcept { c.fetch_add(1, std::memory_order_relaxed); }
+
+}  // namespace
+
+std::int64_t CanDeviceBase::now_ms() noexcept {
   timespec ts;
   clock_gettime(CLOCK_MONOTONIC, &ts);
   return static_cast<std::int64_t>(ts.tv_sec) * 1000 + ts.tv_nsec / 1'000'000;
 }
 
-void bump(std::atomic<std::uint64_t>& c) noexcept { c.fetch_add(1, std::memory_order_relaxed); }
-
-}  // namespace
+std::string CanDeviceBase::hex(std::uint32_t v, int digits) {
+  char buf[16];
+  std::snprintf(buf, sizeof buf, "0x%0*X", digits, v);
+  return buf;
+}
 
 CanDeviceBase::CanDeviceBase(const CanSettings& settings, double sample_period_s, Opener open)
     : settings_(settings),

@@ -106,6 +106,10 @@ class CanDeviceBase : public Device {
   bool heartbeat_lost() noexcept { return ++ticks_since_heartbeat_ > heartbeat_limit_ticks_; }
   std::uint32_t ticks_since_heartbeat() const noexcept { return ticks_since_heartbeat_; }
 
+  // CLOCK_MONOTONIC in ms, for the non-RT waits; "0x0000002A" (digits hex digits).
+  static std::int64_t now_ms() noexcept;
+  static std::string hex(std::uint32_t v, int digits);
+
   // The shared part of describe(): transport kinds; the profile adds its own.
   std::string describe_transport(const DeviceFault& f) const;
   CanFaultKind fault_kind() const noexcept { return kind_; }

@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 
@@ -27,11 +28,28 @@ Loopback can_loopback(const config::Config& cfg) {
   // The device keeps the pair's end and hands its transport a duplicate at each configure,
   // so closing and configuring again works like unplugging and replugging a cable.
   auto kept = std::make_shared<io::UniqueFd>(std::move(driver_end));
-  auto device = make_can_device(cfg, [kept] {
+  auto open = [kept] {
     const int fd = ::fcntl(kept->get(), F_DUPFD_CLOEXEC, 0);
     if (fd < 0) throw DeviceError(std::string("can: loopback: dup: ") + std::strerror(errno));
     return CanSocket::adopt(io::UniqueFd(fd), "loopback");
-  });
+  };
+  std::unique_ptr<Device> device;
+  if (realtime_clock(cfg)) {
+    // The simulated drive answers at once unless the host holds its thread up: configure's
+    // waits (an SDO answer, a heartbeat, a state) get seconds, not the bus's milliseconds.
+    CanSettings s = can_settings(cfg);
+    s.sdo_timeout_ms = std::max(s.sdo_timeout_ms, 2000);
+    s.state_timeout_ms = std::max(s.state_timeout_ms, 5000);
+    s.heartbeat_timeout_ms = std::max(s.heartbeat_timeout_ms, 2000);
+    const double period = cfg.loop.sample_period_s();
+    if (s.profile == Profile::kOdrive) {
+      device = std::make_unique<OdriveDevice>(s, period, std::move(open));
+    } else {
+      device = std::make_unique<Cia402Device>(s, period, std::move(open), cfg.loop.rt_priority);
+    }
+  } else {
+    device = make_can_device(cfg, std::move(open));
+  }
   // In the same process the simulated drive's clock is its protocol trigger (SYNC, the
   // encoder request) in real-time runs too: its heartbeats and watchdogs count those, so a
   // host that holds every thread up (sim/peers/peer_runner.h) cannot make it see a lost

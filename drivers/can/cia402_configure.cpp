@@ -19,18 +19,6 @@ using cia402::PowerState;
 constexpr std::uint32_t kAbortNoObject = 0x06020000;    // CiA 301: object does not exist
 constexpr std::uint32_t kAbortNoSubindex = 0x06090011;  // CiA 301: subindex does not exist
 
-std::int64_t now_ms() {
-  timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1000 + ts.tv_nsec / 1'000'000;
-}
-
-std::string hex(std::uint32_t v, int digits) {
-  char buf[16];
-  std::snprintf(buf, sizeof buf, "0x%0*X", digits, v);
-  return buf;
-}
-
 std::string number(double v) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.4g", v);
