@@ -22,13 +22,19 @@ using std::chrono::milliseconds;
 using std::chrono::seconds;
 
 const std::string kBin = HAPTICD_BINARY;
-constexpr double kHandForce = 1.0;  // N
-// An emulated guest cannot keep 1 kHz: 50 Hz, and a wall the gate passes there with the
-// driver's one sample of delay. A SYNC-watching drive times out after 1.5 cycles (30 ms).
-constexpr double kStiffness = 50.0;
+// An emulated guest cannot keep 1 kHz, and stalls for tens of milliseconds now and then: the
+// ODrive at 50 Hz, the CiA 402 drives at 10 Hz (a SYNC-watching drive times out after 1.5
+// cycles: 150 ms), each with a wall the gate passes there with the driver's one sample of
+// delay, and a hand pushing F into it: the rest is F/K = 20 mm.
+struct Rig {
+  double rate_hz, stiffness, hand_force;
+};
+constexpr Rig kOdriveRig{50.0, 50.0, 1.0};
+constexpr Rig kCia402Rig{10.0, 10.0, 0.2};
 
 std::vector<std::string> run_args(const std::string& profile, double duration,
                                   std::vector<std::string> sets) {
+  const Rig& r = profile == "odrive" ? kOdriveRig : kCia402Rig;
   std::vector<std::string> a = {
       kBin,         "run",
       "--config",   std::string(HAPTICD_SOURCE_DIR) + "/config/can-" + profile + ".yaml",
@@ -39,16 +45,18 @@ std::vector<std::string> run_args(const std::string& profile, double duration,
         "device.can.state_timeout_ms=2000", "device.can.heartbeat_timeout_ms=1000"}) {
     sets.push_back(s);
   }
-  sets.push_back("wall.stiffness=" + std::to_string(kStiffness));
+  sets.push_back("wall.stiffness=" + std::to_string(r.stiffness));
   for (const std::string& s : sets) a.insert(a.end(), {"--set", s});
   return a;
 }
 
-reference::PlantParameters hand() {
+// The hand pushes once hapticd has output on (press_now): a wall that finds the axis already
+// inside it stays off until the axis leaves it.
+reference::PlantParameters hand(double force) {
   reference::PlantParameters p;
   p.damping = 10.0;  // slow enough for the ODrive's default velocity limit (0.196 m/s here)
-  p.hand_force = kHandForce;
-  p.hand_start_s = 0.5;
+  p.hand_force = force;
+  p.hand_start_s = 1e6;
   p.hand_ramp_s = 0.5;
   return p;
 }
@@ -70,7 +78,7 @@ TEST(CanReferenceOnVcan, Odrive05WithItsWatchdogOnRendersTheWallAndIdlesWhenHapt
   kernel_test::VcanInterface bus("vcan0");
   reference::Odrive056Config c;
   c.watchdog_timeout_s = 1.0;  // the emulator's slow start of the RT thread
-  reference::Odrive056 axis(c, hand(), reference::monotonic_ns());
+  reference::Odrive056 axis(c, hand(kOdriveRig.hand_force), reference::monotonic_ns());
   reference::ReferenceRunner runner(axis, reference::CanPort::open("vcan0"));
   std::this_thread::sleep_for(milliseconds(1200));  // power-on, nobody talking: expired
   ASSERT_EQ(axis.axis_error(), reference::Odrive056::kWatchdogExpired);
@@ -80,9 +88,11 @@ TEST(CanReferenceOnVcan, Odrive05WithItsWatchdogOnRendersTheWallAndIdlesWhenHapt
       "/tmp/hapticd-ref-odrive.out");
   kernel_test::wait_until([&] { return axis.armed(); }, milliseconds(60'000),
                           "the axis in closed loop");
+  std::this_thread::sleep_for(milliseconds(500));
+  axis.press_now();
   std::this_thread::sleep_for(milliseconds(3000));
   const double x = rest_position(axis, 1000);
-  const double expected = kHandForce / kStiffness;
+  const double expected = kOdriveRig.hand_force / kOdriveRig.stiffness;
   EXPECT_NEAR(x, expected, 0.01 * expected) << run.output();
   RecordProperty("rest_mm", std::to_string(x * 1e3));
   ASSERT_TRUE(axis.armed()) << run.output();
@@ -107,7 +117,8 @@ struct Cia402Case {
 
 reference::Cia402Behaviour with(void (*f)(reference::Cia402Behaviour&)) {
   reference::Cia402Behaviour b;
-  b.rated_torque_mnm = 50;  // 1 per mille: 5 mN at this transmission, 0.5 % of the hand
+  b.rated_torque_mnm = 5;         // 1 per mille: 0.5 mN at this transmission, 0.25 % of the hand
+  b.max_torque_permille = 30000;  // 0.15 N m, above max_torque
   f(b);
   return b;
 }
@@ -132,15 +143,19 @@ TEST(CanReferenceOnVcan, Cia402DrivesAsTheyAreStartAndRenderTheWall) {
   for (const Cia402Case& k : cases) {
     SCOPED_TRACE(k.name);
     kernel_test::VcanInterface bus("vcan0");
-    reference::Cia402Drive drive(k.behaviour, hand(), reference::monotonic_ns());
+    reference::Cia402Drive drive(k.behaviour, hand(kCia402Rig.hand_force),
+                                 reference::monotonic_ns());
     reference::ReferenceRunner runner(drive, reference::CanPort::open("vcan0"));
-    ChildProcess run(run_args("cia402", 6, k.sets), "/tmp/hapticd-ref-cia402.out");
+    ChildProcess run(run_args("cia402", 60, k.sets), "/tmp/hapticd-ref-cia402.out");
     kernel_test::wait_until([&] { return drive.torque_on(); }, milliseconds(60'000),
                             "operation enabled");
-    std::this_thread::sleep_for(milliseconds(3000));
+    drive.press_now();
+    std::this_thread::sleep_for(milliseconds(5000));  // K/b: a 1 s time constant
     const double x = rest_position(drive, 1000);
-    const double expected = kHandForce / kStiffness;
+    const double expected = kCia402Rig.hand_force / kCia402Rig.stiffness;
     EXPECT_NEAR(x, expected, 0.01 * expected) << run.output();
+    RecordProperty(std::string("rest_mm_") + std::to_string(&k - cases), std::to_string(x * 1e3));
+    run.signal(SIGTERM);  // a normal stop
     EXPECT_EQ(run.wait(seconds(60)), 0) << run.output();
     std::this_thread::sleep_for(milliseconds(300));
     runner.stop();
@@ -159,7 +174,7 @@ TEST(CanReferenceOnVcan, ADriveLimitBelowMaxTorqueIsNamedBeforeOutputIsEnabled) 
   reference::Cia402Drive drive(with([](reference::Cia402Behaviour& b) {
                                  b.max_torque_permille = 500;  // 0.025 N m < 0.1
                                }),
-                               hand(), reference::monotonic_ns());
+                               hand(kCia402Rig.hand_force), reference::monotonic_ns());
   reference::ReferenceRunner runner(drive, reference::CanPort::open("vcan0"));
   ChildProcess run(run_args("cia402", 3, {}), "/tmp/hapticd-ref-6072.out");
   EXPECT_EQ(run.wait(seconds(60)), 4) << run.output();

@@ -81,6 +81,8 @@ class Cia402Drive final : public ReferenceDevice {
   bool torque_on() const { return power() == Power::kOperationEnabled; }
   double position_m() const { return plant_.position_now(); }
   double motor_force_n() const { return plant_.motor_force_now(); }
+  // The hand starts pushing now (a test: once hapticd has output on).
+  void press_now() { plant_.press_from(monotonic_ns()); }
   // Any thread: the drive faults at its next service (EMCY `code`, Fault).
   void inject_fault(std::uint16_t code) { injected_fault_.store(code); }
   // The drive's thread, or after the runner stopped.

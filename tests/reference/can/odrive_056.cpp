@@ -53,7 +53,7 @@ void Odrive056::control_pass(std::int64_t now_ns) {
     plant_.hold_motor_force(0.0);
     return;
   }
-  double torque = input_torque_;
+  double torque = static_cast<double>(input_torque_);
   if (c_.enable_torque_mode_vel_limit) {
     torque =
         std::clamp(torque, (-c_.vel_limit - vel) * c_.vel_gain, (c_.vel_limit - vel) * c_.vel_gain);

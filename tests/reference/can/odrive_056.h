@@ -81,6 +81,8 @@ class Odrive056 final : public ReferenceDevice {
   bool armed() const { return state() == kClosedLoop; }
   double position_m() const { return plant_.position_now(); }
   double motor_force_n() const { return plant_.motor_force_now(); }
+  // The hand starts pushing now (a test: once hapticd has output on).
+  void press_now() { plant_.press_from(monotonic_ns()); }
   std::uint64_t unmodelled_mode_passes() const { return unmodelled_.load(); }
   // Where a test may change the axis's error before hapticd meets it (a fault at power-on).
   void raise_axis_error(std::uint32_t bits) { error_.fetch_or(bits); }

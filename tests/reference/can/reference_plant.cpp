@@ -5,11 +5,15 @@
 namespace hapticd::reference {
 
 ReferencePlant::ReferencePlant(const PlantParameters& p, std::int64_t t0_ns)
-    : p_(p), t0_ns_(t0_ns), t_ns_(t0_ns), x_(p.start), published_x_(p.start) {}
+    : p_(p),
+      t_ns_(t0_ns),
+      x_(p.start),
+      published_x_(p.start),
+      hand_start_ns_(t0_ns + static_cast<std::int64_t>(p.hand_start_s * 1e9)) {}
 
-double ReferencePlant::hand(double t_s) const {
-  const double ramp = std::clamp((t_s - p_.hand_start_s) / p_.hand_ramp_s, 0.0, 1.0);
-  return p_.hand_force * ramp;
+double ReferencePlant::hand(std::int64_t t_ns) const {
+  const double since = static_cast<double>(t_ns - hand_start_ns_.load()) * 1e-9;
+  return p_.hand_force * std::clamp(since / p_.hand_ramp_s, 0.0, 1.0);
 }
 
 void ReferencePlant::advance_to(std::int64_t t_ns) {
@@ -19,8 +23,7 @@ void ReferencePlant::advance_to(std::int64_t t_ns) {
   const double h = p_.step_s;
   while (t_ns_ < t_ns) {
     const double dt = std::min(h, static_cast<double>(t_ns - t_ns_) * 1e-9);
-    const double t = static_cast<double>(t_ns_ - t0_ns_) * 1e-9;
-    const double a = (motor_force_ + hand(t) - p_.damping * v_) / p_.mass;
+    const double a = (motor_force_ + hand(t_ns_) - p_.damping * v_) / p_.mass;
     v_ += a * dt;
     x_ += v_ * dt;
     t_ns_ += static_cast<std::int64_t>(dt * 1e9 + 0.5);

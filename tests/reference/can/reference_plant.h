@@ -32,18 +32,20 @@ class ReferencePlant {
   // Any thread.
   double position_now() const { return published_x_.load(std::memory_order_relaxed); }
   double motor_force_now() const { return published_f_.load(std::memory_order_relaxed); }
+  // Any thread: the hand starts its push (its ramp) at t_ns instead of hand_start_s after t0.
+  void press_from(std::int64_t t_ns) { hand_start_ns_.store(t_ns); }
 
  private:
-  double hand(double t_s) const;
+  double hand(std::int64_t t_ns) const;
 
   PlantParameters p_;
-  std::int64_t t0_ns_;
   std::int64_t t_ns_;
   double x_;
   double v_ = 0.0;
   double motor_force_ = 0.0;
   std::atomic<double> published_x_;
   std::atomic<double> published_f_{0.0};
+  std::atomic<std::int64_t> hand_start_ns_;
 };
 
 }  // namespace hapticd::reference
