@@ -18,6 +18,15 @@ config::Config cia402_config(std::vector<std::string> sets = {}) {
   return load_example("can-cia402.yaml", sets, false);
 }
 
+// Ticking on a shared, loaded host (a kernel that does not preempt a task in the kernel): a
+// cycle long enough that the drive's 1.5-cycle SYNC watch and its heartbeat consumer judge
+// the driver, not the host.
+config::Config slow_cia402_config() {
+  return cia402_config(
+      {"loop.rate_hz=10", "wall.stiffness=10", "device.can.cia402.master_heartbeat_ms=100",
+       "device.can.cia402.drive_watchdog_ms=1000", "device.can.heartbeat_timeout_ms=1000"});
+}
+
 reference::PlantParameters axis() {
   reference::PlantParameters p;
   p.damping = 10.0;
@@ -128,11 +137,11 @@ TEST(CanReferenceCia402, TheDrivesInternalLimitIsCounted) {
   Cia402Behaviour b;
   b.internal_limit_permille = 300;  // a derating of its own: 3 N at this transmission
   Cia402Drive drive(b, axis(), reference::monotonic_ns());
-  ReferenceRig rig(cia402_config({"loop.rate_hz=50", "wall.stiffness=50"}), drive);
+  ReferenceRig rig(slow_cia402_config(), drive);
   rig.device->configure();
   rig.device->enable();
-  EXPECT_EQ(rig.run(8.0, 400), IoStatus::kOk) << rig.device->describe_fault();
-  EXPECT_GT(rig.can().counters().internal_limit.load(), 10u);
+  EXPECT_EQ(rig.run(8.0, 600), IoStatus::kOk) << rig.device->describe_fault();
+  EXPECT_GT(rig.can().counters().internal_limit.load(), 3u);
   EXPECT_NE(rig.can().counter_summary().find("statusword bit 11"), std::string::npos);
 }
 
@@ -163,16 +172,16 @@ TEST(CanReferenceCia402, AMissing6007IsExplained) {
 // one per cycle to the end.
 TEST(CanReferenceCia402, ANormalStopRaisesNoSyncLossAndKeepsOneSyncPerCycle) {
   Cia402Drive drive({}, axis(), reference::monotonic_ns());
-  ReferenceRig rig(cia402_config({"loop.rate_hz=50", "wall.stiffness=50"}), drive);
+  ReferenceRig rig(slow_cia402_config(), drive);
   rig.device->configure();
   rig.device->enable();
-  const IoStatus ran = rig.run(0.5, 400);
+  const IoStatus ran = rig.run(0.5, 800);
   if (ran != IoStatus::kOk) rig.runner->stop();
   ASSERT_EQ(ran, IoStatus::kOk) << rig.device->describe_fault() << "\n"
                                 << sync_history(rig.runner->log());
   const std::int64_t stop = reference::monotonic_ns();
   rig.device->disable();
-  sleep_ms(400);  // 20 cycles: a SYNC watch still on would have fired
+  sleep_ms(500);  // 5 cycles: a SYNC watch still on would have fired
   rig.runner->stop();
   const auto log = rig.runner->log();
   std::int64_t last_sync = 0;
@@ -184,13 +193,13 @@ TEST(CanReferenceCia402, ANormalStopRaisesNoSyncLossAndKeepsOneSyncPerCycle) {
     }
     if (!l.sent && l.frame.id == 0x080) {
       if (l.time_ns > stop) {  // the stop's SYNCs, from the last tick's on
-        EXPECT_GT(l.time_ns - last_sync, 10'000'000) << "two SYNCs within half a 20 ms cycle";
+        EXPECT_GT(l.time_ns - last_sync, 50'000'000) << "two SYNCs within half a 100 ms cycle";
       }
       last_sync = l.time_ns;
       ++syncs;
     }
   }
-  EXPECT_GT(syncs, 15);
+  EXPECT_GT(syncs, 6);
   EXPECT_EQ(drive.object(0x1006, 0), 0u) << "the SYNC watch switched off";
   EXPECT_FALSE(drive.torque_on());
 }
@@ -198,14 +207,17 @@ TEST(CanReferenceCia402, ANormalStopRaisesNoSyncLossAndKeepsOneSyncPerCycle) {
 // After a fault the run disables the device and then closes it: one stop on the bus.
 TEST(CanReferenceCia402, AfterAFaultTheStopIsSentOnce) {
   Cia402Drive drive({}, axis(), reference::monotonic_ns());
-  ReferenceRig rig(cia402_config({"loop.rate_hz=50", "wall.stiffness=50"}), drive);
+  ReferenceRig rig(slow_cia402_config(), drive);
   rig.device->configure();
   rig.device->enable();
-  ASSERT_EQ(rig.run(0.5, 100), IoStatus::kOk);
+  ASSERT_EQ(rig.run(0.5, 300), IoStatus::kOk) << rig.device->describe_fault();
   drive.inject_fault(0x2310);
-  EXPECT_EQ(rig.run(0.5, 500), IoStatus::kDeviceFault);
+  EXPECT_EQ(rig.run(0.5, 1000), IoStatus::kDeviceFault);
+  EXPECT_NE(rig.device->describe_fault().find("EMCY 0x2310"), std::string::npos)
+      << rig.device->describe_fault();
   rig.device->disable();
   rig.device->close();
+  sleep_ms(100);  // the drive reads what was sent last
   rig.runner->stop();
   int shutdowns = 0;
   int preops = 0;
