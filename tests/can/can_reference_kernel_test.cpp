@@ -39,10 +39,15 @@ std::vector<std::string> run_args(const std::string& profile, double duration,
       kBin,         "run",
       "--config",   std::string(HAPTICD_SOURCE_DIR) + "/config/can-" + profile + ".yaml",
       "--duration", std::to_string(duration)};
+  sets.push_back("loop.rate_hz=" + std::to_string(r.rate_hz));
+  if (profile == "cia402") {  // hapticd's heartbeat each tick, watched over several
+    sets.push_back("device.can.cia402.master_heartbeat_ms=200");
+    sets.push_back("device.can.cia402.drive_watchdog_ms=1500");
+  }
   for (const char* s :
-       {"loop.rate_hz=50", "safety.stale_fault_ticks=10", "loop.overrun_fault_streak=100",
+       {"safety.stale_fault_ticks=10", "loop.overrun_fault_streak=100",
         "device.can.interface=vcan0", "device.can.sdo_timeout_ms=1000",
-        "device.can.state_timeout_ms=2000", "device.can.heartbeat_timeout_ms=1000"}) {
+        "device.can.state_timeout_ms=2000", "device.can.heartbeat_timeout_ms=3000"}) {
     sets.push_back(s);
   }
   sets.push_back("wall.stiffness=" + std::to_string(r.stiffness));
