@@ -21,6 +21,7 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace hapticd {
 
@@ -107,6 +108,10 @@ class Device {
   // Not RT-safe. One sentence about the latched fault, naming its cause and code.
   std::string describe_fault() const;
   virtual std::string_view driver_name() const noexcept = 0;
+  // Not RT-safe, valid from CONFIGURED on. What configure found that the person running it
+  // should know but that does not stop it (an optional object the device lacks, a setting seen
+  // on the wire), one sentence each.
+  virtual std::vector<std::string> notices() const { return {}; }
 
   // RT-safe: called every tick. The newest sample, draining whatever the transport queued.
   // Allowed in CONFIGURED (output off) and ACTIVE; a fault latches FAULTED and commands zero.

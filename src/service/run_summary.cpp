@@ -84,6 +84,7 @@ json summary_to_json(const RunSummary& s) {
   j["output_was_enabled"] = s.output_was_enabled;
   j["device"] = {{"name", s.device_name},
                  {"description", s.device_description},
+                 {"notices", s.device_notices},
                  {"state", s.device_state},
                  {"final_command", s.final_command},
                  {"output_enabled", s.final_output_enabled}};

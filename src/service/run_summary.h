@@ -38,6 +38,7 @@ struct RunSummary {
   bool output_was_enabled = false;    // false: stopped before output was ever enabled
   std::string device_name;            // the driver
   std::string device_description;     // DeviceInfo::description
+  std::vector<std::string> device_notices;  // DeviceInfo::notices
   std::string device_state;           // after the run, before close: "configured", "faulted"
   double final_command = 0.0;         // Device::last_command() once output was disabled
   bool final_output_enabled = false;  // Device::output_enabled() then

@@ -218,6 +218,8 @@ bool configure_and_gate(config::Config& cfg, DeviceSession& session, RunSummary&
   Device& device = session.device();
   device.configure();
   s.device_description = device.info().description;
+  s.device_notices = device.notices();
+  for (const std::string& n : s.device_notices) spdlog::warn("{}", n);
   const int declared = session.driver().declared_delay(cfg);
   if (device.info().transport_delay_samples != declared) {
     throw DeviceError(std::string(device.driver_name()) + ": the device declares " +
