@@ -39,6 +39,7 @@ struct RunSummary {
   std::string device_name;            // the driver
   std::string device_description;     // DeviceInfo::description
   std::string device_state;           // after the run, before close: "configured", "faulted"
+  std::vector<DeviceCounter> device_counters;  // the driver's own (Device::device_counters)
   double final_command = 0.0;         // Device::last_command() once output was disabled
   bool final_output_enabled = false;  // Device::output_enabled() then
   bool loopback = false;              // a simulated peer stood in for the device
@@ -51,6 +52,8 @@ struct RunSummary {
 };
 
 nlohmann::json summary_to_json(const RunSummary& s);
+// {"name": value, ...}: a driver's counters for the summary and `hapticctl status`.
+nlohmann::json counters_json(const std::vector<DeviceCounter>& counters);
 std::string summary_to_text(const RunSummary& s);
 
 }  // namespace hapticd::service
