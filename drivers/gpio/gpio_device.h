@@ -88,7 +88,7 @@ class GpioDevice final : public Device {
   // When each of the last missed_edge_fault + 1 missed edges was seen (a ring, preallocated).
   std::vector<std::int64_t> missed_times_;
   std::size_t missed_next_ = 0;
-  std::uint64_t missed_seen_ = 0;  // decoder_.missed_edges() at the last read
+  std::uint64_t missed_seen_ = 0;                   // decoder_.missed_edges() at the last read
   std::atomic<std::uint64_t> missed_published_{0};  // the same, for other threads
 };
 

@@ -55,9 +55,8 @@ std::vector<std::uint8_t> report_profile_descriptor(const ReportProfileLayout& l
 // so a driver that hard-codes ids fails against it.
 struct PidReferenceIds {
   std::uint8_t position = 0x05, state = 0x06;
-  std::uint8_t set_effect = 0x31, set_envelope = 0x32, set_constant = 0x35,
-               effect_operation = 0x3A, block_free = 0x3B, device_control = 0x3C,
-               device_gain = 0x3D;
+  std::uint8_t set_effect = 0x31, set_envelope = 0x32, set_constant = 0x35, effect_operation = 0x3A,
+               block_free = 0x3B, device_control = 0x3C, device_gain = 0x3D;
   std::uint8_t create_effect = 0x41, block_load = 0x42, pool = 0x43;
 };
 

@@ -328,9 +328,9 @@ void read_liveness(MapReader& hid, Ctx& c, const config::Config& cfg, HidSetting
               "only with reports_on_change: true (a device that reports every period is "
               "bounded by safety.stale_fault_ticks)");
   } else if (s.liveness_ms < min_ms) {
-    c.d.error(live.key_mark, live.path,
-              "must be at least two sample periods (" + config::schema::format_number(min_ms) +
-                  " ms)");
+    c.d.error(
+        live.key_mark, live.path,
+        "must be at least two sample periods (" + config::schema::format_number(min_ms) + " ms)");
   }
 }
 

@@ -233,10 +233,11 @@ IoStatus HidDevice::on_write(double force) noexcept {
 }
 
 HidCounters HidDevice::counters() const noexcept {
-  return {c_.input_reports.load(),  c_.superseded.load(),     c_.state_reports.load(),
-          c_.unknown_id.load(),     c_.too_short.load(),      c_.too_long.load(),
-          c_.output_reports.load(), c_.out_queue_full.load(), c_.drain_limit.load(),
-          c_.held.load()};
+  return {c_.input_reports.load(),  c_.superseded.load(),
+          c_.state_reports.load(),  c_.unknown_id.load(),
+          c_.too_short.load(),      c_.too_long.load(),
+          c_.output_reports.load(), c_.out_queue_full.load(),
+          c_.drain_limit.load(),    c_.held.load()};
 }
 
 std::vector<DeviceCounter> HidDevice::device_counters() const {

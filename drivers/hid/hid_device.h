@@ -59,8 +59,7 @@ class HidDevice final : public Device {
   static constexpr int kMaxDrain = 256;  // reports per tick: a flooding device cannot stall it
   struct Counters {
     std::atomic<std::uint64_t> input_reports{0}, superseded{0}, state_reports{0}, unknown_id{0},
-        too_short{0}, too_long{0}, output_reports{0}, out_queue_full{0}, drain_limit{0},
-        held{0};
+        too_short{0}, too_long{0}, output_reports{0}, out_queue_full{0}, drain_limit{0}, held{0};
   };
   struct Drained {
     std::uint32_t samples = 0;  // position reports (the newest is decoded_)
@@ -83,7 +82,7 @@ class HidDevice final : public Device {
   double period_s_;
   std::int64_t liveness_ns_;
   std::int64_t last_report_ns_ = 0;  // when the last well-formed report arrived
-  bool have_position_ = false;      // a sample since enable: a held position is valid
+  bool have_position_ = false;       // a sample since enable: a held position is valid
   std::unique_ptr<HidTransport> transport_;
   std::unique_ptr<HidProfile> profile_;
   std::atomic<HidTransport*> emergency_{nullptr};

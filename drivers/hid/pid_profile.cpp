@@ -211,7 +211,7 @@ class PidProfile final : public HidProfile {
     }
     a.full = chosen(in, l_.bl_full);
     a.error =
-        a.full ? "the device's effect memory is full"
+        a.full                    ? "the device's effect memory is full"
         : chosen(in, l_.bl_error) ? "the device reports a load error"
         : chosen(in, l_.bl_success)
             ? "success, but effect block index " + std::to_string(a.block) + " is outside its range"

@@ -144,7 +144,8 @@ class ReportProfile final : public HidProfile {
       return;
     }
     need(*p.descriptor, ReportKind::kInput, l_.input.report_id, l_.input.length, "input");
-    declared_input_ = p.descriptor->find_report(ReportKind::kInput, l_.input.report_id)->data_bytes();
+    declared_input_ =
+        p.descriptor->find_report(ReportKind::kInput, l_.input.report_id)->data_bytes();
     need(*p.descriptor, ReportKind::kOutput, l_.output.report_id, l_.output.length, "output");
     for (const auto* f : {&l_.enable_feature, &l_.gain_feature, &l_.watchdog_feature}) {
       if (*f) need(*p.descriptor, ReportKind::kFeature, (*f)->report_id, (*f)->length, "feature");

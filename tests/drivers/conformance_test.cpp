@@ -37,7 +37,8 @@ const Case kCases[] = {
     {"hid", "config/hid-pid.yaml", "device.hid.pid.sequence={usage_page: 0xff00, usage: 0x20}"},
 #endif
 #if HAPTICD_WITH_CAN
-    {"can", "config/can-cia402.yaml"}, {"can", "config/can-odrive.yaml"},
+    {"can", "config/can-cia402.yaml"},
+    {"can", "config/can-odrive.yaml"},
 #endif
 #if HAPTICD_WITH_GPIO
     {"gpio", "config/gpio.yaml"},

@@ -52,13 +52,14 @@ TEST_P(HidPidUsb, APeerThatStopsAnsweringFaultsWithZeroForce) {
 }
 
 TEST_P(HidPidUsb, ASafetySwitchOffFaultsWithZeroForce) {
-  PidRig rig(GetParam(), kRawGadget);
+  // The simulated device drives its Safety Switch: this configuration faults on it (0x04).
+  PidRig rig(GetParam(), kRawGadget, {"device.hid.pid.fault_mask=0x06"});
   expect_fault_exit("hid-pid.yaml", rig.sets, rig.device(), sim::PeerFault::kDeviceFault,
-                    "the device reports safety switch off");
+                    "the device reports actuators disabled, safety switch off");
 }
 
 TEST_P(HidPidUsb, SkippedSequenceNumbersFaultWithZeroForce) {
-  PidRig rig(GetParam(), kRawGadget);
+  PidRig rig(GetParam(), kRawGadget, {"device.hid.pid.sequence={usage_page: 0xff00, usage: 0x20}"});
   expect_fault_exit("hid-pid.yaml", rig.sets, rig.device(), sim::PeerFault::kSkipSequence,
                     "sequence skipped 5[0-9] samples");
 }

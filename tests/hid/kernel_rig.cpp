@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <iostream>
 #include <regex>
 
@@ -60,7 +61,12 @@ void expect_the_sim_drivers_wall(const char* config, const std::vector<std::stri
   std::cout << config << ": hid " << p_hid * 1e3 << " mm, sim " << p_sim * 1e3 << " mm, delay "
             << delay << ", stale ticks " << hid.summary["stale_ticks"] << ", sequence gaps "
             << hid.summary["sequence_gaps"] << "\n";
-  EXPECT_FALSE(peer.output_on()) << "the run left the simulated amplifier on";
+  // Over libusb, hidapi gives the interface back to usbhid as hapticd closes it, and the
+  // kernel's own PID driver (hid-pidff) enables the actuators again as it binds, with no
+  // effect playing: only the force says what hapticd left.
+  const bool libusb =
+      std::find(sets.begin(), sets.end(), "device.hid.backend=libusb") != sets.end();
+  if (!libusb) EXPECT_FALSE(peer.output_on()) << "the run left the simulated amplifier on";
   EXPECT_EQ(peer.applied_force(), 0.0);
 }
 

@@ -133,9 +133,9 @@ TEST(HidKeepalive, TheFirstEnabledReportMovesOnFromTheOutputOffReport) {
   const auto out = rig.fake.outputs();
   const std::size_t k = 1 + 3, on = 1 + 2;  // keepalive byte 3, enable byte 2
   for (std::size_t i = 1; i < out.size(); ++i) {
-    EXPECT_NE(out[i][k], out[i - 1][k]) << "report " << i << " repeats the keep-alive "
-                                        << int(out[i][k]) << " (enable " << int(out[i][on])
-                                        << " after " << int(out[i - 1][on]) << ")";
+    EXPECT_NE(out[i][k], out[i - 1][k])
+        << "report " << i << " repeats the keep-alive " << int(out[i][k]) << " (enable "
+        << int(out[i][on]) << " after " << int(out[i - 1][on]) << ")";
   }
 }
 
