@@ -52,6 +52,9 @@ enum SampleFlag : std::uint8_t {
   kSampleHasTime = 1u << 0,      // time_ns is when the device or kernel measured it
   kSampleHasSequence = 1u << 1,  // sequence is the device's own counter
   kSampleHasVelocity = 1u << 2,  // velocity is the device's own estimate
+  // The device reports only on change and said nothing this tick: the position is the last
+  // one it reported, still current (not stale), but no new measurement either.
+  kSampleHeld = 1u << 3,
 };
 
 struct PositionSample {

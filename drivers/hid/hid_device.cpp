@@ -153,8 +153,8 @@ IoStatus HidDevice::hold(PositionSample& out, std::int64_t now) noexcept {
   }
   bump(c_.held);
   out.position = decoded_.position;
-  out.time_ns = now;  // nothing changed up to now: the position is measured as of now
-  out.flags = kSampleHasTime;
+  out.time_ns = now;  // nothing changed up to now: the position is current as of now
+  out.flags = kSampleHasTime | kSampleHeld;
   if (decoded_.has_velocity) {
     out.velocity = 0.0;  // the device would have reported a moving axis
     out.flags |= kSampleHasVelocity;

@@ -208,6 +208,14 @@ bool ServoLoop::sense(std::uint64_t tick, std::int64_t wake_ns, PositionSample& 
     return st.have_x && res.fault.cause == FaultCause::kNone;
   }
   st.stale_streak = 0;
+  if ((sample.flags & kSampleHeld) != 0 && st.have_x) {
+    // The same position, current but not measured anew: no staleness, and the next measured
+    // sample's move is judged over the whole time since the last one.
+    ++st.periods_since_x;
+    st.fresh = false;
+    sample.position = st.last_x;
+    return true;
+  }
   st.fresh = true;
   const bool has_time = (sample.flags & kSampleHasTime) != 0 && sample.time_ns > 0;
   if (has_time) rec.sample_time_ns = sample.time_ns;

@@ -71,7 +71,8 @@ std::string status_text(const json& s) {
   if (s.contains("device") && s["device"].contains("counters")) {
     for (const auto& [name, value] : s["device"]["counters"].items()) {
       if (value.is_number() && value.get<double>() != 0.0)
-        out << "  " << name << "  " << num(value) << "\n";
+        out << "  " << name << std::string(name.size() < 14 ? 14 - name.size() : 1, ' ')
+            << num(value) << "\n";
     }
   }
   out << "  fault         " << (s["fault"].is_string() ? text(s["fault"]) : "none") << "\n";

@@ -176,7 +176,9 @@ std::string summary_to_text(const RunSummary& s) {
   }
   os << "\n";
   for (const DeviceCounter& c : s.device_counters) {
-    if (c.value > 0) os << "  " << c.name << "  " << c.value << " (" << c.meaning << ")\n";
+    if (c.value == 0) continue;
+    const std::size_t pad = c.name.size() < 15 ? 15 - c.name.size() : 1;
+    os << "  " << c.name << std::string(pad, ' ') << c.value << " (" << c.meaning << ")\n";
   }
   if (s.loop.sequence_gaps > 0) {
     os << "  sequence gaps  " << s.loop.sequence_gaps << " (" << s.loop.samples_missed

@@ -61,7 +61,8 @@ void play(int fd, int effect, int value) {
 TEST(HidPidff, TheKernelsPidDriverBindsAndItsConstantForceMovesTheSimulatedDevice) {
   const std::vector<std::string> sets = sets_for("hidraw");
   const config::Config cfg = load_example("hid-pid.yaml", sets);
-  KernelPeer device(cfg, "/dev/raw-gadget");
+  auto peer = std::make_unique<KernelPeer>(cfg, "/dev/raw-gadget");
+  KernelPeer& device = *peer;
   ASSERT_TRUE(wait_listed(true));
   int fd = -1;
   ASSERT_TRUE(KernelPeer::wait_for([&] { return (fd = open_force_feedback(kKernelSerial)) >= 0; }))
@@ -88,6 +89,8 @@ TEST(HidPidff, TheKernelsPidDriverBindsAndItsConstantForceMovesTheSimulatedDevic
       << "stopped, yet " << device.peer->applied_force() << " N";
   EXPECT_EQ(ioctl(fd, EVIOCRMFF, effect.id), 0) << std::strerror(errno);
   ::close(fd);
+  peer.reset();  // unplugged: the next test's device must not be mistaken for this one
+  EXPECT_TRUE(wait_listed(false));
 }
 
 }  // namespace

@@ -66,7 +66,9 @@ void expect_the_sim_drivers_wall(const char* config, const std::vector<std::stri
   // effect playing: only the force says what hapticd left.
   const bool libusb =
       std::find(sets.begin(), sets.end(), "device.hid.backend=libusb") != sets.end();
-  if (!libusb) EXPECT_FALSE(peer.output_on()) << "the run left the simulated amplifier on";
+  if (!libusb) {
+    EXPECT_FALSE(peer.output_on()) << "the run left the simulated amplifier on";
+  }
   EXPECT_EQ(peer.applied_force(), 0.0);
 }
 

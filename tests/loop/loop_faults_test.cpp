@@ -279,5 +279,24 @@ TEST(LoopFaults, ADeviceThatSkipsSamplesBeyondThoseTakenInStillFaults) {
   EXPECT_EQ(r.samples_missed, 2u);
 }
 
+// Issue 22: a device that reports on change says nothing while the axis rests; the driver
+// hands the loop its last position, marked held. Not stale, and the move the next report
+// shows is judged over the whole time since the last report, not one period.
+TEST(LoopFaults, HeldPositionsAreNotStaleAndTheNextMoveIsJudgedOverTheirTime) {
+  ScriptedDevice dev;
+  dev.script = [](std::uint64_t k, PositionSample& s) {
+    s.position = k < 60 ? 0.0 : 0.025;  // 25 mm after 50 held ticks: 0.5 m/s
+    s.flags = k >= 10 && k < 60 ? kSampleHeld : 0;
+    return IoStatus::kOk;
+  };
+  LoopOptions o = freerun(70);
+  o.max_speed = 10.0;  // 25 mm in one period would be 25 m/s
+  o.stale_fault_ticks = 3;
+  const LoopResult r = run(dev, o);
+  EXPECT_EQ(r.fault.cause, FaultCause::kNone) << describe(r.fault);
+  EXPECT_EQ(r.stale_ticks, 0u);
+  EXPECT_EQ(r.ticks, 70u);
+}
+
 }  // namespace
 }  // namespace hapticd::loop

@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <iostream>
+#include <memory>
 
 #include "hapticd_process.h"
 #include "hid_support.h"
@@ -30,25 +31,57 @@ std::vector<std::string> sets(const char* backend, const std::string& serial) {
           "device.hid.select.serial=" + serial};
 }
 
-// The board plugged in, and listed by the kernel before the test goes on.
+// Whether the kernel lists a hidraw node of a board with this serial (a node that vanishes
+// while it is being looked at is no board).
+bool listed(const std::string& serial) {
+  try {
+    return kernel_test::find_hidraw(3, OpenFfboard::kVendor, OpenFfboard::kProduct, serial)
+        .has_value();
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
+// The board as the test machine can carry it: its report rate setting (usb_report_rate, the
+// firmware's own divider) at 4, 250 reports a second while the wheel moves; the emulated
+// USB controller cannot move 1 kHz of input reports and the host's commands at once.
+OpenFfboardOptions guest_board() {
+  OpenFfboardOptions o;
+  o.usb_report_rate = 4;
+  return o;
+}
+
+// The board plugged in, and listed by the kernel before the test goes on; unplugged and gone
+// from the kernel's lists when the test ends, so the next board is not mistaken for it.
 struct Board {
-  explicit Board(OpenFfboardOptions o = {}) : board(o) {
-    EXPECT_TRUE(wait_until([&] {
-      return kernel_test::find_hidraw(3, OpenFfboard::kVendor, OpenFfboard::kProduct, o.serial)
-          .has_value();
-    })) << "the reference OpenFFBoard never appeared";
-    serial = o.serial;
+  explicit Board(OpenFfboardOptions o = guest_board())
+      : serial(o.serial), owned(std::make_unique<OpenFfboard>(o)), board(*owned) {
+    EXPECT_TRUE(wait_until([&] { return listed(serial); }))
+        << "the reference OpenFFBoard never appeared";
     // The kernel's own PID host (hid-pidff) binds to it too, resets it and tries one effect
     // (its autocenter probe): let that pass before hapticd meets the board.
     std::this_thread::sleep_for(std::chrono::seconds(1));
     EXPECT_TRUE(wait_until([&] { return board.allocated() == 0; }));
   }
-  ~Board() { EXPECT_EQ(board.error(), "") << "the reference device's USB side failed"; }
-  // hapticd has enabled output: its effect is allocated and FFB is on.
-  bool enabled() { return board.allocated() > 0 && board.ffb_active(); }
-  OpenFfboard board;
+  ~Board() {
+    EXPECT_EQ(board.error(), "") << "the reference device's USB side failed";
+    owned.reset();
+    EXPECT_TRUE(wait_until([&] { return !listed(serial); })) << "the board did not go";
+  }
+  // hapticd has enabled output and runs: its effect plays, FFB is on, and a second passed.
+  bool enabled() {
+    if (board.allocated() == 0 || !board.ffb_active()) return false;
+    std::this_thread::sleep_for(std::chrono::seconds(1));
+    return board.allocated() > 0 && board.ffb_active();
+  }
   std::string serial;
+  std::unique_ptr<OpenFfboard> owned;
+  OpenFfboard& board;
 };
+
+double final_command(const HapticdRun& r) {
+  return r.summary.is_object() ? r.summary["device"].value("final_command", -1.0) : -1.0;
+}
 
 class OpenFfboardUsb : public ::testing::TestWithParam<const char*> {};
 
@@ -107,7 +140,7 @@ TEST_P(OpenFfboardUsb, AHungFirmwareFaultsWithinTheLivenessBound) {
   EXPECT_LT(took_ms, kLivenessMs + 1500.0);
   std::cout << GetParam() << ": hung firmware noticed and hapticd ended " << took_ms
             << " ms after the hang\n";
-  EXPECT_EQ(r.summary["device"]["final_command"].get<double>(), 0.0);
+  EXPECT_EQ(final_command(r), 0.0);
 }
 
 TEST_P(OpenFfboardUsb, AnUnpluggedBoardFaultsTheRun) {
@@ -119,7 +152,7 @@ TEST_P(OpenFfboardUsb, AnUnpluggedBoardFaultsTheRun) {
                                    });
   EXPECT_EQ(r.status, 1) << r.log;
   EXPECT_NE(r.faults().find("hid: the device is gone"), std::string::npos) << r.faults();
-  EXPECT_EQ(r.summary["device"]["final_command"].get<double>(), 0.0);
+  EXPECT_EQ(final_command(r), 0.0);
 }
 
 INSTANTIATE_TEST_SUITE_P(Backends, OpenFfboardUsb, ::testing::Values("hidraw", "libusb"),
@@ -130,8 +163,8 @@ INSTANTIATE_TEST_SUITE_P(Backends, OpenFfboardUsb, ::testing::Values("hidraw", "
 // never resets the board between runs.
 TEST(OpenFfboardBlocks, EveryEndOfARunFreesItsEffectBlock) {
   Board b;
-  for (int run = 0; run < 6; ++run) {
-    const int sig = run % 3 == 0 ? 0 : run % 3 == 1 ? SIGTERM : SIGINT;
+  for (int run = 0; run < 3; ++run) {
+    const int sig = run == 0 ? 0 : run == 1 ? SIGTERM : SIGINT;
     const HapticdRun r = run_hapticd(shipped("hid-openffboard.yaml"), sets("hidraw", b.serial),
                                      {"--duration", sig == 0 ? "1" : "30"}, [&](pid_t pid) {
                                        ASSERT_TRUE(wait_until([&] { return b.enabled(); }));
@@ -147,7 +180,7 @@ TEST(OpenFfboardBlocks, EveryEndOfARunFreesItsEffectBlock) {
 // a run SIGKILLed with its block allocated, and the next run still enables (Block Free by
 // index, then Create New Effect again).
 TEST(OpenFfboardBlocks, APoolAKilledRunLeftFullIsFreedAtTheNextStart) {
-  OpenFfboardOptions o;
+  OpenFfboardOptions o = guest_board();
   o.effects = 1;
   o.serial = "openffboard-one-effect";
   Board b(o);

@@ -26,7 +26,7 @@ constexpr std::uint8_t kDtHid = 0x21, kDtReport = 0x22;
 constexpr std::uint8_t kGetReport = 0x01, kGetIdle = 0x02, kGetProtocol = 0x03, kSetReport = 0x09,
                        kSetIdle = 0x0A, kSetProtocol = 0x0B;
 constexpr std::uint8_t kTypeOutput = 2, kTypeFeature = 3;
-constexpr std::size_t kMaxIo = 1024;
+constexpr std::size_t kMaxIo = 4096;  // HID_MAX_DESCRIPTOR_SIZE: the longest ep0 answer
 
 // One raw gadget transfer: the kernel's usb_raw_ep_io header, then the data.
 struct Io {
@@ -107,8 +107,6 @@ RawUsbHid::RawUsbHid(const UsbIdentity& id, std::vector<std::uint8_t> report_des
   config_desc_.insert(config_desc_.end(), {7, USB_DT_ENDPOINT, kOutAddress, 3, kPacket, 0, 1});
   config_desc_[2] = static_cast<std::uint8_t>(config_desc_.size());
 
-  fd_ = ::open("/dev/raw-gadget", O_RDWR | O_CLOEXEC);
-  if (fd_ < 0) throw std::runtime_error(std::string("/dev/raw-gadget: ") + std::strerror(errno));
   std::string udc, driver;
   std::error_code ec;
   for (const auto& e : std::filesystem::directory_iterator("/sys/class/udc", ec)) {
@@ -118,17 +116,25 @@ RawUsbHid::RawUsbHid(const UsbIdentity& id, std::vector<std::uint8_t> report_des
     driver = link.filename().string();
     break;
   }
+  if (udc.empty()) throw std::runtime_error("raw gadget: no USB device controller");
   usb_raw_init init{};
   std::memcpy(init.driver_name, driver.data(),
               std::min<std::size_t>(driver.size(), UDC_NAME_LENGTH_MAX - 1));
   std::memcpy(init.device_name, udc.data(),
               std::min<std::size_t>(udc.size(), UDC_NAME_LENGTH_MAX - 1));
   init.speed = USB_SPEED_FULL;
-  if (udc.empty() || ioctl(fd_, USB_RAW_IOCTL_INIT, &init) < 0 ||
-      ioctl(fd_, USB_RAW_IOCTL_RUN, 0) < 0) {
-    const std::string why = udc.empty() ? "no USB device controller" : std::strerror(errno);
+  // The controller may still be bound to the last gadget (its close unbinds it a little
+  // later): a refused run fails that raw gadget for good, so open a new one and try again.
+  for (int attempt = 0;; ++attempt) {
+    fd_ = ::open("/dev/raw-gadget", O_RDWR | O_CLOEXEC);
+    if (fd_ < 0) throw std::runtime_error(std::string("/dev/raw-gadget: ") + std::strerror(errno));
+    if (ioctl(fd_, USB_RAW_IOCTL_INIT, &init) == 0 && ioctl(fd_, USB_RAW_IOCTL_RUN, 0) == 0) break;
+    const int e = errno;
     ::close(fd_);
-    throw std::runtime_error("raw gadget on '" + udc + "': " + why);
+    if (e != EBUSY || attempt == 500) {
+      throw std::runtime_error("raw gadget on '" + udc + "': " + std::strerror(e));
+    }
+    usleep(10'000);
   }
   install_wake();
   control_ = std::thread([this] { control_loop(); });
@@ -172,7 +178,7 @@ bool RawUsbHid::send_input(std::span<const std::uint8_t> report) {
 
 void RawUsbHid::reply(std::uint16_t asked, std::span<const std::uint8_t> data) {
   if (asked == 0) return ack();
-  const std::size_t n = std::min<std::size_t>(data.size(), asked);
+  const std::size_t n = std::min<std::size_t>({data.size(), asked, kMaxIo});
   Io io(0, n, n < asked && n % kPacket == 0);  // a short answer of whole packets ends in a ZLP
   std::memcpy(io.data(), data.data(), n);
   if (ioctl(fd_, USB_RAW_IOCTL_EP0_WRITE, &io.block) < 0 && broken(errno)) fail("ep0 write");
