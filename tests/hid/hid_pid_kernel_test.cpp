@@ -53,7 +53,10 @@ TEST_P(HidPidUsb, APeerThatStopsAnsweringFaultsWithZeroForce) {
 
 TEST_P(HidPidUsb, ASafetySwitchOffFaultsWithZeroForce) {
   // The simulated device drives its Safety Switch: this configuration faults on it (0x04).
-  PidRig rig(GetParam(), kRawGadget, {"device.hid.pid.fault_mask=0x06"});
+  // A 1 s effect: the firmware's own watchdog must not trip first (the emulator may leave the
+  // host silent for 100 ms between the enable and the first tick).
+  PidRig rig(GetParam(), kRawGadget,
+             {"device.hid.pid.fault_mask=0x06", "device.hid.pid.effect_duration_ms=1000"});
   expect_fault_exit("hid-pid.yaml", rig.sets, rig.device(), sim::PeerFault::kDeviceFault,
                     "the device reports actuators disabled, safety switch off");
 }

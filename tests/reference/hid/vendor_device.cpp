@@ -3,6 +3,7 @@
 #include <time.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <vector>
 
@@ -27,7 +28,16 @@ VendorDevice::VendorDevice(const VendorDeviceOptions& o)
   c.product_id = 0x0002;
   c.name = "reference vendor device";
   c.serial = o.serial;
-  uhid_ = std::make_unique<kernel_test::UhidDevice>(c);
+  // Looking for its hidraw node can meet the last device's node as it vanishes: try again.
+  for (int attempt = 0;; ++attempt) {
+    try {
+      uhid_ = std::make_unique<kernel_test::UhidDevice>(c);
+      break;
+    } catch (const std::exception&) {
+      if (attempt == 4) throw;
+      std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    }
+  }
   sampler_ = std::thread([this] { sample_loop(); });
   listener_ = std::thread([this] { output_loop(); });
 }
