@@ -46,7 +46,7 @@ TEST_P(HidPidUsb, PidProfileRendersTheSimDriversWall) {
 }
 
 TEST_P(HidPidUsb, APeerThatStopsAnsweringFaultsWithZeroForce) {
-  PidRig rig(GetParam(), kRawGadget);
+  PidRig rig(GetParam(), kRawGadget, {"device.hid.pid.effect_duration_ms=1000"});
   expect_fault_exit("hid-pid.yaml", rig.sets, rig.device(), sim::PeerFault::kStopAnswering,
                     "stale encoder data");
 }
@@ -82,9 +82,9 @@ TEST_P(HidPidUsb, AnUnpluggedDeviceFaultsTheRun) {
         ASSERT_TRUE(KernelPeer::wait_for([&] { return rig.device().applied_force() < -0.2; }));
         ASSERT_TRUE(rig.device().inject(sim::PeerFault::kTransportFault));
       });
-  EXPECT_EQ(h.status, 1) << h.stderr_text;
+  EXPECT_EQ(h.status, 1) << h.log;
   EXPECT_NE(faults(h).find("hid: the device is gone"), std::string::npos) << faults(h) << "\n"
-                                                                          << h.stderr_text;
+                                                                          << h.log;
 }
 
 INSTANTIATE_TEST_SUITE_P(Backends, HidPidUsb, ::testing::Values("hidraw", "libusb"),

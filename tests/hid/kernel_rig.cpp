@@ -50,13 +50,13 @@ void expect_the_sim_drivers_wall(const char* config, const std::vector<std::stri
   const int delay = find_driver("hid").declared_delay(cfg);
   const Hapticd hid =
       run_hapticd(with_sets({"run", "--config", example(config), "--duration", "4"}, sets));
-  ASSERT_EQ(hid.status, 0) << hid.stderr_text;
+  ASSERT_EQ(hid.status, 0) << hid.log;
   std::vector<std::string> twin = sets;
   twin.insert(twin.end(), {"device.driver=sim", "device.hid=", "loop.clock=freerun",
                            "wall.delay_samples=" + std::to_string(delay)});
   const Hapticd sim =
       run_hapticd(with_sets({"run", "--config", example(config), "--duration", "4"}, twin));
-  ASSERT_EQ(sim.status, 0) << sim.stderr_text;
+  ASSERT_EQ(sim.status, 0) << sim.log;
   EXPECT_EQ(faults(hid), "[]");
   const double p_hid = hid.summary["max_penetration"].get<double>();
   const double p_sim = sim.summary["max_penetration"].get<double>();
@@ -64,7 +64,7 @@ void expect_the_sim_drivers_wall(const char* config, const std::vector<std::stri
   EXPECT_GT(p_sim, 0.002);
   EXPECT_NEAR(p_hid, p_sim, 0.1 * p_sim)
       << "hid " << p_hid * 1e3 << " mm, sim " << p_sim * 1e3 << " mm with " << delay
-      << " samples of delay; " << hid.stderr_text;
+      << " samples of delay; " << hid.log;
   std::cout << config << ": hid " << p_hid * 1e3 << " mm, sim " << p_sim * 1e3 << " mm, delay "
             << delay << ", stale ticks " << hid.summary["stale_ticks"] << ", sequence gaps "
             << hid.summary["sequence_gaps"] << "\n";
@@ -82,7 +82,7 @@ void expect_fault_exit(const char* config, const std::vector<std::string>& sets,
             << "the wall never pushed";
         ASSERT_TRUE(peer.inject(fault));
       });
-  EXPECT_EQ(h.status, 1) << h.stderr_text;
+  EXPECT_EQ(h.status, 1) << h.log;
   EXPECT_TRUE(std::regex_search(faults(h), std::regex(words))) << words << ": " << faults(h);
   EXPECT_TRUE(KernelPeer::wait_for(
       [&] { return peer.applied_force() == 0.0 && (over_libusb(sets) || !peer.output_on()); },

@@ -33,24 +33,22 @@ inline std::string shipped(const std::string& name) {
   return std::string(HAPTICD_SOURCE_DIR) + "/config/" + name;
 }
 
-// Runs `hapticd run --config CONFIG --set S... ARGS...`; `during(pid)` runs meanwhile.
-inline HapticdRun run_hapticd(const std::string& config, const std::vector<std::string>& sets,
-                              std::vector<std::string> args,
+// Runs `hapticd ARGS... --summary-json FILE` (HAPTICD_BINARY); `during(pid)` runs while it
+// does, then the process is waited for. The HID driver's kernel tests use it too.
+inline HapticdRun run_hapticd(std::vector<std::string> args,
                               const std::function<void(pid_t)>& during = {}) {
   static int n = 0;
   const std::string stem =
-      "/tmp/hapticd-ref-" + std::to_string(::getpid()) + "-" + std::to_string(n++);
-  std::vector<std::string> argv_s = {HAPTICD_BINARY, "run", "--config", config};
-  for (const std::string& s : sets) argv_s.insert(argv_s.end(), {"--set", s});
-  argv_s.insert(argv_s.end(), args.begin(), args.end());
-  argv_s.insert(argv_s.end(), {"--summary-json", stem + ".json"});
+      "/tmp/hapticd-kt-" + std::to_string(::getpid()) + "-" + std::to_string(n++);
+  args.insert(args.begin(), HAPTICD_BINARY);
+  args.insert(args.end(), {"--summary-json", stem + ".json"});
   const pid_t pid = ::fork();
   if (pid == 0) {
     if (!std::freopen((stem + ".err").c_str(), "w", stderr) ||
         !std::freopen("/dev/null", "w", stdout))
       _exit(127);
     std::vector<char*> argv;
-    for (std::string& a : argv_s) argv.push_back(a.data());
+    for (std::string& a : args) argv.push_back(a.data());
     argv.push_back(nullptr);
     ::execv(HAPTICD_BINARY, argv.data());
     _exit(127);
@@ -65,6 +63,16 @@ inline HapticdRun run_hapticd(const std::string& config, const std::vector<std::
   std::ifstream e(stem + ".err");
   r.log.assign(std::istreambuf_iterator<char>(e), {});
   return r;
+}
+
+// `hapticd run --config CONFIG --set S... ARGS...`.
+inline HapticdRun run_hapticd(const std::string& config, const std::vector<std::string>& sets,
+                              std::vector<std::string> args,
+                              const std::function<void(pid_t)>& during = {}) {
+  std::vector<std::string> all = {"run", "--config", config};
+  for (const std::string& s : sets) all.insert(all.end(), {"--set", s});
+  all.insert(all.end(), args.begin(), args.end());
+  return run_hapticd(std::move(all), during);
 }
 
 // Waits up to `timeout` for `done`; false if it never held.
