@@ -3,7 +3,8 @@
 // config/hid-openffboard.yaml. The machine is emulated (TCG) and its USB controller is
 // dummy_hcd (transfers on a 4 ms timer, wake-ups up to 50 ms late), so the loop runs at 100 Hz
 // with a wall the gate allows there, the effect's duration is 1 s and the liveness bound 1 s:
-// above the emulator's stalls on top of the firmware's ~100 ms resend, far below a hang.
+// above the emulator's stalls on top of the firmware's ~100 ms resend, far below a hang. The
+// emulated controller also stalls output transfers under load: 100 full ticks fault, not 10.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -27,6 +28,7 @@ std::vector<std::string> sets(const char* backend, const std::string& serial) {
           "wall.stiffness=" + std::to_string(kStiffness),
           "device.hid.pid.effect_duration_ms=1000",
           "device.hid.liveness_ms=" + std::to_string(kLivenessMs),
+          "device.hid.limits.out_queue_full_fault=100",
           std::string("device.hid.backend=") + backend,
           "device.hid.select.serial=" + serial};
 }
