@@ -1,8 +1,10 @@
 // hapticd's report profile (config/hid-report.yaml) against the reference vendor devices
 // (vendor_device.h) on uhid, in the kernel test machine, through hidraw: a device four times
 // faster than the loop, one that really loses samples, and one that reports on change. At
-// 100 Hz with the emulator's thresholds (kernel test machine: TCG, stalls up to 50 ms), except
-// the sequence-gap fault, which stays the example's 3: replaced reports must never reach it.
+// 50 Hz (a 200 Hz device): hidraw keeps 64 reports, and a loaded emulator can stall hapticd
+// for 100 ms and more, which at 400 Hz would lose reports in the kernel, a real gap. The
+// emulator's stale threshold; the sequence-gap fault stays the example's 3: replaced reports
+// must never reach it.
 #include <gtest/gtest.h>
 
 #include <iostream>
@@ -14,9 +16,9 @@ namespace hapticd::reference {
 namespace {
 
 std::vector<std::string> sets(const std::string& serial, std::vector<std::string> more = {}) {
-  std::vector<std::string> s = {"loop.rate_hz=100",
+  std::vector<std::string> s = {"loop.rate_hz=50",
                                 "loop.overrun_fault_streak=1000",
-                                "wall.stiffness=250",
+                                "wall.stiffness=150",
                                 "safety.stale_fault_ticks=50",
                                 "device.hid.select.product_id=0x0002",
                                 "device.hid.select.serial=" + serial};
@@ -42,7 +44,7 @@ HapticdRun push_into_the_wall(VendorDevice& d, const std::vector<std::string>& s
 TEST(VendorDevice, FourReportsPerTickWithNoLossRunWithoutAFault) {
   VendorDeviceOptions o;
   o.serial = "vendor-fast";
-  o.sample_hz = 400.0;
+  o.sample_hz = 200.0;
   VendorDevice d(o);
   double rest = 0.0;
   const HapticdRun r = push_into_the_wall(d, sets(o.serial), &rest);
@@ -52,8 +54,8 @@ TEST(VendorDevice, FourReportsPerTickWithNoLossRunWithoutAFault) {
   const std::uint64_t superseded =
       r.summary["device"]["counters"]["superseded"].get<std::uint64_t>();
   EXPECT_GT(superseded, ticks) << "several reports a tick were replaced by newer ones";
-  EXPECT_GT(r.summary["contact_ticks"].get<std::uint64_t>(), 50u);
-  EXPECT_NEAR(rest, 1.0 / 250.0, 0.1 / 250.0) << "the wall holds the push";
+  EXPECT_GT(r.summary["contact_ticks"].get<std::uint64_t>(), 25u);
+  EXPECT_NEAR(rest, 1.0 / 150.0, 0.1 / 150.0) << "the wall holds the push";
   std::cout << "4x device: " << d.reports() << " reports, " << ticks << " ticks, " << superseded
             << " superseded\n";
 }
@@ -62,8 +64,8 @@ TEST(VendorDevice, FourReportsPerTickWithNoLossRunWithoutAFault) {
 TEST(VendorDevice, ADeviceThatLosesSamplesStillFaults) {
   VendorDeviceOptions o;
   o.serial = "vendor-lossy";
-  o.sample_hz = 400.0;
-  o.lose_every = 200;
+  o.sample_hz = 200.0;
+  o.lose_every = 100;
   VendorDevice d(o);
   const HapticdRun r = push_into_the_wall(d, sets(o.serial));
   EXPECT_EQ(r.status, 1) << r.log;
@@ -82,8 +84,8 @@ TEST(VendorDevice, AnOnChangeDeviceHeldStillRunsWithoutAFault) {
       d, sets(o.serial, {"device.hid.reports_on_change=true", "device.hid.liveness_ms=1000",
                          "safety.stale_fault_ticks=3"}));
   ASSERT_EQ(r.status, 0) << r.faults() << "\n" << r.log;
-  EXPECT_GT(r.summary["device"]["counters"]["held_ticks"].get<std::uint64_t>(), 50u);
-  EXPECT_GT(r.summary["contact_ticks"].get<std::uint64_t>(), 50u);
+  EXPECT_GT(r.summary["device"]["counters"]["held_ticks"].get<std::uint64_t>(), 25u);
+  EXPECT_GT(r.summary["contact_ticks"].get<std::uint64_t>(), 25u);
 }
 
 }  // namespace
