@@ -163,6 +163,12 @@ TEST(GpioLoopback, MissedEdgesWithinTheToleranceOnlyMarkTheSamples) {
   PositionSample s;
   ASSERT_EQ(rig.device.read(s), IoStatus::kOk);
   EXPECT_NE(s.status & kStatusMissedEdges, 0u);
+  // Issue 22: and they are said where a person looks, the run summary and `hapticctl status`
+  // (both print Device::device_counters), not only in the tick log's status bit.
+  const auto counters = rig.device.device_counters();
+  ASSERT_EQ(counters.size(), 1u);
+  EXPECT_EQ(counters[0].name, "missed_edges");
+  EXPECT_GT(counters[0].value, 0u);
 }
 
 TEST(GpioLoopback, IndexReZeroesWhereThePlantsIndexMarkIs) {
