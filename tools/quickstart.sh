@@ -7,6 +7,7 @@
 #   tools/quickstart.sh test   builds everything and runs every test, what .ci/run does
 #                              (stages below)
 #   tools/quickstart.sh build  builds the daemon only (what tools/hapticd-plot calls)
+#   tools/quickstart.sh packages  installs what test needs and builds nothing (tools/fuzz.sh)
 # The test command's stages, each timed, all run even when one fails:
 #   main    Release build (warnings are errors) and the whole suite, the kernel tests in the
 #           kernel test machine included (HAPTICD_KERNEL_TESTS=0 skips those, and says so)
@@ -20,9 +21,9 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 mode=${1:-}
 case $mode in
-  demo | build | test) ;;
+  demo | build | test | packages) ;;
   *)
-    echo "usage: tools/quickstart.sh demo|test|build" >&2
+    echo "usage: tools/quickstart.sh demo|test|build|packages" >&2
     exit 2 ;;
 esac
 
@@ -93,7 +94,7 @@ release_packages() {
   printf '%s\n' "$key" "libclang-rt-${clang#clang-}-dev" "$compiler" >"$memo"
   tail -n +2 "$memo"
 }
-if [[ $mode == test ]]; then
+if [[ $mode == test || $mode == packages ]]; then
   packages+=("${test_packages[@]}")
   if ! names=$(release_packages); then
     apt_update  # a fresh machine's apt knows no package before its first update
@@ -135,6 +136,7 @@ case $mode in
   build)
     configure_and_build build -DCMAKE_BUILD_TYPE=Release -- hapticd
     exit 0 ;;
+  packages) exit 0 ;;
 esac
 
 stages=${HAPTICD_STAGES:-main asan tsan}
