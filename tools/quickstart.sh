@@ -40,7 +40,7 @@ packages=(
 test_packages=(
   systemd man-db file                                   # the unit and man page checked
   rt-tests util-linux                                   # cyclictest, jitter_bench.py; prlimit
-  qemu-system-x86 busybox-static cpio kmod xz-utils     # tools/kernel-vm, the kernel test machine
+  qemu-system-x86 busybox-static cpio kmod xz-utils zstd  # tools/kernel-vm, the kernel test machine
   clang llvm                                            # the asan stage; llvm-symbolizer
 )
 
@@ -54,8 +54,8 @@ need_root() {
   fi
 }
 apt_updated=0
-apt_update() {
-  need_root "apt-get update" "${1:-}"
+apt_update() {  # WHY [PACKAGES]
+  need_root "$1" "${2:-}"
   "${as_root[@]}" apt-get update -q
   apt_updated=1
 }
@@ -97,7 +97,8 @@ release_packages() {
 if [[ $mode == test || $mode == packages ]]; then
   packages+=("${test_packages[@]}")
   if ! names=$(release_packages); then
-    apt_update  # a fresh machine's apt knows no package before its first update
+    # A fresh machine's apt knows no package before its first update.
+    apt_update "looking up this release's package names (apt-get update)"
     names=$(release_packages) || {
       echo "quickstart: apt knows no clang or no linux-image-${HAPTICD_KERNEL_FLAVOUR:-amd64}" \
         "with its headers: is this Debian, with main in its sources?" >&2
@@ -113,7 +114,7 @@ for p in "${packages[@]}"; do
 done
 if ((${#missing[@]})); then
   echo "quickstart: installing ${missing[*]}"
-  ((apt_updated)) || apt_update "${missing[*]}"
+  ((apt_updated)) || apt_update "installing Debian packages" "${missing[*]}"
   "${as_root[@]}" env DEBIAN_FRONTEND=noninteractive \
     apt-get install -y -q --no-install-recommends "${missing[@]}"
 fi
