@@ -1,5 +1,5 @@
-// The GPIO driver's simulated device (DESIGN.md §6): a motor driver and a quadrature encoder
-// with the plant between them (encoder_sim.h), on one of two carriers:
+// The GPIO driver's simulated device (docs/drivers/gpio.md): a motor driver and a quadrature
+// encoder with the plant between them (encoder_sim.h), on one of two carriers:
 //   - GpioLoopbackPeer: the driver's socketpair (gpio_wire.h). It steps the plant once per
 //     output message (the driver sends one a tick: the PWM period's clock) and answers with the
 //     period's edges, time-stamped on the plant's clock (freerun: simulated time, so runs are
