@@ -1,8 +1,8 @@
 // The GPIO driver against its loopback peer (encoder and motor driver around the plant), as
 // `hapticd run --loopback` runs it: the wall rendered as with the sim driver, every GPIO
 // fault (edge burst, illegal transitions, lost edges, fault line, cut wires) faulting the loop
-// with its cause named and zero duty, the index, brake and coast, the emergency stop, and a
-// peer that lies.
+// with its cause named and zero duty, the index, every stop as duty 0 on the enabled channel,
+// the emergency stop, and a peer that lies.
 #include <gtest/gtest.h>
 #include <poll.h>
 #include <sys/socket.h>
@@ -125,6 +125,10 @@ void expect_fault(const std::vector<std::string>& sets, std::optional<sim::gpio:
       << rig.device.describe_fault();
   EXPECT_EQ(rig.pair.peer->applied_force(), 0.0) << "zero duty written";
   EXPECT_EQ(rig.device.last_command(), 0.0);
+  rig.device.disable();
+  rig.runner.wait_idle();
+  EXPECT_EQ(rig.pair.peer->applied_force(), 0.0) << "zero duty after the disable too";
+  EXPECT_TRUE(rig.gpio_peer().channel_enabled()) << "a fault stops with duty 0, channel on";
 }
 
 TEST(GpioLoopback, EdgeBurstFasterThanTheLimitFaults) {
@@ -196,21 +200,40 @@ TEST(GpioLoopback, IndexReZeroesWhereThePlantsIndexMarkIs) {
       << o.max_penetration << " vs " << e.max_penetration;
 }
 
-TEST(GpioLoopback, BrakeKeepsThePwmEnabledAtZeroAndCoastDisablesIt) {
-  for (const char* mode : {"brake", "coast"}) {
-    SCOPED_TRACE(mode);
-    Rig rig(load("gpio.yaml", {std::string("device.gpio.on_disable=") + mode}));
-    rig.device.configure();
+// Issue 22: every stop is duty 0 on the enabled PWM channel (a disabled channel's output is
+// undefined, Documentation/driver-api/pwm.rst). The simulated motor driver judges the force
+// from the duty alone, so a stop that left a duty behind (a disable by the enable file) is
+// force the hand still feels here.
+TEST(GpioLoopback, EveryStopIsZeroDutyOnTheEnabledChannel) {
+  Rig rig(load("gpio.yaml"));
+  rig.device.configure();
+  rig.runner.wait_idle();
+  EXPECT_TRUE(rig.gpio_peer().channel_enabled()) << "enabled at configure, at duty 0";
+  EXPECT_FALSE(rig.pair.peer->output_on());
+  const auto drive = [&] {
     rig.device.enable();
     PositionSample s;
     rig.device.read(s);
     ASSERT_EQ(rig.device.write(3.0), IoStatus::kOk);
     EXPECT_NEAR(rig.pair.peer->applied_force(), 3.0, 1e-3);
-    rig.device.disable();
+    EXPECT_TRUE(rig.pair.peer->output_on());
+  };
+  const auto expect_stopped = [&](const char* how) {
     rig.runner.wait_idle();
-    EXPECT_EQ(rig.pair.peer->output_on(), std::string(mode) == "brake");
-    EXPECT_EQ(rig.pair.peer->applied_force(), 0.0);
-  }
+    EXPECT_EQ(rig.pair.peer->applied_force(), 0.0) << how;
+    EXPECT_FALSE(rig.pair.peer->output_on()) << how;
+    EXPECT_TRUE(rig.gpio_peer().channel_enabled()) << how << ": the channel stays enabled";
+  };
+  drive();
+  rig.device.disable();
+  expect_stopped("disable");
+  drive();
+  rig.device.emergency_stop();
+  expect_stopped("emergency stop");
+  rig.device.disable();
+  drive();
+  rig.device.close();
+  expect_stopped("close");
 }
 
 TEST(GpioLoopback, NegativeForceDrivesTheDirectionLine) {

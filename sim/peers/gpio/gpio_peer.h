@@ -26,6 +26,8 @@ class GpioPeer : public LoopbackPeer {
  public:
   // Any thread. Produce `f` once, from the next period on.
   virtual bool inject_wire(WireFault f) noexcept = 0;
+  // Any thread. Whether the PWM channel was enabled at the last output the peer applied.
+  virtual bool channel_enabled() const noexcept = 0;
 };
 
 // Throws config::ConfigError when device.sim and device.gpio disagree about the encoder (the

@@ -115,6 +115,8 @@ class GpioLoopbackPeer final : public GpioPeer {
     return true;
   }
 
+  bool channel_enabled() const noexcept override { return enabled_.load(); }
+
   void set_has_fault_line(bool v) { has_fault_line_ = v; }
 
  private:
@@ -197,6 +199,7 @@ class GpioLoopbackPeer final : public GpioPeer {
   void publish() {
     force_.store(enc_.applied_force());
     on_.store(enc_.output_on());
+    enabled_.store(enc_.channel_enabled());
     // After the wires were cut nothing drives the motor, whatever this thread was handling
     // when inject() cut them (inject stores zero after setting shut_; this re-checks after).
     if (shut_.load()) {
@@ -224,6 +227,7 @@ class GpioLoopbackPeer final : public GpioPeer {
   std::atomic<unsigned> wire_faults_{0};
   std::atomic<double> force_{0.0};
   std::atomic<bool> on_{false};
+  std::atomic<bool> enabled_{false};
   std::array<std::uint8_t, wire::kMaxMessageSize> rx_{};
   std::vector<dg::Edge> batch_;
 };
