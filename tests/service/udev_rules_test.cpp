@@ -141,7 +141,7 @@ TEST(UdevRules, HidGrantsTheConfiguredDeviceByVendorProductAndSerial) {
   ASSERT_EQ(rules.size(), 1u);
   EXPECT_EQ(rules[0],
             "SUBSYSTEM==\"usb\", ENV{DEVTYPE}==\"usb_device\", ATTR{idVendor}==\"1209\", "
-            "ATTR{idProduct}==\"ffb1\", ATTR{serial}==\"0042\", GROUP=\"hapticd\", "
+            "ATTR{idProduct}==\"ffb0\", ATTR{serial}==\"0042\", GROUP=\"hapticd\", "
             "MODE=\"0660\"");
   rules = rule_lines(instance_udev_rules(
       example("hid-report.yaml", {"device.hid.select.path=/dev/hidraw3"}), "a"));
