@@ -81,7 +81,6 @@ class GpioDevice final : public Device {
   int declared_delay_;
   QuadratureDecoder decoder_;
   std::array<Edge, kEdgeBuffer> edges_{};
-  bool pwm_enabled_ = false;
   bool direction_level_ = false;
   bool fault_line_ = false;
   std::int64_t previous_complete_ns_ = 0;  // the last read's EdgeRead::complete_until_ns
