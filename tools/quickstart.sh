@@ -144,6 +144,8 @@ esac
 stages=${HAPTICD_STAGES:-main asan tsan}
 failed=()
 report=()
+# A stage runs in a subshell whose status is tested, where bash ignores `set -e`: each step
+# that must stop its stage says `|| return` (a failed build must not go on to run old tests).
 run_stage() {
   local name=$1 start=$SECONDS status=0
   shift
@@ -156,7 +158,7 @@ run_stage() {
 }
 
 stage_main() {
-  configure_and_build build -DCMAKE_BUILD_TYPE=Release
+  configure_and_build build -DCMAKE_BUILD_TYPE=Release || return
   cd build && ctest --output-on-failure -j "$(nproc)"
 }
 # clang, because libFuzzer ships with it: one instrumented build serves both the suite under
@@ -172,7 +174,7 @@ stage_asan() {
   CC=clang CXX=clang++ configure_and_build build-asan-clang -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -gline-tables-only -DNDEBUG" \
     -DHAPTICD_SANITIZE=address -DHAPTICD_FUZZ=$fuzz -DHAPTICD_BUILD_BENCHMARKS=OFF \
-    -DHAPTICD_BUILD_KERNEL_TESTS=OFF
+    -DHAPTICD_BUILD_KERNEL_TESTS=OFF || return
   # One boot of the kernel test machine per run: the main stage's; its binaries are not even
   # built here (a sixth of the build). Not the layering probes (they compile, run nothing) nor
   # the plot tool's test (Python drawing what the Cli tests' commands print): the main stage
@@ -188,7 +190,7 @@ stage_tsan() {
     -DHAPTICD_BUILD_BENCHMARKS=OFF -DHAPTICD_WITH_CAN=OFF -DHAPTICD_WITH_GPIO=OFF \
     -DHAPTICD_WITH_HID=OFF \
     -- hapticd hapticd_loop_tests hapticd_telemetry_tests hapticd_service_tests \
-    hapticd_service_unit_tests
+    hapticd_service_unit_tests || return
   # Not the random-signal trial: TSan intercepts signals and defers them to its own safe
   # points, and one trial in three loaded runs lost a start-up signal that way (never in the
   # main or asan stage, which run it too). This stage is for data races.
