@@ -87,12 +87,12 @@ void BM_SysfsPwmWrite(benchmark::State& state) {
     std::ofstream(root / "pwmchip0" / "pwm0" / f) << (f[1] == 'o' ? "normal\n" : "0\n");
   }
   drivers::gpio::SysfsPwm pwm;
-  pwm.open({root.string(), 0, 0, 50'000, false}, true);
+  pwm.open({root.string(), 0, 0, 50'000, false});
   const bool changing = state.range(0) != 0;
   std::uint64_t duty = 0;
   for (auto _ : state) {
     if (changing) duty = (duty + 1) % 50'000;
-    pwm.write(duty, true);
+    pwm.write(duty);
   }
   state.counters["writes_per_tick"] =
       static_cast<double>(pwm.writes()) / static_cast<double>(state.iterations());
