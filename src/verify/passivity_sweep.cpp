@@ -99,6 +99,7 @@ class Sweep {
     sim::SimDevice device(c.device, t);
     control::ControlLaw law = control::make_control_law(c);
     law.require_outside_start = false;  // the motion starts in contact, where it stays
+    law.linear_contact = true;          // the loop of the bound: linear, the contact never opens
     control::Controller controller(law);
     loop::LoopOptions lo;
     lo.realtime = false;
