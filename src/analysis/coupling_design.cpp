@@ -141,8 +141,12 @@ class Search {
       s.best = {s.best.nu, r.coupling, r.verdict};
       s.point = r.point;
     }
-    // Not reached: certified (kInfeasible), or not in c iterations - the paper's stop.
-    if (r.outcome != CclResult::Outcome::kFound) s.lo = std::max(s.lo, target);
+    // Not reached: certified (kInfeasible), or not in c iterations - the paper's stop. A
+    // solver that gave up says nothing about the target.
+    if (r.outcome == CclResult::Outcome::kInfeasible ||
+        r.outcome == CclResult::Outcome::kNotConverged) {
+      s.lo = std::max(s.lo, target);
+    }
     if (progress_) {
       progress_({out_.steps, s.best.nu, target, r.outcome, r.iterations,
                  r.improved ? r.verdict.gamma : 0.0, s.best.verdict.gamma, s.lo});

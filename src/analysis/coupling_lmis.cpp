@@ -87,11 +87,11 @@ CouplingPlants coupling_plants(const CouplingSpec& spec, const CouplingScales& s
   StateSpace s = mix_inputs(append(realise({g2}, den2), realise({e.num}, e.den)), split_inputs);
   s = mix_outputs(MatrixXd{{1.0, -1.0}, {1.0, 0.0}}, s);  // (f, E w) -> (f - E w, f)
   const Polynomial w = poly_scale(spec.weight.num, scales.weight);
-  p.transparency = series(s, append(realise({w}, spec.weight.den),
-                                    static_gain(MatrixXd::Identity(1, 1))));
+  p.transparency = balanced(series(s, append(realise({w}, spec.weight.den),
+                                             static_gain(MatrixXd::Identity(1, 1)))));
   const double kappa = spec.sample_period * scale / spec.allowed_damping;
   const Polynomial delayed = poly_scale(poly_shift(e.num, 1 + spec.delay_samples), kappa);
-  p.passivity = mix_inputs(realise({delayed, g2}, den2), MatrixXd{{1.0, -1.0}});
+  p.passivity = balanced(mix_inputs(realise({delayed, g2}, den2), MatrixXd{{1.0, -1.0}}));
   return p;
 }
 

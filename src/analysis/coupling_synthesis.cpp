@@ -71,21 +71,26 @@ VectorXd point_at(const CouplingLmis& lmis, const CouplingParameters& chi, doubl
                   const SdpSolver& solver) {
   const VectorXd at = chi_vector(lmis, chi);
   VariablePool pool;
-  std::array<AffineMatrix, 3> ps;
+  std::array<AffineMatrix, 3> ps, qs;
   SdpProblem prob;
-  for (int i = 0; i < 3; ++i) {
-    const int n = static_cast<int>(lmis.pairs[static_cast<std::size_t>(i)].x.rows());
-    ps[static_cast<std::size_t>(i)] = pool.symmetric(n);
-    prob.blocks.push_back(original_inequality(i, ps[static_cast<std::size_t>(i)],
-                                              lmis.systems[static_cast<std::size_t>(i)], at,
-                                              gamma_hat));
-    prob.blocks.push_back(lmi_block({n}, {{{0, 0}, ps[static_cast<std::size_t>(i)]}}));
+  for (std::size_t i = 0; i < 3; ++i) {
+    const int n = static_cast<int>(lmis.pairs[i].x.rows());
+    ps[i] = pool.symmetric(n);
+    qs[i] = pool.symmetric(n);
+    prob.blocks.push_back(
+        original_inequality(static_cast<int>(i), ps[i], lmis.systems[i], at, gamma_hat));
+    // [Q I; I P] >= 0 with tr(P + Q) minimal keeps P well inside the cone: Q >= P^-1 bounds
+    // it away from singular, as tr(P) bounds it from above.
+    prob.blocks.push_back(lmi_block(
+        {n, n}, {{{0, 0}, qs[i]}, {{1, 0}, affine(MatrixXd::Identity(n, n))}, {{1, 1}, ps[i]}}));
   }
   prob.variables = pool.count();
   prob.objective = VectorXd::Zero(prob.variables);
-  for (const AffineMatrix& p : ps)
-    for (const auto& [var, coeff] : p.terms) prob.objective(var) += coeff.trace();
-  prob.margin = 1e-6;
+  for (std::size_t i = 0; i < 3; ++i) {
+    for (const auto& [var, coeff] : ps[i].terms) prob.objective(var) += coeff.trace();
+    for (const auto& [var, coeff] : qs[i].terms) prob.objective(var) += coeff.trace();
+  }
+  prob.margin = 1e-7;
   const SdpSolution s = solver.solve(prob);
   if (s.status != SdpSolution::Status::kSolved) return {};
   VectorXd y = at;

@@ -79,6 +79,36 @@ StateSpace mix_outputs(const MatrixXd& m, const StateSpace& s) {
   return {s.a, s.b, m * s.c, m * s.d};
 }
 
+namespace {
+
+// X = A X A' + Q, by the Kronecker form (the systems here have a dozen states at most).
+MatrixXd discrete_lyapunov(const MatrixXd& a, const MatrixXd& q) {
+  const Eigen::Index n = a.rows();
+  MatrixXd k = MatrixXd::Identity(n * n, n * n);
+  for (Eigen::Index i = 0; i < n; ++i)
+    for (Eigen::Index j = 0; j < n; ++j) k.block(i * n, j * n, n, n) -= a(i, j) * a;
+  const Eigen::VectorXd x = k.partialPivLu().solve(q.reshaped());
+  return x.reshaped(n, n);
+}
+
+}  // namespace
+
+StateSpace balanced(const StateSpace& s) {
+  if (s.states() == 0 || spectral_radius(s) >= 1.0) return s;
+  const MatrixXd wc = discrete_lyapunov(s.a, s.b * s.b.transpose());
+  const MatrixXd wo = discrete_lyapunov(s.a.transpose(), s.c.transpose() * s.c);
+  const Eigen::LLT<MatrixXd> lc(0.5 * (wc + wc.transpose()));
+  if (lc.info() != Eigen::Success) return s;
+  const MatrixXd l = lc.matrixL();
+  const Eigen::SelfAdjointEigenSolver<MatrixXd> eig(l.transpose() * wo * l);
+  if (eig.info() != Eigen::Success || eig.eigenvalues().minCoeff() <= 0.0) return s;
+  const Eigen::VectorXd sigma = eig.eigenvalues().cwiseSqrt();  // Hankel singular values
+  const MatrixXd t = l * eig.eigenvectors() * sigma.cwiseInverse().cwiseSqrt().asDiagonal();
+  const MatrixXd ti = sigma.cwiseSqrt().asDiagonal() * eig.eigenvectors().transpose() *
+                      l.triangularView<Eigen::Lower>().solve(MatrixXd::Identity(l.rows(), l.cols()));
+  return {ti * s.a * t, ti * s.b, s.c * t, s.d};
+}
+
 double spectral_radius(const StateSpace& s) {
   if (s.states() == 0) return 0.0;
   return Eigen::EigenSolver<MatrixXd>(s.a, false).eigenvalues().cwiseAbs().maxCoeff();

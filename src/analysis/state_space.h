@@ -35,6 +35,12 @@ StateSpace append(const StateSpace& s1, const StateSpace& s2);
 StateSpace mix_inputs(const StateSpace& s, const Eigen::MatrixXd& m);
 StateSpace mix_outputs(const Eigen::MatrixXd& m, const StateSpace& s);
 
+// The same system in balanced coordinates (equal, diagonal controllability and observability
+// Gramians): the realisation an LMI solver handles best, where companion forms of clustered
+// poles near z = 1 are badly conditioned. Unchanged when A is not stable or the realisation
+// not minimal.
+StateSpace balanced(const StateSpace& s);
+
 // Largest |eigenvalue| of A (0 without states).
 double spectral_radius(const StateSpace& s);
 

@@ -37,12 +37,19 @@ config::Config measurement_config(const config::Config& base, int total_delay) {
 
 class Sweep {
  public:
-  Sweep(const config::Config& base, int total_delay, double amplitude, bool nyquist_pole)
+  Sweep(const config::Config& base, int total_delay, double amplitude, bool nyquist_pole,
+        double slowest_pole)
       : cfg_(measurement_config(base, total_delay)),
         amplitude_(amplitude),
         nyquist_pole_(nyquist_pole) {
-    // Harmless decay time for the filters' start-up transient (E is FIR for backward).
+    // Decay time for the filters' start-up transient: short for a bare wall (E is FIR for
+    // backward); behind a coupling with a pole at z = 1, until H's slowest pole has decayed by
+    // 1e-12 (its transient would otherwise be measured as power at the lowest frequencies).
     warmup_ = 16 + 4 * total_delay;
+    if (slowest_pole > 0.0 && slowest_pole < 1.0) {
+      const double settle = std::log(1e-12) / std::log(slowest_pole);
+      warmup_ = std::max<std::int64_t>(warmup_, std::llround(std::min(settle, 1e6)));
+    }
   }
 
   // Zero of the cycle-averaged operator power at theta = 2 pi p / q (rad per sample).
@@ -152,7 +159,8 @@ VerifyResult verify_passivity(const config::Config& cfg, int device_delay_sample
   // The amplitude only scales the energy; 1 mm keeps the numbers in a familiar range.
   r.amplitude = 1e-3;
   const bool tustin = cfg.wall.discretization == config::Discretization::kTustin;
-  Sweep sweep(cfg, r.delay_samples, r.amplitude, tustin);
+  Sweep sweep(cfg, r.delay_samples, r.amplitude, tustin,
+              analysis::spectral_radius(analysis::contact_map(e, c)));
 
   // Coarse grid theta = pi j / J up to Nyquist (Tustin's pole at -1 resonates exactly there),
   // plus low frequencies where delayed walls peak as theta -> 0.
