@@ -24,6 +24,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev     # tests and benchmarks
   rt-tests python3 util-linux                    # cyclictest and tools/jitter_bench.py; prlimit
   python3-matplotlib                             # tools/hapticd-plot
+  libsdp-dev                                     # CSDP: hapticd design-coupling's SDP solver
   qemu-system-x86 busybox-static cpio kmod xz-utils  # tools/kernel-vm, the kernel test machine
   clang libclang-rt-14-dev llvm                  # the asan stage: libFuzzer, llvm-symbolizer
 )

@@ -21,8 +21,9 @@ void validate(const CouplingSpec& s) {
   if (!(std::isfinite(s.device_damping) && s.device_damping > 0.0))
     fail("device.damping must be a finite number > 0: Theorem 1 divides by it");
   if (!(std::isfinite(s.allowed_damping) && s.allowed_damping > 0.0))
-    fail("the damping the gate allows ((1 - safety.passivity_margin) device.damping - "
-         "safety.operator_passivity_shortage) must be > 0: no coupling can make b_req <= 0");
+    fail(
+        "the damping the gate allows ((1 - safety.passivity_margin) device.damping - "
+        "safety.operator_passivity_shortage) must be > 0: no coupling can make b_req <= 0");
   if (s.order < 1 || s.order > kMaxDesignOrder)
     fail("the order must be 1 to " + std::to_string(kMaxDesignOrder) + ", got " +
          std::to_string(s.order));
@@ -33,8 +34,9 @@ void validate(const CouplingSpec& s) {
   }
   if (!is_stable(s.weight)) fail("the transparency weight W(z) must be stable");
   if (!is_stable(s.environment))
-    fail("E(z) has a pole on the unit circle (Tustin's at z = -1), so W (H - E) is unbounded "
-         "for every coupling: design for wall.discretization: backward");
+    fail(
+        "E(z) has a pole on the unit circle (Tustin's at z = -1), so W (H - E) is unbounded "
+        "for every coupling: design for wall.discretization: backward");
   if (poly_norm1(s.environment.num) == 0.0) fail("the wall is zero: there is nothing to couple");
 }
 
@@ -109,7 +111,11 @@ class Search {
  public:
   Search(const CouplingSpec& spec, const DesignOptions& options, const SdpSolver& solver,
          const std::function<void(const DesignStep&)>& progress, CouplingDesign& out)
-      : spec_(spec), options_(options), solver_(solver), progress_(progress), out_(out),
+      : spec_(spec),
+        options_(options),
+        solver_(solver),
+        progress_(progress),
+        out_(out),
         scales_(coupling_scales(spec)) {}
 
   // A site at a family that passes alone, its LMIs linearised at C_bar = 0.
@@ -207,9 +213,17 @@ CouplingDesign design_coupling(const CouplingSpec& spec, const DesignOptions& op
       double f1 = probe(x1), f2 = probe(x2);
       for (int i = 0; i < options.golden_steps && search.budget_left(); ++i) {
         if (f1 <= f2) {
-          b = x2; x2 = x1; f2 = f1; x1 = b - g * (b - a); f1 = probe(x1);
+          b = x2;
+          x2 = x1;
+          f2 = f1;
+          x1 = b - g * (b - a);
+          f1 = probe(x1);
         } else {
-          a = x1; x1 = x2; f1 = f2; x2 = a + g * (b - a); f2 = probe(x2);
+          a = x1;
+          x1 = x2;
+          f1 = f2;
+          x2 = a + g * (b - a);
+          f2 = probe(x2);
         }
       }
     }

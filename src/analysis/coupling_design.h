@@ -46,9 +46,9 @@ struct CouplingDesign {
   Status status = Status::kNoCoupling;
   TransferFunction coupling;  // C(z), user units
   CouplingFamily nu;
-  CouplingVerdict verdict;    // the exact checks on it
-  double gamma_floor = 0.0;   // |W(1) E(1)|^2: no admissible C does better (H(1) = 0)
-  double gamma_lower = 0.0;   // the bracket's lower end when the search stopped
+  CouplingVerdict verdict;   // the exact checks on it
+  double gamma_floor = 0.0;  // |W(1) E(1)|^2: no admissible C does better (H(1) = 0)
+  double gamma_lower = 0.0;  // the bracket's lower end when the search stopped
   int steps = 0;
   int sdp_solves = 0;
   std::string note;

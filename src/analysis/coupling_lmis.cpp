@@ -42,9 +42,8 @@ LmiBlock positive_real(const MatrixPair& xy, const AffineSystem& s) {
 
 LmiBlock complementary(const MatrixPair& xy) {
   const int n = static_cast<int>(xy.x.rows());
-  return lmi_block({n, n}, {{{0, 0}, xy.x},
-                            {{1, 0}, affine(MatrixXd::Identity(n, n))},
-                            {{1, 1}, xy.y}});
+  return lmi_block({n, n},
+                   {{{0, 0}, xy.x}, {{1, 0}, affine(MatrixXd::Identity(n, n))}, {{1, 1}, xy.y}});
 }
 
 }  // namespace
@@ -68,8 +67,8 @@ TransferFunction coupling_filter_of(const CouplingScales& scales, const Coupling
     nb.push_back(chi.c(i) / scales.force);
     db.push_back(chi.alpha(i));
   }
-  const Polynomial num = poly_add(poly_mul(poly_add(nb, poly_scale(db, nu.dc)), {1.0, -1.0}),
-                                  poly_scale(db, nu.d));
+  const Polynomial num =
+      poly_add(poly_mul(poly_add(nb, poly_scale(db, nu.dc)), {1.0, -1.0}), poly_scale(db, nu.d));
   return {poly_trim(num), poly_trim(poly_mul(db, {1.0, -1.0}))};
 }
 
@@ -79,16 +78,15 @@ CouplingPlants coupling_plants(const CouplingSpec& spec, const CouplingScales& s
   const TransferFunction e = tf_scale(spec.environment, 1.0 / scale);
   const double d = nu.d * scale, dc = nu.dc * scale;
   // G2 = E / (1 + E (d/(1 - w) + D_c)) = n (1 - w) / den2, and G2 / (z - 1) = n w / den2.
-  const Polynomial den2 =
-      poly_add(poly_mul(e.den, {1.0, -1.0}), poly_mul(e.num, {d + dc, -dc}));
+  const Polynomial den2 = poly_add(poly_mul(e.den, {1.0, -1.0}), poly_mul(e.num, {d + dc, -dc}));
   const Polynomial g2 = poly_mul(e.num, {1.0, -1.0});
   CouplingPlants p;
   const MatrixXd split_inputs{{1.0, -1.0}, {1.0, 0.0}};  // (w, u) -> (w - u, w)
   StateSpace s = mix_inputs(append(realise({g2}, den2), realise({e.num}, e.den)), split_inputs);
   s = mix_outputs(MatrixXd{{1.0, -1.0}, {1.0, 0.0}}, s);  // (f, E w) -> (f - E w, f)
   const Polynomial w = poly_scale(spec.weight.num, scales.weight);
-  p.transparency = balanced(series(s, append(realise({w}, spec.weight.den),
-                                             static_gain(MatrixXd::Identity(1, 1)))));
+  p.transparency = balanced(
+      series(s, append(realise({w}, spec.weight.den), static_gain(MatrixXd::Identity(1, 1)))));
   const double kappa = spec.sample_period * scale / spec.allowed_damping;
   const Polynomial delayed = poly_scale(poly_shift(e.num, 1 + spec.delay_samples), kappa);
   p.passivity = balanced(mix_inputs(realise({delayed, g2}, den2), MatrixXd{{1.0, -1.0}}));
@@ -139,8 +137,8 @@ CouplingLmis coupling_lmis(const CouplingSpec& spec, const CouplingScales& scale
   const double dc = nu.dc * scale - beta;
   MatrixXd e1 = MatrixXd::Zero(nc, 1);
   if (nc > 0) e1(0, 0) = 1.0;
-  const AffineMatrix abar = affine_blocks(
-      {{ac, affine(-e1)}, {affine(MatrixXd::Zero(1, nc)), affine(scalar(0.0))}});
+  const AffineMatrix abar =
+      affine_blocks({{ac, affine(-e1)}, {affine(MatrixXd::Zero(1, nc)), affine(scalar(0.0))}});
   MatrixXd bbar(nc + 1, 1);
   bbar << e1, 1.0;
   const AffineMatrix cbar = affine_blocks({{cc, affine(scalar(-dc))}});

@@ -25,13 +25,13 @@ namespace hapticd::analysis {
 
 // What the design is given, in the user's units.
 struct CouplingSpec {
-  TransferFunction environment;   // E(z)
-  TransferFunction weight;        // W(z) of the transparency measure
-  double sample_period = 0.0;     // T (s)
-  double device_damping = 0.0;    // b (N s/m): Theorem 1's
-  double allowed_damping = 0.0;   // the most b_req may be: (1 - margin) b - eta (N s/m)
-  int delay_samples = 0;          // d of the passivity bound
-  int order = 3;                  // degree of C(z); C_bar has order - 1 states
+  TransferFunction environment;  // E(z)
+  TransferFunction weight;       // W(z) of the transparency measure
+  double sample_period = 0.0;    // T (s)
+  double device_damping = 0.0;   // b (N s/m): Theorem 1's
+  double allowed_damping = 0.0;  // the most b_req may be: (1 - margin) b - eta (N s/m)
+  int delay_samples = 0;         // d of the passivity bound
+  int order = 3;                 // degree of C(z); C_bar has order - 1 states
 };
 
 // nu of (13), in the user's units: the integrator d z/(z-1) and the feed-through D_c (m/N).

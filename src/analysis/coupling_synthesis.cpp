@@ -55,10 +55,11 @@ LmiBlock original_inequality(int pair, const AffineMatrix& p, const AffineSystem
   const AffineMatrix apa = a.transpose() * p * a, bpa = b.transpose() * p * a;
   const AffineMatrix bpb = b.transpose() * p * b;
   if (pair == 0) {
-    return lmi_block({n, 1}, {{{0, 0}, p + (-1.0) * apa + affine(-c.transpose() * c)},
-                              {{1, 0}, (-1.0) * bpa + affine(-d.transpose() * c)},
-                              {{1, 1}, affine(MatrixXd::Constant(1, 1, gamma_hat) -
-                                              d.transpose() * d) + (-1.0) * bpb}});
+    return lmi_block(
+        {n, 1},
+        {{{0, 0}, p + (-1.0) * apa + affine(-c.transpose() * c)},
+         {{1, 0}, (-1.0) * bpa + affine(-d.transpose() * c)},
+         {{1, 1}, affine(MatrixXd::Constant(1, 1, gamma_hat) - d.transpose() * d) + (-1.0) * bpb}});
   }
   return lmi_block({n, 1}, {{{0, 0}, p + (-1.0) * apa},
                             {{1, 0}, affine(c) + (-1.0) * bpa},

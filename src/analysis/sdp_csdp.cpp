@@ -176,10 +176,10 @@ class CsdpSolver final : public SdpSolver {
       sort_entries(q.k, q.c, q.constraints);
       auto v = [&](int i) { return w.vec[i].data(); };
       auto kv = [&](int i) { return w.kvec[i].data(); };
-      ret = sdp(q.n, q.k, q.c, q.a, 0.0, q.constraints, byblocks.data(), fill, x, y, z,
-                w.cholxinv, w.cholzinv, &pobj, &dobj, w.work1, w.work2, w.work3, v(0), v(1), v(2),
-                v(3), v(4), v(5), v(6), v(7), v(8), w.bestx, kv(0), w.bestz, w.zi, w.o.data(),
-                kv(1), w.dz, w.dx, kv(2), kv(3), kv(4), 0, parameters());
+      ret = sdp(q.n, q.k, q.c, q.a, 0.0, q.constraints, byblocks.data(), fill, x, y, z, w.cholxinv,
+                w.cholzinv, &pobj, &dobj, w.work1, w.work2, w.work3, v(0), v(1), v(2), v(3), v(4),
+                v(5), v(6), v(7), v(8), w.bestx, kv(0), w.bestz, w.zi, w.o.data(), kv(1), w.dz,
+                w.dx, kv(2), kv(3), kv(4), 0, parameters());
       free_fill(fill);
       s.y.resize(q.k);
       for (int i = 0; i < q.k; ++i) s.y(i) = y[i + 1];

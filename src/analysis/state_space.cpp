@@ -12,9 +12,7 @@ StateSpace realise(const std::vector<Polynomial>& numerators, const Polynomial& 
   if (den.empty() || den[0] == 0.0) throw std::invalid_argument("realise: den[0] must be nonzero");
   std::size_t n = den.size() - 1;
   for (const Polynomial& p : numerators) n = std::max(n, p.empty() ? 0 : p.size() - 1);
-  const auto coeff = [](const Polynomial& p, std::size_t i) {
-    return i < p.size() ? p[i] : 0.0;
-  };
+  const auto coeff = [](const Polynomial& p, std::size_t i) { return i < p.size() ? p[i] : 0.0; };
   const double a0 = den[0];
   const Eigen::Index ns = static_cast<Eigen::Index>(n);
   const Eigen::Index ny = static_cast<Eigen::Index>(numerators.size());
@@ -104,8 +102,9 @@ StateSpace balanced(const StateSpace& s) {
   if (eig.info() != Eigen::Success || eig.eigenvalues().minCoeff() <= 0.0) return s;
   const Eigen::VectorXd sigma = eig.eigenvalues().cwiseSqrt();  // Hankel singular values
   const MatrixXd t = l * eig.eigenvectors() * sigma.cwiseInverse().cwiseSqrt().asDiagonal();
-  const MatrixXd ti = sigma.cwiseSqrt().asDiagonal() * eig.eigenvectors().transpose() *
-                      l.triangularView<Eigen::Lower>().solve(MatrixXd::Identity(l.rows(), l.cols()));
+  const MatrixXd ti =
+      sigma.cwiseSqrt().asDiagonal() * eig.eigenvectors().transpose() *
+      l.triangularView<Eigen::Lower>().solve(MatrixXd::Identity(l.rows(), l.cols()));
   return {ti * s.a * t, ti * s.b, s.c * t, s.d};
 }
 

@@ -30,8 +30,9 @@ analysis::CouplingSpec spec_of(const config::Config& cfg, const DesignCouplingOp
     throw usage(cfg, "--weight must be felt or configured, got '" + o.weight + "'");
   }
   if (cfg.wall.discretization == config::Discretization::kTustin) {
-    throw usage(cfg, "wall.discretization tustin: E(z) has a pole at z = -1, so W (H - E) is "
-                     "unbounded for every coupling; design for backward");
+    throw usage(cfg,
+                "wall.discretization tustin: E(z) has a pole at z = -1, so W (H - E) is "
+                "unbounded for every coupling; design for backward");
   }
   analysis::CouplingSpec s;
   s.environment = analysis::environment_filter(control::wall_params(cfg, cfg.wall.stiffness));
@@ -41,8 +42,8 @@ analysis::CouplingSpec spec_of(const config::Config& cfg, const DesignCouplingOp
   try {
     s.weight = o.weight == "felt" ? analysis::felt_weight(w, o.felt_from_hz, s.sample_period) : w;
   } catch (const std::invalid_argument& e) {
-    throw usage(cfg, std::string("--felt-from-hz ") + format_number(o.felt_from_hz) + ": " +
-                         e.what());
+    throw usage(cfg,
+                std::string("--felt-from-hz ") + format_number(o.felt_from_hz) + ": " + e.what());
   }
   s.device_damping = cfg.device.damping;
   s.allowed_damping = (1.0 - cfg.safety.passivity_margin) * cfg.device.damping -
@@ -60,11 +61,9 @@ void print_step(const analysis::DesignStep& s, int max_steps) {
                                                      : "not reached";
   std::cerr << "design-coupling: step " << s.index << "/" << max_steps
             << ": d = " << format_number(s.nu.d) << ", D_c = " << format_number(s.nu.dc)
-            << ", gamma target " << format_number(s.target) << " " << what << " in "
-            << s.iterations << " SDPs"
-            << (s.found > 0.0 ? ", found " + format_number(s.found) : std::string())
-            << "; best " << format_number(s.best) << ", lower " << format_number(s.lower)
-            << "\n";
+            << ", gamma target " << format_number(s.target) << " " << what << " in " << s.iterations
+            << " SDPs" << (s.found > 0.0 ? ", found " + format_number(s.found) : std::string())
+            << "; best " << format_number(s.best) << ", lower " << format_number(s.lower) << "\n";
 }
 
 }  // namespace
@@ -82,9 +81,9 @@ int design_coupling_command(const DesignCouplingOptions& o) {
   const std::unique_ptr<analysis::SdpSolver> solver = analysis::make_sdp_solver();
   analysis::CouplingDesign design;
   try {
-    design = analysis::design_coupling(
-        spec, options, *solver,
-        [&](const analysis::DesignStep& s) { print_step(s, options.max_steps); });
+    design = analysis::design_coupling(spec, options, *solver, [&](const analysis::DesignStep& s) {
+      print_step(s, options.max_steps);
+    });
   } catch (const std::invalid_argument& e) {
     throw usage(cfg, e.what());
   }
@@ -94,8 +93,8 @@ int design_coupling_command(const DesignCouplingOptions& o) {
     config::Config with = cfg;
     with.wall.coupling = {true, report.design.coupling.num, report.design.coupling.den};
     report.gate = gate::evaluate_gate(with, device_delay);
-    report.gate_passed = report.gate.pass && report.gate.coupling.admissible &&
-                         report.gate.coupling.dspr;
+    report.gate_passed =
+        report.gate.pass && report.gate.coupling.admissible && report.gate.coupling.dspr;
   }
   const std::string text = o.json ? design_report_json(report) : design_report_text(report);
   if (!report.designed()) std::cerr << "hapticd: design-coupling: " << report.failure() << "\n";

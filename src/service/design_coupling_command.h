@@ -11,11 +11,11 @@ namespace hapticd::service {
 
 struct DesignCouplingOptions {
   ConfigOptions config;
-  int order = 3;                  // degree of C(z)
-  std::string weight = "felt";    // felt | configured
-  double felt_from_hz = 1.0;      // the felt band's lower edge
-  int max_steps = 24;             // outer steps
-  int max_iterations = 12;        // cone complementarity iterations per step
+  int order = 3;                // degree of C(z)
+  std::string weight = "felt";  // felt | configured
+  double felt_from_hz = 1.0;    // the felt band's lower edge
+  int max_steps = 24;           // outer steps
+  int max_iterations = 12;      // cone complementarity iterations per step
   bool json = false;
 };
 

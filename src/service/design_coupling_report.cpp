@@ -38,7 +38,6 @@ struct Measures {
   double static_stiffness = 0.0;
 };
 
-
 Measures measures(const DesignReport& r, const std::optional<TransferFunction>& c) {
   const TransferFunction& e = r.spec.environment;
   const TransferFunction h = analysis::contact_map(e, c);
@@ -71,8 +70,8 @@ json measures_json(const Measures& m) {
 json curve_json(const DesignReport& r, const std::optional<TransferFunction>& configured) {
   const double t = r.spec.sample_period, nyquist = 0.5 / t;
   const TransferFunction& e = r.spec.environment;
-  const TransferFunction wf = analysis::felt_weight(configured_weight(r.cfg),
-                                                    r.options.felt_from_hz, t);
+  const TransferFunction wf =
+      analysis::felt_weight(configured_weight(r.cfg), r.options.felt_from_hz, t);
   const TransferFunction hd = analysis::contact_map(e, r.design.coupling);
   const std::optional<TransferFunction> hc =
       configured ? std::optional(analysis::contact_map(e, configured)) : std::nullopt;
@@ -92,8 +91,10 @@ json curve_json(const DesignReport& r, const std::optional<TransferFunction>& co
       err_conf.push_back(std::norm(at(wf) * (at(*hc) - at(e))));
     }
   }
-  return {{"frequency_hz", f},         {"bare_wall", bare},
-          {"designed", des},           {"configured_coupling", hc ? conf : json(nullptr)},
+  return {{"frequency_hz", f},
+          {"bare_wall", bare},
+          {"designed", des},
+          {"configured_coupling", hc ? conf : json(nullptr)},
           {"felt_error_designed", err_des},
           {"felt_error_configured_coupling", hc ? err_conf : json(nullptr)}};
 }
@@ -109,11 +110,13 @@ std::string curve_text(const DesignReport& r, const std::optional<TransferFuncti
   for (double hz : {0.1, 0.3, 1.0, 3.0, 10.0, 30.0, 100.0, 300.0}) {
     if (hz >= 0.5 / t) break;
     const double th = 2.0 * std::numbers::pi * hz * t;
-    os << "    " << format_number(hz) << ": " << format_number(std::abs(analysis::frequency_response(e, th)))
-       << ", " << format_number(std::abs(analysis::frequency_response(hd, th)));
+    os << "    " << format_number(hz) << ": "
+       << format_number(std::abs(analysis::frequency_response(e, th))) << ", "
+       << format_number(std::abs(analysis::frequency_response(hd, th)));
     if (configured) {
-      os << ", " << format_number(std::abs(analysis::frequency_response(
-                        analysis::contact_map(e, configured), th)));
+      os << ", "
+         << format_number(
+                std::abs(analysis::frequency_response(analysis::contact_map(e, configured), th)));
     }
     os << "\n";
   }
@@ -146,21 +149,21 @@ std::string DesignReport::failure() const {
 
 std::string design_report_json(const DesignReport& r) {
   const std::optional<TransferFunction> configured = control::coupling_filter(r.cfg);
-  json j{{"config", r.cfg.source_name},
-         {"status", status_name(r)},
-         {"order", r.spec.order},
-         {"weight", r.options.weight},
-         {"felt_from_hz", r.options.felt_from_hz},
-         {"solver", r.solver},
-         {"delay_samples", r.spec.delay_samples},
-         {"device_damping", r.spec.device_damping},
-         {"allowed_damping", r.spec.allowed_damping},
-         {"steps", r.design.steps},
-         {"sdp_solves", r.design.sdp_solves},
-         {"gamma_floor_configured", configured_floor(r)},
-         {"bare_wall", measures_json(measures(r, std::nullopt))},
-         {"configured_coupling",
-          configured ? measures_json(measures(r, configured)) : json(nullptr)}};
+  json j{
+      {"config", r.cfg.source_name},
+      {"status", status_name(r)},
+      {"order", r.spec.order},
+      {"weight", r.options.weight},
+      {"felt_from_hz", r.options.felt_from_hz},
+      {"solver", r.solver},
+      {"delay_samples", r.spec.delay_samples},
+      {"device_damping", r.spec.device_damping},
+      {"allowed_damping", r.spec.allowed_damping},
+      {"steps", r.design.steps},
+      {"sdp_solves", r.design.sdp_solves},
+      {"gamma_floor_configured", configured_floor(r)},
+      {"bare_wall", measures_json(measures(r, std::nullopt))},
+      {"configured_coupling", configured ? measures_json(measures(r, configured)) : json(nullptr)}};
   if (!r.designed()) {
     j["failure"] = r.failure();
     return j.dump(1) + "\n";
@@ -216,7 +219,8 @@ std::string design_report_text(const DesignReport& r) {
      << "  gate                  PASS: b_req " << format_number(r.gate.passivity.required_damping)
      << " <= " << format_number(r.gate.passivity.available_damping)
      << " N s/m; Theorem 1 DSPR, min Re " << format_number(r.gate.coupling.dspr_min_real) << "\n"
-     << curve_text(r, configured) << "# paste into the configuration:\nwall:\n  coupling:\n    numerator: "
+     << curve_text(r, configured)
+     << "# paste into the configuration:\nwall:\n  coupling:\n    numerator: "
      << coefficients(d.coupling.num) << "\n    denominator: " << coefficients(d.coupling.den)
      << "\n";
   return os.str();

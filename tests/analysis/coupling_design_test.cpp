@@ -35,8 +35,7 @@ TEST(StateSpace, RealisationMatchesTheTransferFunction) {
     const Complex z = std::polar(1.0, th);
     const Eigen::MatrixXcd m =
         z * Eigen::MatrixXcd::Identity(s.states(), s.states()) - s.a.cast<Complex>();
-    const Complex v =
-        (s.c.cast<Complex>() * m.inverse() * s.b.cast<Complex>())(0, 0) + s.d(0, 0);
+    const Complex v = (s.c.cast<Complex>() * m.inverse() * s.b.cast<Complex>())(0, 0) + s.d(0, 0);
     EXPECT_NEAR(std::abs(v - frequency_response(g, th)), 0.0, 1e-12) << th;
   }
 }
@@ -54,8 +53,9 @@ TEST(Sdp, SolvesAnLmiWithAKnownOptimum) {
   ASSERT_EQ(s.status, SdpSolution::Status::kSolved) << s.note;
   EXPECT_NEAR(s.y(0), 1.0, 1e-6);
   // And y <= -1 with y >= 0 is infeasible, certified.
-  p.blocks.push_back(lmi_block({1}, {{{0, 0}, AffineMatrix{Eigen::MatrixXd::Constant(1, 1, -1.0),
-                                                            {{y, -Eigen::MatrixXd::Ones(1, 1)}}}}}));
+  p.blocks.push_back(lmi_block({1}, {{{0, 0},
+                                      AffineMatrix{Eigen::MatrixXd::Constant(1, 1, -1.0),
+                                                   {{y, -Eigen::MatrixXd::Ones(1, 1)}}}}}));
   EXPECT_EQ(make_sdp_solver()->solve(p).status, SdpSolution::Status::kInfeasible);
 }
 

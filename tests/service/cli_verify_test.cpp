@@ -39,9 +39,8 @@ TEST(CliVerify, FindsAnInteriorWorstFrequency) {
 // decays, so the measurement runs the linear loop the bound is about (the contact never opens)
 // and waits out the coupling's slow transient.
 TEST(CliVerify, MeasuresTheLinearLoopBehindACouplingWithAPoleAtOne) {
-  const ProcessResult r =
-      run_process({hapticd_binary(), "verify", "--json", "--config",
-                   source_dir() + "/config/coupling-example.yaml"});
+  const ProcessResult r = run_process({hapticd_binary(), "verify", "--json", "--config",
+                                       source_dir() + "/config/coupling-example.yaml"});
   ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
   const nlohmann::json j = nlohmann::json::parse(r.out);
   EXPECT_EQ(j["verdict"], "agree");
