@@ -104,19 +104,26 @@ TEST(DesignCoupling, CheckNamesItOnARefusedWall) {
   EXPECT_NE(r.out.find("hapticd design-coupling"), std::string::npos) << r.out;
 }
 
-// Over the last n ticks: the path length the device travelled beyond its net displacement.
-// Zero for a device at rest or creeping one way (a coupled wall yields slowly under a steady
-// push: H(1) = 0), large for one that oscillates.
-double back_and_forth_in_last(const std::vector<telemetry::TickRecord>& r, std::size_t n) {
+// Over the last n ticks: the peak-to-peak of the position about the straight line from the
+// window's first to its last sample. A device at rest, or creeping one way (a coupled wall
+// yields slowly under a steady push: H(1) = 0), stays within an encoder count or two of it
+// (the quantisation dithers, outside the theorems); the bare wall bounces by millimetres.
+double wobble_in_last(const std::vector<telemetry::TickRecord>& r, std::size_t n) {
   const std::size_t first = r.size() - std::min(n, r.size());
-  double path = 0.0;
-  for (std::size_t k = first + 1; k < r.size(); ++k)
-    path += std::abs(r[k].position - r[k - 1].position);
-  return path - std::abs(r.back().position - r[first].position);
+  const double x0 = r[first].position,
+               slope = (r.back().position - x0) / static_cast<double>(r.size() - 1 - first);
+  double lo = 0.0, hi = 0.0;
+  for (std::size_t k = first; k < r.size(); ++k) {
+    const double dev = r[k].position - (x0 + slope * static_cast<double>(k - first));
+    lo = std::min(lo, dev);
+    hi = std::max(hi, dev);
+  }
+  return hi - lo;
 }
 
-// Lean on purpose (searches of 16 steps of 4 SDPs at most): about a minute on the shared
-// 2-core development machine.
+// Searches kept short (16 steps of at most 4 SDPs); still the heaviest test here: 3 min 17 s of
+// CPU (7 min 21 s wall on the shared 2-core machine, 2026-11-25), most of it `verify` waiting
+// out the slow pole of couplings with a tiny integrator.
 TEST(DesignCoupling, TwentyRandomRefusedWallsEveryPrintedDesignPassesVerifiesAndSettles) {
   std::mt19937 rng(2025);
   const auto uniform = [&](double lo, double hi) {
@@ -155,8 +162,8 @@ TEST(DesignCoupling, TwentyRandomRefusedWallsEveryPrintedDesignPassesVerifiesAnd
     ASSERT_EQ(run.exit_code, 0) << run.err;
     const auto records = telemetry::read_log(log).records;
     ASSERT_FALSE(records.empty());
-    // No oscillation: within 4 encoder counts (1e-5 m each) of a one-way path.
-    EXPECT_LT(back_and_forth_in_last(records, records.size() / 4), 4e-5);
+    // No oscillation: within 5 encoder counts (1e-5 m each) of a one-way path.
+    EXPECT_LT(wobble_in_last(records, records.size() / 4), 5e-5);
   }
   EXPECT_GE(designed, 15);  // the search finds most; the rest are refused with exit 1
 }
