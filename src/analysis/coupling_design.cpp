@@ -14,7 +14,9 @@ bool finite_poly(const Polynomial& p) {
   return !p.empty() && std::all_of(p.begin(), p.end(), [](double v) { return std::isfinite(v); });
 }
 
-void validate(const CouplingSpec& s) {
+}  // namespace
+
+void validate_coupling_spec(const CouplingSpec& s) {
   const auto fail = [](const std::string& what) { throw std::invalid_argument(what); };
   if (!(std::isfinite(s.sample_period) && s.sample_period > 0.0))
     fail("the sample period must be a finite number > 0");
@@ -39,6 +41,8 @@ void validate(const CouplingSpec& s) {
         "for every coupling: design for wall.discretization: backward");
   if (poly_norm1(s.environment.num) == 0.0) fail("the wall is zero: there is nothing to couple");
 }
+
+namespace {
 
 struct Candidate {
   CouplingFamily nu;
@@ -173,7 +177,7 @@ class Search {
 CouplingDesign design_coupling(const CouplingSpec& spec, const DesignOptions& options,
                                const SdpSolver& solver,
                                const std::function<void(const DesignStep&)>& progress) {
-  validate(spec);
+  validate_coupling_spec(spec);
   CouplingDesign out;
   const double w1 = dc_gain(spec.weight), e1 = dc_gain(spec.environment);
   out.gamma_floor = w1 * w1 * e1 * e1;

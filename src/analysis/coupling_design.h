@@ -54,6 +54,9 @@ struct CouplingDesign {
   std::string note;
 };
 
+// Throws std::invalid_argument naming what is wrong with spec (as design_coupling does).
+void validate_coupling_spec(const CouplingSpec& spec);
+
 // Throws std::invalid_argument naming what is wrong with spec (non-finite numbers, order out
 // of 1..kMaxDesignOrder, T, b or the allowed damping not positive, an unstable weight, a wall
 // that W (H - E) cannot be bounded for).

@@ -79,15 +79,29 @@ int design_coupling_command(const DesignCouplingOptions& o) {
     throw usage(cfg, "--max-steps and --max-iterations must be 1 to 1000");
   }
   const std::unique_ptr<analysis::SdpSolver> solver = analysis::make_sdp_solver();
-  analysis::CouplingDesign design;
   try {
-    design = analysis::design_coupling(spec, options, *solver, [&](const analysis::DesignStep& s) {
-      print_step(s, options.max_steps);
-    });
+    analysis::validate_coupling_spec(spec);
   } catch (const std::invalid_argument& e) {
     throw usage(cfg, e.what());
   }
-  DesignReport report{cfg, o, device_delay, spec, std::move(design), solver->name(), {}, false};
+  // A wall the gate passes bare needs no coupling: say so instead of designing one.
+  config::Config bare = cfg;
+  bare.wall.coupling = {};
+  gate::GateReport bare_gate = gate::evaluate_gate(bare, device_delay);
+  const bool not_needed = bare_gate.pass;
+  analysis::CouplingDesign design;
+  if (!not_needed) {
+    try {
+      design = analysis::design_coupling(
+          spec, options, *solver,
+          [&](const analysis::DesignStep& s) { print_step(s, options.max_steps); });
+    } catch (const std::invalid_argument& e) {
+      throw usage(cfg, e.what());
+    }
+  }
+  DesignReport report{
+      cfg,   o,          device_delay,        spec, std::move(design), solver->name(), {},
+      false, not_needed, std::move(bare_gate)};
   if (report.design.status == analysis::CouplingDesign::Status::kDesigned) {
     // The gate's own exact check of the configuration with the coupling pasted in.
     config::Config with = cfg;
@@ -97,9 +111,11 @@ int design_coupling_command(const DesignCouplingOptions& o) {
         report.gate.pass && report.gate.coupling.admissible && report.gate.coupling.dspr;
   }
   const std::string text = o.json ? design_report_json(report) : design_report_text(report);
-  if (!report.designed()) std::cerr << "hapticd: design-coupling: " << report.failure() << "\n";
+  if (!report.designed() && !report.not_needed) {
+    std::cerr << "hapticd: design-coupling: " << report.failure() << "\n";
+  }
   if (!write_stdout(text)) return kExitRuntimeFault;
-  return report.designed() ? kExitOk : kExitRuntimeFault;
+  return report.designed() || report.not_needed ? kExitOk : kExitRuntimeFault;
 }
 
 }  // namespace hapticd::service

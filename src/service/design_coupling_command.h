@@ -19,7 +19,8 @@ struct DesignCouplingOptions {
   bool json = false;
 };
 
-// Exit 0: designed and passed by the gate; 1: not converged, no coupling found, or refused by
+// Exit 0: designed and passed by the gate, or none needed (the wall passes the gate bare:
+// nothing is designed or printed as a coupling); 1: not converged, no coupling found, or refused by
 // the gate's exact check (never printed as a coupling); 2: bad input. One progress line per
 // outer step on stderr.
 int design_coupling_command(const DesignCouplingOptions& options);

@@ -124,6 +124,7 @@ std::string curve_text(const DesignReport& r, const std::optional<TransferFuncti
 }
 
 const char* status_name(const DesignReport& r) {
+  if (r.not_needed) return "not needed";
   switch (r.design.status) {
     case analysis::CouplingDesign::Status::kDesigned:
       return r.gate_passed ? "designed" : "refused by the gate";
@@ -138,6 +139,13 @@ const char* status_name(const DesignReport& r) {
 }  // namespace
 
 std::string DesignReport::failure() const {
+  if (not_needed) {
+    return "the wall passes the gate without a coupling (b_req " +
+           format_number(bare_gate.passivity.required_damping) +
+           " <= " + format_number(bare_gate.passivity.available_damping) +
+           " N s/m): none is designed, since every coupling Theorem 1 admits would make it "
+           "yield under a steady push (H(1) = 0)";
+  }
   if (design.status != analysis::CouplingDesign::Status::kDesigned) {
     return std::string(status_name(*this)) + ": " + design.note;
   }
@@ -165,7 +173,7 @@ std::string design_report_json(const DesignReport& r) {
       {"bare_wall", measures_json(measures(r, std::nullopt))},
       {"configured_coupling", configured ? measures_json(measures(r, configured)) : json(nullptr)}};
   if (!r.designed()) {
-    j["failure"] = r.failure();
+    j[r.not_needed ? "note" : "failure"] = r.failure();
     return j.dump(1) + "\n";
   }
   const analysis::CouplingDesign& d = r.design;

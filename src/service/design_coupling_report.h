@@ -22,11 +22,15 @@ struct DesignReport {
   std::string solver;
   gate::GateReport gate;     // of cfg with the designed coupling
   bool gate_passed = false;  // passes, and Theorem 1 holds by the gate's exact DSPR check
+  // The wall passes the gate without a coupling: nothing is designed (every coupling Theorem 1
+  // admits would only make the wall yield under a steady push, H(1) = 0).
+  bool not_needed = false;
+  gate::GateReport bare_gate;  // of cfg without its coupling, when not_needed
 
   bool designed() const {
     return design.status == analysis::CouplingDesign::Status::kDesigned && gate_passed;
   }
-  std::string failure() const;  // why nothing is offered
+  std::string failure() const;  // why nothing is offered (or, not_needed, why none is)
 };
 
 std::string design_report_text(const DesignReport& r);

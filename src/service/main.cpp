@@ -198,7 +198,8 @@ int main(int argc, char** argv) {
       "(Naghshtabrizi and Hespanha: the most transparent C that passes their Theorem 1, by cone "
       "complementarity on an SDP solver), verify it with the gate and print the wall.coupling "
       "YAML to paste, its transparency and static stiffness. A progress line per step on stderr. "
-      "Exit 0 designed, 1 not converged or refused by the gate, 2 bad input.");
+      "Exit 0 designed (or none needed: the wall passes bare), 1 not converged or refused by the "
+      "gate, 2 bad input.");
   add_config_options(design, design_opts.config);
   design->add_option("--order", design_opts.order, "Degree of C(z), 1 to 8 (default 3)");
   design->add_option("--weight", design_opts.weight,
