@@ -72,7 +72,9 @@ void BM_PassivityObserver(benchmark::State& state) {
   for (auto _ : state) {
     const double xi = x[i++ & 1023];
     observer.observe(xi, true, 1);
-    const hapticd::control::Damping d = observer.damp(-2000.0 * std::max(xi, 0.0), law);
+    // Not const: Google Benchmark 1.8 on (Debian 13) deprecates DoNotOptimize of a const
+    // struct, which the compiler may still optimise around.
+    hapticd::control::Damping d = observer.damp(-2000.0 * std::max(xi, 0.0), law);
     observer.commanded(d.command, d.added);
     benchmark::DoNotOptimize(d);
   }

@@ -6,14 +6,9 @@
 install(CODE "set(CMAKE_INSTALL_DO_STRIP ON)")  # before the targets: they honour it
 install(TARGETS hapticd hapticctl RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 
-# /usr installs its configuration in /etc (the FHS), every other prefix in PREFIX/etc.
-if(CMAKE_INSTALL_PREFIX STREQUAL "/usr")
-  set(HAPTICD_CONFIG_DESTINATION /etc/hapticd)
-else()
-  set(HAPTICD_CONFIG_DESTINATION ${CMAKE_INSTALL_SYSCONFDIR}/hapticd)
-endif()
-install(FILES ${PROJECT_SOURCE_DIR}/config/sim.yaml DESTINATION ${HAPTICD_CONFIG_DESTINATION}
-        RENAME hapticd.yaml)
+# The default instance's configuration is installed with the unit (cmake/install_unit.cmake):
+# /usr installs it in /etc (the FHS), every other prefix in PREFIX/etc, decided for the prefix
+# of the install itself, so the unit and the file agree also for `--prefix /usr`.
 install(FILES ${PROJECT_SOURCE_DIR}/docs/man/hapticd.1 DESTINATION ${CMAKE_INSTALL_MANDIR}/man1)
 
 # Where systemd looks for units and sysusers.d files under this prefix, as pkg-config says
@@ -39,10 +34,14 @@ set(HAPTICD_UDEV_RULES_DIR "lib/udev/rules.d" CACHE STRING
     "udev rules directory, relative to the install prefix unless absolute")
 install(FILES ${PROJECT_SOURCE_DIR}/systemd/hapticd.sysusers DESTINATION ${HAPTICD_SYSUSERS_DIR}
         RENAME hapticd.conf)
-file(GLOB _udev_rules ${PROJECT_SOURCE_DIR}/udev/*.rules)
-install(FILES ${_udev_rules} DESTINATION ${HAPTICD_UDEV_RULES_DIR})
+# One rule, for /dev/cpu_dma_latency. No device rule is installed: an instance's rules (its CAN
+# interface, GPIO chip and PWM channel, HID device) are written from its configuration by
+# `hapticd udev-rules` (docs/operations.md lists everything installing changes, and a test
+# holds this file to that list).
+install(FILES ${PROJECT_SOURCE_DIR}/udev/60-hapticd-rt.rules DESTINATION ${HAPTICD_UDEV_RULES_DIR})
 install(CODE "
   set(HAPTICD_UNIT_TEMPLATE \"${PROJECT_SOURCE_DIR}/systemd/hapticd@.service.in\")
+  set(HAPTICD_DEFAULT_CONFIG \"${PROJECT_SOURCE_DIR}/config/sim.yaml\")
   set(HAPTICD_UNIT_DIR \"${HAPTICD_SYSTEMD_UNIT_DIR}\")
   set(HAPTICD_INSTALL_BINDIR \"${CMAKE_INSTALL_BINDIR}\")
   set(HAPTICD_INSTALL_SYSCONFDIR \"${CMAKE_INSTALL_SYSCONFDIR}\")

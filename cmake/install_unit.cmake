@@ -1,5 +1,6 @@
 # Runs at install time (cmake/install.cmake): writes the systemd template unit
-# hapticd@.service for the prefix being installed to, under DESTDIR when one is set.
+# hapticd@.service for the prefix being installed to, under DESTDIR when one is set, and
+# installs the default instance's configuration where that unit reads it.
 set(_prefix "${CMAKE_INSTALL_PREFIX}")
 set(HAPTICD_BINDIR "${_prefix}/${HAPTICD_INSTALL_BINDIR}")
 if(_prefix STREQUAL "/usr")
@@ -15,3 +16,5 @@ endif()
 set(_out "$ENV{DESTDIR}${_dir}/hapticd@.service")
 message(STATUS "Installing: ${_out}")
 configure_file("${HAPTICD_UNIT_TEMPLATE}" "${_out}" @ONLY)
+# file(INSTALL) puts DESTDIR in front of the destination itself.
+file(INSTALL "${HAPTICD_DEFAULT_CONFIG}" DESTINATION "${HAPTICD_CONFIG_DIR}" RENAME hapticd.yaml)

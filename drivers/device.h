@@ -21,6 +21,7 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace hapticd {
 
@@ -51,6 +52,9 @@ enum SampleFlag : std::uint8_t {
   kSampleHasTime = 1u << 0,      // time_ns is when the device or kernel measured it
   kSampleHasSequence = 1u << 1,  // sequence is the device's own counter
   kSampleHasVelocity = 1u << 2,  // velocity is the device's own estimate
+  // The device reports only on change and said nothing this tick: the position is the last
+  // one it reported, still current (not stale), but no new measurement either.
+  kSampleHeld = 1u << 3,
 };
 
 struct PositionSample {
@@ -60,6 +64,16 @@ struct PositionSample {
   double velocity = 0.0;       // the device's own velocity estimate (kSampleHasVelocity)
   std::uint32_t status = 0;    // driver-specific status bits, recorded in the tick log
   std::uint8_t flags = 0;      // SampleFlag bits
+  // Samples of the device's sequence this read took in: the newest and the older ones it
+  // replaced (a device faster than the loop). The loop counts a gap only beyond them.
+  std::uint32_t samples = 1;
+};
+
+// One of a driver's own counters, for the run summary and `hapticctl status`.
+struct DeviceCounter {
+  std::string name;  // snake_case, e.g. "missed_edges"
+  std::uint64_t value = 0;
+  std::string meaning;  // one line: what it counts
 };
 
 // What configure() learned about the device: the numbers the gate analyses.
@@ -107,6 +121,13 @@ class Device {
   // Not RT-safe. One sentence about the latched fault, naming its cause and code.
   std::string describe_fault() const;
   virtual std::string_view driver_name() const noexcept = 0;
+  // Not RT-safe, valid from CONFIGURED on. What configure found that the person running it
+  // should know but that does not stop it (an optional object the device lacks, a setting seen
+  // on the wire), one sentence each.
+  virtual std::vector<std::string> notices() const { return {}; }
+  // Any thread, not RT-safe (allocates). The driver's own counters worth a person's notice
+  // (missed encoder edges, malformed reports...); empty by default.
+  virtual std::vector<DeviceCounter> device_counters() const { return {}; }
 
   // RT-safe: called every tick. The newest sample, draining whatever the transport queued.
   // Allowed in CONFIGURED (output off) and ACTIVE; a fault latches FAULTED and commands zero.

@@ -22,8 +22,8 @@ unset(CMAKE_REQUIRED_FLAGS)
 unset(CMAKE_REQUIRED_LINK_OPTIONS)
 if(NOT HAPTICD_HAVE_LIBFUZZER)
   message(FATAL_ERROR
-    "HAPTICD_FUZZ=ON: ${CMAKE_CXX_COMPILER} cannot link -fsanitize=fuzzer; on Debian 12 "
-    "install libclang-rt-14-dev (tools/fuzz.sh installs it)")
+    "HAPTICD_FUZZ=ON: ${CMAKE_CXX_COMPILER} cannot link -fsanitize=fuzzer; install the "
+    "libclang-rt-N-dev of its clang-N (tools/quickstart.sh packages installs it)")
 endif()
 
 # Any UBSan report aborts, so libFuzzer records it as a crash instead of printing and going on.

@@ -25,19 +25,9 @@ declare -A dict=([config_gate]=config [set_override]=set_override [log_reader]=l
                  [log_reader_crc]=log [can_codec]=can [gpio_decoder]=gpio [control_socket]=control
                  [hid_codec]=hid)
 
-# clang, libFuzzer's runtime and llvm-symbolizer (for readable stacks): Debian 12 packages.
-install_missing() {
-  local p missing=()
-  for p in clang libclang-rt-14-dev llvm; do
-    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
-  done
-  ((${#missing[@]})) || return 0
-  echo "fuzz: installing ${missing[*]}"
-  local sudo=""
-  [[ $(id -u) -ne 0 ]] && sudo=sudo
-  $sudo apt-get update -q
-  $sudo env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends "${missing[@]}"
-}
+# clang, libFuzzer's runtime and llvm-symbolizer (for readable stacks): the quick start
+# installs them with the test command's packages, under this release's names.
+install_missing() { tools/quickstart.sh packages; }
 
 build_targets() {
   install_missing

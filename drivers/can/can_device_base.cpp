@@ -3,6 +3,7 @@
 #include <time.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 
 namespace hapticd::drivers::can {
@@ -12,15 +13,21 @@ namespace {
 // babbling bus can keep the RT thread in the drain.
 constexpr int kMaxFramesPerDrain = 64;
 
-std::int64_t now_ms() {
+void bump(std::atomic<std::uint64_t>& c) noexcept { c.fetch_add(1, std::memory_order_relaxed); }
+
+}  // namespace
+
+std::int64_t CanDeviceBase::now_ms() noexcept {
   timespec ts;
   clock_gettime(CLOCK_MONOTONIC, &ts);
   return static_cast<std::int64_t>(ts.tv_sec) * 1000 + ts.tv_nsec / 1'000'000;
 }
 
-void bump(std::atomic<std::uint64_t>& c) noexcept { c.fetch_add(1, std::memory_order_relaxed); }
-
-}  // namespace
+std::string CanDeviceBase::hex(std::uint32_t v, int digits) {
+  char buf[16];
+  std::snprintf(buf, sizeof buf, "0x%0*X", digits, v);
+  return buf;
+}
 
 CanDeviceBase::CanDeviceBase(const CanSettings& settings, double sample_period_s, Opener open)
     : settings_(settings),
@@ -33,6 +40,15 @@ void CanDeviceBase::open_transport() {
   socket_.emplace(open_());
   emergency_fd_.store(socket_->fd(), std::memory_order_release);
   clear_pending();
+  // What waited before this configure (a transport kept across configures, a socketpair) is
+  // older than anything configure may judge the device by: an ODrive's heartbeat from before
+  // an error, an SDO answer to an earlier question.
+  CanSocket::Received rx;
+  int error = 0;
+  for (int i = 0; i < 1024; ++i) {
+    const CanSocket::Io r = socket_->receive(rx, error);
+    if (r != CanSocket::Io::kDone && r != CanSocket::Io::kMalformed) break;
+  }
 }
 
 void CanDeviceBase::close_transport() noexcept {
@@ -248,6 +264,14 @@ std::string CanDeviceBase::counter_summary() const {
   add(counters_.controller_restarts, "controller restarts");
   add(counters_.emcy_resets, "EMCY error resets");
   add(counters_.sdo_aborts, "SDO aborts");
+  add(counters_.over_vel_limit,
+      "ticks above the axis's torque-mode velocity limit (controller.config.vel_limit: the "
+      "firmware braked)");
+  add(counters_.internal_limit,
+      "ticks with the drive's internal limit active (statusword bit 11: it limited the torque "
+      "itself)");
+  add(counters_.unsolicited_estimates,
+      "encoder estimates the axis sent by itself (not answers; its encoder rate is not 0)");
   return out;
 }
 

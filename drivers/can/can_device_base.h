@@ -11,6 +11,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "drivers/can/can_settings.h"
 #include "drivers/can/can_socket.h"
@@ -32,6 +33,10 @@ struct CanCounters {
   std::atomic<std::uint64_t> controller_restarts{0};
   std::atomic<std::uint64_t> emcy_resets{0};  // EMCY 0x0000: the drive's error cleared
   std::atomic<std::uint64_t> sdo_aborts{0};
+  // Forces the drive applied that hapticd did not command, and messages it did not ask for.
+  std::atomic<std::uint64_t> over_vel_limit{0};  // ODrive: ticks above controller.config.vel_limit
+  std::atomic<std::uint64_t> internal_limit{0};  // CiA 402: ticks with statusword bit 11
+  std::atomic<std::uint64_t> unsolicited_estimates{0};  // ODrive: cyclic estimates, not answers
 };
 
 // Why a CAN device latched (its describe() sentence); the fault code holds the detail.
@@ -59,6 +64,7 @@ class CanDeviceBase : public Device {
   // Async-signal-safe: write(2) of the profile's prebuilt zero-torque and disable frames.
   void emergency_stop() noexcept override;
   const CanCounters& counters() const noexcept { return counters_; }
+  std::vector<std::string> notices() const override { return notices_; }
   // Not RT-safe: "3 wrong-length frames, 1 unknown id" (empty when nothing was unusual).
   std::string counter_summary() const;
 
@@ -100,6 +106,10 @@ class CanDeviceBase : public Device {
   bool heartbeat_lost() noexcept { return ++ticks_since_heartbeat_ > heartbeat_limit_ticks_; }
   std::uint32_t ticks_since_heartbeat() const noexcept { return ticks_since_heartbeat_; }
 
+  // CLOCK_MONOTONIC in ms, for the non-RT waits; "0x0000002A" (digits hex digits).
+  static std::int64_t now_ms() noexcept;
+  static std::string hex(std::uint32_t v, int digits);
+
   // The shared part of describe(): transport kinds; the profile adds its own.
   std::string describe_transport(const DeviceFault& f) const;
   CanFaultKind fault_kind() const noexcept { return kind_; }
@@ -108,6 +118,7 @@ class CanDeviceBase : public Device {
   const double period_s_;
   CanCounters counters_;
   std::optional<CanSocket> socket_;
+  std::vector<std::string> notices_;  // configure's (notices())
 
  private:
   void on_bus_event(const BusEvent& e) noexcept;

@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 
@@ -27,13 +28,33 @@ Loopback can_loopback(const config::Config& cfg) {
   // The device keeps the pair's end and hands its transport a duplicate at each configure,
   // so closing and configuring again works like unplugging and replugging a cable.
   auto kept = std::make_shared<io::UniqueFd>(std::move(driver_end));
-  auto device = make_can_device(cfg, [kept] {
+  auto open = [kept] {
     const int fd = ::fcntl(kept->get(), F_DUPFD_CLOEXEC, 0);
     if (fd < 0) throw DeviceError(std::string("can: loopback: dup: ") + std::strerror(errno));
     return CanSocket::adopt(io::UniqueFd(fd), "loopback");
-  });
-  auto peer = make_can_peer(cfg, CanSocket::adopt(std::move(peer_end), "loopback peer"),
-                            realtime_clock(cfg));
+  };
+  std::unique_ptr<Device> device;
+  if (realtime_clock(cfg)) {
+    // The simulated drive answers at once unless the host holds its thread up: configure's
+    // waits (an SDO answer, a heartbeat, a state) get seconds, not the bus's milliseconds.
+    CanSettings s = can_settings(cfg);
+    s.sdo_timeout_ms = std::max(s.sdo_timeout_ms, 2000);
+    s.state_timeout_ms = std::max(s.state_timeout_ms, 5000);
+    s.heartbeat_timeout_ms = std::max(s.heartbeat_timeout_ms, 2000);
+    const double period = cfg.loop.sample_period_s();
+    if (s.profile == Profile::kOdrive) {
+      device = std::make_unique<OdriveDevice>(s, period, std::move(open));
+    } else {
+      device = std::make_unique<Cia402Device>(s, period, std::move(open), cfg.loop.rt_priority);
+    }
+  } else {
+    device = make_can_device(cfg, std::move(open));
+  }
+  // In the same process the simulated drive's clock is its protocol trigger (SYNC, the
+  // encoder request) in real-time runs too: its heartbeats and watchdogs count those, so a
+  // host that holds every thread up (sim/peers/peer_runner.h) cannot make it see a lost
+  // master. `hapticd peer` on a real interface keeps wall-clock watchdogs (can_peer_on).
+  auto peer = make_can_peer(cfg, CanSocket::adopt(std::move(peer_end), "loopback peer"), false);
   return {std::move(device), std::move(peer)};
 }
 
@@ -52,7 +73,9 @@ std::unique_ptr<sim::LoopbackPeer> can_peer_on(const config::Config& cfg,
 }
 
 std::vector<std::string> can_notes(const config::Config& cfg) {
-  return bus_load_notes(can_settings(cfg), cfg.loop.rate_hz);
+  std::vector<std::string> notes = bus_load_notes(can_settings(cfg), cfg.loop.rate_hz);
+  if (const std::string v = odrive_speed_note(can_settings(cfg)); !v.empty()) notes.push_back(v);
+  return notes;
 }
 
 }  // namespace
@@ -83,7 +106,9 @@ std::unique_ptr<Device> make_can_device(const config::Config& cfg,
   const double period = cfg.loop.sample_period_s();
   if (s.profile == Profile::kOdrive)
     return std::make_unique<OdriveDevice>(s, period, std::move(open));
-  return std::make_unique<Cia402Device>(s, period, std::move(open));
+  // A stop keeps SYNC going on the loop's clock: at its priority where the loop runs in real time.
+  const int keeper = realtime_clock(cfg) ? cfg.loop.rt_priority : 0;
+  return std::make_unique<Cia402Device>(s, period, std::move(open), keeper);
 }
 
 std::unique_ptr<sim::LoopbackPeer> make_can_peer(const config::Config& cfg, CanSocket socket,

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <climits>
 #include <cmath>
+#include <cstdio>
 #include <vector>
 
 #include "drivers/device.h"
@@ -89,6 +90,8 @@ void read_odrive(MapReader& can, bool selected, CanSettings& s) {
   integer(m, "cyclic_period_ms", IntRange::between(1, 1000), o.cyclic_period_ms);
   integer(m, "heartbeat_period_ms", IntRange::between(1, 65535), o.heartbeat_period_ms);
   number(m, "watchdog_timeout_s", Range::greater_than(0.0), o.watchdog_timeout_s);
+  number(m, "vel_limit", Range::at_least(0.0), o.vel_limit);
+  number(m, "vel_limit_tolerance", Range::at_least(1.0), o.vel_limit_tolerance);
   integer(m, "enable_watchdog_endpoint", IntRange::between(0, 65535), o.enable_watchdog_endpoint);
   integer(m, "watchdog_timeout_endpoint", IntRange::between(0, 65535), o.watchdog_timeout_endpoint);
   m.finish();
@@ -157,6 +160,22 @@ int delay_samples(const CanSettings& s, double rate_hz) {
 
 int declared_delay(const config::Config& cfg) {
   return delay_samples(can_settings(cfg), cfg.loop.rate_hz);
+}
+
+std::string odrive_speed_note(const CanSettings& s) {
+  if (s.profile != Profile::kOdrive || s.odrive.vel_limit <= 0.0) return {};
+  const double axis_speed = s.odrive.vel_limit * std::abs(s.position_per_unit);
+  char text[512];
+  std::snprintf(text, sizeof text,
+                "warning: odrive: in torque control the axis brakes by itself above "
+                "controller.config.vel_limit = %.3g turn/s (%.3g axis units/s here; "
+                "enable_torque_mode_vel_limit) and faults above %.3g times that "
+                "(enable_overspeed_error: CONTROLLER_FAILED / OVERSPEED on 0.5, "
+                "VELOCITY_LIMIT_VIOLATION on 0.6): forces hapticd never commanded. Raise "
+                "vel_limit, or set both to False, then tell hapticd "
+                "(device.can.odrive.vel_limit; docs/drivers/can.md)",
+                s.odrive.vel_limit, axis_speed, s.odrive.vel_limit_tolerance);
+  return text;
 }
 
 }  // namespace hapticd::drivers::can

@@ -34,8 +34,15 @@ struct OdriveSettings {
   bool detect_firmware = true;  // firmware: auto (Get_Version, 0.5 when it stays silent)
   odrive::Firmware firmware = odrive::Firmware::k06;
   PositionSource position_source = PositionSource::kRequest;
-  int cyclic_period_ms = 1;          // axis.config.can.encoder_msg_rate_ms (cyclic)
-  int heartbeat_period_ms = 100;     // axis.config.can.heartbeat_msg_rate_ms
+  int cyclic_period_ms = 1;  // encoder rate: 0.5 axis.config.can.encoder_rate_ms, 0.6
+                             // axis.config.can.encoder_msg_rate_ms (cyclic)
+  int heartbeat_period_ms =
+      100;  // 0.5 axis.config.can.heartbeat_rate_ms, 0.6 heartbeat_msg_rate_ms
+  // What the axis has in controller.config.vel_limit (turn/s) with enable_torque_mode_vel_limit
+  // (brakes above it) and enable_overspeed_error (faults above vel_limit_tolerance times it):
+  // the firmware's defaults, 2 turn/s and 1.2; 0: the user switched both off.
+  double vel_limit = 2.0;
+  double vel_limit_tolerance = 1.2;
   double watchdog_timeout_s = 0.25;  // axis.config.watchdog_timeout the driver relies on
   // 0.6 only: endpoint ids (flat_endpoints.json of the firmware) through which configure
   // writes enable_watchdog and watchdog_timeout and reads them back; 0: set by the user.
@@ -71,5 +78,8 @@ const CanSettings& can_settings(const config::Config& cfg);
 // is the position the next tick acts on); ceil(period / T) for ODrive's cyclic message.
 int declared_delay(const config::Config& cfg);
 int delay_samples(const CanSettings& s, double rate_hz);
+// ODrive: the speed above which the firmware brakes (and then faults) in torque control, in
+// the axis's own units, as a `check` warning; "" for CiA 402 or with the limit off.
+std::string odrive_speed_note(const CanSettings& s);
 
 }  // namespace hapticd::drivers::can

@@ -1,5 +1,7 @@
 #include "drivers/can/cia402.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 namespace hapticd::drivers::can::cia402 {
@@ -21,19 +23,22 @@ bool is_quick_stop(std::uint16_t cw) { return (cw & 0x86) == 0x02; }
 
 MappingEntry entry(std::uint16_t index, std::uint8_t sub, std::uint32_t value, std::uint8_t size,
                    bool final) {
-  return {{index, sub}, value, size, final};
+  return {{index, sub}, value, size, final, false};
+}
+MappingEntry cob_id(std::uint16_t index, std::uint32_t value, bool final) {
+  return {{index, 1}, value, 4, final, true};
 }
 
 // One PDO: invalidate, transmission type, clear mapping, entries, count, validate.
 void add_pdo(std::vector<MappingEntry>& out, std::uint16_t comm, std::uint16_t map,
-             std::uint32_t cob_id, std::initializer_list<std::uint32_t> objects) {
-  out.push_back(entry(comm, 1, kCobIdInvalid | cob_id, 4, false));
+             std::uint32_t id, std::initializer_list<std::uint32_t> objects) {
+  out.push_back(cob_id(comm, kCobIdInvalid | id, false));
   out.push_back(entry(comm, 2, 1, 1, true));  // synchronous, every SYNC
   out.push_back(entry(map, 0, 0, 1, false));
   std::uint8_t sub = 1;
   for (const std::uint32_t object : objects) out.push_back(entry(map, sub++, object, 4, true));
   out.push_back(entry(map, 0, static_cast<std::uint32_t>(objects.size()), 1, true));
-  out.push_back(entry(comm, 1, cob_id, 4, true));
+  out.push_back(cob_id(comm, id, true));
 }
 
 }  // namespace
@@ -173,18 +178,38 @@ std::vector<MappingEntry> pdo_mapping(std::uint8_t node, bool with_velocity) {
   if (with_velocity) {
     add_pdo(out, 0x1801, 0x1A01, canopen::kTpdo2Base + node, {0x606C0020});
   } else {
-    out.push_back(entry(0x1801, 1, kCobIdInvalid | (canopen::kTpdo2Base + node), 4, true));
+    out.push_back(cob_id(0x1801, kCobIdInvalid | (canopen::kTpdo2Base + node), true));
   }
   // The other default PDOs (RPDO2-4, TPDO3-4) stay off the bus.
   for (std::uint16_t i = 1; i < 4; ++i) {
-    out.push_back(entry(static_cast<std::uint16_t>(0x1400 + i), 1,
-                        kCobIdInvalid | (canopen::kRpdo1Base + 0x100u * i + node), 4, true));
+    out.push_back(cob_id(static_cast<std::uint16_t>(0x1400 + i),
+                         kCobIdInvalid | (canopen::kRpdo1Base + 0x100u * i + node), true));
   }
   for (std::uint16_t i = 2; i < 4; ++i) {
-    out.push_back(entry(static_cast<std::uint16_t>(0x1800 + i), 1,
-                        kCobIdInvalid | (canopen::kTpdo1Base + 0x100u * i + node), 4, true));
+    out.push_back(cob_id(static_cast<std::uint16_t>(0x1800 + i),
+                         kCobIdInvalid | (canopen::kTpdo1Base + 0x100u * i + node), true));
   }
   return out;
+}
+
+InterpolationPeriod interpolation_period(double period_s) noexcept {
+  // The largest power of ten that gives a whole value up to 255 (1 ms: 1 x 10^-3).
+  InterpolationPeriod best{255, -6, false};
+  double best_error = 1e300;
+  for (int index = 0; index >= -6; --index) {
+    const double unit = std::pow(10.0, index);
+    const double value = std::round(period_s / unit);
+    if (value < 1.0 || value > 255.0) continue;
+    const double error = std::abs(value * unit - period_s);
+    if (error <= 1e-12 * std::max(1.0, period_s / unit)) {
+      return {static_cast<std::uint8_t>(value), static_cast<std::int8_t>(index), true};
+    }
+    if (error < best_error) {
+      best_error = error;
+      best = {static_cast<std::uint8_t>(value), static_cast<std::int8_t>(index), false};
+    }
+  }
+  return best;
 }
 
 }  // namespace hapticd::drivers::can::cia402

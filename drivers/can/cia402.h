@@ -28,12 +28,28 @@ inline constexpr canopen::SdoAddress kStatusword{0x6041, 0};
 inline constexpr canopen::SdoAddress kModesOfOperation{0x6060, 0};
 inline constexpr canopen::SdoAddress kModesOfOperationDisplay{0x6061, 0};
 inline constexpr canopen::SdoAddress kTargetTorque{0x6071, 0};
-inline constexpr canopen::SdoAddress kRatedTorque{0x6076, 0};  // mN m
+inline constexpr canopen::SdoAddress kMaxTorque{0x6072, 0};                 // per mille of 0x6076
+inline constexpr canopen::SdoAddress kRatedTorque{0x6076, 0};               // mN m
+inline constexpr canopen::SdoAddress kInterpolationPeriodValue{0x60C2, 1};  // u8
+inline constexpr canopen::SdoAddress kInterpolationPeriodIndex{0x60C2, 2};  // i8, power of ten (s)
 inline constexpr canopen::SdoAddress kPositionActual{0x6064, 0};
 inline constexpr canopen::SdoAddress kVelocityActual{0x606C, 0};
 
 inline constexpr std::uint16_t kDeviceProfile402 = 402;  // low 16 bits of 0x1000
 inline constexpr std::int8_t kModeCyclicSynchronousTorque = 10;
+
+// Statusword bit 11, internal limit active: the drive limits a value itself (0x6072 max
+// torque, a current limit, a thermal derating): a force the wall did not command.
+inline constexpr std::uint16_t kSwInternalLimitActive = 1u << 11;
+
+// 0x60C2 interpolation time period: value x 10^index s. The exact period T where it fits in
+// the two numbers (exact false otherwise: the nearest that does).
+struct InterpolationPeriod {
+  std::uint8_t value = 1;
+  std::int8_t index = -3;
+  bool exact = true;
+};
+InterpolationPeriod interpolation_period(double period_s) noexcept;
 
 // Controlword commands (the bits that matter; DESIGN.md §6).
 inline constexpr std::uint16_t kCwDisableVoltage = 0x00;
@@ -89,6 +105,8 @@ struct MappingEntry {
   std::uint8_t size;
   bool final;  // the value the object must end with (verify reads these back); false for the
                // intermediate writes (PDO invalidated, mapping count 0) of the procedure
+  bool cob_id = false;  // a PDO's COB-ID: value holds the CAN id and the valid bit only; the
+                        // drive's own bits are read first and kept (cob_id_to_write)
 };
 // In write order (CiA 301 §7.5.2.36): each PDO is invalidated, its transmission type set (1:
 // every SYNC), its mapping count set to 0, the entries written, the count written, and the PDO
@@ -96,6 +114,17 @@ struct MappingEntry {
 // the bus. TPDO2 carries the velocity when with_velocity.
 std::vector<MappingEntry> pdo_mapping(std::uint8_t node, bool with_velocity);
 inline constexpr std::uint32_t kCobIdInvalid = 0x80000000u;
+// Bit 30: for a TPDO "no RTR allowed", for an RPDO reserved. Many drives require it as they
+// ship it (CANopenNode's TPDO default is 0xC0000180 + node) and abort a write that clears it
+// with 0x06090030; so it is read and kept.
+inline constexpr std::uint32_t kCobIdNoRtr = 0x40000000u;
+// The COB-ID to write over what the drive holds (`current`): its bit 30 kept, the valid bit
+// (31) and the 11-bit CAN id from `wanted`, bits 11-29 zero (CiA 301: 11-bit ids). When the
+// id already matches, only bit 31 changes.
+inline constexpr std::uint32_t cob_id_to_write(std::uint32_t current,
+                                               std::uint32_t wanted) noexcept {
+  return (current & kCobIdNoRtr) | (wanted & (kCobIdInvalid | 0x7FFu));
+}
 // The bits of a COB-ID that verify compares (valid flag and 11-bit id; drives differ in the
 // others, e.g. bit 30 "no RTR").
 inline constexpr std::uint32_t kCobIdCompareMask = 0x800007FFu;

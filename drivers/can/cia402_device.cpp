@@ -1,3 +1,4 @@
+// The CiA 402 drive's lifecycle after configure (cia402_configure.cpp) and its tick.
 #include "drivers/can/cia402_device.h"
 
 #include <algorithm>
@@ -10,198 +11,9 @@
 namespace hapticd::drivers::can {
 namespace {
 
-using canopen::SdoAddress;
-using canopen::SdoReply;
 using cia402::PowerState;
 
-std::int64_t now_ms() {
-  timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1000 + ts.tv_nsec / 1'000'000;
-}
-
-std::string hex(std::uint32_t v, int digits) {
-  char buf[16];
-  std::snprintf(buf, sizeof buf, "0x%0*X", digits, v);
-  return buf;
-}
-
 }  // namespace
-
-// --- SDO client ---
-
-std::string Cia402Device::sdo_where(SdoAddress at, const char* name) const {
-  char buf[24];
-  std::snprintf(buf, sizeof buf, "0x%04X:%02X", at.index, at.subindex);
-  return "can: node " + std::to_string(settings_.node_id) + " on " + socket_->description() +
-         ": SDO " + buf + " (" + name + ")";
-}
-
-void Cia402Device::note_async(const CanFrame& f) {
-  if (f.id == canopen::kEmcyBase + settings_.node_id) {
-    const auto e = canopen::decode_emcy(f);
-    if (e && e->code == 0) return;  // an error reset is good news
-    throw DeviceError("can: node " + std::to_string(settings_.node_id) + " sent EMCY " +
-                      (e ? canopen::describe_emcy_code(e->code) + " (error register " +
-                               hex(e->error_register, 2) + ")"
-                         : "truncated to " + std::to_string(f.len) + " bytes"));
-  }
-}
-
-SdoReply Cia402Device::sdo_exchange(const CanFrame& request, SdoAddress at, const char* name) {
-  send_or_throw(request, "an SDO request");
-  const std::uint32_t reply_id = canopen::kSdoTxBase + settings_.node_id;
-  SdoReply reply;
-  const bool answered = await(
-      settings_.sdo_timeout_ms,
-      [&](const CanFrame& f) {
-        if (f.id != reply_id) return false;
-        reply = canopen::decode_sdo_reply(f, at);
-        return reply.kind != SdoReply::Kind::kOtherObject;
-      },
-      [&](const CanFrame& f) { note_async(f); });
-  if (!answered) {
-    throw DeviceError(sdo_where(at, name) + ": no answer within " +
-                      std::to_string(settings_.sdo_timeout_ms) +
-                      " ms (node id, bitrate, wiring, or the drive is not powered)");
-  }
-  if (reply.kind == SdoReply::Kind::kAbort) {
-    counters_.sdo_aborts.fetch_add(1, std::memory_order_relaxed);
-    throw DeviceError(sdo_where(at, name) + ": aborted with " + hex(reply.abort_code, 8) + " " +
-                      std::string(canopen::describe_sdo_abort(reply.abort_code)));
-  }
-  if (reply.kind == SdoReply::Kind::kMalformed) {
-    throw DeviceError(sdo_where(at, name) + ": malformed answer: " + reply.problem);
-  }
-  return reply;
-}
-
-std::uint32_t Cia402Device::sdo_read(SdoAddress at, const char* name) {
-  const SdoReply r = sdo_exchange(canopen::sdo_upload_request(settings_.node_id, at), at, name);
-  if (r.kind != SdoReply::Kind::kUploadValue) {
-    throw DeviceError(sdo_where(at, name) + ": answered a read with a write confirmation");
-  }
-  return r.value;
-}
-
-void Cia402Device::sdo_write(SdoAddress at, std::uint32_t value, std::uint8_t size,
-                             const char* name) {
-  const SdoReply r =
-      sdo_exchange(canopen::sdo_download_request(settings_.node_id, at, value, size), at, name);
-  if (r.kind != SdoReply::Kind::kDownloadConfirmed) {
-    throw DeviceError(sdo_where(at, name) + ": answered a write with a value");
-  }
-}
-
-// --- lifecycle ---
-
-PowerState Cia402Device::read_state(std::uint16_t& statusword) {
-  statusword = static_cast<std::uint16_t>(sdo_read(cia402::kStatusword, "statusword"));
-  return cia402::decode_statusword(statusword);
-}
-
-std::string Cia402Device::drive_error_text() {
-  try {
-    const auto code = static_cast<std::uint16_t>(sdo_read(cia402::kErrorCode, "error code"));
-    return "error code 0x603F = " + canopen::describe_emcy_code(code);
-  } catch (const DeviceError&) {
-    return "error code 0x603F unreadable";
-  }
-}
-
-void Cia402Device::switch_off_and_identify() {
-  const std::uint8_t node = settings_.node_id;
-  send_or_throw(canopen::nmt_command(canopen::NmtCommand::kEnterPreOperational, node), "NMT");
-  const std::uint32_t type = sdo_read(cia402::kDeviceType, "device type");
-  if ((type & 0xFFFF) != cia402::kDeviceProfile402) {
-    throw DeviceError("can: node " + std::to_string(node) + " is not a CiA 402 drive (device " +
-                      "type 0x1000 = " + hex(type, 8) + ", profile " +
-                      std::to_string(type & 0xFFFF) + ")");
-  }
-  std::uint16_t sw = 0;
-  if (read_state(sw) == PowerState::kFault) {
-    throw DeviceError("can: node " + std::to_string(node) + " is in Fault (statusword " +
-                      cia402::describe_statusword(sw) + ", " + drive_error_text() +
-                      "): find the cause, clear it with the drive's tool, and start again");
-  }
-  // Output off before anything else: "switch on disabled" whatever state it was left in.
-  sdo_write(cia402::kControlword, cia402::kCwDisableVoltage, 2, "controlword");
-  rated_torque_mnm_ = sdo_read(cia402::kRatedTorque, "rated torque");
-  if (rated_torque_mnm_ == 0) {
-    throw DeviceError("can: node " + std::to_string(node) + " reports a rated torque 0x6076 of 0");
-  }
-}
-
-void Cia402Device::write_parameters() {
-  const Cia402Settings& c = settings_.cia402;
-  sdo_write(cia402::kModesOfOperation,
-            static_cast<std::uint8_t>(cia402::kModeCyclicSynchronousTorque), 1,
-            "modes of operation");
-  const auto shown = static_cast<std::int8_t>(
-      sdo_read(cia402::kModesOfOperationDisplay, "modes of operation display"));
-  if (shown != cia402::kModeCyclicSynchronousTorque) {
-    throw DeviceError("can: node " + std::to_string(settings_.node_id) +
-                      " did not take mode 10 (cyclic synchronous torque): 0x6061 shows " +
-                      std::to_string(shown));
-  }
-  const auto cycle_us = static_cast<std::uint32_t>(std::lround(period_s_ * 1e6));
-  sdo_write(cia402::kCommunicationCyclePeriod, cycle_us, 4, "communication cycle period");
-  sdo_write(cia402::kProducerHeartbeatTime, static_cast<std::uint32_t>(c.heartbeat_producer_ms), 2,
-            "producer heartbeat time");
-  sdo_write(cia402::kAbortConnectionOption, static_cast<std::uint32_t>(c.comm_loss_reaction), 2,
-            "abort connection option code");
-  sdo_write(cia402::kTargetTorque, 0, 2, "target torque");
-}
-
-void Cia402Device::map_pdos() {
-  const bool verify = settings_.cia402.pdo_mapping == PdoMapping::kVerify;
-  for (const cia402::MappingEntry& e :
-       cia402::pdo_mapping(settings_.node_id, settings_.cia402.map_velocity)) {
-    if (!verify) {
-      sdo_write(e.at, e.value, e.size, "PDO mapping");
-      continue;
-    }
-    if (!e.final) continue;
-    std::uint32_t got = sdo_read(e.at, "PDO mapping");
-    std::uint32_t want = e.value;
-    if (cia402::is_cob_id(e.at)) {
-      got &= cia402::kCobIdCompareMask;
-      want &= cia402::kCobIdCompareMask;
-    }
-    if (got != want) {
-      throw DeviceError(sdo_where(e.at, "PDO mapping") + ": is " + hex(got, 8) +
-                        ", hapticd needs " + hex(want, 8) +
-                        " (set device.can.cia402.pdo_mapping: configure, or map " +
-                        "it with the drive's tool; docs/drivers/can.md lists the mapping)");
-    }
-  }
-}
-
-DeviceInfo Cia402Device::on_configure() {
-  open_transport();
-  switch_off_and_identify();
-  write_parameters();
-  map_pdos();
-  const std::uint32_t vendor = sdo_read(cia402::kVendorId, "vendor id");
-  const std::uint8_t node = settings_.node_id;
-  // Per mille of the rated torque for one unit of axis force, through the transmission.
-  permille_per_force_ = settings_.torque_per_force * 1e6 / rated_torque_mnm_;
-  max_permille_ = static_cast<int>(
-      std::min(32767.0, std::floor(settings_.max_torque * 1e6 / rated_torque_mnm_)));
-  const int hb = settings_.cia402.master_heartbeat_ms;
-  master_heartbeat_ticks_ =
-      hb == 0 ? 0 : std::max<std::uint32_t>(1, static_cast<std::uint32_t>(hb * 1e-3 / period_s_));
-  set_emergency_frames({canopen::rpdo1_frame(node, cia402::kCwEnableOperation, 0),
-                        canopen::sync_frame(), canopen::rpdo1_frame(node, cia402::kCwShutdown, 0),
-                        canopen::sync_frame(),
-                        canopen::nmt_command(canopen::NmtCommand::kEnterPreOperational, node)});
-  DeviceInfo info;
-  info.description = "cia402 node " + std::to_string(node) + " on " + socket_->description() +
-                     " (vendor " + hex(vendor, 8) + ", rated torque " +
-                     std::to_string(rated_torque_mnm_) + " mN m)";
-  info.transport_delay_samples = 1;
-  return info;
-}
 
 void Cia402Device::walk_to_enabled() {
   std::uint16_t sw = 0;
@@ -233,9 +45,16 @@ void Cia402Device::on_enable() {
   clear_pending();
   fresh_ = false;
   tick_ = 0;
+  last_sync_ns_.store(0, std::memory_order_relaxed);
+  stopped_ = false;  // from here on a failed enable is undone by the stop
   const std::uint8_t node = settings_.node_id;
   const Cia402Settings& c = settings_.cia402;
   sdo_write(cia402::kTargetTorque, 0, 2, "target torque");
+  if (has_cycle_period_) {  // the last stop switched the SYNC watch off
+    sdo_write(cia402::kCommunicationCyclePeriod,
+              static_cast<std::uint32_t>(std::lround(period_s_ * 1e6)), 4,
+              "communication cycle period");
+  }
   if (c.drive_watchdog_ms > 0) {
     sdo_write(cia402::kConsumerHeartbeatTime,
               (static_cast<std::uint32_t>(c.master_node_id) << 16) |
@@ -248,16 +67,45 @@ void Cia402Device::on_enable() {
 }
 
 void Cia402Device::on_disable() noexcept {
+  if (stopped_) return;  // once per enable: a fault's disable and the close after it are one stop
+  stopped_ = true;
+  if (!socket_) return;
   const std::uint8_t node = settings_.node_id;
-  send_quietly(canopen::rpdo1_frame(node, cia402::kCwEnableOperation, 0));
-  send_quietly(canopen::sync_frame());
+  // Zero torque and the power stage off together, applied at the next SYNC slot: one SYNC per
+  // cycle, never two within microseconds (a drive's SYNC-locked clock would see a jump).
   send_quietly(canopen::rpdo1_frame(node, cia402::kCwShutdown, 0));
-  send_quietly(canopen::sync_frame());
-  send_quietly(canopen::nmt_command(canopen::NmtCommand::kEnterPreOperational, node));
-  if (!socket_ || settings_.cia402.drive_watchdog_ms == 0) return;
+  const auto period_ns = static_cast<std::int64_t>(std::llround(period_s_ * 1e9));
+  const std::int64_t last = last_sync_ns_.load(std::memory_order_relaxed);
+  std::vector<PeriodicSender::Entry> keep = {
+      {canopen::sync_frame(), period_ns, last == 0 ? 0 : last + period_ns}};
+  if (master_heartbeat_ticks_ != 0) {
+    keep.push_back(
+        {canopen::heartbeat_frame(settings_.cia402.master_node_id, canopen::NmtState::kOperational),
+         static_cast<std::int64_t>(settings_.cia402.master_heartbeat_ms) * 1'000'000, 0});
+  }
   try {
-    // hapticd's heartbeat stops now: the drive must not take that for a lost master.
-    sdo_write(cia402::kConsumerHeartbeatTime, 0, 4, "consumer heartbeat time");
+    keeper_.start(socket_->fd(), std::move(keep), keeper_priority_);
+    keeper_.wait_written(1);
+  } catch (...) {
+    send_quietly(canopen::sync_frame());  // no thread to be had: the stop at least
+  }
+  stop_keeping_alive();
+  keeper_.stop();
+  send_quietly(canopen::nmt_command(canopen::NmtCommand::kEnterPreOperational, node));
+}
+
+// While SYNC and hapticd's heartbeat still come: the drive stops watching them, so their end
+// is no lost master (CANopenNode: EMCY 0x8100 at 1.5 cycles without SYNC, 0x8130 when the
+// heartbeat consumer times out, both in pre-operational too).
+void Cia402Device::stop_keeping_alive() noexcept {
+  try {
+    if (has_cycle_period_) {
+      sdo_write(cia402::kCommunicationCyclePeriod, 0, 4,
+                "communication cycle period (0: the SYNC watch off)");
+    }
+    if (settings_.cia402.drive_watchdog_ms > 0) {
+      sdo_write(cia402::kConsumerHeartbeatTime, 0, 4, "consumer heartbeat time");
+    }
   } catch (...) {
     // Best effort: the power stage is already off, and a lost bus is reported elsewhere.
   }
@@ -297,6 +145,9 @@ void Cia402Device::on_tpdo1(const CanSocket::Received& rx) noexcept {
   statusword_ = pdo->statusword;
   position_ = pdo->position;
   sample_time_ns_ = rx.time_ns;
+  if (state() == DeviceState::kActive && (statusword_ & cia402::kSwInternalLimitActive) != 0) {
+    counters_.internal_limit.fetch_add(1, std::memory_order_relaxed);
+  }
   const PowerState s = cia402::decode_statusword(statusword_);
   if (s == PowerState::kFault || s == PowerState::kFaultReactionActive) {
     raise(CanFaultKind::kStatuswordFault, statusword_);
@@ -373,6 +224,7 @@ IoStatus Cia402Device::on_write(double force) noexcept {
   // RPDO first, then SYNC: the drive applies the torque at this SYNC and samples its position.
   bool ok = send_rt(canopen::rpdo1_frame(node, cia402::kCwEnableOperation, torque)) &&
             send_rt(canopen::sync_frame());
+  last_sync_ns_.store(PeriodicSender::now_ns(), std::memory_order_relaxed);
   if (ok && master_heartbeat_ticks_ != 0 && tick_++ % master_heartbeat_ticks_ == 0) {
     ok = send_rt(
         canopen::heartbeat_frame(settings_.cia402.master_node_id, canopen::NmtState::kOperational));

@@ -1,33 +1,47 @@
 // A CiA 402 drive in cyclic synchronous torque (DESIGN.md §6), driven over CANopen.
 //
 // configure: NMT pre-operational, device type 0x1000 checked for profile 402, the power stage
-// switched off (controlword 0x00, "switch on disabled"), rated torque 0x6076 read, mode 10 in
-// 0x6060 (read back from 0x6061), 0x1006 communication cycle = T, 0x1017 heartbeat producer,
-// 0x6007 the drive's reaction to losing the master, PDOs mapped (or verified) - every SDO
-// write confirmed, an abort named with CiA 301's text.
-// enable: target torque 0, 0x1016 heartbeat consumer (the drive's own watchdog on hapticd),
-// NMT start, then the power state machine walked to Operation enabled through the controlword,
-// each step confirmed from the statusword within state_timeout_ms.
+// switched off (controlword 0x00, "switch on disabled"), rated torque 0x6076 and the drive's
+// own limit 0x6072 read (below max_torque refuses: the wall would give way early), mode 10 in
+// 0x6060 (0x6061 polled until it shows it), 0x1006 communication cycle = T and 0x60C2
+// interpolation period = T where the drive has them (a notice names what it lacks), 0x1017
+// heartbeat producer, 0x6007 the drive's reaction to losing the master (unless
+// comm_loss_reaction is none), PDOs mapped (each COB-ID read first, only its valid bit and id
+// changed) or verified - every SDO write confirmed, an abort named with CiA 301's text.
+// enable: target torque 0, 0x1006 again, 0x1016 heartbeat consumer (the drive's own watchdogs
+// on hapticd), NMT start, then the power state machine walked to Operation enabled through the
+// controlword, each step confirmed from the statusword within state_timeout_ms.
 // Each tick: read drains the TPDOs, EMCY, heartbeat and bus events; write sends the RPDO
 // (controlword 0x0F, target torque in per mille of the rated torque) and then SYNC, at which
 // the drive samples its position and applies the torque: the force computed from the sample a
 // tick reads acts from the next SYNC on - one sample of delay, declared as such.
-// disable: zero torque, controlword 0x06 (shutdown: power stage off), NMT pre-operational,
-// the heartbeat consumer switched off. clear_fault: fault reset (0x80 edge), confirmed.
+// disable (once per enable, a fault's included): at the next SYNC slot one RPDO with zero
+// torque and controlword 0x06 (shutdown: power stage off); SYNC and hapticd's heartbeat kept
+// going, one per period, until the drive's watchdogs on them (0x1006, 0x1016) are switched
+// off, so a normal stop raises no EMCY; then NMT pre-operational.
+// clear_fault: fault reset (0x80 edge), confirmed.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "drivers/can/can_device_base.h"
 #include "drivers/can/canopen.h"
+#include "drivers/can/periodic_sender.h"
 
 namespace hapticd::drivers::can {
 
 class Cia402Device final : public CanDeviceBase {
  public:
-  Cia402Device(const CanSettings& settings, double sample_period_s, Opener open)
-      : CanDeviceBase(settings, sample_period_s, std::move(open)) {}
+  // keeper_priority: SCHED_FIFO priority of the thread that keeps SYNC going during a stop
+  // (the loop's; 0: none asked).
+  Cia402Device(const CanSettings& settings, double sample_period_s, Opener open,
+               int keeper_priority = 0)
+      : CanDeviceBase(settings, sample_period_s, std::move(open)),
+        keeper_priority_(keeper_priority) {}
   ~Cia402Device() override { close(); }
 
   // Valid from CONFIGURED on: what configure read.
@@ -38,7 +52,10 @@ class Cia402Device final : public CanDeviceBase {
   void on_enable() override;
   void on_disable() noexcept override;
   void on_clear_fault() override;
-  void on_close() noexcept override { close_transport(); }
+  void on_close() noexcept override {
+    keeper_.stop();
+    close_transport();
+  }
   // RT-safe: called every tick.
   IoStatus on_read(PositionSample& out) noexcept override;
   // RT-safe: called every tick.
@@ -54,14 +71,25 @@ class Cia402Device final : public CanDeviceBase {
   // SDO client (non-RT): expedited transfers, each answered within sdo_timeout_ms.
   std::uint32_t sdo_read(canopen::SdoAddress at, const char* name);
   void sdo_write(canopen::SdoAddress at, std::uint32_t value, std::uint8_t size, const char* name);
-  canopen::SdoReply sdo_exchange(const CanFrame& request, canopen::SdoAddress at, const char* name);
+  // For an object a drive may lack: nothing / false when the drive says it has no such object
+  // (abort 0x06020000 or 0x06090011); any other abort throws as above.
+  std::optional<std::uint32_t> sdo_read_optional(canopen::SdoAddress at, const char* name);
+  bool sdo_write_optional(canopen::SdoAddress at, std::uint32_t value, std::uint8_t size,
+                          const char* name);
+  canopen::SdoReply sdo_exchange(const CanFrame& request, canopen::SdoAddress at, const char* name,
+                                 bool may_lack = false);
   // Frames that arrive while configuring or enabling: an EMCY ends it with a DeviceError.
   void note_async(const CanFrame& f);
   std::string sdo_where(canopen::SdoAddress at, const char* name) const;
 
   void switch_off_and_identify();
+  void check_torque_limit();
+  void select_mode();
   void write_parameters();
+  void write_cycle_objects();
   void map_pdos();
+  void stop_keeping_alive() noexcept;
+  std::string node_name() const;
   void walk_to_enabled();
   cia402::PowerState read_state(std::uint16_t& statusword);
   std::string drive_error_text();
@@ -71,6 +99,12 @@ class Cia402Device final : public CanDeviceBase {
   int max_permille_ = 0;             // max_torque in per mille
   std::uint32_t master_heartbeat_ticks_ = 0;
   std::uint32_t tick_ = 0;
+  const int keeper_priority_;
+  bool has_cycle_period_ = false;  // 0x1006 exists (optional: CiA 301 requires it of SYNC
+                                   // producers only)
+  bool stopped_ = true;            // the stop went out since the last enable
+  PeriodicSender keeper_;
+  std::atomic<std::int64_t> last_sync_ns_{0};  // the RT thread's last SYNC (CLOCK_MONOTONIC)
 
   // RT state of the newest sample.
   bool fresh_ = false;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 
 namespace hapticd::drivers::can {
@@ -41,17 +42,46 @@ Heartbeat OdriveDevice::await_heartbeat(int timeout_ms, const std::string& waiti
         got = *h;
         return accept(got);
       },
-      nullptr);
+      [this](const CanFrame& f) { note_unsolicited(f); });
   if (!seen) {
     throw DeviceError(
         node_name() + ": no heartbeat " + waiting_for + " within " + std::to_string(timeout_ms) +
         " ms" +
         (accept == &any_heartbeat
-             ? " (node id, bitrate, wiring, power, "
-               "axis.config.can.heartbeat_msg_rate_ms)"
+             ? std::string(" (node id, bitrate, wiring, power, ") +
+                   (firmware_ == odrive::Firmware::k05 ? "axis.config.can.heartbeat_rate_ms"
+                                                       : "axis.config.can.heartbeat_msg_rate_ms") +
+                   ")"
              : ", last state " + std::string(odrive::axis_state_name(got.axis_state))));
   }
   return got;
+}
+
+void OdriveDevice::note_unsolicited(const CanFrame& f) {
+  if (!f.rtr && f.id == id_base_ + odrive::kGetEncoderEstimates) ++unsolicited_estimates_;
+}
+
+void OdriveDevice::feed_watchdog() {
+  if (!socket_) return;
+  // A remote request for the heartbeat: 0.5 does nothing with it but feed the watchdog
+  // (can_simple.cpp, MSG_ODRIVE_HEARTBEAT), 0.6 answers it with a heartbeat.
+  const double period_ms = std::clamp(settings_.odrive.watchdog_timeout_s * 1e3 / 4.0, 1.0, 50.0);
+  feeder_.start(socket_->fd(), {{odrive::request(settings_.node_id, odrive::kHeartbeat, 8),
+                                 static_cast<std::int64_t>(period_ms * 1e6), 0}});
+}
+
+Heartbeat OdriveDevice::clear_expired_watchdog(Heartbeat h) {
+  const std::uint32_t expired = odrive::watchdog_error_bit(firmware_);
+  if (h.axis_error != expired) return h;
+  // The state of every 0.5 axis with its watchdog on that nobody fed since power-on: nothing
+  // went wrong. Clear_Errors feeds the watchdog before it clears (every CAN frame does), and
+  // the feeder keeps it fed from now on. It clears every error of the ODrive, so only this one.
+  send_or_throw(odrive::clear_errors(settings_.node_id, firmware_), "Clear_Errors");
+  send_or_throw(odrive::request(settings_.node_id, odrive::kHeartbeat, 8), "a heartbeat request");
+  return await_heartbeat(settings_.heartbeat_timeout_ms,
+                         "without an error after clearing WATCHDOG_TIMER_EXPIRED (the watchdog "
+                         "expired before configure could feed it)",
+                         &no_error);
 }
 
 std::string OdriveDevice::detect_firmware() {
@@ -111,15 +141,22 @@ void OdriveDevice::configure_watchdog() {
 DeviceInfo OdriveDevice::on_configure() {
   id_base_ = odrive::frame_id(settings_.node_id, 0);
   firmware_ = settings_.odrive.firmware;
+  unsolicited_estimates_ = 0;
+  controller_error_.reset();
+  notices_.clear();
+  stopped_ = true;
   open_transport();
+  feed_watchdog();
   const std::string fw = detect_firmware();
-  // The heartbeat comes every heartbeat_msg_rate_ms anyway; asking for it answers sooner
-  // where the firmware answers remote requests for cyclic messages.
+  // The heartbeat comes every heartbeat period anyway; asking for it answers sooner where the
+  // firmware answers remote requests for cyclic messages (0.6).
   send_or_throw(odrive::request(settings_.node_id, odrive::kHeartbeat, 8), "a heartbeat request");
-  const Heartbeat h = await_heartbeat(settings_.heartbeat_timeout_ms, "", &any_heartbeat);
+  const Heartbeat h =
+      clear_expired_watchdog(await_heartbeat(settings_.heartbeat_timeout_ms, "", &any_heartbeat));
   if (h.axis_error != 0) {
     throw DeviceError(node_name() + " reports axis error " +
                       odrive::describe_axis_error(firmware_, h.axis_error) +
+                      overspeed_text(h.axis_error) +
                       ": find the cause and clear it (Clear_Errors, odrivetool) first");
   }
   const std::uint8_t node = settings_.node_id;
@@ -137,13 +174,27 @@ DeviceInfo OdriveDevice::on_configure() {
   info.description =
       "odrive node " + std::to_string(node) + " on " + socket_->description() + " (" + fw + ")";
   info.transport_delay_samples = delay_samples(settings_, 1.0 / period_s_);
+  if (settings_.odrive.position_source == PositionSource::kRequest && unsolicited_estimates_ > 0) {
+    notices_.push_back(
+        node_name() + ": the axis sends encoder estimates by itself (" +
+        std::to_string(unsolicited_estimates_) + " while configuring: " +
+        (firmware_ == odrive::Firmware::k05 ? "axis.config.can.encoder_rate_ms, 10 ms by default "
+                                              "on 0.5,"
+                                            : "axis.config.can.encoder_msg_rate_ms") +
+        " is not 0); each tick uses only the answer to its own request, so samples stay one "
+        "period apart. Set it to 0 to take them off the bus (docs/drivers/can.md)");
+  }
   return info;
 }
 
 void OdriveDevice::on_enable() {
   clear_pending();
   fresh_ = false;
+  answered_ = true;
+  controller_error_.reset();
   const std::uint8_t node = settings_.node_id;
+  feed_watchdog();  // fed until the loop's own frames take over
+  stopped_ = false;
   send_or_throw(odrive::set_input_torque(node, 0.0f), "Set_Input_Torque");
   send_or_throw(odrive::set_axis_state(node, odrive::kAxisClosedLoop), "Set_Axis_State");
   const Heartbeat h =
@@ -152,17 +203,52 @@ void OdriveDevice::on_enable() {
     throw DeviceError(node_name() + ": entering closed loop failed with axis error " +
                       odrive::describe_axis_error(firmware_, h.axis_error));
   }
+  // From here only the loop feeds the watchdog: if it stops, the axis stops.
+  feeder_.stop();
   heartbeat_seen();
 }
 
 void OdriveDevice::on_disable() noexcept {
-  send_quietly(odrive::set_input_torque(settings_.node_id, 0.0f));
-  send_quietly(odrive::set_axis_state(settings_.node_id, odrive::kAxisIdle));
+  if (!stopped_) {  // once per enable: a fault's disable and the close after it are one stop
+    stopped_ = true;
+    send_quietly(odrive::set_input_torque(settings_.node_id, 0.0f));
+    send_quietly(odrive::set_axis_state(settings_.node_id, odrive::kAxisIdle));
+    read_controller_error();
+  }
+  try {
+    feed_watchdog();  // idle, or holding a fault: the watchdog must not add its own error
+  } catch (...) {
+    // No thread to be had: the watchdog may expire in IDLE, which configure clears again.
+  }
+}
+
+void OdriveDevice::read_controller_error() noexcept {
+  // CONTROLLER_FAILED says only that controller.error is set; 0.5.6 answers
+  // Get_Controller_Error (can_simple.cpp), earlier 0.5 releases stay silent.
+  if (!socket_ || firmware_ != odrive::Firmware::k05 || fault_kind() != CanFaultKind::kAxisError ||
+      (fault().code & odrive::overspeed_error_bits(firmware_)) == 0) {
+    return;
+  }
+  try {
+    send_or_throw(odrive::request(settings_.node_id, odrive::kGetControllerError, 8),
+                  "Get_Controller_Error");
+    await(
+        settings_.sdo_timeout_ms,
+        [&](const CanFrame& f) {
+          if (f.id != id_base_ + odrive::kGetControllerError) return false;
+          controller_error_ = odrive::decode_controller_error(f);
+          return controller_error_.has_value();
+        },
+        nullptr);
+  } catch (...) {
+    // The description falls back on the last velocity the axis reported.
+  }
 }
 
 void OdriveDevice::on_clear_fault() {
   if (!socket_) throw DeviceError(node_name() + ": the transport is closed");
   clear_pending();
+  controller_error_.reset();
   send_or_throw(odrive::clear_errors(settings_.node_id, firmware_), "Clear_Errors");
   send_or_throw(odrive::set_axis_state(settings_.node_id, odrive::kAxisIdle), "Set_Axis_State");
   await_heartbeat(settings_.state_timeout_ms, "without an axis error", &no_error);
@@ -181,10 +267,24 @@ void OdriveDevice::on_frame(const CanSocket::Received& rx) noexcept {
       counters_.wrong_length.fetch_add(1, std::memory_order_relaxed);
       return;
     }
+    if (settings_.odrive.position_source == PositionSource::kRequest &&
+        (answered_ || rx.time_ns < request_ns_)) {
+      // Not the answer to this tick's request: one the axis sent by itself (its encoder rate
+      // is not 0), sampled at another instant. Taken as well it would make the samples land
+      // unevenly, and the velocity the wall's damping sees jump.
+      counters_.unsolicited_estimates.fetch_add(1, std::memory_order_relaxed);
+      return;
+    }
+    answered_ = true;
     fresh_ = true;
     position_turns_ = e->position_turns;
     velocity_turns_ = e->velocity_turns_per_s;
+    last_speed_turns_ = e->velocity_turns_per_s;
     sample_time_ns_ = rx.time_ns;
+    const double limit = settings_.odrive.vel_limit;
+    if (limit > 0.0 && std::abs(static_cast<double>(e->velocity_turns_per_s)) > limit) {
+      counters_.over_vel_limit.fetch_add(1, std::memory_order_relaxed);
+    }
   } else if (command == odrive::kHeartbeat) {
     const auto h = odrive::decode_heartbeat(f);
     if (!h) {
@@ -225,6 +325,8 @@ IoStatus OdriveDevice::on_write(double force) noexcept {
   const std::uint8_t node = settings_.node_id;
   bool ok = send_rt(odrive::set_input_torque(node, static_cast<float>(torque)));
   if (ok && settings_.odrive.position_source == PositionSource::kRequest) {
+    request_ns_ = PeriodicSender::now_ns();  // before it goes out: no answer can precede it
+    answered_ = false;
     ok = send_rt(odrive::request(node, odrive::kGetEncoderEstimates, 8));
   }
   if (ok) ok = end_tick_tx();
@@ -240,7 +342,7 @@ std::string OdriveDevice::describe_cause(const DeviceFault& f) const {
   switch (fault_kind()) {
     case CanFaultKind::kAxisError:
       return node_name() + " reports axis error " + odrive::describe_axis_error(firmware_, f.code) +
-             " (firmware " + std::string(to_string(firmware_)) + ")";
+             " (firmware " + std::string(to_string(firmware_)) + ")" + overspeed_text(f.code);
     case CanFaultKind::kAxisStateChanged:
       return node_name() + " left CLOSED_LOOP_CONTROL by itself: its heartbeat says " +
              std::string(odrive::axis_state_name(f.code));
@@ -250,6 +352,38 @@ std::string OdriveDevice::describe_cause(const DeviceFault& f) const {
     default:
       return describe_transport(f);
   }
+}
+
+// Why an axis fails in torque control though hapticd never commanded a speed: the firmware's
+// own velocity limit (controller.cpp: enable_torque_mode_vel_limit clamps the torque to
+// (+-vel_limit - vel) * vel_gain, enable_overspeed_error faults above vel_limit_tolerance
+// times vel_limit; defaults 2 turn/s and 1.2).
+std::string OdriveDevice::overspeed_text(std::uint32_t axis_error) const {
+  if ((axis_error & odrive::overspeed_error_bits(firmware_)) == 0) return {};
+  const OdriveSettings& o = settings_.odrive;
+  const double speed = std::abs(static_cast<double>(last_speed_turns_));
+  std::string text;
+  bool overspeed = firmware_ == odrive::Firmware::k06;  // VELOCITY_LIMIT_VIOLATION says so
+  if (controller_error_) {
+    text = ": controller error " + odrive::describe_controller_error(*controller_error_);
+    overspeed = (*controller_error_ & odrive::kControllerOverspeed) != 0;
+  } else if (firmware_ == odrive::Firmware::k05) {
+    overspeed = o.vel_limit > 0.0 && speed > o.vel_limit;
+    text = overspeed ? ": OVERSPEED, by the last speed the axis reported"
+                     : ": controller.error was not read back (0.5.6 answers "
+                       "Get_Controller_Error; odrivetool shows axis.controller.error)";
+  }
+  if (!overspeed) return text;
+  char numbers[128];
+  std::snprintf(numbers, sizeof numbers,
+                " (%.3g turn/s x %.3g; the last estimate said %.3g turn/s)", o.vel_limit,
+                o.vel_limit_tolerance, speed);
+  return text +
+         ": in torque control the firmware faults when the axis turns faster than "
+         "controller.config.vel_limit x vel_limit_tolerance" +
+         (o.vel_limit > 0.0 ? std::string(numbers) : std::string(" (configured here as off)")) +
+         " and brakes above vel_limit by itself; raise vel_limit, or set "
+         "enable_torque_mode_vel_limit and enable_overspeed_error to False (docs/drivers/can.md)";
 }
 
 }  // namespace hapticd::drivers::can

@@ -1,24 +1,31 @@
 // An ODrive axis in closed-loop torque control with passthrough input, over CAN Simple
 // (DESIGN.md §6), firmware 0.5 or 0.6 (configured, or detected: 0.6 answers Get_Version).
 //
-// configure: the firmware found, a heartbeat awaited (an axis error refuses), the axis put in
-// IDLE (output off) with torque control + passthrough, and on 0.6 - where endpoint ids are
-// configured - the axis watchdog enabled and its time-out written and read back.
+// configure: the axis watchdog fed from here on (0.5 runs it in every axis state: an axis
+// nobody talked to since power-on reports WATCHDOG_TIMER_EXPIRED), the firmware found, a
+// heartbeat awaited - exactly WATCHDOG_TIMER_EXPIRED is cleared (Clear_Errors), any other axis
+// error refuses - the axis put in IDLE (output off) with torque control + passthrough, and on
+// 0.6, where endpoint ids are configured, the axis watchdog enabled and its time-out written
+// and read back. Estimates the axis sends by itself are noticed.
 // enable: input torque 0, CLOSED_LOOP_CONTROL requested and confirmed by a heartbeat within
-// state_timeout_ms.
+// state_timeout_ms; then the loop's own frames feed the watchdog.
 // Each tick: read drains encoder estimates, heartbeats and bus events; write sends
 // Set_Input_Torque (N m, through the transmission) and, in request mode, the remote request
-// for Get_Encoder_Estimates. Every frame feeds the axis watchdog. The position answering this
-// tick's request is the one the next tick acts on, and the torque acts from now until the next
-// write: one sample of delay (cyclic mode: the message period in samples, at least one).
-// disable: torque 0, IDLE. clear_fault: Clear_Errors, confirmed by a heartbeat without error.
+// for Get_Encoder_Estimates, whose answer (the first estimate after it: cyclic ones in
+// between are not samples of this tick) is the position the next tick acts on; the torque
+// acts from now until the next write: one sample of delay (cyclic mode: the message period in
+// samples, at least one).
+// disable: torque 0, IDLE, once however often it is asked, and the watchdog fed again.
+// clear_fault: Clear_Errors, confirmed by a heartbeat without error.
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 
 #include "drivers/can/can_device_base.h"
 #include "drivers/can/odrive_protocol.h"
+#include "drivers/can/periodic_sender.h"
 
 namespace hapticd::drivers::can {
 
@@ -37,7 +44,10 @@ class OdriveDevice final : public CanDeviceBase {
   void on_enable() override;
   void on_disable() noexcept override;
   void on_clear_fault() override;
-  void on_close() noexcept override { close_transport(); }
+  void on_close() noexcept override {
+    feeder_.stop();  // before the descriptor it writes to goes
+    close_transport();
+  }
   // RT-safe: called every tick.
   IoStatus on_read(PositionSample& out) noexcept override;
   // RT-safe: called every tick.
@@ -52,10 +62,20 @@ class OdriveDevice final : public CanDeviceBase {
   odrive::Heartbeat await_heartbeat(int timeout_ms, const std::string& waiting_for,
                                     bool (*accept)(const odrive::Heartbeat&));
   void configure_watchdog();
+  // Exactly WATCHDOG_TIMER_EXPIRED: cleared and confirmed; any other error refuses.
+  odrive::Heartbeat clear_expired_watchdog(odrive::Heartbeat h);
+  void feed_watchdog();
+  void note_unsolicited(const CanFrame& f);
+  void read_controller_error() noexcept;
+  std::string overspeed_text(std::uint32_t axis_error) const;
   std::string node_name() const;
 
   odrive::Firmware firmware_;
   std::uint32_t id_base_ = 0;  // node << 5
+  PeriodicSender feeder_;
+  bool stopped_ = true;            // the disable frames went out since the last enable
+  int unsolicited_estimates_ = 0;  // seen while configuring (request mode)
+  std::optional<std::uint32_t> controller_error_;  // 0.5.6's answer after CONTROLLER_FAILED
 
   // RT state of the newest sample.
   bool fresh_ = false;
@@ -63,6 +83,9 @@ class OdriveDevice final : public CanDeviceBase {
   float velocity_turns_ = 0.0f;
   std::int64_t sample_time_ns_ = 0;
   std::uint8_t axis_state_ = 0;
+  std::int64_t request_ns_ = 0;    // when this tick's Get_Encoder_Estimates request went out
+  bool answered_ = true;           // the answer to it arrived
+  float last_speed_turns_ = 0.0f;  // the newest estimate's, for a fault's description
 };
 
 }  // namespace hapticd::drivers::can

@@ -52,6 +52,18 @@ constexpr std::array kErrors06 = {
     Bit{0x40000000, "CALIBRATION_ERROR"},
 };
 
+// firmware 0.5.x, enum Controller.Error of odrive-interface.yaml (controller.error).
+constexpr std::array kControllerErrors05 = {
+    Bit{0x00000001, "OVERSPEED"},
+    Bit{0x00000002, "INVALID_INPUT_MODE"},
+    Bit{0x00000004, "UNSTABLE_GAIN"},
+    Bit{0x00000008, "INVALID_MIRROR_AXIS"},
+    Bit{0x00000010, "INVALID_LOAD_ENCODER"},
+    Bit{0x00000020, "INVALID_ESTIMATE"},
+    Bit{0x00000040, "INVALID_CIRCULAR_RANGE"},
+    Bit{0x00000080, "SPINOUT_DETECTED"},
+};
+
 template <std::size_t N>
 std::string name_bits(const std::array<Bit, N>& table, std::uint32_t error) {
   std::string names;
@@ -205,6 +217,22 @@ std::string describe_axis_error(Firmware f, std::uint32_t axis_error) {
   if (axis_error == 0) return std::string(hex) + " (no error)";
   return std::string(hex) + " " +
          (f == Firmware::k05 ? name_bits(kErrors05, axis_error) : name_bits(kErrors06, axis_error));
+}
+
+std::uint32_t overspeed_error_bits(Firmware f) noexcept {
+  return f == Firmware::k05 ? 0x00000200u : 0x00008000u;
+}
+
+std::optional<std::uint32_t> decode_controller_error(const CanFrame& f) noexcept {
+  if (f.rtr || f.len != 8) return std::nullopt;
+  return get_u32(f, 0);
+}
+
+std::string describe_controller_error(std::uint32_t controller_error) {
+  char hex[16];
+  std::snprintf(hex, sizeof hex, "0x%08X", controller_error);
+  if (controller_error == 0) return std::string(hex) + " (no error)";
+  return std::string(hex) + " " + name_bits(kControllerErrors05, controller_error);
 }
 
 }  // namespace hapticd::drivers::can::odrive

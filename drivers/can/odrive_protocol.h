@@ -29,6 +29,7 @@ enum Command : std::uint8_t {
   kSetControllerMode = 0x00B,
   kSetInputTorque = 0x00E,
   kClearErrors = 0x018,
+  kGetControllerError = 0x01D,  // 0.5.6 (Get_Controller_Error); 0.5.1-0.5.5 do not answer
 };
 
 enum AxisState : std::uint8_t {
@@ -108,5 +109,13 @@ std::optional<RxSdo> decode_rx_sdo(const CanFrame& f) noexcept;
 
 // "0x00000800 WATCHDOG_TIMER_EXPIRED" (every bit set, named as the firmware names it).
 std::string describe_axis_error(Firmware f, std::uint32_t axis_error);
+// The axis error bit that says the controller failed and why is in controller.error (0.5
+// CONTROLLER_FAILED), or that the axis ran too fast (0.6 VELOCITY_LIMIT_VIOLATION).
+std::uint32_t overspeed_error_bits(Firmware f) noexcept;
+// 0.5.6's answer to Get_Controller_Error: controller.error (u32); 8 bytes.
+std::optional<std::uint32_t> decode_controller_error(const CanFrame& f) noexcept;
+// "0x00000001 OVERSPEED" (0.5's enum Controller.Error).
+std::string describe_controller_error(std::uint32_t controller_error);
+inline constexpr std::uint32_t kControllerOverspeed = 0x00000001;
 
 }  // namespace hapticd::drivers::can::odrive

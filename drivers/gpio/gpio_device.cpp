@@ -50,6 +50,7 @@ GpioDevice::GpioDevice(const GpioSettings& settings, double max_force,
 // RT-safe. Records the missed edges the decoder counted since the last read, at `now_ns`.
 void GpioDevice::note_missed(std::int64_t now_ns) noexcept {
   const std::uint64_t total = decoder_.missed_edges();
+  missed_published_.store(total, std::memory_order_relaxed);
   const std::uint64_t fresh = std::min<std::uint64_t>(total - missed_seen_, missed_times_.size());
   missed_seen_ = total;
   for (std::uint64_t i = 0; i < fresh; ++i) {
@@ -88,6 +89,7 @@ DeviceInfo GpioDevice::on_configure() {
   std::fill(missed_times_.begin(), missed_times_.end(), 0);
   missed_next_ = 0;
   missed_seen_ = 0;
+  missed_published_.store(0, std::memory_order_relaxed);
   fault_line_ = s_.line_fault && (levels & wire::kLevelFault) != 0;
   if (fault_line_) {
     throw DeviceError("gpio: the motor driver reports a fault (line " +
@@ -132,6 +134,12 @@ void GpioDevice::on_clear_fault() {
 }
 
 void GpioDevice::on_close() noexcept { transport_->close(); }
+
+std::vector<DeviceCounter> GpioDevice::device_counters() const {
+  return {{"missed_edges", missed_published_.load(std::memory_order_relaxed),
+           "encoder edges missed within device.gpio.missed_edge_fault's tolerance: the count "
+           "may be off by them (re-home on the index)"}};
+}
 
 IoStatus GpioDevice::check_faults() noexcept {
   if (fault_line_) {

@@ -12,6 +12,7 @@
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <memory>
 #include <vector>
 
@@ -48,6 +49,8 @@ class GpioDevice final : public Device {
              std::unique_ptr<GpioTransport> transport, int declared_delay);
 
   std::string_view driver_name() const noexcept override { return "gpio"; }
+  // Any thread: missed edges the tolerance absorbed, for the summary and `hapticctl status`.
+  std::vector<DeviceCounter> device_counters() const override;
   void emergency_stop() noexcept override { transport_->emergency_stop(); }
 
   // Any thread, for tests and the summary (plain reads of RT-owned counters: approximate
@@ -85,7 +88,8 @@ class GpioDevice final : public Device {
   // When each of the last missed_edge_fault + 1 missed edges was seen (a ring, preallocated).
   std::vector<std::int64_t> missed_times_;
   std::size_t missed_next_ = 0;
-  std::uint64_t missed_seen_ = 0;  // decoder_.missed_edges() at the last read
+  std::uint64_t missed_seen_ = 0;                   // decoder_.missed_edges() at the last read
+  std::atomic<std::uint64_t> missed_published_{0};  // the same, for other threads
 };
 
 }  // namespace hapticd::drivers::gpio

@@ -28,7 +28,7 @@ std::string why(int err) {
   if (err == EBUSY) return "busy (another process or a kernel driver holds it: see gpioinfo)";
   if (err == EACCES || err == EPERM) {
     return std::string(std::strerror(err)) +
-           " (udev/60-hapticd-gpio.rules gives group hapticd access)";
+           " (`hapticd udev-rules` writes the rules that give group hapticd access)";
   }
   return std::strerror(err);
 }

@@ -17,7 +17,7 @@ namespace {
 std::string err_text(int e) {
   if (e == EACCES || e == EPERM) {
     return std::string(std::strerror(e)) +
-           " (udev/60-hapticd-gpio.rules gives group hapticd access)";
+           " (`hapticd udev-rules` writes the rules that give group hapticd access)";
   }
   return std::strerror(e);
 }
@@ -60,7 +60,9 @@ void SysfsPwm::open(const PwmChannel& ch, bool enabled) {
                       " (device.gpio.pwm.chip, pwm.sysfs_root)");
   }
   const std::string dir = chip_dir + "/pwm" + std::to_string(ch.channel);
-  {
+  // Exported already (by the instance's udev rule, as root: the chip's export file may stay
+  // root's, so the group cannot take or release another channel; or by an earlier run).
+  if (::stat(dir.c_str(), &st) != 0) {
     io::UniqueFd exp(::open((chip_dir + "/export").c_str(), O_WRONLY | O_CLOEXEC));
     if (!exp) throw DeviceError("gpio: cannot open " + chip_dir + "/export: " + err_text(errno));
     const std::string n = std::to_string(ch.channel) + "\n";

@@ -29,8 +29,8 @@ class SysfsPwm {
   // group) after an export.
   static constexpr int kExportWaitMs = 2000;
 
-  // Not RT-safe. Exports the channel (an EBUSY from an export of an already exported channel
-  // is fine: the files are there; EBUSY with no files means a kernel driver holds it), then
+  // Not RT-safe. Exports the channel unless it is exported already (an EBUSY from the export
+  // is fine too: the files are there; EBUSY with no files means a kernel driver holds it), then
   // writes enable 0, duty 0, the period, the polarity, and enable `enabled`. Throws
   // DeviceError naming the file and the reason.
   void open(const PwmChannel& channel, bool enabled);

@@ -81,9 +81,8 @@ void block_index(DescriptorBuilder& b) {
 void set_effect(DescriptorBuilder& b, std::uint8_t id) {
   b.usage(kSetEffectReport).collection(kLogical).report_id(id);
   block_index(b);
-  b.usage(kEffectType).collection(kLogical);
-  b.usage(kEtConstantForce).usage(0x27).usage(0x30).usage(0x31);  // constant, ramp, square, sine
-  b.logical(1, 4).report_size(8).report_count(1).output(kArray).end_collection();
+  b.usage(kEffectType).collection(kLogical).usage(kEtConstantForce);  // the one it renders
+  b.logical(1, 1).report_size(8).report_count(1).output(kArray).end_collection();
   b.usage(kDuration).usage(kTriggerRepeatInterval).usage(kSamplePeriod).usage(kStartDelay);
   b.logical(0, 32767).report_size(16).report_count(4).output(kData);
   b.usage(kGain).logical(0, 255).report_size(8).report_count(1).output(kData);
@@ -124,9 +123,8 @@ void device_reports(DescriptorBuilder& b, const PidReferenceIds& ids) {
   b.usage(kDeviceGain).logical(0, 255).report_size(8).report_count(1).output(kData);
   b.end_collection();
   b.usage(kCreateNewEffectReport).collection(kLogical).report_id(ids.create_effect);
-  b.usage(kEffectType).collection(kLogical);
-  b.usage(kEtConstantForce).usage(0x27).usage(0x30).usage(0x31);
-  b.logical(1, 4).report_size(8).report_count(1).feature(kArray).end_collection();
+  b.usage(kEffectType).collection(kLogical).usage(kEtConstantForce);
+  b.logical(1, 1).report_size(8).report_count(1).feature(kArray).end_collection();
   b.end_collection();
   b.usage(kBlockLoadReport).collection(kLogical).report_id(ids.block_load);
   b.usage(kEffectBlockIndex).logical(1, 40).report_size(8).report_count(1).feature(kData);
@@ -134,6 +132,27 @@ void device_reports(DescriptorBuilder& b, const PidReferenceIds& ids) {
   b.usage(kBlockLoadSuccess).usage(kBlockLoadFull).usage(kBlockLoadError);
   b.logical(1, 3).report_size(8).report_count(1).feature(kArray).end_collection();
   b.usage(kRamPoolAvailable).logical(0, 65535).report_size(16).report_count(1).feature(kData);
+  b.end_collection();
+  // PID Pool (HID PID 1.0 5.6): the pool's size, the effects it plays at once, and that the
+  // device manages its memory itself (hid-pidff refuses a device that does not).
+  b.usage(kPoolReport).collection(kLogical).report_id(ids.pool);
+  b.usage(kRamPoolSize).logical(0, 65535).report_size(16).report_count(1).feature(kData);
+  b.usage(kSimultaneousEffectsMax).logical(0, 255).report_size(8).report_count(1).feature(kData);
+  b.usage(kDeviceManagedPool).usage(kSharedParameterBlocks).logical(0, 1).report_size(1);
+  b.report_count(2).feature(kData);
+  b.padding(ReportKind::kFeature, 6);
+  b.end_collection();
+}
+
+// Set Envelope (HID PID 1.0 5.3): attack and fade of an effect. hapticd's constant force never
+// has one, but a PID host offers constant force only on a device that can take one.
+void envelope(DescriptorBuilder& b, std::uint8_t id) {
+  b.usage(kSetEnvelopeReport).collection(kLogical).report_id(id);
+  block_index(b);
+  b.usage(kAttackLevel).usage(kFadeLevel).logical(0, 10000).report_size(16).report_count(2);
+  b.output(kData);
+  b.usage(kAttackTime).usage(kFadeTime).logical(0, 32767).report_size(16).report_count(2);
+  b.output(kData);
   b.end_collection();
 }
 
@@ -162,6 +181,7 @@ std::vector<std::uint8_t> pid_reference_descriptor(const PidReferenceOptions& o)
   b.usage_page(kPage);
   if (o.state_report) state_report(b, o.ids.state);
   set_effect(b, o.ids.set_effect);
+  envelope(b, o.ids.set_envelope);
   effect_control(b, o.ids);
   device_reports(b, o.ids);
   b.end_collection();

@@ -55,9 +55,9 @@ std::vector<std::uint8_t> report_profile_descriptor(const ReportProfileLayout& l
 // so a driver that hard-codes ids fails against it.
 struct PidReferenceIds {
   std::uint8_t position = 0x05, state = 0x06;
-  std::uint8_t set_effect = 0x31, set_constant = 0x35, effect_operation = 0x3A, block_free = 0x3B,
-               device_control = 0x3C, device_gain = 0x3D;
-  std::uint8_t create_effect = 0x41, block_load = 0x42;
+  std::uint8_t set_effect = 0x31, set_envelope = 0x32, set_constant = 0x35, effect_operation = 0x3A,
+               block_free = 0x3B, device_control = 0x3C, device_gain = 0x3D;
+  std::uint8_t create_effect = 0x41, block_load = 0x42, pool = 0x43;
 };
 
 struct PidReferenceOptions {
@@ -66,9 +66,10 @@ struct PidReferenceOptions {
   PidReferenceIds ids;
 };
 
-// A one-axis force-feedback joystick on the PID page: Generic Desktop X (16 bit, +-32767) in
-// the input report, and the PID reports the `pid` profile uses. It has no PID Pool report, so
-// Linux's own PID driver (hid-pidff) leaves it alone and only hapticd drives it.
+// A one-axis force-feedback joystick on the PID page (HID PID 1.0): Generic Desktop X (16 bit,
+// +-32767) in the input report, one effect type (constant force), and every report a PID host
+// needs for it: those the `pid` profile uses, and Set Envelope and the PID Pool feature report
+// that Linux's own PID host (hid-pidff) requires before it offers FF_CONSTANT through evdev.
 std::vector<std::uint8_t> pid_reference_descriptor(const PidReferenceOptions& options = {});
 
 // The vendor usage of the sequence counter in pid_reference_descriptor().

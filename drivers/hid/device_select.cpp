@@ -90,7 +90,7 @@ Selection select_one(const Selector& s, const std::vector<DeviceListing>& all,
     e = "no HID device matches device.hid.select (" + describe(s) + ") through the " + backend +
         " backend";
     if (all.empty()) {
-      e += "; none is attached (or none is accessible: see udev/60-hapticd-hid.rules)";
+      e += "; none is attached (or none is accessible: see `hapticd udev-rules`)";
     } else {
       e += "; attached:";
       for (const DeviceListing& d : all) e += "\n  " + one_line(d);

@@ -84,6 +84,15 @@ void number(MapReader& m, const Field& f, const Range& r, double& out) {
   if (const auto v = config::schema::read_number(m.diag(), f, r)) out = *v;
 }
 
+// A raw value written into a field (an enable's on/off, a feature's value): a number, or an
+// unsigned integer in 0x hexadecimal as ids and masks are.
+void raw_value(MapReader& m, const Field& f, double& out) {
+  const bool hex = f.present && f.node.IsScalar() && f.node.Scalar().size() > 2 &&
+                   f.node.Scalar()[0] == '0' && (f.node.Scalar()[1] | 0x20) == 'x';
+  if (!hex) return number(m, f, Range::any(), out);
+  if (const auto v = read_hex(m.diag(), f, 0xFFFFFFFFu)) out = static_cast<double>(*v);
+}
+
 // byte, type, endian and (for quantities) scale and offset of one field's mapping.
 FieldSpec read_spec(MapReader& m, bool quantity) {
   FieldSpec f;
@@ -164,8 +173,8 @@ void read_output(MapReader& report, Ctx& c, OutputLayout& out) {
     c.mark(enable, "output.enable");
     MapReader e(c.d, enable);
     SwitchField sw{read_spec(e, false)};
-    number(e, e.take("on"), Range::any(), sw.on);
-    number(e, e.take("off"), Range::any(), sw.off);
+    raw_value(e, e.take("on"), sw.on);
+    raw_value(e, e.take("off"), sw.off);
     e.finish();
     out.enable = sw;
   }
@@ -192,10 +201,10 @@ std::optional<FeatureLayout> read_feature(MapReader& report, Ctx& c, const char*
   f.field = read_spec(s, false);
   s.finish();
   if (is_switch) {
-    number(m, m.take("on"), Range::any(), f.on);
-    number(m, m.take("off"), Range::any(), f.off);
+    raw_value(m, m.take("on"), f.on);
+    raw_value(m, m.take("off"), f.off);
   } else {
-    number(m, take(m, "value", "the raw value written"), Range::any(), f.on);
+    raw_value(m, take(m, "value", "the raw value written"), f.on);
   }
   m.finish();
   return f;
@@ -304,6 +313,27 @@ void read_limits(MapReader& hid, Ctx& c, Limits& l) {
   m.finish();
 }
 
+// reports_on_change and its liveness bound: longer than the device's own resend interval
+// (OpenFFBoard: about 100 report intervals), and meaningless for a device that reports every
+// period (the loop's stale check is its bound).
+void read_liveness(MapReader& hid, Ctx& c, const config::Config& cfg, HidSettings& s) {
+  if (const auto v = config::schema::read_bool(c.d, hid.take("reports_on_change")))
+    s.reports_on_change = *v;
+  const Field live = hid.take("liveness_ms");
+  const double min_ms = 2e3 * cfg.loop.sample_period_s();
+  number(hid, live, Range::interval(0.0, false, 60000.0, true), s.liveness_ms);
+  if (!live.present) return;
+  if (!s.reports_on_change) {
+    c.d.error(live.key_mark, live.path,
+              "only with reports_on_change: true (a device that reports every period is "
+              "bounded by safety.stale_fault_ticks)");
+  } else if (s.liveness_ms < min_ms) {
+    c.d.error(
+        live.key_mark, live.path,
+        "must be at least two sample periods (" + config::schema::format_number(min_ms) + " ms)");
+  }
+}
+
 }  // namespace
 
 std::shared_ptr<const config::DriverSettings> read_hid_section(MapReader& hid,
@@ -321,6 +351,7 @@ std::shared_ptr<const config::DriverSettings> read_hid_section(MapReader& hid,
   number(hid, hid.take("poll_interval_ms"), Range::interval(0.0, false, 1000.0, true),
          s->poll_interval_ms);
   read_limits(hid, c, s->limits);
+  read_liveness(hid, c, cfg, *s);
   if (s->profile == Profile::kReport) {
     read_report_profile(hid, c, cfg, *s);
     hid.not_used("pid", "profile report");

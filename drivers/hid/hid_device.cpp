@@ -5,6 +5,7 @@
 
 #include <cerrno>
 #include <cstring>
+#include <thread>
 
 namespace hapticd::drivers::hid {
 namespace {
@@ -19,14 +20,17 @@ std::int64_t monotonic_ns() noexcept {
 
 HidDevice::HidDevice(std::shared_ptr<const HidSettings> settings,
                      std::function<std::unique_ptr<HidTransport>()> open, double sample_period_s)
-    : settings_(std::move(settings)), open_(std::move(open)), period_s_(sample_period_s) {}
+    : settings_(std::move(settings)),
+      open_(std::move(open)),
+      period_s_(sample_period_s),
+      liveness_ns_(static_cast<std::int64_t>(settings_->liveness_ms * 1e6)) {}
 
 HidDevice::~HidDevice() { close(); }
 
 DeviceInfo HidDevice::on_configure() {
   for (auto* c :
        {&c_.input_reports, &c_.superseded, &c_.state_reports, &c_.unknown_id, &c_.too_short,
-        &c_.too_long, &c_.output_reports, &c_.out_queue_full, &c_.drain_limit}) {
+        &c_.too_long, &c_.output_reports, &c_.out_queue_full, &c_.drain_limit, &c_.held}) {
     c->store(0);
   }
   logged_ = {};
@@ -50,6 +54,32 @@ void HidDevice::drain_stale() noexcept {
     if (transport_->read(rx_).status != TransportIo::kOk) break;
   }
   decoded_.status = 0;
+  have_position_ = false;
+}
+
+// A device that reports on change may say nothing for its whole resend interval: the enable
+// waits (up to the liveness bound) for one report, so the first tick has a position it can
+// trust, never one from before the reports buffered while nobody read them.
+void HidDevice::await_first_sample() {
+  const auto end = std::chrono::steady_clock::now() +
+                   std::chrono::nanoseconds(static_cast<std::int64_t>(liveness_ns_));
+  while (std::chrono::steady_clock::now() < end) {
+    const Drained d = drain();
+    if (d.error != 0) {
+      throw DeviceError(std::string("hid: reading the device at enable: ") +
+                        std::strerror(d.error));
+    }
+    if (d.samples > 0) {
+      have_position_ = true;
+      last_report_ns_ = monotonic_ns();
+      return;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  throw DeviceError("hid: the device sent no input report within device.hid.liveness_ms (" +
+                    std::to_string(settings_->liveness_ms) +
+                    " ms) of the enable: is it hung, or is liveness_ms shorter than the "
+                    "interval at which it repeats an unchanged report?");
 }
 
 void HidDevice::on_enable() {
@@ -57,6 +87,7 @@ void HidDevice::on_enable() {
   queue_full_streak_ = 0;
   profile_->enable(*transport_);
   transport_->set_safe_reports(profile_->safe_reports());  // now naming the effect it made
+  if (settings_->reports_on_change) await_first_sample();
   active_ = true;
 }
 
@@ -82,46 +113,24 @@ void HidDevice::emergency_stop() noexcept {
 }
 
 IoStatus HidDevice::on_read(PositionSample& out) noexcept {
-  bool sample = false;
-  int i = 0;
-  for (; i < kMaxDrain; ++i) {
-    const IoResult r = transport_->read(rx_);
-    if (r.status == TransportIo::kEmpty) break;
-    if (r.status == TransportIo::kError) {
-      if (r.error == EMSGSIZE) {
-        bump(c_.too_long);
-        continue;
-      }
-      set_fault_code(static_cast<std::uint32_t>(r.error));
-      return IoStatus::kTransportFault;
-    }
-    switch (profile_->decode({rx_.data(), r.size}, decoded_)) {
-      case InputKind::kPosition:
-        if (sample) bump(c_.superseded);
-        sample = true;
-        bump(c_.input_reports);
-        break;
-      case InputKind::kState:
-        bump(c_.state_reports);
-        break;
-      case InputKind::kOther:
-        bump(c_.unknown_id);
-        break;
-      case InputKind::kTooShort:
-        bump(c_.too_short);
-        break;
-    }
+  const Drained d = drain();
+  if (d.error != 0) {
+    set_fault_code(static_cast<std::uint32_t>(d.error));
+    return IoStatus::kTransportFault;
   }
-  if (i == kMaxDrain) bump(c_.drain_limit);
   out.status = decoded_.status;
   if (active_ && profile_->fault_bits(decoded_.status) != 0) {
     set_fault_code(decoded_.status);
     return IoStatus::kDeviceFault;
   }
-  if (!sample) return IoStatus::kNoNewData;
+  const std::int64_t now = monotonic_ns();
+  if (d.reports > 0) last_report_ns_ = now;
+  if (d.samples == 0) return hold(out, now);
+  have_position_ = true;
   out.position = decoded_.position;
-  out.time_ns = monotonic_ns();  // hidapi gives no kernel time stamp: when it was read
+  out.time_ns = now;  // hidapi gives no kernel time stamp: when it was read
   out.flags = kSampleHasTime;
+  out.samples = d.samples;
   if (decoded_.has_sequence) {
     out.sequence = decoded_.sequence;
     out.flags |= kSampleHasSequence;
@@ -131,6 +140,66 @@ IoStatus HidDevice::on_read(PositionSample& out) noexcept {
     out.flags |= kSampleHasVelocity;
   }
   return IoStatus::kOk;
+}
+
+// A tick without a sample. From a device that reports every period it is stale data (the loop
+// counts it). From one that reports on change it means nothing moved: the last position is
+// the current one, for as long as the device shows it is alive within the liveness bound.
+IoStatus HidDevice::hold(PositionSample& out, std::int64_t now) noexcept {
+  if (!settings_->reports_on_change || !have_position_) return IoStatus::kNoNewData;
+  if (now - last_report_ns_ > liveness_ns_) {
+    set_fault_code(ETIMEDOUT);
+    return IoStatus::kTransportFault;
+  }
+  bump(c_.held);
+  out.position = decoded_.position;
+  out.time_ns = now;  // nothing changed up to now: the position is current as of now
+  out.flags = kSampleHasTime | kSampleHeld;
+  if (decoded_.has_velocity) {
+    out.velocity = 0.0;  // the device would have reported a moving axis
+    out.flags |= kSampleHasVelocity;
+  }
+  return IoStatus::kOk;
+}
+
+HidDevice::Drained HidDevice::drain() noexcept {
+  Drained d;
+  int i = 0;
+  for (; i < kMaxDrain; ++i) {
+    const IoResult r = transport_->read(rx_);
+    if (r.status == TransportIo::kEmpty) break;
+    if (r.status == TransportIo::kError) {
+      if (r.error == EMSGSIZE) {
+        bump(c_.too_long);
+        continue;
+      }
+      d.error = r.error;
+      return d;
+    }
+    switch (profile_->decode({rx_.data(), r.size}, decoded_)) {
+      case InputKind::kPosition:
+        if (d.samples > 0) bump(c_.superseded);
+        ++d.samples;
+        ++d.reports;
+        bump(c_.input_reports);
+        break;
+      case InputKind::kState:
+        ++d.reports;
+        bump(c_.state_reports);
+        break;
+      case InputKind::kOther:
+        bump(c_.unknown_id);
+        break;
+      case InputKind::kTooShort:
+        bump(c_.too_short);
+        break;
+      case InputKind::kTooLong:
+        bump(c_.too_long);
+        break;
+    }
+  }
+  if (i == kMaxDrain) bump(c_.drain_limit);
+  return d;
 }
 
 IoStatus HidDevice::send(std::span<const std::uint8_t> report) noexcept {
@@ -164,9 +233,21 @@ IoStatus HidDevice::on_write(double force) noexcept {
 }
 
 HidCounters HidDevice::counters() const noexcept {
-  return {c_.input_reports.load(),  c_.superseded.load(),     c_.state_reports.load(),
-          c_.unknown_id.load(),     c_.too_short.load(),      c_.too_long.load(),
-          c_.output_reports.load(), c_.out_queue_full.load(), c_.drain_limit.load()};
+  return {c_.input_reports.load(),  c_.superseded.load(),
+          c_.state_reports.load(),  c_.unknown_id.load(),
+          c_.too_short.load(),      c_.too_long.load(),
+          c_.output_reports.load(), c_.out_queue_full.load(),
+          c_.drain_limit.load(),    c_.held.load()};
+}
+
+std::vector<DeviceCounter> HidDevice::device_counters() const {
+  const HidCounters k = counters();
+  return {{"input_reports", k.input_reports, "input reports with a sample"},
+          {"superseded", k.superseded, "samples replaced by a newer one in the same tick"},
+          {"held_ticks", k.held, "ticks without a report, the position held (reports on change)"},
+          {"malformed_reports", k.unknown_id + k.too_short + k.too_long,
+           "input reports of an unknown id, too short or too long"},
+          {"out_queue_full", k.out_queue_full, "ticks whose output report was dropped"}};
 }
 
 void HidDevice::log_counters() const {
@@ -200,6 +281,10 @@ std::string HidDevice::describe(const DeviceFault& fault) const {
   if (e == ENOBUFS) {
     s = "hid: the device took no output report for " +
         std::to_string(settings_->limits.out_queue_full_fault) + " ticks in a row (OUT queue full)";
+  } else if (e == ETIMEDOUT) {
+    s = "hid: the device sent no report for longer than device.hid.liveness_ms (" +
+        std::to_string(static_cast<long>(settings_->liveness_ms)) +
+        " ms): its firmware is hung or the link is stalled";
   } else if (e == ENODEV || e == EIO || e == ESHUTDOWN || e == EPROTO) {
     // EPROTO: hidraw's write while usbhid tears the unplugged device down.
     s = std::string("hid: the device is gone (") + std::strerror(e) + "): unplugged or reset?";

@@ -30,6 +30,7 @@ struct HidCounters {
   std::uint64_t output_reports = 0;  // handed to the transport
   std::uint64_t out_queue_full = 0;  // ticks whose report was dropped: the queue was full
   std::uint64_t drain_limit = 0;     // ticks that stopped draining at the per-tick bound
+  std::uint64_t held = 0;            // ticks without a report, position held (on change)
 };
 
 class HidDevice final : public Device {
@@ -43,6 +44,7 @@ class HidDevice final : public Device {
   void emergency_stop() noexcept override;
   // Any thread.
   HidCounters counters() const noexcept;
+  std::vector<DeviceCounter> device_counters() const override;
 
  protected:
   DeviceInfo on_configure() override;
@@ -57,8 +59,17 @@ class HidDevice final : public Device {
   static constexpr int kMaxDrain = 256;  // reports per tick: a flooding device cannot stall it
   struct Counters {
     std::atomic<std::uint64_t> input_reports{0}, superseded{0}, state_reports{0}, unknown_id{0},
-        too_short{0}, too_long{0}, output_reports{0}, out_queue_full{0}, drain_limit{0};
+        too_short{0}, too_long{0}, output_reports{0}, out_queue_full{0}, drain_limit{0}, held{0};
   };
+  struct Drained {
+    std::uint32_t samples = 0;  // position reports (the newest is decoded_)
+    std::uint32_t reports = 0;  // well-formed reports of any kind: the device is alive
+    int error = 0;              // the transport failed (errno)
+  };
+  // RT-safe: called every tick. Every pending input report, decoded into decoded_.
+  Drained drain() noexcept;
+  IoStatus hold(PositionSample& out, std::int64_t now) noexcept;
+  void await_first_sample();
   static void bump(std::atomic<std::uint64_t>& c) noexcept {
     c.store(c.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);  // one writer
   }
@@ -69,6 +80,9 @@ class HidDevice final : public Device {
   std::shared_ptr<const HidSettings> settings_;
   std::function<std::unique_ptr<HidTransport>()> open_;
   double period_s_;
+  std::int64_t liveness_ns_;
+  std::int64_t last_report_ns_ = 0;  // when the last well-formed report arrived
+  bool have_position_ = false;       // a sample since enable: a held position is valid
   std::unique_ptr<HidTransport> transport_;
   std::unique_ptr<HidProfile> profile_;
   std::atomic<HidTransport*> emergency_{nullptr};

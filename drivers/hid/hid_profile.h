@@ -22,6 +22,7 @@ enum class InputKind : std::uint8_t {
   kState,     // a status-only report (PID State): status updated
   kOther,     // a report of another id: counted, ignored
   kTooShort,  // our id, shorter than its layout: counted as malformed
+  kTooLong,   // our id, longer than the device declares it: counted as malformed
 };
 
 struct Decoded {

@@ -49,6 +49,12 @@ struct HidSettings final : config::DriverSettings {
   Backend backend = Backend::kHidraw;
   Profile profile = Profile::kReport;
   double poll_interval_ms = 1.0;  // the interrupt endpoints' polling interval (bInterval)
+  // The device sends its input report only when a value changes (and again after a while of
+  // none), as most joysticks, wheels and OpenFFBoard do: a tick without a report is the same
+  // position, and a device silent for longer than liveness_ms is a transport fault (hung
+  // firmware). false: one report a period, and the loop's safety.stale_fault_ticks applies.
+  bool reports_on_change = false;
+  double liveness_ms = 250.0;
   Limits limits;
   ReportProfileLayout report;  // profile report
   PidSettings pid;             // profile pid

@@ -176,6 +176,7 @@ class HidapiTransport final : public HidTransport {
   std::vector<std::size_t> sizes_;
   std::size_t capacity_;
   std::atomic<std::uint64_t> head_{0}, tail_{0};
+  std::atomic<std::uint64_t> safe_cut_{0};  // head_ at write_safe(): what the safe reports drop
   std::atomic<bool> safe_pending_{false}, stop_{false}, failed_{false};
   std::atomic<int> error_code_{0};
   std::vector<std::vector<std::uint8_t>> safe_;
@@ -261,7 +262,12 @@ void HidapiTransport::run() {
     }
     while (!stop_.load() && !failed_.load()) {
       if (safe_pending_.exchange(false)) {
-        tail_.store(head_.load(std::memory_order_acquire), std::memory_order_release);
+        // Drop what was queued before write_safe(), never what came after it (disable's
+        // Block Free follows the safe reports at once, and must reach the device).
+        const std::uint64_t cut = safe_cut_.load(std::memory_order_acquire);
+        if (tail_.load(std::memory_order_relaxed) < cut) {
+          tail_.store(cut, std::memory_order_release);
+        }
         for (const auto& s : safe_) {
           if (!send(s.data(), s.size())) break;
         }
@@ -308,6 +314,7 @@ void HidapiTransport::set_safe_reports(std::vector<std::vector<std::uint8_t>> re
 }
 
 void HidapiTransport::write_safe() noexcept {
+  safe_cut_.store(head_.load(std::memory_order_relaxed), std::memory_order_release);
   safe_pending_.store(true);
   wake();
 }
@@ -380,8 +387,8 @@ std::unique_ptr<HidTransport> open_hidapi(const HidSettings& s) {
   hid_device* dev = a.open_path(path.c_str());
   if (dev == nullptr) {
     throw DeviceError("hid: cannot open " + path + " (" + to_utf8(a.error(nullptr)) +
-                      "): is the user in group hapticd, and does udev/60-hapticd-hid.rules "
-                      "list this device's ids?");
+                      "): is the user in group hapticd, and are the rules `hapticd udev-rules` "
+                      "writes for this configuration installed?");
   }
   try {
     return std::make_unique<HidapiTransport>(a, s.backend, dev, *sel.device, std::move(descriptor),

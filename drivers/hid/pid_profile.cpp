@@ -1,5 +1,7 @@
 // The `pid` profile: one constant-force effect on the HID PID page (pid_protocol.h), its
 // reports found in the device's report descriptor.
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -50,7 +52,17 @@ class PidProfile final : public HidProfile {
     std::vector<std::uint8_t> create = make_report(l_.create_effect, l_.numbered);
     choose(data(create, l_.create_effect), l_.ce_constant);
     t.set_feature(create);
-    block_ = load_block(t);
+    LoadAnswer a = read_block_load(t);
+    if (a.full && l_.block_free.present) {
+      // A run that ended without its own code running (SIGKILL, power cut of the host) left
+      // its block allocated; blocks are indexed, so free them all and ask once more. hapticd
+      // is the device's only user while it runs (docs/drivers/hid.md).
+      free_every_block(t);
+      t.set_feature(create);
+      a = read_block_load(t);
+    }
+    if (!a.error.empty()) throw DeviceError("hid: Block Load after Create New Effect: " + a.error);
+    block_ = a.block;
     std::vector<std::uint8_t> effect = make_report(l_.set_effect, l_.numbered);
     fill_set_effect(data(effect, l_.set_effect));
     set_block_everywhere();
@@ -87,6 +99,8 @@ class PidProfile final : public HidProfile {
   }
 
   InputKind decode(std::span<const std::uint8_t> report, Decoded& d) noexcept override {
+    if (longer_than_declared(report, l_.position_report) || longer_than_declared(report, l_.state))
+      return InputKind::kTooLong;
     if (is_report(report, l_.position_report, l_.numbered)) {
       const auto in = data_of(report, l_.position_report, l_.numbered);
       const Slot& p = l_.position;
@@ -146,6 +160,13 @@ class PidProfile final : public HidProfile {
   }
 
  private:
+  // Our id (or the device's one unnumbered report) with more bytes than the descriptor gives
+  // it: hidraw hands such a report over whole, and its fields cannot be trusted.
+  bool longer_than_declared(std::span<const std::uint8_t> r, const ReportRef& ref) const noexcept {
+    if (!ref.present || (l_.numbered && (r.empty() || r[0] != ref.id))) return false;
+    return r.size() > ref.data_bytes + (l_.numbered ? 1 : 0);
+  }
+
   std::span<std::uint8_t> data(std::vector<std::uint8_t>& r, const ReportRef& ref) const {
     return data_of(std::span<std::uint8_t>(r), ref, l_.numbered);
   }
@@ -166,8 +187,14 @@ class PidProfile final : public HidProfile {
     set_slot(data(start_, l_.effect_operation), l_.eo_loop_count, 1);
   }
 
+  struct LoadAnswer {
+    std::int64_t block = 0;
+    bool full = false;
+    std::string error;  // empty on success
+  };
+
   // Block Load, read back after Create New Effect: the index the device gave the effect.
-  std::int64_t load_block(HidTransport& t) {
+  LoadAnswer read_block_load(HidTransport& t) {
     const std::vector<std::uint8_t> r = t.get_feature(l_.block_load.id, l_.block_load.wire_size());
     if (r.size() < l_.block_load.wire_size() || r[0] != l_.block_load.id) {
       throw DeviceError("hid: Block Load: the device answered " + std::to_string(r.size()) +
@@ -175,21 +202,49 @@ class PidProfile final : public HidProfile {
                         ", not feature report " + std::to_string(l_.block_load.id));
     }
     const auto in = data_of(std::span<const std::uint8_t>(r), l_.block_load, l_.numbered);
-    const std::int64_t block = get_slot(in, l_.bl_block);
-    if (chosen(in, l_.bl_success) && block >= std::max<std::int64_t>(1, l_.bl_block.logical_min) &&
-        block <= l_.bl_block.logical_max) {
-      return block;
+    LoadAnswer a;
+    a.block = get_slot(in, l_.bl_block);
+    if (chosen(in, l_.bl_success) &&
+        a.block >= std::max<std::int64_t>(1, l_.bl_block.logical_min) &&
+        a.block <= l_.bl_block.logical_max) {
+      return a;
     }
-    std::string why =
-        chosen(in, l_.bl_full)    ? "the device's effect memory is full"
+    a.full = chosen(in, l_.bl_full);
+    a.error =
+        a.full                    ? "the device's effect memory is full"
         : chosen(in, l_.bl_error) ? "the device reports a load error"
         : chosen(in, l_.bl_success)
-            ? "success, but effect block index " + std::to_string(block) + " is outside its range"
+            ? "success, but effect block index " + std::to_string(a.block) + " is outside its range"
             : "status " + std::to_string(get_slot(in, l_.bl_success.slot)) +
                   " is none of success, full, error";
     if (l_.bl_ram_pool.present)
-      why += " (RAM pool available " + std::to_string(get_slot(in, l_.bl_ram_pool)) + ")";
-    throw DeviceError("hid: Block Load after Create New Effect: " + why);
+      a.error += " (RAM pool available " + std::to_string(get_slot(in, l_.bl_ram_pool)) + ")";
+    if (a.full) {
+      a.error += l_.block_free.present
+                     ? ", even after Block Free of every index " + block_range() +
+                           ": power-cycle the device (unplug it and plug it in again)"
+                     : "; it has no Block Free report: power-cycle the device (unplug it and "
+                       "plug it in again)";
+    }
+    return a;
+  }
+
+  std::string block_range() const {
+    return std::to_string(std::max<std::int64_t>(1, l_.bf_block.logical_min)) + ".." +
+           std::to_string(std::min<std::int64_t>(255, l_.bf_block.logical_max));
+  }
+
+  void free_every_block(HidTransport& t) {
+    std::vector<std::uint8_t> free = make_report(l_.block_free, l_.numbered);
+    const std::int64_t last = std::min<std::int64_t>(255, l_.bf_block.logical_max);
+    for (std::int64_t i = std::max<std::int64_t>(1, l_.bf_block.logical_min); i <= last; ++i) {
+      set_slot(data(free, l_.block_free), l_.bf_block, i);
+      send_now(t, free, "Block Free " + std::to_string(i), timeout_);
+    }
+    spdlog::warn(
+        "hid: the device's effect memory was full (a run before this one could not free its "
+        "block): freed every block index {}",
+        block_range());
   }
 
   void fill_set_effect(std::span<std::uint8_t> d) const {

@@ -30,6 +30,11 @@ enum Usage : std::uint16_t {
   kGain = 0x52,
   kTriggerButton = 0x53,
   kTriggerRepeatInterval = 0x54,
+  kSetEnvelopeReport = 0x5A,
+  kAttackLevel = 0x5B,
+  kAttackTime = 0x5C,
+  kFadeLevel = 0x5D,
+  kFadeTime = 0x5E,
   kAxesEnable = 0x55,
   kDirectionEnable = 0x56,
   kDirection = 0x57,
@@ -43,6 +48,9 @@ enum Usage : std::uint16_t {
   kLoopCount = 0x7C,
   kDeviceGainReport = 0x7D,
   kDeviceGain = 0x7E,
+  kPoolReport = 0x7F,
+  kRamPoolSize = 0x80,
+  kSimultaneousEffectsMax = 0x83,
   kBlockLoadReport = 0x89,
   kBlockLoadStatus = 0x8B,
   kBlockLoadSuccess = 0x8C,
@@ -63,6 +71,8 @@ enum Usage : std::uint16_t {
   kActuatorOverrideSwitch = 0xA5,
   kActuatorPower = 0xA6,
   kStartDelay = 0xA7,
+  kDeviceManagedPool = 0xA9,
+  kSharedParameterBlocks = 0xAA,
   kCreateNewEffectReport = 0xAB,
   kRamPoolAvailable = 0xAC,
 };
@@ -148,10 +158,12 @@ enum PidStatus : std::uint32_t {
   kPidPowerOff = 1u << 4,           // Actuator Power reads 0
   kPidEffectStopped = 1u << 5,      // Effect Playing reads 0
 };
-// What faults the loop by default: the device turned its actuators off, lost its safety
-// switch or power, or the person overrode it.
-inline constexpr std::uint32_t kPidDefaultFaultMask =
-    kPidActuatorsDisabled | kPidSafetySwitchOff | kPidOverride | kPidPowerOff;
+// What faults the loop by default: the device turned its actuators off. That bit answers the
+// host's own Device Control, so every firmware that declares it drives it. Safety Switch,
+// Actuator Override and Actuator Power mean what a board makes them mean, and common firmware
+// declares bits it never sets (OpenFFBoard's Safety Switch reads 0 always): a configuration
+// adds them for a board that drives them (docs/drivers/hid.md).
+inline constexpr std::uint32_t kPidDefaultFaultMask = kPidActuatorsDisabled;
 
 // Not RT-safe. Finds every report and field the profile needs. `position_usage` is the input
 // usage read as the position (e.g. kGenericDesktopX); `sequence_usage` an optional input usage

@@ -41,8 +41,9 @@ class ReportProfile final : public HidProfile {
   void enable(HidTransport& t) override {
     if (l_.gain_feature) set(t, *l_.gain_feature, l_.gain_feature->on, "gain");
     if (l_.enable_feature) set(t, *l_.enable_feature, l_.enable_feature->on, "enable (on)");
-    encode_force(0.0, l_.output, out_);
-    send_now(t, out_, "the output-on report", timeout_);
+    // Through force_report: the first enabled report moves the keep-alive on from the
+    // output-off report before it, as every report after it does.
+    send_now(t, force_report(0.0), "the output-on report", timeout_);
   }
 
   void disable(HidTransport& t) noexcept override {
@@ -57,6 +58,11 @@ class ReportProfile final : public HidProfile {
   std::vector<std::vector<std::uint8_t>> safe_reports() const override { return {off_}; }
 
   InputKind decode(std::span<const std::uint8_t> report, Decoded& d) noexcept override {
+    const bool numbered = l_.input.report_id != 0;
+    if ((!numbered || (!report.empty() && report[0] == l_.input.report_id)) &&
+        report.size() > declared_input_ + (numbered ? 1 : 0)) {
+      return InputKind::kTooLong;  // hidraw passes it whole: its fields cannot be trusted
+    }
     InputValues v;
     switch (decode_input(report, l_.input, v)) {
       case InputDecode::kOk:
@@ -85,7 +91,9 @@ class ReportProfile final : public HidProfile {
     encode_force(force, l_.output, out_);
     if (l_.output.keepalive) {  // a counter the firmware watches: it moves with every report
       const FieldSpec& k = *l_.output.keepalive;
-      keepalive_ = (keepalive_ + 1) % counter_modulus(k.type);
+      // 1, 2, ... M-1, 1...: never the output-off report's 0, so the report after it and
+      // the one before it both differ from it.
+      keepalive_ = keepalive_ % (counter_modulus(k.type) - 1) + 1;
       write_raw(out_.data() + 1 + k.byte, k.type, k.endian, static_cast<double>(keepalive_));
     }
     return out_;
@@ -136,6 +144,8 @@ class ReportProfile final : public HidProfile {
       return;
     }
     need(*p.descriptor, ReportKind::kInput, l_.input.report_id, l_.input.length, "input");
+    declared_input_ =
+        p.descriptor->find_report(ReportKind::kInput, l_.input.report_id)->data_bytes();
     need(*p.descriptor, ReportKind::kOutput, l_.output.report_id, l_.output.length, "output");
     for (const auto* f : {&l_.enable_feature, &l_.gain_feature, &l_.watchdog_feature}) {
       if (*f) need(*p.descriptor, ReportKind::kFeature, (*f)->report_id, (*f)->length, "feature");
@@ -163,6 +173,9 @@ class ReportProfile final : public HidProfile {
   std::vector<std::uint8_t> off_;  // zero force, enable off
   std::uint64_t keepalive_ = 0;
   std::string descriptor_note_;
+  // The input report's length as the device declares it (the layout's when it has no
+  // descriptor): anything longer is malformed.
+  std::size_t declared_input_ = l_.input.length;
 };
 
 }  // namespace

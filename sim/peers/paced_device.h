@@ -1,6 +1,10 @@
-// A driver paced by its loopback peer, for freerun: after every write it waits until the peer
+// A driver paced by its in-process loopback peer: after every write it waits until the peer
 // has handled it and answered, so the next read sees the answer whatever the two threads'
-// timing. Everything else is the driver's own: its lifecycle, faults and descriptions.
+// timing (freerun, and real-time `--loopback` runs: peer_runner.h says why). The simulated
+// device's clock is its protocol trigger, not the wall clock, so its samples are handed on
+// without the wall-clock receive time (a host stall between the answer and the next tick is
+// the loop's overrun, not an old sample). Everything else is the driver's own: its lifecycle,
+// faults and descriptions.
 #pragma once
 
 #include <memory>
@@ -16,6 +20,8 @@ class PacedDevice final : public Device {
       : inner_(std::move(inner)), runner_(runner) {}
   std::string_view driver_name() const noexcept override { return inner_->driver_name(); }
   void emergency_stop() noexcept override { inner_->emergency_stop(); }
+  std::vector<std::string> notices() const override { return inner_->notices(); }
+  std::vector<DeviceCounter> device_counters() const override { return inner_->device_counters(); }
 
  protected:
   DeviceInfo on_configure() override {
@@ -28,6 +34,8 @@ class PacedDevice final : public Device {
   void on_close() noexcept override { inner_->close(); }
   IoStatus on_read(PositionSample& out) noexcept override {
     const IoStatus r = inner_->read(out);
+    out.flags &= static_cast<std::uint8_t>(~kSampleHasTime);
+    out.time_ns = 0;
     if (r == IoStatus::kTransportFault || r == IoStatus::kDeviceFault) {
       set_fault_code(inner_->fault().code);
     }

@@ -60,9 +60,13 @@ void PeerRunner::run(int priority) {
       error_ = e.what();
       failed_.store(true);
       busy_.store(false);
+      rounds_.fetch_add(1);
+      rounds_.notify_all();
       break;
     }
     busy_.store(false);
+    rounds_.fetch_add(1);
+    rounds_.notify_all();
     if (stopping || (fds[0].revents & (POLLHUP | POLLERR))) break;  // or the driver closed its end
   }
 }
@@ -70,8 +74,11 @@ void PeerRunner::run(int priority) {
 void PeerRunner::wait_idle() const noexcept {
   if (!thread_.joinable()) return;
   while (!failed_.load()) {
+    const std::uint32_t round = rounds_.load();
     if (!has_unread(peer_.fd()) && !busy_.load() && !has_unread(peer_.fd())) return;
-    sched_yield();
+    // Asleep until the peer finishes a service round (a round that ended since `round` was
+    // read returns at once), then judged again.
+    rounds_.wait(round);
   }
 }
 

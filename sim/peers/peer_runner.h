@@ -1,10 +1,15 @@
 // Runs a loopback peer on its own thread, as a device runs on its own clock: whenever the
-// driver has written something the peer handles it and answers. In freerun, where nothing
-// may depend on timing, PacedDevice (paced_device.h) waits for the peer to be idle after every
-// write, so a loopback run is as reproducible as the in-process sim.
+// driver has written something the peer handles it and answers. PacedDevice (paced_device.h)
+// waits for the peer to be idle after every write - in freerun, where nothing may depend on
+// timing, and in a real-time `--loopback` run too: the peer shares the host with the loop, and
+// on a kernel without full preemption (this machine's is PREEMPT_NONE) a thread woken at any
+// SCHED_FIFO priority waits until whatever runs leaves the kernel - 30 ms was traced, on both
+// cores at once, under a build. A simulated device held up by its host is not a device that
+// failed; the loop waits for its answer, and a host stall shows as what it is, an overrun.
 #pragma once
 
 #include <atomic>
+#include <cstdint>
 #include <string>
 #include <thread>
 
@@ -24,8 +29,10 @@ class PeerRunner {
   PeerRunner(const PeerRunner&) = delete;
   PeerRunner& operator=(const PeerRunner&) = delete;
 
-  // RT-safe (no allocation, lock or syscall but FIONREAD): returns once everything written to
-  // the peer so far has been handled and answered, or the peer has failed.
+  // RT-safe (no allocation or lock; FIONREAD and a futex wait): returns once everything
+  // written to the peer so far has been handled and answered, or the peer has failed. Sleeps
+  // while it waits (never spins), so the peer runs even on the waiting thread's core below
+  // its priority.
   void wait_idle() const noexcept;
   // Not RT-safe, after stop(): why the peer failed ("" if it did not).
   std::string error() const;
@@ -37,6 +44,7 @@ class PeerRunner {
   int stop_fd_ = -1;  // eventfd: wakes the thread to stop
   std::atomic<bool> busy_{false};
   std::atomic<bool> failed_{false};
+  std::atomic<std::uint32_t> rounds_{0};  // services done: what wait_idle sleeps on
   std::string error_;
   std::thread thread_;
 };

@@ -158,8 +158,13 @@ bool ServoLoop::check_sequence(std::uint64_t tick, const PositionSample& sample,
                                telemetry::TickRecord& rec, LoopResult& res) noexcept {
   rec.sequence = static_cast<std::uint32_t>(sample.sequence);
   if (st.have_sequence) {
-    std::uint64_t gap = sample.sequence - st.last_sequence - 1;  // wraps like the counter
-    if (options_.sequence_modulus != 0) gap %= options_.sequence_modulus;
+    // How far the counter moved, against how many samples the driver took in since the last
+    // tick (the newest and those it replaced): only numbers nobody received are a gap. A
+    // counter that moved less (a device that repeats a sample) lost nothing.
+    std::uint64_t advance = sample.sequence - st.last_sequence;  // wraps like the counter
+    if (options_.sequence_modulus != 0) advance %= options_.sequence_modulus;
+    const std::uint64_t taken = std::max<std::uint32_t>(1, sample.samples);
+    const std::uint64_t gap = advance > taken ? advance - taken : 0;
     if (gap > 0) {
       rec.flags |= telemetry::kFlagSequenceGap;
       rec.sequence_gap = static_cast<std::uint16_t>(std::min<std::uint64_t>(gap, 65535));
@@ -203,6 +208,14 @@ bool ServoLoop::sense(std::uint64_t tick, std::int64_t wake_ns, PositionSample& 
     return st.have_x && res.fault.cause == FaultCause::kNone;
   }
   st.stale_streak = 0;
+  if ((sample.flags & kSampleHeld) != 0 && st.have_x) {
+    // The same position, current but not measured anew: no staleness, and the next measured
+    // sample's move is judged over the whole time since the last one.
+    ++st.periods_since_x;
+    st.fresh = false;
+    sample.position = st.last_x;
+    return true;
+  }
   st.fresh = true;
   const bool has_time = (sample.flags & kSampleHasTime) != 0 && sample.time_ns > 0;
   if (has_time) rec.sample_time_ns = sample.time_ns;

@@ -67,6 +67,14 @@ std::string status_text(const json& s) {
       << "), stale " << num(s["stale_ticks"]) << ", contact " << num(s["contact_ticks"])
       << " ticks\n";
   out << "  reloads       " << num(s["reloads"]) << "\n";
+  // The driver's own counters (missed encoder edges, malformed reports...), those not zero.
+  if (s.contains("device") && s["device"].contains("counters")) {
+    for (const auto& [name, value] : s["device"]["counters"].items()) {
+      if (value.is_number() && value.get<double>() != 0.0)
+        out << "  " << name << std::string(name.size() < 14 ? 14 - name.size() : 1, ' ')
+            << num(value) << "\n";
+    }
+  }
   out << "  fault         " << (s["fault"].is_string() ? text(s["fault"]) : "none") << "\n";
   return out.str();
 }

@@ -12,10 +12,10 @@ DeviceSession::DeviceSession(const config::Config& cfg, bool loopback, bool real
   }
   drivers::Loopback pair = driver_.make_loopback(cfg);
   peer_ = std::move(pair.peer);
-  // A device answers on its own clock: just below the loop's priority, so it is not starved.
+  // A device answers on its own clock: just below the loop's priority, so it is not starved;
+  // and the loop waits for its answers (peer_runner.h: a host may hold any thread up).
   runner_ = std::make_unique<sim::PeerRunner>(*peer_, realtime ? cfg.loop.rt_priority - 1 : 0);
-  device_ = realtime ? std::move(pair.device)
-                     : std::make_unique<sim::PacedDevice>(std::move(pair.device), *runner_);
+  device_ = std::make_unique<sim::PacedDevice>(std::move(pair.device), *runner_);
 }
 
 DeviceSession::~DeviceSession() { shut_down(); }

@@ -1,6 +1,6 @@
 // The device a run drives, built through the driver registry: the driver for real hardware,
 // or (`--loopback`, and always for the sim) the driver wired to its simulated peer, the peer
-// on its own thread, and in freerun the driver paced by the peer so the run is reproducible.
+// on its own thread, and the driver paced by the peer (sim/peers/peer_runner.h says why).
 // Owns them in the order that tears them down safely: the device is closed (output off, its
 // transport closed) before the peer's thread stops.
 #pragma once

@@ -22,6 +22,7 @@
 #include "service/result_output.h"
 #include "service/run_command.h"
 #include "service/stop_signals.h"
+#include "service/udev_rules.h"
 #include "service/verify_command.h"
 
 namespace {
@@ -125,16 +126,27 @@ int main(int argc, char** argv) {
   std::optional<double> peer_duration;
   CLI::App* peer = app.add_subcommand(
       "peer",
-      "Run the configured driver's simulated device (the plant of device.sim) on a real kernel "
+      "Run the configured driver's simulated device (the plant of device.sim) on a kernel "
       "endpoint - a USB HID gadget's /dev/hidgN, /dev/raw-gadget or /dev/uhid, a CAN interface, a "
-      "gpio-sim chip - until "
-      "SIGINT/SIGTERM or --duration, so `hapticd run` (or another master) can drive it through "
-      "the kernel as it would hardware.");
+      "gpio-sim chip - until SIGINT/SIGTERM or --duration, so `hapticd run` (or another master) "
+      "can drive it through the kernel as it would hardware. Only on the kernel's simulations "
+      "(vcan/vxcan, gpio-sim, dummy_hcd's UDC, uhid) unless --impersonate-on-real-hardware "
+      "(else exit 2); on CAN it first asks and listens for the configured node and refuses when "
+      "one answers (exit 4).");
   add_config_options(peer, peer_opts.config);
   peer->add_option("--endpoint", peer_opts.endpoint,
                    "Where the device lives; the driver says what it takes (docs/drivers/)")
       ->required();
   peer->add_option("--duration", peer_duration, "Stop after this many seconds")
+      ->check(CLI::Validator(check_duration, "SECONDS"));
+  peer->add_flag("--impersonate-on-real-hardware", peer_opts.policy.impersonate_on_real_hardware,
+                 "Also play the device on real hardware (a CAN controller, a GPIO chip that is "
+                 "not gpio-sim, a USB device controller that is not dummy_hcd's), where it "
+                 "answers beside or instead of a real device");
+  peer->add_option("--listen", peer_opts.policy.listen_s,
+                   "CAN: seconds to listen for a node already answering at device.can.node_id "
+                   "before the peer takes that id")
+      ->default_str("2")
       ->check(CLI::Validator(check_duration, "SECONDS"));
 
   hapticd::service::ReplayOptions replay_opts;
@@ -212,6 +224,20 @@ int main(int argc, char** argv) {
                      "Cone complementarity iterations per step (default 12)");
   design->add_flag("--json", design_opts.json, "Print exactly one JSON object");
 
+  ConfigOptions rules_cfg;
+  std::string rules_instance;
+  CLI::App* rules = app.add_subcommand(
+      "udev-rules",
+      "Print the udev rules this configuration's instance needs, and nothing more: its CAN "
+      "interface's bitrate (no other interface), its GPIO chip and its one PWM channel, its HID "
+      "device's node by vendor and product id, each for group hapticd. Installing hapticd "
+      "adds none of these; write them to /etc/udev/rules.d/70-hapticd-NAME.rules. Exit 0, 2 "
+      "for a configuration a rule cannot match exactly.");
+  add_config_options(rules, rules_cfg);
+  rules->add_option("--instance", rules_instance,
+                    "The systemd instance NAME (hapticd@NAME), for the comments (default: the "
+                    "configuration file's name without .yaml)");
+
   CLI::App* devices = app.add_subcommand(
       "devices",
       "List the devices the drivers find attached (HID through hidapi's hidraw and libusb "
@@ -248,6 +274,7 @@ int main(int argc, char** argv) {
     if (*exp) return hapticd::service::export_command(export_log, export_out);
     if (*replay) return hapticd::service::replay_command(replay_opts);
     if (*devices) return hapticd::service::devices_command();
+    if (*rules) return hapticd::service::udev_rules_command(rules_cfg, rules_instance);
     if (*curves) return hapticd::service::curves_command(curves_cfg, !curves_no_measure);
     if (*design) return hapticd::service::design_coupling_command(design_opts);
     if (*identify) {

@@ -52,6 +52,12 @@ void passivity_text(const RunSummary& s, std::ostream& os) {
 
 }  // namespace
 
+json counters_json(const std::vector<DeviceCounter>& counters) {
+  json j = json::object();
+  for (const DeviceCounter& c : counters) j[c.name] = c.value;
+  return j;
+}
+
 json summary_to_json(const RunSummary& s) {
   json j;
   j["ticks"] = s.loop.ticks;
@@ -84,9 +90,11 @@ json summary_to_json(const RunSummary& s) {
   j["output_was_enabled"] = s.output_was_enabled;
   j["device"] = {{"name", s.device_name},
                  {"description", s.device_description},
+                 {"notices", s.device_notices},
                  {"state", s.device_state},
                  {"final_command", s.final_command},
-                 {"output_enabled", s.final_output_enabled}};
+                 {"output_enabled", s.final_output_enabled},
+                 {"counters", counters_json(s.device_counters)}};
   j["loopback"] =
       s.loopback ? json{{"applied_force", s.peer_applied_force}, {"output_on", s.peer_output_on}}
                  : json(nullptr);
@@ -168,6 +176,11 @@ std::string summary_to_text(const RunSummary& s) {
        << format_number(s.peer_applied_force) << " N)";
   }
   os << "\n";
+  for (const DeviceCounter& c : s.device_counters) {
+    if (c.value == 0) continue;
+    const std::size_t pad = c.name.size() < 15 ? 15 - c.name.size() : 1;
+    os << "  " << c.name << std::string(pad, ' ') << c.value << " (" << c.meaning << ")\n";
+  }
   if (s.loop.sequence_gaps > 0) {
     os << "  sequence gaps  " << s.loop.sequence_gaps << " (" << s.loop.samples_missed
        << " samples missed)\n";

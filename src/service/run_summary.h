@@ -33,16 +33,18 @@ struct RunSummary {
   std::uint32_t log_segments = 0;       // files of this run's log (rotation), 0 with no log
   std::uint64_t log_files_deleted = 0;  // by the retention cap (telemetry.max_total_mb)
   std::uint64_t log_bytes_deleted = 0;
-  std::string previous_log;           // where a log already at log_path was kept, "" if none
-  std::string stop_reason;            // "duration", "signal SIGTERM", "fault"
-  bool output_was_enabled = false;    // false: stopped before output was ever enabled
-  std::string device_name;            // the driver
-  std::string device_description;     // DeviceInfo::description
-  std::string device_state;           // after the run, before close: "configured", "faulted"
-  double final_command = 0.0;         // Device::last_command() once output was disabled
-  bool final_output_enabled = false;  // Device::output_enabled() then
-  bool loopback = false;              // a simulated peer stood in for the device
-  double peer_applied_force = 0.0;    // what the peer's plant felt last (loopback)
+  std::string previous_log;                 // where a log already at log_path was kept, "" if none
+  std::string stop_reason;                  // "duration", "signal SIGTERM", "fault"
+  bool output_was_enabled = false;          // false: stopped before output was ever enabled
+  std::string device_name;                  // the driver
+  std::string device_description;           // DeviceInfo::description
+  std::vector<std::string> device_notices;  // Device::notices
+  std::string device_state;                 // after the run, before close: "configured", "faulted"
+  std::vector<DeviceCounter> device_counters;  // the driver's own (Device::device_counters)
+  double final_command = 0.0;                  // Device::last_command() once output was disabled
+  bool final_output_enabled = false;           // Device::output_enabled() then
+  bool loopback = false;                       // a simulated peer stood in for the device
+  double peer_applied_force = 0.0;             // what the peer's plant felt last (loopback)
   bool peer_output_on = false;
   nlohmann::json gate;
   std::string passivity_mode;  // safety.passivity_controller: "off", "observe", "damp"
@@ -51,6 +53,8 @@ struct RunSummary {
 };
 
 nlohmann::json summary_to_json(const RunSummary& s);
+// {"name": value, ...}: a driver's counters for the summary and `hapticctl status`.
+nlohmann::json counters_json(const std::vector<DeviceCounter>& counters);
 std::string summary_to_text(const RunSummary& s);
 
 }  // namespace hapticd::service

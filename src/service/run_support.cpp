@@ -170,6 +170,7 @@ void summarise_device(DeviceSession& session, RunSummary& s) {
   s.device_state = std::string(to_string(d.state()));
   s.final_command = d.last_command();
   s.final_output_enabled = d.output_enabled();
+  s.device_counters = d.device_counters();
 }
 
 void summarise_peer(DeviceSession& session, RunSummary& s) {
@@ -218,6 +219,8 @@ bool configure_and_gate(config::Config& cfg, DeviceSession& session, RunSummary&
   Device& device = session.device();
   device.configure();
   s.device_description = device.info().description;
+  s.device_notices = device.notices();
+  for (const std::string& n : s.device_notices) spdlog::warn("{}", n);
   const int declared = session.driver().declared_delay(cfg);
   if (device.info().transport_delay_samples != declared) {
     throw DeviceError(std::string(device.driver_name()) + ": the device declares " +

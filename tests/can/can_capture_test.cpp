@@ -229,9 +229,21 @@ TEST(CanCapture, OdriveStartUpCyclicExchangeAndDisable) {
   };
   const std::size_t version = find_from(frames, 0, cmd(odrive::kGetVersion, true));
   ASSERT_LT(version, frames.size());
+  std::string before;
+  for (std::size_t k = 0; k < version; ++k) {
+    before += " " + std::to_string(frames[k].id) + (frames[k].rtr ? "r" : "") + "/" +
+              std::to_string(frames[k].len);
+  }
+  // The watchdog feeder starts before anything else (a 0.5 axis' watchdog counts from power-on),
+  // so its heartbeat requests may come first, racing Get_Version from their own thread.
   EXPECT_TRUE(std::all_of(frames.begin(), frames.begin() + static_cast<long>(version),
-                          cmd(odrive::kHeartbeat, false)))
-      << "Get_Version is hapticd's first frame (firmware auto); only the axis' heartbeats before";
+                          [&](const CanFrame& f) {
+                            return cmd(odrive::kHeartbeat, false)(f) ||
+                                   cmd(odrive::kHeartbeat, true)(f);
+                          }))
+      << "Get_Version is hapticd's first frame but for the watchdog feeder's heartbeat requests "
+         "(firmware auto); only those and the axis' heartbeats before; before it came (id/len):"
+      << before;
   const std::size_t answer = find_from(frames, version, cmd(odrive::kGetVersion, false));
   const std::size_t idle = find_from(frames, answer, [](const CanFrame& f) {
     return f.id == odrive::frame_id(1, odrive::kSetAxisState) && get_u32(f, 0) == 1;

@@ -1,6 +1,6 @@
 // The GPIO driver on the kernel's own interfaces, in the kernel test machine: a gpio-sim chip
 // (the encoder's lines, the direction and fault lines) and hapticd's PWM simulator (sysfs PWM),
-// driven by libgpiod 1.6 on a Debian 12 root or 2.x on a Debian 13 one (tools/debian13-root).
+// driven by libgpiod 1.6 on a Debian 12 root or 2.x on a Debian 13 one (tools/debian-root).
 // The simulated encoder and motor driver on the far side is the driver's own peer on those
 // endpoints (make_peer_on). Latency in an emulated guest measures qemu: nothing here times.
 #include <gtest/gtest.h>

@@ -97,6 +97,15 @@ TEST_F(FakePwmRoot, EmergencyStopWritesZeroOnTheOpenDescriptor) {
   EXPECT_EQ(drain(0), "0\n");
 }
 
+// The instance's udev rule exports the channel as root and leaves the chip's export root's.
+TEST_F(FakePwmRoot, AnExportedChannelIsUsedWithoutTheChipsExport) {
+  fs::remove(root_ / "pwmchip3" / "export");
+  SysfsPwm pwm;
+  ASSERT_NO_THROW(pwm.open(channel(), false));
+  EXPECT_TRUE(pwm.is_open());
+  EXPECT_EQ(slurp("period"), "40000");
+}
+
 TEST_F(FakePwmRoot, MissingChipOrUnwritableChannelIsADeviceErrorNamingIt) {
   SysfsPwm pwm;
   PwmChannel c = channel();

@@ -66,7 +66,7 @@ TEST(HidConfig, TheExampleConfigurationsLoad) {
   EXPECT_EQ(s.writer_priority, 79);
   const config::Config p = load(file("hid-pid.yaml"));
   EXPECT_EQ(hid(p).profile, Profile::kPid);
-  EXPECT_EQ(hid(p).pid.sequence_usage, 0xFF000020u);
+  EXPECT_EQ(hid(p).pid.sequence_usage, 0u) << "a real PID device has no vendor counter";
   EXPECT_DOUBLE_EQ(hid(p).pid.effect_duration_ms, 100);
 }
 
@@ -153,6 +153,18 @@ TEST(HidConfig, MissingLayoutPartsAreNamed) {
   EXPECT_TRUE(has(e, "device.hid.report.output.force.scale: missing")) << all(e);
   EXPECT_TRUE(has(e, "device.hid.report.output.force.full_scale: missing")) << all(e);
   EXPECT_TRUE(has(e, "device.hid.report.input.position: missing")) << all(e);
+}
+
+TEST(HidConfig, TheLivenessBoundBelongsToADeviceThatReportsOnChange) {
+  auto e = errors(file("hid-report.yaml"), {"device.hid.liveness_ms=100"});
+  EXPECT_TRUE(has(e, "device.hid.liveness_ms: only with reports_on_change: true")) << all(e);
+  e = errors(file("hid-report.yaml"),
+             {"device.hid.reports_on_change=true", "device.hid.liveness_ms=1"});
+  EXPECT_TRUE(has(e, "device.hid.liveness_ms: must be at least two sample periods (2 ms)"))
+      << all(e);
+  e = errors(file("hid-report.yaml"), {"device.hid.report.output.enable={byte: 2, type: u8, "
+                                       "on: 0xzz, off: 0}"});
+  EXPECT_TRUE(has(e, "device.hid.report.output.enable.on: must be an integer in")) << all(e);
 }
 
 }  // namespace

@@ -79,9 +79,9 @@ TEST_P(HidGadget, AnUnpluggedDeviceFaultsTheRun) {
         rig.peer.reset();
         rig.gadget.reset();
       });
-  EXPECT_EQ(h.status, 1) << h.stderr_text;
+  EXPECT_EQ(h.status, 1) << h.log;
   EXPECT_NE(faults(h).find("hid: the device is gone"), std::string::npos) << faults(h) << "\n"
-                                                                          << h.stderr_text;
+                                                                          << h.log;
 }
 
 INSTANTIATE_TEST_SUITE_P(Backends, HidGadget, ::testing::Values("hidraw", "libusb"),

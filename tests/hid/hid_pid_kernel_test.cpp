@@ -46,19 +46,23 @@ TEST_P(HidPidUsb, PidProfileRendersTheSimDriversWall) {
 }
 
 TEST_P(HidPidUsb, APeerThatStopsAnsweringFaultsWithZeroForce) {
-  PidRig rig(GetParam(), kRawGadget);
+  PidRig rig(GetParam(), kRawGadget, {"device.hid.pid.effect_duration_ms=1000"});
   expect_fault_exit("hid-pid.yaml", rig.sets, rig.device(), sim::PeerFault::kStopAnswering,
                     "stale encoder data");
 }
 
 TEST_P(HidPidUsb, ASafetySwitchOffFaultsWithZeroForce) {
-  PidRig rig(GetParam(), kRawGadget);
+  // The simulated device drives its Safety Switch: this configuration faults on it (0x04).
+  // A 1 s effect: the firmware's own watchdog must not trip first (the emulator may leave the
+  // host silent for 100 ms between the enable and the first tick).
+  PidRig rig(GetParam(), kRawGadget,
+             {"device.hid.pid.fault_mask=0x06", "device.hid.pid.effect_duration_ms=1000"});
   expect_fault_exit("hid-pid.yaml", rig.sets, rig.device(), sim::PeerFault::kDeviceFault,
-                    "the device reports safety switch off");
+                    "the device reports actuators disabled, safety switch off");
 }
 
 TEST_P(HidPidUsb, SkippedSequenceNumbersFaultWithZeroForce) {
-  PidRig rig(GetParam(), kRawGadget);
+  PidRig rig(GetParam(), kRawGadget, {"device.hid.pid.sequence={usage_page: 0xff00, usage: 0x20}"});
   expect_fault_exit("hid-pid.yaml", rig.sets, rig.device(), sim::PeerFault::kSkipSequence,
                     "sequence skipped 5[0-9] samples");
 }
@@ -78,9 +82,9 @@ TEST_P(HidPidUsb, AnUnpluggedDeviceFaultsTheRun) {
         ASSERT_TRUE(KernelPeer::wait_for([&] { return rig.device().applied_force() < -0.2; }));
         ASSERT_TRUE(rig.device().inject(sim::PeerFault::kTransportFault));
       });
-  EXPECT_EQ(h.status, 1) << h.stderr_text;
+  EXPECT_EQ(h.status, 1) << h.log;
   EXPECT_NE(faults(h).find("hid: the device is gone"), std::string::npos) << faults(h) << "\n"
-                                                                          << h.stderr_text;
+                                                                          << h.log;
 }
 
 INSTANTIATE_TEST_SUITE_P(Backends, HidPidUsb, ::testing::Values("hidraw", "libusb"),

@@ -2,12 +2,20 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <iostream>
 #include <regex>
 
 #include "drivers/hid/hidapi_transport.h"
 
 namespace hapticd::drivers::hid::testing {
+
+// Over libusb, hidapi gives the interface back to usbhid as hapticd closes it, and the kernel's
+// own PID driver (hid-pidff) enables the actuators again as it binds, with no effect playing:
+// there only the force says what hapticd left.
+bool over_libusb(const std::vector<std::string>& sets) {
+  return std::find(sets.begin(), sets.end(), "device.hid.backend=libusb") != sets.end();
+}
 
 std::string example(const char* name) {
   return std::string(HAPTICD_SOURCE_DIR) + "/config/" + name;
@@ -42,13 +50,13 @@ void expect_the_sim_drivers_wall(const char* config, const std::vector<std::stri
   const int delay = find_driver("hid").declared_delay(cfg);
   const Hapticd hid =
       run_hapticd(with_sets({"run", "--config", example(config), "--duration", "4"}, sets));
-  ASSERT_EQ(hid.status, 0) << hid.stderr_text;
+  ASSERT_EQ(hid.status, 0) << hid.log;
   std::vector<std::string> twin = sets;
   twin.insert(twin.end(), {"device.driver=sim", "device.hid=", "loop.clock=freerun",
                            "wall.delay_samples=" + std::to_string(delay)});
   const Hapticd sim =
       run_hapticd(with_sets({"run", "--config", example(config), "--duration", "4"}, twin));
-  ASSERT_EQ(sim.status, 0) << sim.stderr_text;
+  ASSERT_EQ(sim.status, 0) << sim.log;
   EXPECT_EQ(faults(hid), "[]");
   const double p_hid = hid.summary["max_penetration"].get<double>();
   const double p_sim = sim.summary["max_penetration"].get<double>();
@@ -56,11 +64,13 @@ void expect_the_sim_drivers_wall(const char* config, const std::vector<std::stri
   EXPECT_GT(p_sim, 0.002);
   EXPECT_NEAR(p_hid, p_sim, 0.1 * p_sim)
       << "hid " << p_hid * 1e3 << " mm, sim " << p_sim * 1e3 << " mm with " << delay
-      << " samples of delay; " << hid.stderr_text;
+      << " samples of delay; " << hid.log;
   std::cout << config << ": hid " << p_hid * 1e3 << " mm, sim " << p_sim * 1e3 << " mm, delay "
             << delay << ", stale ticks " << hid.summary["stale_ticks"] << ", sequence gaps "
             << hid.summary["sequence_gaps"] << "\n";
-  EXPECT_FALSE(peer.output_on()) << "the run left the simulated amplifier on";
+  if (!over_libusb(sets)) {
+    EXPECT_FALSE(peer.output_on()) << "the run left the simulated amplifier on";
+  }
   EXPECT_EQ(peer.applied_force(), 0.0);
 }
 
@@ -72,11 +82,12 @@ void expect_fault_exit(const char* config, const std::vector<std::string>& sets,
             << "the wall never pushed";
         ASSERT_TRUE(peer.inject(fault));
       });
-  EXPECT_EQ(h.status, 1) << h.stderr_text;
+  EXPECT_EQ(h.status, 1) << h.log;
   EXPECT_TRUE(std::regex_search(faults(h), std::regex(words))) << words << ": " << faults(h);
-  EXPECT_TRUE(KernelPeer::wait_for([&] { return peer.applied_force() == 0.0 && !peer.output_on(); },
-                                   std::chrono::seconds(2)))
-      << "force " << peer.applied_force();
+  EXPECT_TRUE(KernelPeer::wait_for(
+      [&] { return peer.applied_force() == 0.0 && (over_libusb(sets) || !peer.output_on()); },
+      std::chrono::seconds(2)))
+      << "force " << peer.applied_force() << ", amplifier " << peer.output_on();
 }
 
 void expect_no_force_after_sigkill(const char* config, const std::vector<std::string>& sets,

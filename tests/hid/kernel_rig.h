@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "drivers/registry.h"
+#include "hapticd_process.h"
 #include "hid_test_support.h"
 #include "sim/peers/peer_runner.h"
 
@@ -38,42 +39,9 @@ inline const std::vector<std::string> kKernelRate = {"loop.rate_hz=100",
                                                      "safety.sequence_gap_fault=20",
                                                      "loop.overrun_fault_streak=1000"};
 
-struct Hapticd {
-  int status = -1;  // exit status (128 + signal when killed)
-  nlohmann::json summary;
-  std::string stderr_text;
-};
-
-// Runs `hapticd ARGS... --summary-json FILE`; `during(pid)` runs while it does (from the
-// start), then the process is waited for.
-inline Hapticd run_hapticd(std::vector<std::string> args,
-                           const std::function<void(pid_t)>& during = {}) {
-  static int counter = 0;
-  const std::string stem =
-      "/tmp/hapticd-hid-kt-" + std::to_string(::getpid()) + "-" + std::to_string(counter++);
-  args.insert(args.end(), {"--summary-json", stem + ".json"});
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    const std::string err = stem + ".err";
-    if (!std::freopen(err.c_str(), "w", stderr) || !std::freopen("/dev/null", "w", stdout))
-      _exit(127);
-    std::vector<char*> argv{const_cast<char*>(HAPTICD_BINARY)};
-    for (std::string& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    ::execv(HAPTICD_BINARY, argv.data());
-    _exit(127);
-  }
-  if (during) during(pid);
-  int st = 0;
-  ::waitpid(pid, &st, 0);
-  Hapticd h;
-  h.status = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
-  std::ifstream j(stem + ".json");
-  if (j) h.summary = nlohmann::json::parse(j, nullptr, false);
-  std::ifstream e(stem + ".err");
-  h.stderr_text.assign(std::istreambuf_iterator<char>(e), {});
-  return h;
-}
+// `hapticd` in its own process, as the reference devices' tests run it.
+using Hapticd = reference::HapticdRun;
+using reference::run_hapticd;
 
 inline std::vector<std::string> with_sets(std::vector<std::string> args,
                                           const std::vector<std::string>& sets) {

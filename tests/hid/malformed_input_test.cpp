@@ -147,9 +147,9 @@ TEST(HidMalformed, RandomReportsNeverCrashTheSimulatedFirmware) {
 TEST(HidMalformed, AFiniteEffectThatIsNotRestartedRunsOut) {
   const config::Config cfg = testing::load_example("hid-pid.yaml");  // 100 ms at 1 kHz
   auto fw = sim::hid::make_firmware(cfg, 0);
-  const PidLayout l = *find_pid_layout(*parse_report_descriptor(fw->descriptor()).descriptor,
-                                       kGenericDesktopX, kReferenceSequenceUsage)
-                           .layout;
+  const PidLayout l =
+      *find_pid_layout(*parse_report_descriptor(fw->descriptor()).descriptor, kGenericDesktopX)
+           .layout;
   const sim::hid::HidFirmware::Send ignore = [](std::span<const std::uint8_t>) {};
   const auto out = [&](const ReportRef& ref, auto fill) {
     Bytes r = make_report(ref, true);

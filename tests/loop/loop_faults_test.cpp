@@ -240,5 +240,63 @@ TEST(LoopFaults, AJumpAfterStaleReadsIsJudgedOverTheTimeThatPassed) {
   EXPECT_EQ(run(dev, o).fault.cause, FaultCause::kNone);
 }
 
+// Issue 22: a device four times faster than the loop hands the driver four reports a tick; it
+// keeps the newest and says it took in four. Nothing was lost: no gap, no fault.
+TEST(LoopFaults, ReportsReplacedWithinATickAreNoSequenceGap) {
+  ScriptedDevice dev;
+  dev.script = [](std::uint64_t k, PositionSample& s) {
+    s.position = 0.001;
+    s.sequence = (4 * k + 3) % 256;  // an 8-bit counter: wraps every 64 ticks
+    s.samples = 4;
+    s.flags = kSampleHasSequence;
+    return IoStatus::kOk;
+  };
+  LoopOptions o = freerun(200);
+  o.sequence_gap_fault = 1;
+  o.sequence_modulus = 256;
+  const LoopResult r = run(dev, o);
+  EXPECT_EQ(r.fault.cause, FaultCause::kNone) << r.fault.value;
+  EXPECT_EQ(r.sequence_gaps, 0u);
+  EXPECT_EQ(r.samples_missed, 0u);
+}
+
+// ... while a device that really skips samples still faults: four taken in, six numbered.
+TEST(LoopFaults, ADeviceThatSkipsSamplesBeyondThoseTakenInStillFaults) {
+  ScriptedDevice dev;
+  dev.script = [](std::uint64_t k, PositionSample& s) {
+    s.position = 0.001;
+    s.sequence = k < 10 ? 4 * k : 4 * k + 2;  // tick 10: two numbers nobody received
+    s.samples = 4;
+    s.flags = kSampleHasSequence;
+    return IoStatus::kOk;
+  };
+  LoopOptions o = freerun(100);
+  o.sequence_gap_fault = 2;
+  const LoopResult r = run(dev, o);
+  EXPECT_EQ(r.fault.cause, FaultCause::kSequenceGap);
+  EXPECT_EQ(r.fault.tick, 10u);
+  EXPECT_EQ(r.fault.value, 2.0);
+  EXPECT_EQ(r.samples_missed, 2u);
+}
+
+// Issue 22: a device that reports on change says nothing while the axis rests; the driver
+// hands the loop its last position, marked held. Not stale, and the move the next report
+// shows is judged over the whole time since the last report, not one period.
+TEST(LoopFaults, HeldPositionsAreNotStaleAndTheNextMoveIsJudgedOverTheirTime) {
+  ScriptedDevice dev;
+  dev.script = [](std::uint64_t k, PositionSample& s) {
+    s.position = k < 60 ? 0.0 : 0.025;  // 25 mm after 50 held ticks: 0.5 m/s
+    s.flags = k >= 10 && k < 60 ? kSampleHeld : 0;
+    return IoStatus::kOk;
+  };
+  LoopOptions o = freerun(70);
+  o.max_speed = 10.0;  // 25 mm in one period would be 25 m/s
+  o.stale_fault_ticks = 3;
+  const LoopResult r = run(dev, o);
+  EXPECT_EQ(r.fault.cause, FaultCause::kNone) << describe(r.fault);
+  EXPECT_EQ(r.stale_ticks, 0u);
+  EXPECT_EQ(r.ticks, 70u);
+}
+
 }  // namespace
 }  // namespace hapticd::loop

@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <memory>
@@ -29,9 +30,10 @@ bool has(const std::string& text, const std::string& part) {
 
 json answer(RawClient& c) { return json::parse(c.line(), nullptr, false); }
 
-// Runs hapticctl ARGS as uid/gid 65534 (nobody) with the supplementary `groups`; what it
-// printed on stderr and its exit code.
-ProcessResult ctl_as_nobody(const std::vector<std::string>& args, std::vector<gid_t> groups) {
+// Runs ARGS (args[0] the program) as uid/gid 65534 (nobody) with the supplementary `groups`;
+// what it printed and its exit code. A child that cannot become nobody or run the program
+// says why on that output and exits 127.
+ProcessResult run_as_nobody(const std::vector<std::string>& args, std::vector<gid_t> groups) {
   const std::string err_path = temp_path("nobody" + std::to_string(groups.size()) + ".err");
   const pid_t pid = fork();
   if (pid == 0) {
@@ -39,13 +41,15 @@ ProcessResult ctl_as_nobody(const std::vector<std::string>& args, std::vector<gi
     dup2(fd, 2);
     dup2(fd, 1);
     if (setgroups(groups.size(), groups.data()) != 0 || setgid(65534) != 0 || setuid(65534) != 0) {
-      _exit(99);
+      std::perror("run_as_nobody: cannot become uid/gid 65534");
+      _exit(127);
     }
     std::vector<char*> argv;
     for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
     argv.push_back(nullptr);
     execv(argv[0], argv.data());
-    _exit(98);
+    std::perror(("run_as_nobody: cannot execute " + args[0] + " as uid 65534").c_str());
+    _exit(127);
   }
   int status = 0;
   waitpid(pid, &status, 0);
@@ -62,20 +66,23 @@ TEST(ControlSocketAbuse, APeerOfAnotherUserOutsideTheGroupIsRefusedAndLogged) {
   std::string dir = "/tmp/hapticd-cred-XXXXXX";
   ASSERT_NE(mkdtemp(dir.data()), nullptr);
   ASSERT_EQ(chmod(dir.c_str(), 0755), 0);
+  // The client runs from there too: the build tree may lie where nobody cannot reach it (a
+  // clone in root's home, mode 0700).
+  const std::string ctl = dir + "/hapticctl";
+  std::filesystem::copy_file(hapticctl_binary(), ctl);
+  std::filesystem::permissions(ctl, std::filesystem::perms(0755));
   Daemon d({"--duration", "120"}, dir);
   ASSERT_TRUE(d.ready());
   ASSERT_EQ(chmod(d.socket().c_str(), 0666), 0);
   const gid_t group = getegid();  // no group hapticd here: the socket has the daemon's group
 
-  const ProcessResult outsider =
-      ctl_as_nobody({hapticctl_binary(), "--socket", d.socket(), "status"}, {});
+  const ProcessResult outsider = run_as_nobody({ctl, "--socket", d.socket(), "status"}, {});
+  ASSERT_NE(outsider.exit_code, 127) << outsider.err;
   EXPECT_EQ(outsider.exit_code, 1) << outsider.err;
   EXPECT_TRUE(has(outsider.err, "permission denied: not in group")) << outsider.err;
-  const ProcessResult member =
-      ctl_as_nobody({hapticctl_binary(), "--socket", d.socket(), "status"}, {group});
+  const ProcessResult member = run_as_nobody({ctl, "--socket", d.socket(), "status"}, {group});
   EXPECT_EQ(member.exit_code, 0) << "a member of the socket's group is served\n" << member.err;
-  const ProcessResult stop =
-      ctl_as_nobody({hapticctl_binary(), "--socket", d.socket(), "stop"}, {});
+  const ProcessResult stop = run_as_nobody({ctl, "--socket", d.socket(), "stop"}, {});
   EXPECT_EQ(stop.exit_code, 1) << "an outsider cannot stop the servo";
   EXPECT_EQ(d.status()["state"], "running");
 

@@ -64,6 +64,9 @@ Cia402Peer::Cia402Peer(const config::Config& cfg, drivers::can::CanSocket socket
   od_[{0x1017, 0}] = 0;
   od_[{0x6007, 0}] = 1;
   od_[{0x6060, 0}] = 0;
+  od_[{0x6072, 0}] = 3000;  // max torque: 300 % of the rated torque, in per mille
+  od_[{0x60C2, 1}] = 1;     // interpolation time period: 1 x 10^-3 s
+  od_[{0x60C2, 2}] = static_cast<std::uint8_t>(-3);
   publish();
 }
 
@@ -222,10 +225,10 @@ bool Cia402Peer::read_object(SdoAddress at, std::uint32_t& value, std::uint8_t& 
   const auto it = od_.find({at.index, at.subindex});
   if (it == od_.end()) return false;
   value = it->second;
-  const bool byte = at.index == 0x1001 || at.index == 0x6060 ||
+  const bool byte = at.index == 0x1001 || at.index == 0x6060 || at.index == 0x60C2 ||
                     (is_pdo_map(at.index) && at.subindex == 0) ||
                     (is_pdo_comm(at.index) && at.subindex == 2);
-  size = byte ? 1 : (at.index == 0x1017 || at.index == 0x6007) ? 2 : 4;
+  size = byte ? 1 : (at.index == 0x1017 || at.index == 0x6007 || at.index == 0x6072) ? 2 : 4;
   return true;
 }
 

@@ -43,6 +43,11 @@ void HidFirmware::step(double force) noexcept {
   fifo_head_ = (fifo_head_ + 1) % fifo_.size();
 }
 
+void HidFirmware::hold(double force) noexcept {
+  axis_.hold_force(force);
+  applied_.store(axis_.held_force(), std::memory_order_relaxed);
+}
+
 bool HidFirmware::check_watchdog(std::chrono::steady_clock::time_point now) noexcept {
   const double silent_ms = std::chrono::duration<double, std::milli>(now - last_heard_).count();
   const double limit = watchdog_ms();

@@ -80,6 +80,8 @@ class HidFirmware {
   void set_output(bool on) noexcept;
   // Holds `force` (zero while off) and advances the plant one period.
   void step(double force) noexcept;
+  // Holds `force` from now on without a step: what plays changed between two commands.
+  void hold(double force) noexcept;
   // The position the device reports: measured link_delay steps ago.
   double measured_position() const noexcept { return fifo_[fifo_head_]; }
   double velocity() const noexcept { return axis_.plant().velocity(); }

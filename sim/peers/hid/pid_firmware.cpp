@@ -86,6 +86,9 @@ class PidFirmware final : public HidFirmware {
       if (Effect* e = effect(get_slot(data_of(r, l_.block_free, l_.numbered), l_.bf_block)))
         *e = {};
     }
+    // The amplifier follows every change of what plays at once, not only at the next Set
+    // Constant Force: a PID host (hid-pidff) sets the magnitude before it starts the effect.
+    if (output_on() && !is_report(r, l_.set_constant, l_.numbered)) hold(force());
     send_state(send);
   }
 
@@ -108,6 +111,7 @@ class PidFirmware final : public HidFirmware {
   }
 
   int on_get_feature(std::uint8_t id, std::vector<std::uint8_t>& out) override {
+    if (id == pool_.id) return pool_report(out);
     if (id != l_.block_load.id) return EPIPE;
     out = make_report(l_.block_load, l_.numbered);
     const auto d = data_of(std::span<std::uint8_t>(out), l_.block_load, l_.numbered);
@@ -116,6 +120,18 @@ class PidFirmware final : public HidFirmware {
     const auto used = std::count_if(effects_.begin(), effects_.end(),
                                     [](const Effect& e) { return e.allocated; });
     set_slot(d, l_.bl_ram_pool, static_cast<std::int64_t>(effects_.size()) - used);
+    return 0;
+  }
+
+  // PID Pool: as many effect blocks as it has, all playable at once, managed by the device.
+  int pool_report(std::vector<std::uint8_t>& out) const {
+    out.assign(pool_.size + 1, 0);
+    out[0] = pool_.id;
+    const std::uint16_t size = static_cast<std::uint16_t>(effects_.size() * sizeof(Effect));
+    out[1] = static_cast<std::uint8_t>(size & 0xFF);
+    out[2] = static_cast<std::uint8_t>(size >> 8);
+    out[3] = static_cast<std::uint8_t>(effects_.size());
+    out[4] = 0x01;  // Device Managed Pool 1, Shared Parameter Blocks 0
     return 0;
   }
 
@@ -201,7 +217,8 @@ class PidFirmware final : public HidFirmware {
     const bool playing =
         std::any_of(effects_.begin(), effects_.end(), [](const Effect& e) { return e.playing; });
     const auto d = data_of(std::span<std::uint8_t>(state_), l_.state, l_.numbered);
-    set_slot(d, l_.st_actuators_enabled, output_on() ? 1 : 0);
+    // A faulted device turns its actuators off, and says why where it can: its safety switch.
+    set_slot(d, l_.st_actuators_enabled, output_on() && !device_fault() ? 1 : 0);
     set_slot(d, l_.st_safety_switch, device_fault() ? 0 : 1);
     set_slot(d, l_.st_power, 1);
     set_slot(d, l_.st_playing, playing ? 1 : 0);
@@ -210,8 +227,14 @@ class PidFirmware final : public HidFirmware {
     send(state_);
   }
 
+  // The PID Pool feature report of pid_reference_descriptor(): not one the profile reads.
+  struct PoolRef {
+    std::uint8_t id = PidReferenceIds{}.pool;
+    std::size_t size = 4;  // RAM Pool Size u16, Simultaneous Effects Max u8, two flags + pad
+  };
   PidSettings p_;
   double period_ms_;
+  PoolRef pool_;
   std::vector<std::uint8_t> descriptor_;
   PidLayout l_;
   std::vector<std::uint8_t> position_, state_, sent_state_;

@@ -24,6 +24,7 @@
 #include <linux/slab.h>
 #include <linux/spinlock.h>
 #include <linux/sysfs.h>
+#include <linux/version.h>
 
 #define PWM_SIM_NAME "hapticd-pwm-sim"
 #define PWM_SIM_MAX_CHANNELS 16
@@ -39,18 +40,50 @@ struct pwm_sim_channel {
 	char name[16];
 };
 
+/* The platform device's driver data; the chip finds it through its parent device. */
 struct pwm_sim {
-	struct pwm_chip chip;
 	spinlock_t lock; /* guards every channel's applied state and count */
 	struct pwm_sim_channel *channels;
 	struct attribute **attrs;
 	struct attribute_group group;
 };
 
+/*
+ * Linux 6.9 made the PWM core allocate the chip, with a struct device of its own
+ * (devm_pwmchip_alloc), and 6.7 dropped pwm_ops.owner: Debian 12 runs 6.1, Debian 13 6.12.
+ */
+#if LINUX_VERSION_CODE >= KERNEL_VERSION(6, 9, 0)
+static struct device *pwm_sim_parent(struct pwm_chip *chip)
+{
+	return pwmchip_parent(chip);
+}
+
+static struct pwm_chip *pwm_sim_alloc_chip(struct device *dev)
+{
+	return devm_pwmchip_alloc(dev, npwm, 0);
+}
+#else
+static struct device *pwm_sim_parent(struct pwm_chip *chip)
+{
+	return chip->dev;
+}
+
+static struct pwm_chip *pwm_sim_alloc_chip(struct device *dev)
+{
+	struct pwm_chip *chip = devm_kzalloc(dev, sizeof(*chip), GFP_KERNEL);
+
+	if (!chip)
+		return ERR_PTR(-ENOMEM);
+	chip->dev = dev;
+	chip->npwm = npwm;
+	return chip;
+}
+#endif
+
 static int pwm_sim_apply(struct pwm_chip *chip, struct pwm_device *pwm,
 			 const struct pwm_state *state)
 {
-	struct pwm_sim *sim = container_of(chip, struct pwm_sim, chip);
+	struct pwm_sim *sim = dev_get_drvdata(pwm_sim_parent(chip));
 	struct pwm_sim_channel *ch = &sim->channels[pwm->hwpwm];
 	unsigned long flags;
 
@@ -59,7 +92,7 @@ static int pwm_sim_apply(struct pwm_chip *chip, struct pwm_device *pwm,
 	ch->applies++;
 	spin_unlock_irqrestore(&sim->lock, flags);
 
-	sysfs_notify(&chip->dev->kobj, NULL, ch->name);
+	sysfs_notify(&pwm_sim_parent(chip)->kobj, NULL, ch->name);
 	return 0;
 }
 
@@ -69,7 +102,9 @@ static int pwm_sim_apply(struct pwm_chip *chip, struct pwm_device *pwm,
  */
 static const struct pwm_ops pwm_sim_ops = {
 	.apply = pwm_sim_apply,
+#if LINUX_VERSION_CODE < KERNEL_VERSION(6, 7, 0)
 	.owner = THIS_MODULE,
+#endif
 };
 
 static ssize_t pwm_sim_channel_show(struct device *dev, struct device_attribute *attr,
@@ -119,6 +154,7 @@ static int pwm_sim_add_channel_files(struct device *dev, struct pwm_sim *sim)
 static int pwm_sim_probe(struct platform_device *pdev)
 {
 	struct device *dev = &pdev->dev;
+	struct pwm_chip *chip;
 	struct pwm_sim *sim;
 	int ret;
 
@@ -133,10 +169,11 @@ static int pwm_sim_probe(struct platform_device *pdev)
 	if (ret)
 		return ret;
 
-	sim->chip.dev = dev;
-	sim->chip.ops = &pwm_sim_ops;
-	sim->chip.npwm = npwm;
-	return devm_pwmchip_add(dev, &sim->chip);
+	chip = pwm_sim_alloc_chip(dev);
+	if (IS_ERR(chip))
+		return PTR_ERR(chip);
+	chip->ops = &pwm_sim_ops;
+	return devm_pwmchip_add(dev, chip);
 }
 
 static struct platform_driver pwm_sim_driver = {

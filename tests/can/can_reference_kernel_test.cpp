@@ -1,0 +1,195 @@
+// `hapticd run` as a person runs it against the reference drives (tests/reference/can) on
+// vcan0 in the kernel test machine: an ODrive 0.5 set up as docs/drivers/can.md asks (its
+// watchdog on) straight after power-on, and CiA 402 drives with the behaviours real ones have.
+// Each must start and render the wall to within 1 % of F/K at rest; a drive that limits its
+// torque below max_torque is refused, named, before output is enabled; a killed hapticd leaves
+// an ODrive that idles itself.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <thread>
+
+#include "child_process.h"
+#include "reference/can/cia402_drive.h"
+#include "reference/can/odrive_056.h"
+#include "sysfs.h"
+#include "vcan_interface.h"
+
+namespace hapticd::drivers::can::testing {
+namespace {
+
+using std::chrono::milliseconds;
+using std::chrono::seconds;
+
+const std::string kBin = HAPTICD_BINARY;
+// An emulated guest cannot keep 1 kHz, and stalls now and then (over 150 ms was seen under a
+// loaded host): the ODrive at 50 Hz, the CiA 402 drives at 5 Hz (a SYNC-watching drive times
+// out after 1.5 cycles: 300 ms), each with a wall the gate passes there with the driver's one
+// sample of delay, and a hand pushing F into it: the rest is F/K = 20 mm.
+struct Rig {
+  double rate_hz, stiffness, hand_force;
+};
+constexpr Rig kOdriveRig{50.0, 50.0, 1.0};
+constexpr Rig kCia402Rig{5.0, 5.0, 0.1};
+
+std::vector<std::string> run_args(const std::string& profile, double duration,
+                                  std::vector<std::string> sets) {
+  const Rig& r = profile == "odrive" ? kOdriveRig : kCia402Rig;
+  std::vector<std::string> a = {
+      kBin,         "run",
+      "--config",   std::string(HAPTICD_SOURCE_DIR) + "/config/can-" + profile + ".yaml",
+      "--duration", std::to_string(duration)};
+  sets.push_back("loop.rate_hz=" + std::to_string(r.rate_hz));
+  if (profile == "cia402") {  // hapticd's heartbeat each tick, watched over several
+    sets.push_back("device.can.cia402.master_heartbeat_ms=200");
+    sets.push_back("device.can.cia402.drive_watchdog_ms=1500");
+  }
+  for (const char* s :
+       {"safety.stale_fault_ticks=10", "loop.overrun_fault_streak=100",
+        "device.can.interface=vcan0", "device.can.sdo_timeout_ms=1000",
+        "device.can.state_timeout_ms=2000", "device.can.heartbeat_timeout_ms=3000"}) {
+    sets.push_back(s);
+  }
+  sets.push_back("wall.stiffness=" + std::to_string(r.stiffness));
+  for (const std::string& s : sets) a.insert(a.end(), {"--set", s});
+  return a;
+}
+
+// The hand pushes once hapticd has output on (press_now): a wall that finds the axis already
+// inside it stays off until the axis leaves it.
+reference::PlantParameters hand(double force, double damping) {
+  reference::PlantParameters p;
+  p.damping = damping;
+  p.hand_force = force;
+  p.hand_start_s = 1e6;
+  p.hand_ramp_s = 0.5;
+  return p;
+}
+
+// The axis at rest against the wall: the mean position over the last `ms` before now.
+template <typename Drive>
+double rest_position(const Drive& drive, int ms) {
+  double sum = 0.0;
+  int n = 0;
+  for (int i = 0; i < ms / 10; ++i) {
+    sum += drive.position_m();
+    ++n;
+    std::this_thread::sleep_for(milliseconds(10));
+  }
+  return sum / n;
+}
+
+TEST(CanReferenceOnVcan, Odrive05WithItsWatchdogOnRendersTheWallAndIdlesWhenHapticdIsKilled) {
+  kernel_test::VcanInterface bus("vcan0");
+  reference::Odrive056Config c;
+  c.watchdog_timeout_s = 1.0;  // the emulator's slow start of the RT thread
+  // Damping 10 N s/m: the hand's 1 N moves it at most 0.1 m/s, below the firmware's default
+  // vel_limit (2 turn/s, 0.196 m/s here), which stays on.
+  reference::Odrive056 axis(c, hand(kOdriveRig.hand_force, 10.0), reference::monotonic_ns());
+  reference::ReferenceRunner runner(axis, reference::CanPort::open("vcan0"));
+  std::this_thread::sleep_for(milliseconds(1200));  // power-on, nobody talking: expired
+  ASSERT_EQ(axis.axis_error(), reference::Odrive056::kWatchdogExpired);
+  ChildProcess run(
+      run_args("odrive", 60,
+               {"device.can.odrive.watchdog_timeout_s=1", "device.can.odrive.vel_limit=2"}),
+      "/tmp/hapticd-ref-odrive.out");
+  kernel_test::wait_until([&] { return axis.armed(); }, milliseconds(60'000),
+                          "the axis in closed loop");
+  std::this_thread::sleep_for(milliseconds(500));
+  axis.press_now();
+  std::this_thread::sleep_for(milliseconds(3000));
+  const double x = rest_position(axis, 1000);
+  const double expected = kOdriveRig.hand_force / kOdriveRig.stiffness;
+  EXPECT_NEAR(x, expected, 0.01 * expected) << run.output();
+  RecordProperty("rest_mm", std::to_string(x * 1e3));
+  ASSERT_TRUE(axis.armed()) << run.output();
+  const auto killed = std::chrono::steady_clock::now();
+  run.signal(SIGKILL);
+  EXPECT_EQ(run.wait(seconds(10)), 128 + SIGKILL);
+  kernel_test::wait_until([&] { return !axis.armed(); }, milliseconds(3000),
+                          "the axis idling itself");
+  const auto ms =
+      std::chrono::duration_cast<milliseconds>(std::chrono::steady_clock::now() - killed).count();
+  RecordProperty("idle_after_ms", std::to_string(ms));
+  EXPECT_EQ(axis.axis_error(), reference::Odrive056::kWatchdogExpired);
+  EXPECT_EQ(axis.motor_force_n(), 0.0);
+  runner.stop();
+}
+
+struct Cia402Case {
+  const char* name;
+  reference::Cia402Behaviour behaviour;
+  std::vector<std::string> sets;
+};
+
+reference::Cia402Behaviour with(void (*f)(reference::Cia402Behaviour&)) {
+  reference::Cia402Behaviour b;
+  b.rated_torque_mnm = 5;         // 1 per mille: 0.5 mN at this transmission, 0.25 % of the hand
+  b.max_torque_permille = 30000;  // 0.15 N m, above max_torque
+  f(b);
+  return b;
+}
+
+TEST(CanReferenceOnVcan, Cia402DrivesAsTheyAreStartAndRenderTheWall) {
+  const Cia402Case cases[] = {
+      {"bit 30 kept, 0x6061 late, no 0x1006, 0x60C2",
+       with([](reference::Cia402Behaviour& b) {
+         b.tpdo_cob_id_bit30_required = true;
+         b.mode_display_lag_ms = 40;
+         b.has_1006 = false;
+         b.has_60c2 = true;
+       }),
+       {}},
+      {"watching SYNC (0x1006) and hapticd's heartbeat",
+       with([](reference::Cia402Behaviour&) {}),
+       {}},
+      {"no 0x6007, comm_loss_reaction none",
+       with([](reference::Cia402Behaviour& b) { b.has_6007 = false; }),
+       {"device.can.cia402.comm_loss_reaction=none"}},
+  };
+  for (const Cia402Case& k : cases) {
+    SCOPED_TRACE(k.name);
+    kernel_test::VcanInterface bus("vcan0");
+    reference::Cia402Drive drive(k.behaviour, hand(kCia402Rig.hand_force, 3.0),
+                                 reference::monotonic_ns());
+    reference::ReferenceRunner runner(drive, reference::CanPort::open("vcan0"));
+    ChildProcess run(run_args("cia402", 60, k.sets), "/tmp/hapticd-ref-cia402.out");
+    kernel_test::wait_until([&] { return drive.torque_on(); }, milliseconds(60'000),
+                            "operation enabled");
+    drive.press_now();
+    std::this_thread::sleep_for(milliseconds(5000));  // the slow pole: 0.6 s
+    const double x = rest_position(drive, 1000);
+    const double expected = kCia402Rig.hand_force / kCia402Rig.stiffness;
+    EXPECT_NEAR(x, expected, 0.01 * expected) << run.output();
+    RecordProperty(std::string("rest_mm_") + std::to_string(&k - cases), std::to_string(x * 1e3));
+    run.signal(SIGTERM);  // a normal stop
+    EXPECT_EQ(run.wait(seconds(60)), 0) << run.output();
+    std::this_thread::sleep_for(milliseconds(300));
+    runner.stop();
+    EXPECT_FALSE(drive.torque_on());
+    for (const reference::LoggedFrame& l : runner.log()) {
+      if (l.sent && l.frame.id == 0x081) {
+        EXPECT_EQ(l.frame.u16(0), 0u)
+            << "EMCY " << std::hex << l.frame.u16(0) << ": " << run.output();
+      }
+    }
+  }
+}
+
+TEST(CanReferenceOnVcan, ADriveLimitBelowMaxTorqueIsNamedBeforeOutputIsEnabled) {
+  kernel_test::VcanInterface bus("vcan0");
+  reference::Cia402Drive drive(with([](reference::Cia402Behaviour& b) {
+                                 b.max_torque_permille = 500;  // 0.001 N m < 0.1
+                               }),
+                               hand(kCia402Rig.hand_force, 3.0), reference::monotonic_ns());
+  reference::ReferenceRunner runner(drive, reference::CanPort::open("vcan0"));
+  ChildProcess run(run_args("cia402", 3, {}), "/tmp/hapticd-ref-6072.out");
+  EXPECT_EQ(run.wait(seconds(60)), 4) << run.output();
+  EXPECT_NE(run.output().find("0x6072 = 500 per mille"), std::string::npos) << run.output();
+  EXPECT_EQ(run.output().find("output enabled"), std::string::npos) << run.output();
+  runner.stop();
+  EXPECT_FALSE(drive.torque_on());
+}
+
+}  // namespace
+}  // namespace hapticd::drivers::can::testing

@@ -1,0 +1,96 @@
+// `hapticd run` as a user runs it, in its own process, for the reference-device tests: its exit
+// status, its --summary-json and its log. Only the binary is used, never a header of it.
+#pragma once
+
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <functional>
+#include <iterator>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace hapticd::reference {
+
+struct HapticdRun {
+  int status = -1;  // exit status, 128 + signal when killed
+  nlohmann::json summary;
+  std::string log;
+  std::string faults() const {
+    return summary.is_object() ? summary.value("faults", nlohmann::json::array()).dump()
+                               : "(no summary: exit " + std::to_string(status) + ")";
+  }
+};
+
+// config/NAME of the source tree.
+inline std::string shipped(const std::string& name) {
+  return std::string(HAPTICD_SOURCE_DIR) + "/config/" + name;
+}
+
+// Runs `hapticd ARGS... --summary-json FILE` (HAPTICD_BINARY); `during(pid)` runs while it
+// does, then the process is waited for. The HID driver's kernel tests use it too.
+inline HapticdRun run_hapticd(std::vector<std::string> args,
+                              const std::function<void(pid_t)>& during = {}) {
+  static int n = 0;
+  const std::string stem =
+      "/tmp/hapticd-kt-" + std::to_string(::getpid()) + "-" + std::to_string(n++);
+  args.insert(args.begin(), HAPTICD_BINARY);
+  args.insert(args.end(), {"--summary-json", stem + ".json"});
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    if (!std::freopen((stem + ".err").c_str(), "w", stderr) ||
+        !std::freopen("/dev/null", "w", stdout))
+      _exit(127);
+    std::vector<char*> argv;
+    for (std::string& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    ::execv(HAPTICD_BINARY, argv.data());
+    _exit(127);
+  }
+  if (during) during(pid);
+  int st = 0;
+  ::waitpid(pid, &st, 0);
+  HapticdRun r;
+  r.status = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
+  std::ifstream j(stem + ".json");
+  if (j) r.summary = nlohmann::json::parse(j, nullptr, false);
+  std::ifstream e(stem + ".err");
+  r.log.assign(std::istreambuf_iterator<char>(e), {});
+  return r;
+}
+
+// `hapticd run --config CONFIG --set S... ARGS...`.
+inline HapticdRun run_hapticd(const std::string& config, const std::vector<std::string>& sets,
+                              std::vector<std::string> args,
+                              const std::function<void(pid_t)>& during = {}) {
+  std::vector<std::string> all = {"run", "--config", config};
+  for (const std::string& s : sets) all.insert(all.end(), {"--set", s});
+  all.insert(all.end(), args.begin(), args.end());
+  return run_hapticd(std::move(all), during);
+}
+
+// Waits up to `timeout` for `done`; false if it never held.
+inline bool wait_until(const std::function<bool()>& done,
+                       std::chrono::milliseconds timeout = std::chrono::seconds(20)) {
+  const auto end = std::chrono::steady_clock::now() + timeout;
+  while (std::chrono::steady_clock::now() < end) {
+    if (done()) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return done();
+}
+
+// Whether process `pid` (a child) has ended, without reaping it.
+inline bool ended(pid_t pid) {
+  siginfo_t info{};
+  return ::waitid(P_PID, static_cast<id_t>(pid), &info, WEXITED | WNOHANG | WNOWAIT) == 0 &&
+         info.si_pid == pid;
+}
+
+}  // namespace hapticd::reference

@@ -1,0 +1,107 @@
+// A reference OpenFFBoard: the FFBWheel main class of github Ultrawipf/OpenFFBoard, firmware at
+// commit 160af910, as a USB device on the raw gadget (raw_usb_hid.h). Written from that
+// firmware's source, not from hapticd's codecs:
+//   - its report descriptor (UserExtensions/Src/usb_hid_1ffb_desc.c, hid_1ffb_desc, and the
+//     blocks of UserExtensions/Inc/usb_hid_ffb_desc.h): report 1 the gamepad (64 buttons, eight
+//     16-bit axes), the vendor command reports 0xA1, and the PID reports with the ids of
+//     Inc/ffb_defs.h (Set Effect 1, Envelope 2, Condition 3, Periodic 4, Constant 5, Ramp 6,
+//     Effect Operation 0x0A, Block Free 0x0B, Device Control 0x0C, Device Gain 0x0D, Create New
+//     Effect 0x11, Block Load 0x12, PID Pool 0x13; PID State input 2);
+//   - FFBHIDMain::send_report: the gamepad report goes out only when it changed, or once
+//     reportSendCounter passes 100 / usb_report_rate (about 100 report intervals) without one;
+//     never while the IN endpoint is busy (tud_hid_n_ready);
+//   - HidFFB: effects created by the Create New Effect feature report (type = its index in the
+//     descriptor's list), Block Load and PID Pool answered through GET_REPORT, Device Control as
+//     a byte of one-bit flags (1 enable, 2 disable, 4 stop all, 8 reset, 16 pause, 32
+//     continue), Set Effect starting FFB when it is off, Block Free by index, and the PID State
+//     report sent only from new_effect and set_effect: Actuator Power always, Actuators Enabled
+//     and Effect Playing while FFB is on, Device Paused while it is off, and the declared Safety
+//     Switch never;
+//   - EffectsCalculator: a constant force is its magnitude times sin(direction) for one axis
+//     (direction enable set), times the effect's gain and the device gain (/255 each), and an
+//     effect with a finite duration stops that long after its start.
+// Left out: the optional constant-force low-pass filter (a delay a board may be configured
+// with), conditions, periodic effects and the encoder hardware: the axis is AxisPlant, read
+// every 1 ms FFB cycle.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <mutex>
+#include <optional>
+#include <span>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "axis_plant.h"
+#include "openffboard_descriptor.h"
+#include "raw_usb_hid.h"
+
+namespace hapticd::reference {
+
+struct OpenFfboardOptions {
+  std::string serial = "openffboard-ref";
+  double degrees = 900.0;         // axis.degrees: the X axis spans +-degrees/2 at +-32767
+  double torque_full_scale = 10;  // N m at magnitude 32767, both gains 255 (the power setting)
+  double inertia = 0.05;          // the wheel (kg m^2)
+  double damping = 0.05;          // its own damping (N m s/rad)
+  double start_position = -0.1;   // rad
+  std::size_t effects = 40;       // MAX_EFFECTS
+  int usb_report_rate = 1;        // FFB cycles (1 ms) per send_report call
+};
+
+class OpenFfboard {
+ public:
+  explicit OpenFfboard(const OpenFfboardOptions& o);
+  ~OpenFfboard();  // unplugged
+
+  AxisPlant& axis() { return axis_; }
+  // Effect blocks allocated now (created and not freed).
+  std::size_t allocated() const;
+  bool ffb_active() const { return ffb_active_.load(); }
+  std::uint64_t gamepad_reports() const { return reports_.load(); }
+  // The FFB main loop stops for good (a hung firmware): no more reports, the last torque
+  // stays, and what the host sends is taken by the USB stack and never acted on.
+  void hang() { hung_.store(true); }
+  void unplug() { usb_.unplug(); }
+  std::string error() const { return usb_.error(); }
+
+  static constexpr std::uint16_t kVendor = 0x1209, kProduct = 0xFFB0;
+
+ private:
+  struct Effect {
+    std::uint8_t type = 0;  // 0: free (FFB_EFFECT_NONE)
+    bool playing = false;
+    std::int16_t magnitude = 0;
+    std::uint8_t gain = 255;
+    double axis_magnitude = 0.0;
+    std::uint32_t duration_ms = 0xFFFF;  // FFB_EFFECT_DURATION_INFINITE
+    std::int64_t start_ms = 0;
+  };
+  void main_loop();
+  void send_report(int cycles);
+  double torque(std::int64_t now_ms);
+  void output(std::span<const std::uint8_t> r);
+  bool create_effect(std::span<const std::uint8_t> r);
+  std::optional<std::vector<std::uint8_t>> get_feature(std::uint8_t id);
+  void set_effect(std::span<const std::uint8_t> r);
+  void control(std::uint8_t bits);
+  void status_report();
+  std::int64_t now_ms() const;
+
+  OpenFfboardOptions o_;
+  AxisPlant axis_;
+  mutable std::mutex m_;  // the effects and the PID state (USB handlers vs the FFB loop)
+  std::vector<Effect> effects_;
+  std::uint8_t device_gain_ = 255;
+  std::uint8_t load_index_ = 1, load_status_ = 1;  // blockLoad_report
+  std::atomic<bool> ffb_active_{false}, hung_{false}, stop_{false};
+  std::atomic<std::uint64_t> reports_{0};
+  std::vector<std::uint8_t> last_sent_;
+  int send_counter_ = 0;  // reportSendCounter
+  RawUsbHid usb_;
+  std::thread loop_;
+};
+
+}  // namespace hapticd::reference
