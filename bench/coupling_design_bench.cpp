@@ -26,10 +26,8 @@ CouplingSpec example1(int order) {
 
 void run(benchmark::State& state, const SdpSolver& solver) {
   const CouplingSpec spec = example1(static_cast<int>(state.range(0)));
-  DesignOptions o;
-  o.max_ccl_iterations = 12;  // the command's default
   CouplingDesign d;
-  for (auto _ : state) d = design_coupling(spec, o, solver);
+  for (auto _ : state) d = design_coupling(spec, {}, solver);  // the command's default budget
   state.counters["gamma_felt"] = d.verdict.gamma;
   state.counters["sdp_solves"] = d.sdp_solves;
   state.counters["steps"] = d.steps;

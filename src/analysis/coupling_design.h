@@ -20,7 +20,7 @@ inline constexpr int kMaxDesignOrder = 8;  // C(z) of degree 8: LMIs of ~200 var
 
 struct DesignOptions {
   int max_steps = 24;           // outer steps (one cone complementarity run each)
-  int max_ccl_iterations = 30;  // SDPs per step (the paper's c)
+  int max_ccl_iterations = 12;  // SDPs per step (the paper's c; the command's default)
   double tolerance = 0.02;      // gamma's bracket closes at hi <= lo (1 + tolerance)
   int golden_steps = 3;         // golden-section steps on log d after the decade probes
 };

@@ -11,7 +11,7 @@ namespace hapticd::testing {
 std::string coupling_example();  // config/coupling-example.yaml: the paper's Example 1
 
 // `hapticd design-coupling --json EXTRA...`: its JSON object, with "exit_code" added. Expects
-// exit 0 or 1 and the first progress line on stderr.
+// exit 0 or 1 and a progress line on stderr per step the JSON reports.
 nlohmann::json design_coupling_json(const std::vector<std::string>& extra);
 
 // The designed coupling pasted into the configuration, as --set arguments.
