@@ -140,7 +140,7 @@ TEST(DesignCoupling, ThreeRefusedWallsEveryPrintedDesignPassesVerifiesAndSettles
 }
 
 // The 20 random refused walls (K, B, T, b, delay 0-2): about 50 s of CPU, labelled
-// `slow` (tests/service/CMakeLists.txt). All 20 were designed on CSDP 6.2 (2026-11-26).
+// `slow` (tests/service/CMakeLists.txt). All 20 were designed on CSDP 6.2 (2026-11-25).
 TEST(DesignCouplingSweep, TwentyRandomRefusedWallsEveryPrintedDesignPassesVerifiesAndSettles) {
   std::mt19937 rng(2025);
   const auto uniform = [&](double lo, double hi) {
