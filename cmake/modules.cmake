@@ -1,4 +1,4 @@
-# The layering of DESIGN.md §1, enforced by the build. Each module is one library whose include
+# The layering of docs/architecture.md, enforced by the build. Each module is one library whose include
 # root (build/include/<name>/) holds nothing but a link to the module's own folder, so
 # `#include "drivers/device.h"` resolves only in a target that links the drivers' library (or a
 # library that passes it on publicly). A module that includes what it may not use does not

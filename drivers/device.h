@@ -1,4 +1,4 @@
-// The one seam between control and hardware (DESIGN.md §6). The controller never sees a
+// The one seam between control and hardware (docs/devices.md). The controller never sees a
 // transport; a driver never sees the controller. The lifecycle is an explicit state machine,
 // enforced here for every driver (ros2_control's lifecycle, PX4's self-checking drivers):
 //

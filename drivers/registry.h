@@ -1,4 +1,4 @@
-// The driver registry (DESIGN.md §6): each driver this build has, with its config section, the
+// The driver registry (docs/devices.md): each driver this build has, with its config section, the
 // transport delay it declares as a function of that config and the sample period, its factory
 // for real hardware, and its loopback pair. `check`, `verify` and `run` all analyse the delay
 // declared here, so they analyse the same loop. Adding a driver touches its own folder and

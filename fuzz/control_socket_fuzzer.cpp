@@ -7,7 +7,7 @@
 // Invariants: the server never crashes or hangs; every complete line gets exactly one answer,
 // in order, and a line with no newline at the end of input gets none; every answer is one line
 // of JSON with "v": 1, "ok" true or false, and when false a non-empty "error" and a code of
-// DESIGN.md §9 (1, 2 or 3); a request that is a JSON object gets its "id" back unchanged.
+// docs/operations.md (1, 2 or 3); a request that is a JSON object gets its "id" back unchanged.
 #include <poll.h>
 #include <sys/socket.h>
 #include <sys/un.h>

@@ -1,5 +1,5 @@
 // The simulated one-axis device: mass m, physical damping b, motor force u held by a ZOH for a
-// whole sample period, and an operator (DESIGN.md §7):
+// whole sample period, and an operator (docs/devices.md):
 //   m dv/dt = -b v + u + f_op
 // hand: f_op = k_h (x_s(t) - x) - b_h v; force: f_op = profile; none: f_op = 0;
 // motion/replay: the position is imposed (linear between samples) and f_op is whatever it takes.

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The layering of DESIGN.md §1, checked on every source file of the project.
+"""The layering of docs/architecture.md, checked on every source file of the project.
 
 Each module may include the headers of the modules listed for it and nothing else; the core
 (analysis, config, control, gate) includes no OS header and does no I/O. The build already

@@ -1,4 +1,4 @@
-// The CAN driver's entry in the registry (DESIGN.md §6): device.can, the delay each profile
+// The CAN driver's entry in the registry (docs/drivers/can.md): device.can, the delay each profile
 // declares, the CiA 402 and ODrive devices on a SocketCAN interface or over a socketpair with
 // their simulated drive, the simulated drive on a real interface (`hapticd peer --endpoint
 // vcan0`), and the bus load `hapticd check` reports.

@@ -73,7 +73,7 @@ std::shared_ptr<const config::DriverSettings> read_can_section(config::schema::M
 // The settings of a loaded config whose device.driver is can. Throws DeviceError otherwise.
 const CanSettings& can_settings(const config::Config& cfg);
 
-// Whole samples between write() and the force acting (DESIGN.md §6): 1 for CiA 402 (an RPDO
+// Whole samples between write() and the force acting (docs/drivers/can.md): 1 for CiA 402 (an RPDO
 // takes effect at the next SYNC) and for ODrive on request (the answer to this tick's request
 // is the position the next tick acts on); ceil(period / T) for ODrive's cyclic message.
 int declared_delay(const config::Config& cfg);

@@ -1,4 +1,4 @@
-// The one class that knows SocketCAN (DESIGN.md §6): a non-blocking CAN_RAW socket on an
+// The one class that knows SocketCAN (docs/drivers/can.md): a non-blocking CAN_RAW socket on an
 // interface, with receive filters for the node's ids, error frames enabled and decoded into
 // BusEvents, and SO_TIMESTAMPNS kernel receive times converted to CLOCK_MONOTONIC. The same
 // class adopts one end of io::seqpacket_pair(), where each message is one struct can_frame

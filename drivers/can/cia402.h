@@ -1,7 +1,7 @@
 // CiA 402 (drives and motion control) as hapticd uses it, pure: the objects, the power state
 // machine seen from both ends (the statusword a drive reports, the controlword that moves it
 // on, and - for the simulated drive - how a controlword moves a state), and the PDO mapping
-// of cyclic synchronous torque that the driver configures or verifies (DESIGN.md §6).
+// of cyclic synchronous torque that the driver configures or verifies (docs/drivers/can.md).
 #pragma once
 
 #include <cstdint>
@@ -51,7 +51,7 @@ struct InterpolationPeriod {
 };
 InterpolationPeriod interpolation_period(double period_s) noexcept;
 
-// Controlword commands (the bits that matter; DESIGN.md §6).
+// Controlword commands (the bits that matter; docs/drivers/can.md).
 inline constexpr std::uint16_t kCwDisableVoltage = 0x00;
 inline constexpr std::uint16_t kCwQuickStop = 0x02;
 inline constexpr std::uint16_t kCwShutdown = 0x06;

@@ -1,4 +1,4 @@
-// A CiA 402 drive in cyclic synchronous torque (DESIGN.md §6), driven over CANopen.
+// A CiA 402 drive in cyclic synchronous torque (docs/drivers/can.md), driven over CANopen.
 //
 // configure: NMT pre-operational, device type 0x1000 checked for profile 402, the power stage
 // switched off (controlword 0x00, "switch on disabled"), rated torque 0x6076 and the drive's

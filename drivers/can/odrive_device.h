@@ -1,5 +1,5 @@
 // An ODrive axis in closed-loop torque control with passthrough input, over CAN Simple
-// (DESIGN.md §6), firmware 0.5 or 0.6 (configured, or detected: 0.6 answers Get_Version).
+// (docs/drivers/can.md), firmware 0.5 or 0.6 (configured, or detected: 0.6 answers Get_Version).
 //
 // configure: the axis watchdog fed from here on (0.5 runs it in every axis state: an axis
 // nobody talked to since power-on reports WATCHDOG_TIMER_EXPIRED), the firmware found, a

@@ -70,18 +70,19 @@ bool GpioDevice::logical(const Edge& e) const noexcept {
   return e.line == Line::kFault ? e.level != s_.fault_active_low : e.level != s_.encoder_active_low;
 }
 
+// The channel is enabled from configure on, whatever the device's state: a stop is duty 0 on
+// the enabled channel (sysfs_pwm.h says why).
 OutputState GpioDevice::output(std::uint64_t duty_ns) const noexcept {
   OutputState o;
   o.duty_ns = duty_ns;
   o.period_ns = s_.pwm_period_ns;
-  o.pwm_enabled = pwm_enabled_;
+  o.pwm_enabled = true;
   o.direction_level = direction_level_;
   o.inversed = s_.pwm_inversed;
   return o;
 }
 
 DeviceInfo GpioDevice::on_configure() {
-  pwm_enabled_ = s_.on_disable == DisableMode::kBrake;
   direction_level_ = s_.direction_positive_high;
   const std::uint8_t levels = logical_levels(transport_->open(output(0)));
   decoder_.reset(levels);
@@ -102,15 +103,11 @@ DeviceInfo GpioDevice::on_configure() {
   return info;
 }
 
-void GpioDevice::on_enable() {
-  pwm_enabled_ = true;
-  if (const int e = transport_->write_output(output(0))) {
-    throw DeviceError(std::string("gpio: cannot enable the PWM: ") + std::strerror(e));
-  }
-}
+// The channel runs at duty 0 since configure: output is on from the first non-zero duty.
+void GpioDevice::on_enable() {}
 
+// Duty 0 on the enabled channel: the one stop whose output Linux defines.
 void GpioDevice::on_disable() noexcept {
-  pwm_enabled_ = s_.on_disable == DisableMode::kBrake;
   transport_->write_output(output(0));  // best effort: the transport may be what failed
 }
 

@@ -1,5 +1,5 @@
-// The GPIO Device (DESIGN.md §6): a quadrature encoder on two GPIO lines decoded x4 from the
-// kernel's timestamped edges, an optional index line that re-zeroes the count, an optional
+// The GPIO Device (docs/drivers/gpio.md): a quadrature encoder on two GPIO lines decoded x4 from
+// the kernel's timestamped edges, an optional index line that re-zeroes the count, an optional
 // motor-driver fault line, and a motor driver taking a sysfs PWM duty plus a direction line:
 // duty = |u| / max_force * period. The transport (kernel or loopback peer) is behind
 // gpio_transport.h, so this code is the same for both.
@@ -81,7 +81,6 @@ class GpioDevice final : public Device {
   int declared_delay_;
   QuadratureDecoder decoder_;
   std::array<Edge, kEdgeBuffer> edges_{};
-  bool pwm_enabled_ = false;
   bool direction_level_ = false;
   bool fault_line_ = false;
   std::int64_t previous_complete_ns_ = 0;  // the last read's EdgeRead::complete_until_ns

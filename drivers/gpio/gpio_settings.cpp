@@ -142,8 +142,12 @@ std::shared_ptr<const config::DriverSettings> read_gpio_section(MapReader& m,
   }
   read_encoder(m, *s);
   read_pwm(m, *s);
-  if (const auto v = config::schema::read_choice(d, m.take("on_disable"), {"brake", "coast"})) {
-    s->on_disable = *v == 0 ? DisableMode::kBrake : DisableMode::kCoast;
+  if (const Field f = m.take("on_disable"); f.present) {
+    d.error(f.key_mark, f.path,
+            "is no longer a setting: hapticd stops the motor with duty 0 on the enabled PWM "
+            "channel, the only stop Linux's PWM API defines (a disabled channel's output is "
+            "undefined); whether the motor then brakes or coasts is the motor driver's decay "
+            "mode, in its data sheet (docs/drivers/gpio.md). Remove the key");
   }
   if (!s->line_index && m.take("index_count").present) {
     const Field f = m.take("index_count");

@@ -11,11 +11,6 @@
 
 namespace hapticd::drivers::gpio {
 
-enum class DisableMode : std::uint8_t {
-  kBrake,  // duty 0 with the PWM channel left enabled: its output held at the idle level
-  kCoast,  // duty 0 and the PWM channel disabled ('enable' 0)
-};
-
 // The missed-edge tolerance is a window of that many edge times, preallocated.
 inline constexpr long long kMaxMissedEdgeFault = 10000;
 
@@ -44,7 +39,8 @@ struct GpioSettings final : config::DriverSettings {
   unsigned pwm_channel = 0;
   std::uint64_t pwm_period_ns = 50'000;
   bool pwm_inversed = false;
-  DisableMode on_disable = DisableMode::kCoast;
+  // No stop mode: the motor is stopped with duty 0 on the enabled channel, the one output
+  // level Linux's PWM API defines (docs/drivers/gpio.md, "Stopping the motor").
 };
 
 // The registry's read_section for device.gpio.

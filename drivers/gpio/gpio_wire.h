@@ -41,7 +41,7 @@ inline constexpr std::uint8_t kLevelFault = 1u << 3;
 struct Output {
   std::uint64_t duty_ns = 0;
   std::uint64_t period_ns = 0;
-  bool pwm_enabled = false;
+  bool pwm_enabled = false;      // the channel's enable: always on from the driver (sysfs_pwm.h)
   bool direction_level = false;  // the direction line's electrical level
   bool inversed = false;         // PWM polarity
 };

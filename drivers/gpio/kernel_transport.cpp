@@ -21,7 +21,7 @@ std::uint8_t KernelTransport::open(const OutputState& off) {
   lines_.open(chip_, offsets_, off.direction_level);
   direction_level_ = off.direction_level;
   try {
-    pwm_.open(channel_, off.pwm_enabled);
+    pwm_.open(channel_);  // enabled at duty 0 (sysfs_pwm.h: the one defined stop)
     return lines_.read_levels();
   } catch (...) {
     close();
@@ -52,13 +52,13 @@ EdgeRead KernelTransport::read_edges(std::span<Edge> buffer) noexcept {
 }
 
 // RT-safe: called every tick. The direction before the duty, so a new duty never drives the
-// old direction.
+// old direction. The channel stays enabled (out.pwm_enabled is always true: sysfs_pwm.h).
 int KernelTransport::write_output(const OutputState& out) noexcept {
   if (out.direction_level != direction_level_) {
     if (const int e = lines_.set_direction(out.direction_level)) return e;
     direction_level_ = out.direction_level;
   }
-  return pwm_.write(out.duty_ns, out.pwm_enabled);
+  return pwm_.write(out.duty_ns);
 }
 
 }  // namespace hapticd::drivers::gpio

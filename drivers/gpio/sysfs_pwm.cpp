@@ -51,7 +51,7 @@ std::string read_first_word(const std::string& path) {
 
 }  // namespace
 
-void SysfsPwm::open(const PwmChannel& ch, bool enabled) {
+void SysfsPwm::open(const PwmChannel& ch) {
   close();
   const std::string chip_dir = ch.sysfs_root + "/pwmchip" + std::to_string(ch.chip);
   struct stat st {};
@@ -80,35 +80,36 @@ void SysfsPwm::open(const PwmChannel& ch, bool enabled) {
                       std::to_string(kExportWaitMs) + " ms after the export: " + err_text(errno) +
                       " (a kernel driver may hold the channel)");
   }
-  // Order matters: the core refuses a period of 0 (a fresh channel's) even to disable it, a
-  // period below the duty, and a polarity change while enabled.
-  if (read_first_word(dir + "/enable") == "1") write_text(dir + "/enable", "0");
+  // Order matters. A duty left non-zero goes to 0 before anything else: a channel some earlier
+  // run or tool left driving stops at once, at its defined level while enabled (a fresh
+  // channel's duty is 0 already, and some kernels' core refuses any write while its period is
+  // 0). Then the period (the core refuses one below the duty), and the polarity, which the
+  // core changes only on a disabled channel.
   const std::string duty = read_first_word(dir + "/duty_cycle");
   std::uint64_t current = 0;
   std::from_chars(duty.data(), duty.data() + duty.size(), current);  // unreadable: 0
-  if (current > ch.period_ns) write_text(dir + "/duty_cycle", "0");
+  if (current != 0) write_text(dir + "/duty_cycle", "0");
   write_text(dir + "/period", std::to_string(ch.period_ns));
   write_text(dir + "/duty_cycle", "0");
+  bool enabled = read_first_word(dir + "/enable") == "1";
   const char* polarity = ch.inversed ? "inversed" : "normal";
-  if (read_first_word(dir + "/polarity") != polarity) write_text(dir + "/polarity", polarity);
-  if (enabled) write_text(dir + "/enable", "1");
+  if (read_first_word(dir + "/polarity") != polarity) {
+    if (enabled) write_text(dir + "/enable", "0");
+    enabled = false;
+    write_text(dir + "/polarity", polarity);
+  }
+  if (!enabled) write_text(dir + "/enable", "1");
 
   duty_fd_.reset(::open((dir + "/duty_cycle").c_str(), O_WRONLY | O_CLOEXEC));
-  enable_fd_.reset(::open((dir + "/enable").c_str(), O_WRONLY | O_CLOEXEC));
-  if (!duty_fd_ || !enable_fd_) {
+  if (!duty_fd_) {
     const int e = errno;
-    close();
-    throw DeviceError("gpio: cannot open " + dir + "'s duty_cycle and enable: " + err_text(e));
+    throw DeviceError("gpio: cannot open " + dir + "/duty_cycle: " + err_text(e));
   }
   dir_ = dir;
   duty_ns_ = 0;
-  enabled_ = enabled;
 }
 
-void SysfsPwm::close() noexcept {
-  duty_fd_.reset();
-  enable_fd_.reset();
-}
+void SysfsPwm::close() noexcept { duty_fd_.reset(); }
 
 // RT-safe. One write(2) of the decimal value and a newline; sysfs ignores the file offset.
 int SysfsPwm::write_value(int fd, std::uint64_t value) noexcept {
@@ -123,17 +124,11 @@ int SysfsPwm::write_value(int fd, std::uint64_t value) noexcept {
 }
 
 // RT-safe: called every tick.
-int SysfsPwm::write(std::uint64_t duty_ns, bool enabled) noexcept {
+int SysfsPwm::write(std::uint64_t duty_ns) noexcept {
   if (!duty_fd_) return EBADF;
-  // Disabling: duty first, so the channel is at zero whatever the enable write does.
-  if (duty_ns != duty_ns_) {
-    if (const int e = write_value(duty_fd_.get(), duty_ns)) return e;
-    duty_ns_ = duty_ns;
-  }
-  if (enabled != enabled_) {
-    if (const int e = write_value(enable_fd_.get(), enabled ? 1 : 0)) return e;
-    enabled_ = enabled;
-  }
+  if (duty_ns == duty_ns_) return 0;
+  if (const int e = write_value(duty_fd_.get(), duty_ns)) return e;
+  duty_ns_ = duty_ns;
   return 0;
 }
 

@@ -64,7 +64,7 @@ struct HidSettings final : config::DriverSettings {
 // Whole samples between write() and the force acting, as the gate analyses them: a command
 // waits up to one polling interval to go out and its answer up to one to come back, so the
 // answer to the command of tick k is read at tick k + ceil(2 P / T), one tick later than an
-// in-process device would give it. 1 at 1 kHz with bInterval 1 ms (DESIGN.md §6).
+// in-process device would give it. 1 at 1 kHz with bInterval 1 ms (docs/drivers/hid.md).
 int declared_delay_samples(double poll_interval_ms, double sample_period_s) noexcept;
 
 }  // namespace hapticd::drivers::hid

@@ -1,9 +1,9 @@
-// A loopback peer: the simulated device at the other end of a driver's transport (DESIGN.md
-// §6). It owns a SimAxis, speaks the driver's own bytes on its end of a socketpair (or of a
-// real kernel facility: vcan, a USB HID gadget, gpio-sim), and steps the plant on the
-// protocol's own trigger - an output report, a CAN SYNC, a PWM write - as the device's
-// firmware would. `hapticd run --loopback` and the conformance suite drive a driver against
-// its peer, so the driver's protocol code runs exactly as it would with hardware.
+// A loopback peer: the simulated device at the other end of a driver's transport (docs/devices.md).
+// It owns a SimAxis, speaks the driver's own bytes on its end of a socketpair (or of a real kernel
+// facility: vcan, a USB HID gadget, gpio-sim), and steps the plant on the protocol's own trigger -
+// an output report, a CAN SYNC, a PWM write - as the device's firmware would. `hapticd run
+// --loopback` and the conformance suite drive a driver against its peer, so the driver's protocol
+// code runs exactly as it would with hardware.
 #pragma once
 
 #include <string_view>

@@ -91,7 +91,7 @@ StiffnessLimit max_stiffness(const std::function<TransferFunction(double)>& make
     return std::isfinite(b_req) && b_req <= available_damping;  // an overflow never passes
   };
   // 2^-30 .. 2^60 N/m covers every physical wall; the pass set is an interval for the walls
-  // of DESIGN.md §3 (b_req is convex in K without coupling), and the scan finds the last
+  // of docs/math.md (b_req is convex in K without coupling), and the scan finds the last
   // pass-to-fail transition otherwise.
   constexpr int kLowExp = -30;
   constexpr int kHighExp = 60;

@@ -1,4 +1,4 @@
-// The linear pieces of DESIGN.md §3 as transfer functions: the environment filter E(z) of the
+// The linear pieces of docs/math.md as transfer functions: the environment filter E(z) of the
 // virtual wall, the contact map H = E / (1 + E C) with the virtual coupling, and the ZOH
 // discretisation G(z) of the device with an operator model (for the oscillation check).
 #pragma once

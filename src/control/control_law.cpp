@@ -60,7 +60,7 @@ ControlLaw make_control_law(const config::Config& cfg) {
   law.e0 = law.environment.num[0];
   law.c0 = law.has_coupling ? law.coupling.num[0] : 0.0;
   if (law.e0 < 0.0 || law.c0 < 0.0) {
-    // DESIGN.md §3: the contact algebraic loop has a unique solution only for e0, c0 >= 0.
+    // docs/math.md: the contact algebraic loop has a unique solution only for e0, c0 >= 0.
     throw std::invalid_argument("wall: direct feed-through of E and C must be >= 0");
   }
   law.inv_one_plus_e0c0 = 1.0 / (1.0 + law.e0 * law.c0);

@@ -1,5 +1,5 @@
 // Everything the per-tick controller needs, resolved from the configuration once, off the RT
-// thread: normalised filter coefficients and the cached constants of DESIGN.md §3, so the
+// thread: normalised filter coefficients and the cached constants of docs/math.md, so the
 // tick multiplies and never divides.
 #pragma once
 

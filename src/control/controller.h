@@ -1,4 +1,4 @@
-// The per-tick contact law of DESIGN.md §3: penetration p = n (x - x0), the unilateral
+// The per-tick contact law of docs/math.md: penetration p = n (x - x0), the unilateral
 // nonlinearity xi(p) = max(p, 0), the environment filter E(z), the virtual coupling C(z)
 // through the closed-form solution of its algebraic loop, the delay line, then no_pull and
 // saturation (outside the linear filters, as outside the theorems).

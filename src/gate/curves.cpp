@@ -35,7 +35,7 @@ analysis::TransferFunction oscillation_loop(const config::Config& cfg,
                                             const analysis::TransferFunction& environment,
                                             const std::optional<analysis::TransferFunction>& c,
                                             int delay_samples) {
-  // The loop seen by xi(.): E (z^-d G + C), which is DESIGN.md's E z^-d G without coupling.
+  // The loop seen by xi(.): E (z^-d G + C), which is docs/math.md's E z^-d G without coupling.
   const analysis::TransferFunction g = analysis::device_operator_zoh(
       cfg.device.mass, cfg.device.damping, cfg.analysis.operator_stiffness,
       cfg.analysis.operator_damping, cfg.loop.sample_period_s());

@@ -1,4 +1,4 @@
-// The startup gate (DESIGN.md §4): the analysis of the system that will actually run — the
+// The startup gate (docs/math.md): the analysis of the system that will actually run — the
 // configured wall and coupling, the configured delay plus the driver's declared delay, T, b,
 // eta and margin — and a verdict with the numbers a person needs to fix a failure.
 #pragma once

@@ -9,7 +9,8 @@
 
 namespace hapticd::gate {
 
-// Keys of DESIGN/issue #2; null where a value does not apply (or is infinite).
+// Keys of `hapticd check --json` (docs/operations.md); null where a value does not apply (or is
+// infinite).
 nlohmann::json gate_to_json(const GateReport& r);
 
 std::string gate_to_text(const GateReport& r, const config::Config& cfg);

@@ -1,5 +1,5 @@
 // The one-slot mailbox through which a live reload hands the RT thread a new control law
-// (DESIGN.md §2: a swap at a tick boundary). The reload builds, checks and gates the new
+// (docs/architecture.md: a swap at a tick boundary). The reload builds, checks and gates the new
 // Controller off the RT thread (allocating as it likes), offer()s it, and the RT thread takes
 // it at the start of its next tick without allocating, locking or waiting; the controller it
 // replaced comes back through retire() for the offering side to destroy. A refused reload is

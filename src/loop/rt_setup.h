@@ -1,6 +1,6 @@
-// Real-time set-up of the process and of the RT thread (DESIGN.md §5): mlockall, SCHED_FIFO,
-// CPU affinity, timer slack, stack prefault. Each step reports what it achieved so the daemon
-// can say which guarantees were in force; nothing here fails silently.
+// Real-time set-up of the process and of the RT thread (docs/architecture.md): mlockall,
+// SCHED_FIFO, CPU affinity, timer slack, stack prefault. Each step reports what it achieved so the
+// daemon can say which guarantees were in force; nothing here fails silently.
 #pragma once
 
 #include <cstdint>

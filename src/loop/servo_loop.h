@@ -1,7 +1,7 @@
-// The fixed-rate servo loop of DESIGN.md §5: read the device, step the controller, write the
-// force, record the tick. `realtime` sleeps to an absolute CLOCK_MONOTONIC schedule;
-// `freerun` never sleeps (sim only: thousands of simulated seconds per second, and byte-
-// identical logs because no host timing enters the records).
+// The fixed-rate servo loop of docs/architecture.md: read the device, step the controller, write
+// the force, record the tick. `realtime` sleeps to an absolute CLOCK_MONOTONIC schedule; `freerun`
+// never sleeps (sim only: thousands of simulated seconds per second, and byte- identical logs
+// because no host timing enters the records).
 #pragma once
 
 #include <atomic>

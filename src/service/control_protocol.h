@@ -6,7 +6,7 @@
 //            "config": "<YAML text>", "source": "<name for messages>"}    (config: reload only)
 // Response: {"v": 1, "id": <echoed>, "ok": true, ...the command's members}
 //           {"v": 1, "id": <echoed>, "ok": false, "error": "<why>", "code": <exit code>}
-// `code` is the exit code of DESIGN.md §9 a client reports for the failure: 2 a malformed
+// `code` is the exit code of docs/operations.md a client reports for the failure: 2 a malformed
 // request or an invalid configuration (or one that needs a restart), 3 the gate refused it,
 // 1 anything else (no fault to clear, a device that faults again, permission denied).
 #pragma once

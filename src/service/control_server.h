@@ -1,4 +1,4 @@
-// The control socket of a running daemon (DESIGN.md §11): a Unix stream socket, mode 0660,
+// The control socket of a running daemon (docs/operations.md): a Unix stream socket, mode 0660,
 // group `hapticd` (the daemon's own group where there is no such group), one JSON object per
 // line (control_protocol.h). It runs on its own thread and is non-blocking throughout, so no
 // client - slow, silent, malicious - can stall the servo or the other clients: requests are

@@ -1,4 +1,4 @@
-// Process exit codes (DESIGN.md §9).
+// Process exit codes (docs/operations.md).
 #pragma once
 
 namespace hapticd {

@@ -1,6 +1,6 @@
 // hapticctl: the control socket's command-line client (docs/operations.md). One request per
 // run; human output by default, the daemon's answer as one JSON object with --json. Exit codes
-// follow DESIGN.md §9: 0 done, 1 refused or failed (or no daemon to ask), 2 usage or an
+// follow docs/operations.md: 0 done, 1 refused or failed (or no daemon to ask), 2 usage or an
 // invalid configuration, 3 a reload the gate refused.
 #include <CLI/CLI.hpp>
 #include <cerrno>

@@ -1,5 +1,5 @@
 // hapticd: the one place where the sub-commands are wired to the command line and where
-// every error class is mapped to its exit code (DESIGN.md §9).
+// every error class is mapped to its exit code (docs/operations.md).
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 

@@ -1,4 +1,4 @@
-// The engine of `hapticd replay` (DESIGN.md §8, §12): a tick log's positions fed through a
+// The engine of `hapticd replay` (docs/operations.md): a tick log's positions fed through a
 // controller built from the log's own configuration - switching law at every reload marker,
 // starting afresh at every re-arming, as the run did, with the passivity observer and
 // controller the run had - must reproduce the logged forces bit for bit; fed through another

@@ -21,7 +21,7 @@ struct RunOptions {
   bool on_fault_hold = false;
 };
 
-// Returns the process exit code (DESIGN.md §9). A stop signal taken from `signals` at any
+// Returns the process exit code (docs/operations.md). A stop signal taken from `signals` at any
 // moment before output is enabled means output is never enabled (exit 0, 0 ticks); SIGHUP
 // reloads the configuration file (with the same --set arguments) through the gate.
 int run_command(const RunOptions& options, SignalWatch& signals);

@@ -36,7 +36,7 @@ class RunSession final : public ControlHandler {
   RunSession(const RunOptions& options, config::Config cfg, SignalWatch& signals);
   ~RunSession() override;
 
-  // The whole run; returns the exit code (DESIGN.md §9).
+  // The whole run; returns the exit code (docs/operations.md).
   int run();
 
   // Control socket thread: status, stop, reload, clear-fault.

@@ -1,7 +1,7 @@
 // Bounded single-producer single-consumer ring: the one channel from the RT thread to the
-// telemetry writer thread (DESIGN.md §2, §8). A full ring never blocks the producer: the
-// record is dropped and counted, and the count is stamped on the next record pushed, so the
-// consumer learns exactly where in the stream the loss happened (see pop_run).
+// telemetry writer thread (docs/architecture.md, docs/operations.md). A full ring never blocks the
+// producer: the record is dropped and counted, and the count is stamped on the next record pushed,
+// so the consumer learns exactly where in the stream the loss happened (see pop_run).
 //
 // Template contract:
 //   - T is trivially copyable and default constructible (records are copied by assignment

@@ -1,4 +1,4 @@
-// Every closed form of Roberts, Moore & Colgate that DESIGN.md §3 lists, reproduced
+// Every closed form of Roberts, Moore & Colgate that docs/math.md lists, reproduced
 // by the numerical bound to a relative 1e-9.
 #include <gtest/gtest.h>
 

@@ -1,5 +1,5 @@
 // A capture of the bus during a short run (this test's own CAN_RAW listener on vcan0, as
-// candump would see it), decoded with the codecs into the sequence DESIGN.md §6 describes:
+// candump would see it), decoded with the codecs into the sequence docs/drivers/can.md describes:
 // start-up, the cyclic exchange, and the disable.
 #include <gtest/gtest.h>
 

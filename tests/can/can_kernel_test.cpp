@@ -1,7 +1,7 @@
 // The CAN driver on a real kernel bus (vcan0) in the kernel test machine: `hapticd run` with
 // each example configuration against `hapticd peer` renders the wall as the sim driver does;
 // every injected fault ends the run with exit 1, the cause named and zero force; a capture of
-// the bus decodes to the frame sequence of DESIGN.md §6; and a killed hapticd leaves a drive
+// the bus decodes to the frame sequence of docs/drivers/can.md; and a killed hapticd leaves a drive
 // that switches itself off (its own watchdog on hapticd).
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-// The contact law against sequences computed by hand from DESIGN.md §3.
+// The contact law against sequences computed by hand from docs/math.md.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -11,7 +11,7 @@
 namespace hapticd::control {
 namespace {
 
-// DESIGN.md §3's law as written: these tests start inside the wall on purpose, so the
+// docs/math.md's law as written: these tests start inside the wall on purpose, so the
 // start-up arming (tested on its own below) is off.
 ControlLaw pure_law(const config::Config& c) {
   ControlLaw law = make_control_law(c);

@@ -1,4 +1,4 @@
-// The conformance suite (DESIGN.md §6): every registered driver, with its loopback peer, must
+// The conformance suite (docs/devices.md): every registered driver, with its loopback peer, must
 // keep the lifecycle, command zero force on disable and on every fault class, detect stale
 // data and sequence gaps, and never allocate in read/write, whatever the configuration. A
 // driver joins by adding its example configurations to kCases; a registered driver without

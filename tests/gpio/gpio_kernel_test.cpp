@@ -19,6 +19,7 @@
 #include "config/config_loader.h"
 #include "drivers/gpio/gpio_device.h"
 #include "drivers/gpio/gpiod_lines.h"
+#include "drivers/gpio/sysfs_pwm.h"
 #include "drivers/registry.h"
 #include "gpio_sim_chip.h"
 #include "pwm_sim.h"
@@ -64,6 +65,12 @@ const std::vector<std::string> kGuestSets = {
     "device.sim.operator.setpoint.start=1", "device.sim.operator.setpoint.ramp=5",
     "device.sim.operator.setpoint.hold=2"};
 
+// N of the simulator's /sys/class/pwm/pwmchipN.
+unsigned pwm_chip_number(const PwmSim& pwm) {
+  const std::string p = pwm.chip_path();
+  return static_cast<unsigned>(std::stoul(p.substr(p.rfind("pwmchip") + 7)));
+}
+
 struct Machine {
   GpioSimChip chip{5, "hapticd-gpio-sim"};
   PwmSim pwm;
@@ -73,14 +80,10 @@ struct Machine {
     if (realpath(link.c_str(), buf) == nullptr) throw std::runtime_error("no " + link);
     return buf;
   }
-  std::string pwm_chip_number() const {
-    const std::string p = pwm.chip_path();
-    return p.substr(p.rfind("pwmchip") + 7);
-  }
   std::vector<std::string> sets() const {
     std::vector<std::string> s = kGuestSets;
     s.push_back("device.gpio.chip=" + chip.label());  // found by its label
-    s.push_back("device.gpio.pwm.chip=" + pwm_chip_number());
+    s.push_back("device.gpio.pwm.chip=" + std::to_string(pwm_chip_number(pwm)));
     return s;
   }
   std::string endpoint() const {
@@ -108,7 +111,9 @@ TEST(GpioKernel, DeviceOnGpioSimAndThePwmSimulator) {
   device->configure();
   EXPECT_NE(device->info().description.find("hapticd-gpio-sim"), std::string::npos)
       << device->info().description;
-  EXPECT_FALSE(m.pwm.applied(0).enabled) << "coast: configured with the channel off";
+  // Issue 22: enabled at configure, at duty 0 (a disabled channel's output is undefined).
+  EXPECT_TRUE(m.pwm.applied(0).enabled) << "configured with the channel on, at duty 0";
+  EXPECT_EQ(m.pwm.applied(0).duty_cycle_ns, 0u);
   device->enable();
   PositionSample s;
   ASSERT_EQ(device->read(s), IoStatus::kOk);
@@ -142,7 +147,8 @@ TEST(GpioKernel, DeviceOnGpioSimAndThePwmSimulator) {
   EXPECT_NE(device->describe_fault().find("fault line"), std::string::npos);
   EXPECT_EQ(m.pwm.applied(0).duty_cycle_ns, 0u);
   device->close();
-  EXPECT_FALSE(m.pwm.applied(0).enabled);
+  EXPECT_TRUE(m.pwm.applied(0).enabled) << "closed as every stop: duty 0, channel on";
+  EXPECT_EQ(m.pwm.applied(0).duty_cycle_ns, 0u);
   // Configured again: the channel is still exported (the export answers EBUSY), which is fine;
   // the fault line still active refuses it.
   EXPECT_THROW(device->configure(), DeviceError);
@@ -161,6 +167,55 @@ TEST(GpioKernel, DeviceOnGpioSimAndThePwmSimulator) {
   device->close();
 }
 
+// Issue 22, on the real PWM core: a channel some earlier run or tool left enabled and driving,
+// at a longer period than its duty and the other polarity, is taken over in an order the core
+// accepts (duty 0 first, the polarity changed only while the channel is at duty 0) and ends
+// enabled at duty 0; a stop and the close leave it there, the one state whose output Linux
+// defines (Documentation/driver-api/pwm.rst).
+TEST(GpioKernel, SysfsPwmTakesOverAChannelLeftDrivingAndStopsEnabledAtZero) {
+  PwmSim sim;
+  ASSERT_GE(sim.npwm(), 2u);
+  const std::string dir = sim.chip_path() + "/pwm1";
+  if (!kernel_test::path_exists(dir)) kernel_test::write_text(sim.chip_path() + "/export", "1");
+  struct Unexport {  // however the test ends: the PWM simulator's own test exports it again
+    std::string chip;
+    ~Unexport() {
+      try {
+        kernel_test::write_text(chip + "/unexport", "1");
+      } catch (const kernel_test::KernelFacilityError&) {
+      }
+    }
+  } unexport{sim.chip_path()};
+  kernel_test::wait_until([&] { return kernel_test::path_exists(dir + "/enable"); }, 5000ms,
+                          dir + " after export");
+  kernel_test::write_text(dir + "/period", "1000000");
+  kernel_test::write_text(dir + "/duty_cycle", "600000");
+  kernel_test::write_text(dir + "/polarity", "normal");
+  kernel_test::write_text(dir + "/enable", "1");
+  ASSERT_TRUE(sim.applied(1).enabled);
+  ASSERT_EQ(sim.applied(1).duty_cycle_ns, 600'000u) << "left driving";
+
+  SysfsPwm pwm;
+  PwmChannel ch;
+  ch.chip = pwm_chip_number(sim);
+  ch.channel = 1;
+  ch.period_ns = 50'000;  // below the duty left behind
+  ch.inversed = true;
+  ASSERT_NO_THROW(pwm.open(ch));
+  PwmApplied a = sim.applied(1);
+  EXPECT_TRUE(a.enabled);
+  EXPECT_EQ(a.duty_cycle_ns, 0u);
+  EXPECT_EQ(a.period_ns, 50'000u);
+  EXPECT_TRUE(a.inversed);
+  ASSERT_EQ(pwm.write(20'000), 0);
+  EXPECT_EQ(sim.applied(1).duty_cycle_ns, 20'000u);
+  ASSERT_EQ(pwm.write(0), 0);
+  pwm.close();
+  a = sim.applied(1);
+  EXPECT_TRUE(a.enabled) << "never disabled by a stop or the close";
+  EXPECT_EQ(a.duty_cycle_ns, 0u);
+}
+
 // `hapticd run` against the peer on gpio-sim and the PWM simulator.
 struct RunResult {
   int exit_code = -1;
@@ -169,8 +224,9 @@ struct RunResult {
 };
 
 // hapticd takes seconds to start in an emulated guest, more on a loaded host: the peer, and
-// with it the plant's clock and the hand's press, starts (start_peer) once hapticd has enabled
-// the PWM. At the start count the lines are at 00, where gpio-sim has them: no edge then.
+// with it the plant's clock and the hand's press, starts (start_peer) once hapticd says it has
+// enabled output (the PWM channel itself is enabled at duty 0 from configure on, before the
+// gate). At the start count the lines are at 00, where gpio-sim has them: no edge then.
 RunResult run_hapticd(const Machine& m, double duration_s, const std::vector<std::string>& extra,
                       const std::function<sim::gpio::GpioPeer&()>& start_peer,
                       std::optional<sim::gpio::WireFault> fault) {
@@ -182,10 +238,10 @@ RunResult run_hapticd(const Machine& m, double duration_s, const std::vector<std
                                    "--summary-json", dir + "/summary.json"};
   for (const auto& s : m.sets()) args.insert(args.end(), {"--set", s});
   for (const auto& s : extra) args.insert(args.end(), {"--set", s});
-  const std::uint64_t applies = m.pwm.applied(0).applies;
+  const std::string out = dir + "/output.txt";
+  unlink(out.c_str());  // the previous run's log says "output enabled" too
   const pid_t pid = fork();
   if (pid == 0) {
-    const std::string out = dir + "/output.txt";
     freopen(out.c_str(), "w", stdout);
     dup2(fileno(stdout), 2);
     std::vector<char*> argv;
@@ -201,10 +257,13 @@ RunResult run_hapticd(const Machine& m, double duration_s, const std::vector<std
     return std::chrono::steady_clock::now() < until &&
            !(exited = waitpid(pid, &status, WNOHANG) == pid);
   };
-  const auto enabled = [&] {
-    const PwmApplied a = m.pwm.applied(0);
-    return a.enabled && a.applies > applies;
+  const auto output = [&] {  // hapticd's log, flushed line by line
+    std::ifstream log(out);
+    std::stringstream text;
+    text << log.rdbuf();
+    return text.str();
   };
+  const auto enabled = [&] { return output().find("output enabled") != std::string::npos; };
   while (running() && !enabled()) std::this_thread::sleep_for(5ms);
   if (!exited) {
     sim::gpio::GpioPeer& peer = start_peer();
@@ -218,10 +277,7 @@ RunResult run_hapticd(const Machine& m, double duration_s, const std::vector<std
   if (!exited) waitpid(pid, &status, 0);
   RunResult r;
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  std::ifstream out(dir + "/output.txt");
-  std::stringstream text;
-  text << out.rdbuf();
-  r.output = text.str();
+  r.output = output();
   std::ifstream js(dir + "/summary.json");
   if (js) r.summary = nlohmann::json::parse(js, nullptr, false);
   return r;
@@ -273,7 +329,7 @@ TEST_F(GpioKernelRun, EdgeBurstFasterThanTheLimitFaultsWithZeroDuty) {
   EXPECT_EQ(r.exit_code, 1) << r.output;
   EXPECT_NE(r.output.find("faster than device.gpio.max_edge_rate"), std::string::npos) << r.output;
   EXPECT_EQ(m_.pwm.applied(0).duty_cycle_ns, 0u);
-  EXPECT_FALSE(m_.pwm.applied(0).enabled);
+  EXPECT_TRUE(m_.pwm.applied(0).enabled) << "stopped at duty 0, the channel on";
 }
 
 TEST_F(GpioKernelRun, IllegalTransitionPatternFaultsWithZeroDuty) {
@@ -282,7 +338,7 @@ TEST_F(GpioKernelRun, IllegalTransitionPatternFaultsWithZeroDuty) {
   EXPECT_EQ(r.exit_code, 1) << r.output;
   EXPECT_NE(r.output.find("illegal transitions"), std::string::npos) << r.output;
   EXPECT_EQ(m_.pwm.applied(0).duty_cycle_ns, 0u);
-  EXPECT_FALSE(m_.pwm.applied(0).enabled);
+  EXPECT_TRUE(m_.pwm.applied(0).enabled) << "stopped at duty 0, the channel on";
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 // The sysfs PWM writer on a directory of its own (the sysfs root is configurable): duty_cycle
-// and enable are FIFOs, so the test sees every write(2) the writer makes, in order.
+// and enable are FIFOs, so the test sees every write(2) the writer makes, in order. (Reading
+// one finds what a test wrote into it, or nothing: a channel that is not enabled.)
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <sys/stat.h>
@@ -65,43 +66,60 @@ class FakePwmRoot : public testing::Test {
   int fds_[2] = {-1, -1};
 };
 
-TEST_F(FakePwmRoot, OpenSetsUpInOrderThenWritesOnlyWhatChanges) {
+// Issue 22: every stop is duty 0 on the enabled channel (a disabled channel's output is
+// undefined, Documentation/driver-api/pwm.rst): open ends with the channel enabled at duty 0,
+// and nothing after it writes `enable` again.
+TEST_F(FakePwmRoot, OpenEnablesTheChannelAtZeroDutyAndOnlyTheDutyChangesAfter) {
   SysfsPwm pwm;
-  pwm.open(channel(true), false);
+  pwm.open(channel(true));
   EXPECT_EQ(drain(0), "0\n") << "duty to zero";
-  EXPECT_EQ(drain(1), "") << "not enabled: left alone while the period and polarity change";
+  EXPECT_EQ(drain(1), "1\n") << "enabled once, after the period and the polarity";
   EXPECT_EQ(slurp("period"), "40000");
   EXPECT_EQ(slurp("polarity"), "inversed");
   EXPECT_EQ(pwm.path(), (dir_).string());
 
-  EXPECT_EQ(pwm.write(0, true), 0);
+  EXPECT_EQ(pwm.write(0), 0);
   EXPECT_EQ(drain(0), "") << "duty unchanged: no write";
-  EXPECT_EQ(drain(1), "1\n");
-  EXPECT_EQ(pwm.write(12'000, true), 0);
-  EXPECT_EQ(pwm.write(12'000, true), 0);
-  EXPECT_EQ(pwm.write(12'000, true), 0);
+  EXPECT_EQ(pwm.write(12'000), 0);
+  EXPECT_EQ(pwm.write(12'000), 0);
+  EXPECT_EQ(pwm.write(12'000), 0);
   EXPECT_EQ(drain(0), "12000\n") << "one write for three ticks at the same duty";
-  EXPECT_EQ(pwm.write(0, false), 0);
-  EXPECT_EQ(drain(0), "0\n");
-  EXPECT_EQ(drain(1), "0\n");
-  EXPECT_EQ(pwm.writes(), 4u);
+  EXPECT_EQ(pwm.write(0), 0);
+  EXPECT_EQ(drain(0), "0\n") << "the stop";
+  pwm.close();
+  EXPECT_EQ(drain(1), "") << "never disabled: not by a stop, not by close";
+  EXPECT_EQ(pwm.writes(), 2u);
+}
+
+// A channel some earlier run or tool left driving is stopped before anything else is changed.
+TEST_F(FakePwmRoot, AChannelLeftDrivingIsStoppedFirst) {
+  const int writer = ::open((dir_ / "duty_cycle").c_str(), O_WRONLY | O_NONBLOCK);
+  ASSERT_GE(writer, 0);
+  ASSERT_EQ(::write(writer, "30000\n", 6), 6);  // what open() reads as the current duty
+  ::close(writer);
+  SysfsPwm pwm;
+  pwm.open(channel());
+  EXPECT_EQ(drain(0), "0\n0\n") << "zero at once, and again once the period is set";
+  EXPECT_EQ(drain(1), "1\n");
 }
 
 TEST_F(FakePwmRoot, EmergencyStopWritesZeroOnTheOpenDescriptor) {
   SysfsPwm pwm;
-  pwm.open(channel(), true);
+  pwm.open(channel());
   drain(0);
-  pwm.write(30'000, true);
+  drain(1);
+  pwm.write(30'000);
   EXPECT_EQ(drain(0), "30000\n");
   pwm.emergency_stop();
   EXPECT_EQ(drain(0), "0\n");
+  EXPECT_EQ(drain(1), "") << "the channel stays enabled";
 }
 
 // The instance's udev rule exports the channel as root and leaves the chip's export root's.
 TEST_F(FakePwmRoot, AnExportedChannelIsUsedWithoutTheChipsExport) {
   fs::remove(root_ / "pwmchip3" / "export");
   SysfsPwm pwm;
-  ASSERT_NO_THROW(pwm.open(channel(), false));
+  ASSERT_NO_THROW(pwm.open(channel()));
   EXPECT_TRUE(pwm.is_open());
   EXPECT_EQ(slurp("period"), "40000");
 }
@@ -111,7 +129,7 @@ TEST_F(FakePwmRoot, MissingChipOrUnwritableChannelIsADeviceErrorNamingIt) {
   PwmChannel c = channel();
   c.chip = 9;
   try {
-    pwm.open(c, false);
+    pwm.open(c);
     FAIL();
   } catch (const DeviceError& e) {
     EXPECT_NE(std::string(e.what()).find("pwmchip9"), std::string::npos) << e.what();
@@ -119,13 +137,13 @@ TEST_F(FakePwmRoot, MissingChipOrUnwritableChannelIsADeviceErrorNamingIt) {
   c = channel();
   c.channel = 5;  // not exported, and the export file is a plain file: nothing appears
   try {
-    pwm.open(c, false);
+    pwm.open(c);
     FAIL();
   } catch (const DeviceError& e) {
     EXPECT_NE(std::string(e.what()).find("pwm5/duty_cycle"), std::string::npos) << e.what();
   }
   EXPECT_FALSE(pwm.is_open());
-  EXPECT_EQ(pwm.write(1, true), EBADF);
+  EXPECT_EQ(pwm.write(1), EBADF);
 }
 
 }  // namespace

@@ -131,7 +131,6 @@ TEST(GpioSettings, TheExampleLoads) {
   EXPECT_EQ(s.counts_per_unit, 100000.0);
   EXPECT_EQ(s.start_count, -2000);
   EXPECT_EQ(s.pwm_period_ns, 50'000u);
-  EXPECT_EQ(s.on_disable, DisableMode::kCoast);
   EXPECT_EQ(find_driver("gpio").declared_delay(cfg), 0);
 }
 
@@ -149,8 +148,13 @@ TEST(GpioSettings, EveryWrongKeyIsNamedWithItsPlace) {
   EXPECT_NE(
       errors_of({"device.gpio.lines={a: 0, b: 1}"}).find("device.gpio.lines.direction: missing"),
       std::string::npos);
-  EXPECT_NE(errors_of({"device.gpio.on_disable=float"}).find("device.gpio.on_disable"),
-            std::string::npos);
+  // Issue 22: the old stop modes. Neither can be honoured through a PWM channel (a disabled
+  // one's output is undefined), so the key is refused with why, not silently dropped.
+  for (const char* mode : {"coast", "brake"}) {
+    const std::string e = errors_of({std::string("device.gpio.on_disable=") + mode});
+    EXPECT_NE(e.find("device.gpio.on_disable: is no longer a setting"), std::string::npos) << e;
+    EXPECT_NE(e.find("duty 0 on the enabled PWM channel"), std::string::npos) << e;
+  }
   EXPECT_NE(errors_of({"device.gpio.max_edge_rate=-1"}).find("device.gpio.max_edge_rate"),
             std::string::npos);
   const std::string unknown = errors_of({"device.gpio.chp=x"});

@@ -1,4 +1,4 @@
-// A simulated CiA 402 servo drive in cyclic synchronous torque (DESIGN.md §6): NMT, an SDO
+// A simulated CiA 402 servo drive in cyclic synchronous torque (docs/drivers/can.md): NMT, an SDO
 // server for the objects hapticd uses (with CiA 301 abort codes for everything else), the
 // power state machine, PDOs packed and unpacked through their mapping objects (so a wrong
 // mapping shows up as a wrong frame, as on a real drive), and at each SYNC the plant stepped

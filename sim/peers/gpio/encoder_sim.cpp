@@ -51,10 +51,16 @@ std::uint8_t EncoderSim::raw(dg::Line line, bool logical) const noexcept {
 
 std::uint8_t EncoderSim::raw_levels() const noexcept { return line_levels_; }
 
+// The bridge drives while the PWM input has pulses: the force follows the duty and the
+// direction line alone. The channel's enable is not looked at: a disabled channel's output is
+// undefined (Linux's Documentation/driver-api/pwm.rst), and this motor driver takes the worst
+// a PWM chip may do, its last duty still on the pin.
 void EncoderSim::apply_output(const dg::wire::Output& out) noexcept {
+  channel_enabled_ = out.pwm_enabled;
   if (fault_active_) return;  // a motor driver in fault keeps its bridge off
-  if (out.pwm_enabled != axis_.output_on()) axis_.set_output(out.pwm_enabled);
-  if (!out.pwm_enabled || out.period_ns == 0) return;
+  const bool driving = out.duty_ns != 0 && out.period_ns != 0;
+  if (driving != axis_.output_on()) axis_.set_output(driving);
+  if (!driving) return;
   const double magnitude = static_cast<double>(out.duty_ns) / static_cast<double>(out.period_ns);
   const bool positive = out.direction_level == s_.direction_positive_high;
   axis_.hold_force((positive ? 1.0 : -1.0) * magnitude * max_force_);

@@ -1,10 +1,11 @@
 // What sits on the far side of the GPIO driver's wires, as both GPIO peers simulate it: a
 // motor driver that turns the PWM duty and the direction line into a force on the plant
-// (force = +-duty/period * max_force while the PWM is enabled; off while its fault line is
-// active), and a quadrature encoder (with an optional one-count index mark at index_count and
-// an optional fault output) that turns the plant's motion into edges on its lines, spread over
-// the period in which the motion happened. Also the faults a peer can inject on those wires.
-// Not RT-safe; no OS calls: the peers (loopback_peer, kernel_peer) carry the edges.
+// (force = +-duty/period * max_force, whatever the channel's enable says: a disabled channel's
+// output is undefined, so only duty 0 stops it; off while its fault line is active), and a
+// quadrature encoder (with an optional one-count index mark at index_count and an optional fault
+// output) that turns the plant's motion into edges on its lines, spread over the period in which
+// the motion happened. Also the faults a peer can inject on those wires. Not RT-safe; no OS calls:
+// the peers (loopback_peer, kernel_peer) carry the edges.
 #pragma once
 
 #include <cstdint>
@@ -58,7 +59,11 @@ class EncoderSim {
   void sent(const PendingEdge& e) noexcept;
 
   double applied_force() const noexcept { return axis_.held_force(); }
+  // The bridge drives the motor: a non-zero duty reaches it (and no fault holds it off).
   bool output_on() const noexcept { return axis_.output_on(); }
+  // The PWM channel's enable as last written: what the driver did with it (the force above
+  // does not depend on it).
+  bool channel_enabled() const noexcept { return channel_enabled_; }
   const Plant& plant() const noexcept { return axis_.plant(); }
   std::int64_t period_ns() const noexcept { return period_ns_; }
   std::int64_t injected_spacing_ns() const noexcept { return fast_ns_; }
@@ -77,6 +82,7 @@ class EncoderSim {
   std::uint8_t queued_levels_;  // raw levels once every queued edge is sent
   std::uint8_t line_levels_;    // raw levels as last sent (kLevel* bits)
   bool fault_active_ = false;
+  bool channel_enabled_ = false;
   std::int64_t fast_ns_ = 1000;                // the spacing of injected edges
   std::int64_t pattern_step_ns_ = 20'000'000;  // the illegal pattern's step
   std::deque<PendingEdge> queue_;

@@ -1,9 +1,11 @@
-// The GPIO driver's simulated device (DESIGN.md §6): a motor driver and a quadrature encoder
-// with the plant between them (encoder_sim.h), on one of two carriers:
-//   - GpioLoopbackPeer: the driver's socketpair (gpio_wire.h). It steps the plant once per
-//     output message (the driver sends one a tick: the PWM period's clock) and answers with the
-//     period's edges, time-stamped on the plant's clock (freerun: simulated time, so runs are
-//     reproducible; realtime: CLOCK_MONOTONIC).
+// The GPIO driver's simulated device (docs/drivers/gpio.md): a motor driver and a quadrature
+// encoder with the plant between them (encoder_sim.h), on one of two carriers:
+//   - GpioLoopbackPeer: the driver's socketpair (gpio_wire.h), in hapticd's own process. It
+//     steps the plant once per output message (the driver sends one a tick: the PWM period's
+//     clock) and answers with the period's edges, time-stamped on the plant's clock, in freerun
+//     and real-time runs alike: a simulated device in the same process keeps time by its
+//     protocol, not the wall clock (sim/peers/peer_runner.h), so neither hapticd's start-up
+//     nor a host that holds its threads up moves the plant without the loop.
 //   - GpioKernelPeer: a gpio-sim chip and the PWM simulator in the kernel test machine. It
 //     steps the plant on its own timer every period, reads the PWM channel's applied state and
 //     the direction line, and puts each edge on the wires at its time by writing the gpio-sim
@@ -26,6 +28,8 @@ class GpioPeer : public LoopbackPeer {
  public:
   // Any thread. Produce `f` once, from the next period on.
   virtual bool inject_wire(WireFault f) noexcept = 0;
+  // Any thread. Whether the PWM channel was enabled at the last output the peer applied.
+  virtual bool channel_enabled() const noexcept = 0;
 };
 
 // Throws config::ConfigError when device.sim and device.gpio disagree about the encoder (the

@@ -73,6 +73,7 @@ class GpioKernelPeer final : public GpioPeer {
     std::optional<std::int64_t> next_edge = put_due_edges();
     force_.store(enc_.applied_force());
     on_.store(enc_.output_on());
+    enabled_.store(enc_.channel_enabled());
     arm(next_edge ? std::min(*next_edge, next_step_) : next_step_);
   }
   int fd() const noexcept override { return timer_.get(); }
@@ -100,6 +101,7 @@ class GpioKernelPeer final : public GpioPeer {
     wire_faults_.fetch_or(1u << static_cast<unsigned>(f));
     return true;
   }
+  bool channel_enabled() const noexcept override { return enabled_.load(); }
 
  private:
   void put(int line, bool level) {
@@ -186,6 +188,7 @@ class GpioKernelPeer final : public GpioPeer {
   std::atomic<unsigned> wire_faults_{0};
   std::atomic<double> force_{0.0};
   std::atomic<bool> on_{false};
+  std::atomic<bool> enabled_{false};
 };
 
 }  // namespace

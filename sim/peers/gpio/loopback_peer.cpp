@@ -1,13 +1,10 @@
 // GpioLoopbackPeer: the GPIO wires over the driver's socketpair (gpio_peer.h).
-#include <sys/epoll.h>
 #include <sys/socket.h>
-#include <sys/timerfd.h>
-#include <time.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <array>
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <stdexcept>
 #include <system_error>
@@ -24,67 +21,26 @@ namespace wire = dg::wire;
 class GpioLoopbackPeer final : public GpioPeer {
  public:
   GpioLoopbackPeer(const config::Config& cfg, const dg::GpioSettings& s, io::UniqueFd fd)
-      : enc_(cfg, s),
-        owned_(std::move(fd)),
-        fd_(owned_.get()),
-        simulated_clock_(cfg.loop.clock == config::ClockMode::kFreerun) {
+      : enc_(cfg, s), owned_(std::move(fd)), fd_(owned_.get()) {
     if (s.max_edge_rate_hz > 0.0) spacing_ns_ = std::llround(2e9 / s.max_edge_rate_hz);
-    if (!simulated_clock_) start_clock();
   }
 
+  // The driver's output message is the period's clock: the plant steps once per message, with
+  // the output it carries, and the period's edges go back. Nothing moves between messages,
+  // however long the driver takes to start or the host holds either thread up.
   void service() override {
-    receive();
-    if (!simulated_clock_) run_clock();
-  }
-
-  // Realtime: the plant runs on the peer's own clock, period by period, with whatever the
-  // driver last wrote (a PWM runs on whether or not it is rewritten); the socket and the
-  // period timer are behind one epoll descriptor, the one PeerRunner polls.
-  void start_clock() {
-    timer_.reset(timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC));
-    epoll_.reset(epoll_create1(EPOLL_CLOEXEC));
-    if (!timer_ || !epoll_) throw std::system_error(errno, std::system_category(), "gpio peer");
-    for (int f : {fd_, timer_.get()}) {
-      epoll_event ev{};
-      ev.events = EPOLLIN;
-      ev.data.fd = f;
-      if (epoll_ctl(epoll_.get(), EPOLL_CTL_ADD, f, &ev) != 0) {
-        throw std::system_error(errno, std::system_category(), "gpio peer: epoll_ctl");
-      }
-    }
-    next_step_ = now_ns() + enc_.period_ns();
-    itimerspec its{};
-    its.it_value.tv_sec = static_cast<time_t>(next_step_ / 1'000'000'000);
-    its.it_value.tv_nsec = static_cast<long>(next_step_ % 1'000'000'000);
-    its.it_interval.tv_nsec = static_cast<long>(enc_.period_ns());
-    timerfd_settime(timer_.get(), TFD_TIMER_ABSTIME, &its, nullptr);
-  }
-
-  void run_clock() {
-    std::uint64_t expirations = 0;
-    [[maybe_unused]] const ssize_t r = ::read(timer_.get(), &expirations, sizeof expirations);
-    for (const std::int64_t now = now_ns(); now >= next_step_; next_step_ += enc_.period_ns()) {
-      step(next_step_ - enc_.period_ns());
-    }
-    publish();
-  }
-
-  void receive() {
     for (;;) {
       const ssize_t n = ::recv(fd_, rx_.data(), rx_.size(), MSG_DONTWAIT);
       if (n < 0) {
         if (errno == EAGAIN || errno == EINTR || shut_) return;
         throw std::system_error(errno, std::system_category(), "gpio peer: recv");
       }
-      if (n == 0) {  // the driver closed its end
-        if (epoll_) epoll_ctl(epoll_.get(), EPOLL_CTL_DEL, fd_, nullptr);
-        return;
-      }
+      if (n == 0) return;  // the driver closed its end
       handle({rx_.data(), static_cast<std::size_t>(n)});
       publish();
     }
   }
-  int fd() const noexcept override { return epoll_ ? epoll_.get() : fd_; }
+  int fd() const noexcept override { return fd_; }
   double applied_force() const noexcept override { return force_.load(); }
   bool output_on() const noexcept override { return on_.load(); }
   const Plant& plant() const noexcept override { return enc_.plant(); }
@@ -114,24 +70,21 @@ class GpioLoopbackPeer final : public GpioPeer {
     wire_faults_.fetch_or(1u << static_cast<unsigned>(f));
     return true;
   }
+  bool channel_enabled() const noexcept override { return enabled_.load(); }
 
   void set_has_fault_line(bool v) { has_fault_line_ = v; }
 
  private:
+  // The plant's clock: simulated time, one period per step.
   std::int64_t now_ns() const {
-    if (simulated_clock_) {
-      return 1'000'000'000 + static_cast<std::int64_t>(enc_.plant().steps()) * enc_.period_ns();
-    }
-    timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+    return 1'000'000'000 + static_cast<std::int64_t>(enc_.plant().steps()) * enc_.period_ns();
   }
 
   void send_bytes(const std::uint8_t* p, std::size_t n) {
     if (::send(fd_, p, n, MSG_DONTWAIT | MSG_NOSIGNAL) < 0 && !shut_) {
-      // A driver that is not reading (start-up, a stalled loop) fills the socket: the batch
-      // is dropped, as a full kernel event buffer drops events, and the edges' sequence
-      // numbers tell the driver how many it lost.
+      // A driver that writes without reading fills the socket: the batch is dropped, as a
+      // full kernel event buffer drops events, and the edges' sequence numbers tell the
+      // driver how many it lost.
       if (errno == EAGAIN || errno == EPIPE || errno == ECONNRESET) return;
       throw std::system_error(errno, std::system_category(), "gpio peer: send");
     }
@@ -145,7 +98,7 @@ class GpioLoopbackPeer final : public GpioPeer {
       send_bytes(buf.data(), buf.size());
     } else if (wire::decode_output(msg, out)) {
       enc_.apply_output(out);
-      if (simulated_clock_) step(now_ns());  // freerun: the driver's tick is the period
+      step(now_ns());
     } else {
       ++malformed_;  // a driver that sends garbage: counted, ignored
     }
@@ -197,6 +150,7 @@ class GpioLoopbackPeer final : public GpioPeer {
   void publish() {
     force_.store(enc_.applied_force());
     on_.store(enc_.output_on());
+    enabled_.store(enc_.channel_enabled());
     // After the wires were cut nothing drives the motor, whatever this thread was handling
     // when inject() cut them (inject stores zero after setting shut_; this re-checks after).
     if (shut_.load()) {
@@ -207,11 +161,7 @@ class GpioLoopbackPeer final : public GpioPeer {
 
   EncoderSim enc_;
   io::UniqueFd owned_;
-  io::UniqueFd timer_;
-  io::UniqueFd epoll_;
-  std::int64_t next_step_ = 0;
   int fd_;
-  bool simulated_clock_;
   std::int64_t spacing_ns_ = 0;
   std::int64_t last_ns_ = 0;
   std::uint32_t seq_ = 0;
@@ -224,6 +174,7 @@ class GpioLoopbackPeer final : public GpioPeer {
   std::atomic<unsigned> wire_faults_{0};
   std::atomic<double> force_{0.0};
   std::atomic<bool> on_{false};
+  std::atomic<bool> enabled_{false};
   std::array<std::uint8_t, wire::kMaxMessageSize> rx_{};
   std::vector<dg::Edge> batch_;
 };
