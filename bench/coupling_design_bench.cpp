@@ -6,26 +6,14 @@
 
 #include "analysis/coupling_design.h"
 #include "analysis/sdp_backends.h"
-#include "analysis/transparency_weight.h"
-#include "analysis/wall_model.h"
+#include "coupling_example1.h"
 
 namespace {
 
 using namespace hapticd::analysis;
 
-CouplingSpec example1(int order) {
-  CouplingSpec s;
-  s.environment = environment_filter({1000, 20, 0.02, WallDiscretization::kBackward});
-  s.weight = felt_weight({{0.1, 0.03}, {100, -99}}, 1.0, 0.02);
-  s.sample_period = 0.02;
-  s.device_damping = 10;
-  s.allowed_damping = 10;
-  s.order = order;
-  return s;
-}
-
 void run(benchmark::State& state, const SdpSolver& solver) {
-  const CouplingSpec spec = example1(static_cast<int>(state.range(0)));
+  const CouplingSpec spec = hapticd::testing::coupling_example1(static_cast<int>(state.range(0)));
   CouplingDesign d;
   for (auto _ : state) d = design_coupling(spec, {}, solver);  // the command's default budget
   state.counters["gamma_felt"] = d.verdict.gamma;

@@ -12,21 +12,12 @@
 #include "analysis/sdp_solver.h"
 #include "analysis/transparency_weight.h"
 #include "analysis/wall_model.h"
+#include "coupling_example1.h"
 
 namespace hapticd::analysis {
 namespace {
 
-CouplingSpec example1(int delay = 0) {  // T = 0.02, b = 10, K = 1000, B = 20, the felt weight
-  CouplingSpec s;
-  s.environment = environment_filter({1000, 20, 0.02, WallDiscretization::kBackward});
-  s.weight = felt_weight({{0.1, 0.03}, {100, -99}}, 1.0, 0.02);
-  s.sample_period = 0.02;
-  s.device_damping = 10;
-  s.allowed_damping = 10;
-  s.delay_samples = delay;
-  s.order = 3;
-  return s;
-}
+CouplingSpec example1(int delay = 0) { return testing::coupling_example1(3, delay); }
 
 TEST(StateSpace, RealisationMatchesTheTransferFunction) {
   const TransferFunction g{{0.5, -0.2, 0.1}, {1.0, -1.2, 0.5}};
