@@ -36,6 +36,11 @@ struct ControlLaw {
   // gets zero force (not K p0 + B p0 / T at once) until it leaves. `verify` turns this off to
   // measure the linear law from an imposed motion that starts in contact.
   bool require_outside_start = true;
+  // The linear law the passivity bound is about: the contact never opens (xi = the proxy
+  // penetration, negative or not). Only `verify`'s measurement sets it: behind a coupling with
+  // a pole at z = 1 the mean force of any bounded motion decays to zero (H(1) = 0), so the
+  // unilateral wall would leave contact and the loop measured would not be linear.
+  bool linear_contact = false;
   double max_force = 0.0;
   double sample_period = 0.0;
   // Cached derived constants.

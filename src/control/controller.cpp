@@ -64,7 +64,7 @@ ControlOutput Controller::step(double position) noexcept {
   // The unique solution of f = e0 max(q - c0 f, 0) + r for e0, c0 >= 0.
   double f = r;
   double xi = 0.0;
-  if (q - law_.c0 * r > 0.0) {
+  if (law_.linear_contact || q - law_.c0 * r > 0.0) {
     f = (r + law_.e0 * q) * law_.inv_one_plus_e0c0;
     xi = q - law_.c0 * f;
     out.flags |= kControlContact;

@@ -9,6 +9,14 @@
 #include "service/result_output.h"
 
 namespace hapticd::service {
+namespace {
+
+constexpr const char* kDesignHint =
+    "hint: `hapticd design-coupling` (same --config and --set) designs a virtual coupling C(z) "
+    "that makes this wall pass at this rate and device damping, verified by this gate, and "
+    "says what it costs in transparency";
+
+}  // namespace
 
 int check_command(const ConfigOptions& options, bool json) {
   const config::Config cfg = load_config(options);
@@ -28,6 +36,7 @@ int check_command(const ConfigOptions& options, bool json) {
     nlohmann::json j = gate::gate_to_json(r);
     j["driver"] = cfg.device.driver;
     j["driver_notes"] = notes;
+    if (!r.pass) j["design_coupling"] = kDesignHint;
     j["derated"] = derated
                        ? nlohmann::json{{"configured", derated->first}, {"ran", derated->second}}
                        : nlohmann::json(nullptr);
@@ -35,6 +44,7 @@ int check_command(const ConfigOptions& options, bool json) {
   } else {
     text = gate::gate_to_text(r, cfg);
     for (const std::string& line : notes) text += line + "\n";
+    if (!r.pass) text += std::string(kDesignHint) + "\n";
     if (derated) {
       text += "safety.gate: derate: `run` would run wall.stiffness at " +
               gate::format_number(derated->second, 10) + " N/m, the largest that passes\n";

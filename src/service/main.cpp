@@ -12,6 +12,7 @@
 #include "drivers/device.h"
 #include "service/check_command.h"
 #include "service/curves_command.h"
+#include "service/design_coupling_command.h"
 #include "service/devices_command.h"
 #include "service/exit_codes.h"
 #include "service/export_command.h"
@@ -202,6 +203,27 @@ int main(int argc, char** argv) {
                        "Metres from the start the device may move before the excitation stops "
                        "as a fault (default 0.1)");
 
+  hapticd::service::DesignCouplingOptions design_opts;
+  CLI::App* design = app.add_subcommand(
+      "design-coupling",
+      "Design the virtual coupling C(z) for the configured wall, device damping, rate and delay "
+      "(Naghshtabrizi and Hespanha: the most transparent C that passes their Theorem 1, by cone "
+      "complementarity on an SDP solver), verify it with the gate and print the wall.coupling "
+      "YAML to paste, its transparency and static stiffness. A progress line per step on stderr. "
+      "Exit 0 designed (or none needed: the wall passes bare), 1 not converged or refused by the "
+      "gate, 2 bad input.");
+  add_config_options(design, design_opts.config);
+  design->add_option("--order", design_opts.order, "Degree of C(z), 1 to 8 (default 3)");
+  design->add_option("--weight", design_opts.weight,
+                     "felt: the configured transparency weight from --felt-from-hz up (default); "
+                     "configured: analysis.transparency_weight as is (the paper's criterion)");
+  design->add_option("--felt-from-hz", design_opts.felt_from_hz,
+                     "Lower edge of the felt band (default 1 Hz): below it a push is steady");
+  design->add_option("--max-steps", design_opts.max_steps, "Outer steps (default 24)");
+  design->add_option("--max-iterations", design_opts.max_iterations,
+                     "Cone complementarity iterations per step (default 12)");
+  design->add_flag("--json", design_opts.json, "Print exactly one JSON object");
+
   ConfigOptions rules_cfg;
   std::string rules_instance;
   CLI::App* rules = app.add_subcommand(
@@ -254,6 +276,7 @@ int main(int argc, char** argv) {
     if (*devices) return hapticd::service::devices_command();
     if (*rules) return hapticd::service::udev_rules_command(rules_cfg, rules_instance);
     if (*curves) return hapticd::service::curves_command(curves_cfg, !curves_no_measure);
+    if (*design) return hapticd::service::design_coupling_command(design_opts);
     if (*identify) {
       hapticd::service::SignalWatch signals;
       return hapticd::service::identify_command(id_opts, signals);

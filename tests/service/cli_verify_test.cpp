@@ -35,11 +35,16 @@ TEST(CliVerify, FindsAnInteriorWorstFrequency) {
   EXPECT_NEAR(j["worst_frequency_hz"].get<double>(), 1000.0 / 6, 2.0);
 }
 
-TEST(CliVerify, RefusesAWallThatCannotStayInContact) {
-  const ProcessResult r = run_process(
-      {hapticd_binary(), "verify", "--config", source_dir() + "/config/coupling-example.yaml"});
-  EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("proxy left contact"), std::string::npos) << r.err;
+// Behind a coupling with a pole at z = 1 (H(1) = 0) the mean force of any bounded motion
+// decays, so the measurement runs the linear loop the bound is about (the contact never opens)
+// and waits out the coupling's slow transient.
+TEST(CliVerify, MeasuresTheLinearLoopBehindACouplingWithAPoleAtOne) {
+  const ProcessResult r = run_process({hapticd_binary(), "verify", "--json", "--config",
+                                       source_dir() + "/config/coupling-example.yaml"});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["verdict"], "agree");
+  EXPECT_NEAR(j["measured_required_damping"].get<double>(), 0.1961, 1e-3);
 }
 
 }  // namespace

@@ -39,6 +39,8 @@ with tempfile.TemporaryDirectory() as tmp:
     check(["nyquist"], os.path.join(tmp, "nyquist"))
     check(["nyquist", "--config", os.path.join(source, "config", "coupling-example.yaml")],
           os.path.join(tmp, "nyquist-coupled"), min_png=5000)
+    check(["coupling", "--config", os.path.join(source, "config", "coupling-example.yaml")],
+          os.path.join(tmp, "coupling"))
     check(["log"], os.path.join(tmp, "log"))
     log = os.path.join(tmp, "free.hlog")
     subprocess.run([binary, "run", "--duration", "1", "--set", "loop.clock=freerun", "--log", log],

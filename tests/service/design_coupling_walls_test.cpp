@@ -1,0 +1,165 @@
+// `hapticd design-coupling` end to end, as a user runs it: on Naghshtabrizi and Hespanha's
+// Example 1 against the paper's printed C(z), and on walls the gate refuses, where every
+// design printed must pass `check` and `verify` and settle in `run`. Each design calls the SDP
+// solver, so these have their own ctest label, `design` (main stage only, tools/quickstart.sh);
+// the 20-wall sweep is also labelled `slow`.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <random>
+
+#include "design_coupling_support.h"
+#include "process.h"
+#include "telemetry/log_reader.h"
+
+namespace hapticd::testing {
+namespace {
+
+using nlohmann::json;
+
+// A design's gamma is known to the search's resolution only: it stops when gamma is within
+// 2 % of the bracket's lower end (analysis::DesignOptions::tolerance), and that lower end is
+// where a cone complementarity run stopped short, as the paper's step 5 stops, not a proof.
+// Two designs of the same wall compare within that much. On Example 1 with the felt weight
+// they measured 6.636 (order 3), 6.664 (order 4) and 6.631 (order 5): equal to the
+// resolution, so a strict order between them would test the solver's last digits.
+constexpr double kSearchResolution = 0.02;
+
+std::vector<std::string> example_with(const std::vector<std::string>& extra) {
+  return concat({"--config", coupling_example()}, extra);
+}
+
+TEST(DesignCoupling, Example1BeatsThePapersCouplingByBothMeasuresAndPassesTheGate) {
+  const json d3 = design_coupling_json(example_with({"--order", "3"}));
+  ASSERT_EQ(d3["exit_code"], 0) << d3.dump(1);
+  EXPECT_EQ(d3["status"], "designed");
+  EXPECT_TRUE(d3["gate"]["pass"].get<bool>());
+  EXPECT_TRUE(d3["gate"]["dspr"].get<bool>());
+  // The paper's printed C(z) (the configured coupling): hapticd's measure is the DC floor
+  // (0.13 x 1000)^2, not the paper's 23.45; the felt one is 27.8.
+  const json& paper = d3["configured_coupling"];
+  EXPECT_NEAR(paper["gamma_configured"].get<double>(), 16900.0, 0.1);
+  EXPECT_NEAR(paper["gamma_felt"].get<double>(), 27.82, 0.01);
+  const json& des = d3["designed"];
+  EXPECT_LE(des["gamma_configured"].get<double>(), 16900.0 * (1.0 + 1e-9));  // at the floor
+  EXPECT_LT(des["gamma_felt"].get<double>(), 7.0);        // measured 6.64: a quarter of the paper's
+  EXPECT_EQ(des["static_stiffness"].get<double>(), 0.0);  // Theorem 1's pole at z = 1
+  // The gate itself, with the YAML pasted in, and the measured passivity threshold.
+  const std::vector<std::string> pasted = example_with(pasted_coupling(d3));
+  EXPECT_EQ(run_process(concat({hapticd_binary(), "check"}, pasted)).exit_code, 0);
+  const ProcessResult v = run_process(concat({hapticd_binary(), "verify", "--json"}, pasted));
+  ASSERT_EQ(v.exit_code, 0) << v.out << v.err;
+  EXPECT_EQ(json::parse(v.out)["verdict"], "agree");
+}
+
+// What the order buys, stated to the search's resolution: order 3 does better than the family
+// d z/(z-1) + D_c alone (order 1: measured 7.110 against 6.636, 7 %, beyond it), and order 5
+// is no worse than order 3 (the paper expects better; here Theorem 1's Re C >= T/(2b) at
+// Nyquist is the limit, docs/math.md). Fails if order 5 comes out clearly worse.
+TEST(DesignCoupling, Example1HigherOrdersDoNoWorseToTheSearchsResolution) {
+  const auto felt = [](const char* order) {
+    const json d = design_coupling_json(example_with({"--order", order}));
+    EXPECT_EQ(d["exit_code"], 0) << d.dump(1);
+    return d.contains("designed") ? d["designed"]["gamma_felt"].get<double>()
+                                  : std::numeric_limits<double>::infinity();
+  };
+  const double g1 = felt("1"), g3 = felt("3"), g5 = felt("5");
+  EXPECT_LT(g3 * (1.0 + kSearchResolution), g1) << g3 << " against " << g1;
+  EXPECT_LE(g5, g3 * (1.0 + kSearchResolution)) << g5 << " against " << g3;
+}
+
+// Over the last n ticks: the largest distance the device moved back against its net direction
+// (for no net motion, the smaller of the two directions). A device at rest, or creeping one
+// way (a coupled wall yields under a steady push, H(1) = 0, slowing as the hand's spring
+// relaxes), goes back by at most the encoder's one-count dither; a bouncing wall by its bounce.
+double retrace_in_last(const std::vector<telemetry::TickRecord>& r, std::size_t n) {
+  const std::size_t first = r.size() - std::min(n, r.size());
+  const auto against = [&](double sign) {
+    double furthest = -std::numeric_limits<double>::infinity(), worst = 0.0;
+    for (std::size_t k = first; k < r.size(); ++k) {
+      furthest = std::max(furthest, sign * r[k].position);
+      worst = std::max(worst, furthest - sign * r[k].position);
+    }
+    return worst;
+  };
+  const double net = r.back().position - r[first].position;
+  if (net == 0.0) return std::min(against(1.0), against(-1.0));
+  return against(net > 0.0 ? 1.0 : -1.0);
+}
+
+// `sets` make a wall the gate refuses bare. The design is run with a short search (16 steps of
+// at most 4 SDPs); a design it prints must pass `check` and `verify` (the measured passivity
+// threshold agrees) and settle in a 20 s sim run with the example's firm hand pressing. False
+// when nothing was designed (exit 1), which must then print no coupling.
+bool designs_a_safe_coupling(const std::vector<std::string>& sets, const std::string& name) {
+  const std::vector<std::string> cfg = example_with(sets);
+  EXPECT_EQ(run_process(concat({hapticd_binary(), "check"}, cfg)).exit_code, 3) << "not refused";
+  const json d = design_coupling_json(concat(cfg, {"--max-steps", "16", "--max-iterations", "4"}));
+  SCOPED_TRACE(name + ": " + d.dump());
+  if (d["exit_code"] != 0) {
+    EXPECT_EQ(d.count("coupling"), 0u);  // never printed as a coupling
+    return false;
+  }
+  const std::vector<std::string> withc = concat(cfg, pasted_coupling(d));
+  EXPECT_EQ(run_process(concat({hapticd_binary(), "check"}, withc)).exit_code, 0);
+  const ProcessResult v = run_process(concat({hapticd_binary(), "verify", "--json"}, withc));
+  EXPECT_EQ(v.exit_code, 0) << v.out << v.err;
+  const std::string log = temp_path("design_" + name + ".hlog");
+  const ProcessResult run =
+      run_process(concat({hapticd_binary(), "run", "--duration", "20", "--log", log}, withc));
+  EXPECT_EQ(run.exit_code, 0) << run.err;
+  const auto records = telemetry::read_log(log).records;
+  EXPECT_FALSE(records.empty());
+  // No oscillation over the last quarter: back by at most 2 encoder counts (1e-5 m each).
+  if (!records.empty()) {
+    EXPECT_LE(retrace_in_last(records, records.size() / 4), 2e-5);
+  }
+  return true;
+}
+
+std::vector<std::string> wall(int rate_hz, double b, double k, double damping, int delay) {
+  return {"--set", "loop.rate_hz=" + std::to_string(rate_hz),
+          "--set", "device.damping=" + std::to_string(b),
+          "--set", "wall.stiffness=" + std::to_string(k),
+          "--set", "wall.damping=" + std::to_string(damping),
+          "--set", "wall.delay_samples=" + std::to_string(delay),
+          "--set", "wall.coupling="};
+}
+
+// Three refused walls from the sweep below, one per delay the gate sees, chosen to span it: a
+// stiff wall at 50 Hz (the paper's situation), one sample of delay at 200 Hz with a light
+// device, two samples at 500 Hz, whose coupled wall creeps the longest (the settle measure's
+// hardest case). About 10 s of CPU.
+TEST(DesignCoupling, ThreeRefusedWallsEveryPrintedDesignPassesVerifiesAndSettles) {
+  EXPECT_TRUE(designs_a_safe_coupling(wall(50, 3.5, 2680, 0.5, 0), "50hz_delay0"));
+  EXPECT_TRUE(designs_a_safe_coupling(wall(200, 2.7, 2885, 0.37, 1), "200hz_delay1"));
+  EXPECT_TRUE(designs_a_safe_coupling(wall(500, 4.06, 1651, 2.54, 2), "500hz_delay2"));
+}
+
+// The 20 random refused walls (K, B, T, b, delay 0-2): about 50 s of CPU, labelled
+// `slow` (tests/service/CMakeLists.txt). All 20 were designed on CSDP 6.2 (2026-11-25).
+TEST(DesignCouplingSweep, TwentyRandomRefusedWallsEveryPrintedDesignPassesVerifiesAndSettles) {
+  std::mt19937 rng(2025);
+  const auto uniform = [&](double lo, double hi) {
+    return std::uniform_real_distribution<double>(lo, hi)(rng);
+  };
+  int designed = 0;
+  for (int n = 0; n < 20; ++n) {
+    std::vector<std::string> sets;
+    for (;;) {  // a wall the gate refuses bare
+      const int rate = std::vector<int>{50, 100, 200, 500, 1000}[rng() % 5];
+      const double b = uniform(1.0, 10.0), k = uniform(300.0, 3000.0), damping = uniform(0.0, 3.0);
+      sets = wall(rate, b, k, damping, static_cast<int>(rng() % 3));
+      if (run_process(concat({hapticd_binary(), "check"}, example_with(sets))).exit_code == 3)
+        break;
+    }
+    if (designs_a_safe_coupling(sets, "random_wall_" + std::to_string(n))) ++designed;
+  }
+  EXPECT_GE(designed, 15);  // the search finds most; the rest are refused with exit 1
+}
+
+}  // namespace
+}  // namespace hapticd::testing
