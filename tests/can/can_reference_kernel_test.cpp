@@ -106,8 +106,10 @@ TEST(CanReferenceOnVcan, Odrive05WithItsWatchdogOnRendersTheWallAndIdlesWhenHapt
   const auto killed = std::chrono::steady_clock::now();
   run.signal(SIGKILL);
   EXPECT_EQ(run.wait(seconds(10)), 128 + SIGKILL);
-  kernel_test::wait_until([&] { return !axis.armed(); }, milliseconds(3000),
-                          "the axis idling itself");
+  // The published force follows the state at the plant's next step (reference_plant.h): wait
+  // for both, the idle state and the force it holds.
+  kernel_test::wait_until([&] { return !axis.armed() && axis.motor_force_n() == 0.0; },
+                          milliseconds(3000), "the axis idling itself with zero force");
   const auto ms =
       std::chrono::duration_cast<milliseconds>(std::chrono::steady_clock::now() - killed).count();
   RecordProperty("idle_after_ms", std::to_string(ms));
