@@ -57,7 +57,7 @@ TEST(CanCia402, VerifyingTheMappingOfAFactoryFreshDriveNamesTheObject) {
 }
 
 TEST(CanCia402, AnUnansweredSdoNamesTheObjectAndTheTimeOut) {
-  CanRig rig(load_example(kCia));
+  CanRig rig(load_example(kCia, {"device.can.sdo_timeout_ms=100"}));
   ASSERT_TRUE(rig.peer().inject_can(sim::CanPeerFault::kStopSdo));
   const std::string e = configure_error(rig);
   EXPECT_NE(e.find("SDO 0x1000:00 (device type): no answer within 100 ms"), std::string::npos) << e;
@@ -75,7 +75,8 @@ TEST(CanCia402, AnAbortedSdoCarriesCiA301sText) {
 }
 
 TEST(CanCia402, ANodeIdWithoutADriveIsNamedByItsTimeOut) {
-  CanRig rig(load_example(kCia, {"device.can.node_id=2"}), load_example(kCia));
+  CanRig rig(load_example(kCia, {"device.can.node_id=2", "device.can.sdo_timeout_ms=100"}),
+             load_example(kCia));
   const std::string e = configure_error(rig);
   EXPECT_NE(e.find("node 2"), std::string::npos) << e;
   EXPECT_NE(e.find("no answer within 100 ms"), std::string::npos) << e;

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <string_view>
 #include <thread>
 #include <vector>
 
@@ -51,6 +52,10 @@ config::Config load(const Case& c, const std::vector<std::string>& sets = {}) {
   std::stringstream text;
   text << in.rdbuf();
   std::vector<config::Override> overrides;
+  // A loaded host can hold the in-process drive past the examples' 100 ms SDO wait (can_rig.h).
+  if (std::string_view(c.driver) == "can") {
+    overrides.push_back(config::parse_override("device.can.sdo_timeout_ms=2000"));
+  }
   if (c.set != nullptr) overrides.push_back(config::parse_override(c.set));
   for (const std::string& s : sets) overrides.push_back(config::parse_override(s));
   overrides.push_back(config::parse_override("loop.clock=freerun"));
