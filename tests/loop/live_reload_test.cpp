@@ -25,11 +25,14 @@ using telemetry::TickRecord;
 
 config::Config demo(const std::string& stiffness) {
   // The demo's hand presses into a damped wall behind two samples of delay, so the
-  // histories a swap must carry over (xi, the delay line) are all in use.
+  // histories a swap must carry over (xi, the delay line) are all in use. It holds for 10 s:
+  // a freerun loop runs up to a ring (1024 ticks) ahead of a starved consumer, so the swap
+  // may land as late as tick 1700, when the demo's own 1 s hold has the hand withdrawing.
   return config::load_embedded_default({{"wall.stiffness", stiffness, "--set k"},
                                         {"wall.damping", "0.3", "--set b"},
                                         {"wall.delay_samples", "2", "--set d"},
-                                        {"device.sim.operator.setpoint.start", "0", "--set s"}});
+                                        {"device.sim.operator.setpoint.start", "0", "--set s"},
+                                        {"device.sim.operator.setpoint.hold", "10", "--set h"}});
 }
 
 // The RT side: runs the loop on its own thread and counts what that thread allocates.
@@ -125,7 +128,7 @@ TEST(LiveReload, TheNewLawGovernsFromOneTickBoundaryWithoutAllocatingOnTheRtThre
   }
   EXPECT_EQ(accepted, 1);
   EXPECT_EQ(refused, 1);
-  EXPECT_GT(contact_after, 100) << "the new stiffness was felt";
+  EXPECT_GT(contact_after, 100) << "the new stiffness was felt (swap at tick " << at << ")";
   // And it is a different wall: the old law would have computed other forces after the swap.
   control::Controller old_only(control::make_control_law(before));
   bool differs = false;
