@@ -25,13 +25,13 @@ void tick_bench(benchmark::State& state, const char* example, bool driver_only) 
     pair.device->enable();
   }
   auto& can = dynamic_cast<drivers::can::CanDeviceBase&>(*pair.device);
-  const std::uint64_t sent0 = can.counters().frames_sent.load();
-  const std::uint64_t received0 = can.counters().frames_received.load();
+  const std::uint64_t sent0 = can.can_counters().frames_sent.load();
+  const std::uint64_t received0 = can.can_counters().frames_received.load();
   bench::run_ticks(state, *pair.device, *pair.peer, driver_only);
   const double ticks = static_cast<double>(state.iterations());
-  const double sent = static_cast<double>(can.counters().frames_sent.load() - sent0) / ticks;
+  const double sent = static_cast<double>(can.can_counters().frames_sent.load() - sent0) / ticks;
   const double received =
-      static_cast<double>(can.counters().frames_received.load() - received0) / ticks;
+      static_cast<double>(can.can_counters().frames_received.load() - received0) / ticks;
   state.counters["frames_out"] = sent;
   state.counters["frames_in"] = received;
   // One send(2) per frame out; one recvmsg(2) per frame in plus the one that finds the socket

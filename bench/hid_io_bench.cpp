@@ -27,9 +27,9 @@ void tick_bench(benchmark::State& state, const char* example, bool driver_only) 
   }
   pair.peer->service();  // the enable's answer, so the first tick has a sample
   auto& hid = dynamic_cast<drivers::hid::HidDevice&>(*pair.device);
-  const drivers::hid::HidCounters before = hid.counters();
+  const drivers::hid::HidCounters before = hid.hid_counts();
   bench::run_ticks(state, *pair.device, *pair.peer, driver_only);
-  const drivers::hid::HidCounters after = hid.counters();
+  const drivers::hid::HidCounters after = hid.hid_counts();
   const double ticks = static_cast<double>(state.iterations());
   const double in = static_cast<double>(after.input_reports + after.state_reports -
                                         before.input_reports - before.state_reports) /

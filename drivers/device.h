@@ -18,10 +18,13 @@
 
 #include <atomic>
 #include <cstdint>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <string_view>
 #include <vector>
+
+#include "base/counters.h"
 
 namespace hapticd {
 
@@ -67,13 +70,6 @@ struct PositionSample {
   // Samples of the device's sequence this read took in: the newest and the older ones it
   // replaced (a device faster than the loop). The loop counts a gap only beyond them.
   std::uint32_t samples = 1;
-};
-
-// One of a driver's own counters, for the run summary and `hapticctl status`.
-struct DeviceCounter {
-  std::string name;  // snake_case, e.g. "missed_edges"
-  std::uint64_t value = 0;
-  std::string meaning;  // one line: what it counts
 };
 
 // What configure() learned about the device: the numbers the gate analyses.
@@ -125,9 +121,10 @@ class Device {
   // should know but that does not stop it (an optional object the device lacks, a setting seen
   // on the wire), one sentence each.
   virtual std::vector<std::string> notices() const { return {}; }
-  // Any thread, not RT-safe (allocates). The driver's own counters worth a person's notice
-  // (missed encoder edges, malformed reports...); empty by default.
-  virtual std::vector<DeviceCounter> device_counters() const { return {}; }
+  // Any thread. The driver's own counters (base/counters.h): what it received and sent, and
+  // every anomaly it survived (missed encoder edges, malformed reports...). The run's counter
+  // registry lists them beside the loop's; empty for a driver with nothing to count.
+  virtual std::span<const base::Counter> counters() const noexcept { return {}; }
 
   // RT-safe: called every tick. The newest sample, draining whatever the transport queued.
   // Allowed in CONFIGURED (output off) and ACTIVE; a fault latches FAULTED and commands zero.

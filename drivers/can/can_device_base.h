@@ -63,7 +63,7 @@ class CanDeviceBase : public Device {
   std::string_view driver_name() const noexcept override { return "can"; }
   // Async-signal-safe: write(2) of the profile's prebuilt zero-torque and disable frames.
   void emergency_stop() noexcept override;
-  const CanCounters& counters() const noexcept { return counters_; }
+  const CanCounters& can_counters() const noexcept { return counters_; }
   std::vector<std::string> notices() const override { return notices_; }
   // Not RT-safe: "3 wrong-length frames, 1 unknown id" (empty when nothing was unusual).
   std::string counter_summary() const;

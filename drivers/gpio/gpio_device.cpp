@@ -50,7 +50,7 @@ GpioDevice::GpioDevice(const GpioSettings& settings, double max_force,
 // RT-safe. Records the missed edges the decoder counted since the last read, at `now_ns`.
 void GpioDevice::note_missed(std::int64_t now_ns) noexcept {
   const std::uint64_t total = decoder_.missed_edges();
-  missed_published_.store(total, std::memory_order_relaxed);
+  counters_[0].set(total);
   const std::uint64_t fresh = std::min<std::uint64_t>(total - missed_seen_, missed_times_.size());
   missed_seen_ = total;
   for (std::uint64_t i = 0; i < fresh; ++i) {
@@ -90,7 +90,7 @@ DeviceInfo GpioDevice::on_configure() {
   std::fill(missed_times_.begin(), missed_times_.end(), 0);
   missed_next_ = 0;
   missed_seen_ = 0;
-  missed_published_.store(0, std::memory_order_relaxed);
+  counters_[0].set(0);
   fault_line_ = s_.line_fault && (levels & wire::kLevelFault) != 0;
   if (fault_line_) {
     throw DeviceError("gpio: the motor driver reports a fault (line " +
@@ -131,12 +131,6 @@ void GpioDevice::on_clear_fault() {
 }
 
 void GpioDevice::on_close() noexcept { transport_->close(); }
-
-std::vector<DeviceCounter> GpioDevice::device_counters() const {
-  return {{"missed_edges", missed_published_.load(std::memory_order_relaxed),
-           "encoder edges missed within device.gpio.missed_edge_fault's tolerance: the count "
-           "may be off by them (re-home on the index)"}};
-}
 
 IoStatus GpioDevice::check_faults() noexcept {
   if (fault_line_) {

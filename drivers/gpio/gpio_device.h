@@ -50,7 +50,7 @@ class GpioDevice final : public Device {
 
   std::string_view driver_name() const noexcept override { return "gpio"; }
   // Any thread: missed edges the tolerance absorbed, for the summary and `hapticctl status`.
-  std::vector<DeviceCounter> device_counters() const override;
+  std::span<const base::Counter> counters() const noexcept override { return counters_; }
   void emergency_stop() noexcept override { transport_->emergency_stop(); }
 
   // Any thread, for tests and the summary (plain reads of RT-owned counters: approximate
@@ -87,8 +87,13 @@ class GpioDevice final : public Device {
   // When each of the last missed_edge_fault + 1 missed edges was seen (a ring, preallocated).
   std::vector<std::int64_t> missed_times_;
   std::size_t missed_next_ = 0;
-  std::uint64_t missed_seen_ = 0;                   // decoder_.missed_edges() at the last read
-  std::atomic<std::uint64_t> missed_published_{0};  // the same, for other threads
+  std::uint64_t missed_seen_ = 0;  // decoder_.missed_edges() at the last read
+  // The decoder's missed edges, published for other threads (Device::counters).
+  std::array<base::Counter, 1> counters_{{
+      {"missed_edges", base::CounterKind::kAnomaly,
+       "encoder edges missed within device.gpio.missed_edge_fault's tolerance: the count may "
+       "be off by them (re-home on the index)"},
+  }};
 };
 
 }  // namespace hapticd::drivers::gpio

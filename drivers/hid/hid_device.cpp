@@ -28,11 +28,7 @@ HidDevice::HidDevice(std::shared_ptr<const HidSettings> settings,
 HidDevice::~HidDevice() { close(); }
 
 DeviceInfo HidDevice::on_configure() {
-  for (auto* c :
-       {&c_.input_reports, &c_.superseded, &c_.state_reports, &c_.unknown_id, &c_.too_short,
-        &c_.too_long, &c_.output_reports, &c_.out_queue_full, &c_.drain_limit, &c_.held}) {
-    c->store(0);
-  }
+  for (base::Counter& c : c_) c.set(0);
   logged_ = {};
   decoded_ = {};
   active_ = false;
@@ -151,7 +147,7 @@ IoStatus HidDevice::hold(PositionSample& out, std::int64_t now) noexcept {
     set_fault_code(ETIMEDOUT);
     return IoStatus::kTransportFault;
   }
-  bump(c_.held);
+  bump(kHeld);
   out.position = decoded_.position;
   out.time_ns = now;  // nothing changed up to now: the position is current as of now
   out.flags = kSampleHasTime | kSampleHeld;
@@ -170,7 +166,7 @@ HidDevice::Drained HidDevice::drain() noexcept {
     if (r.status == TransportIo::kEmpty) break;
     if (r.status == TransportIo::kError) {
       if (r.error == EMSGSIZE) {
-        bump(c_.too_long);
+        bump(kTooLong);
         continue;
       }
       d.error = r.error;
@@ -178,27 +174,27 @@ HidDevice::Drained HidDevice::drain() noexcept {
     }
     switch (profile_->decode({rx_.data(), r.size}, decoded_)) {
       case InputKind::kPosition:
-        if (d.samples > 0) bump(c_.superseded);
+        if (d.samples > 0) bump(kSuperseded);
         ++d.samples;
         ++d.reports;
-        bump(c_.input_reports);
+        bump(kInputReports);
         break;
       case InputKind::kState:
         ++d.reports;
-        bump(c_.state_reports);
+        bump(kStateReports);
         break;
       case InputKind::kOther:
-        bump(c_.unknown_id);
+        bump(kUnknownId);
         break;
       case InputKind::kTooShort:
-        bump(c_.too_short);
+        bump(kTooShort);
         break;
       case InputKind::kTooLong:
-        bump(c_.too_long);
+        bump(kTooLong);
         break;
     }
   }
-  if (i == kMaxDrain) bump(c_.drain_limit);
+  if (i == kMaxDrain) bump(kDrainLimit);
   return d;
 }
 
@@ -206,14 +202,14 @@ IoStatus HidDevice::send(std::span<const std::uint8_t> report) noexcept {
   const IoResult r = transport_->write(report);
   if (r.status == TransportIo::kOk) {
     queue_full_streak_ = 0;
-    bump(c_.output_reports);
+    bump(kOutputReports);
     return IoStatus::kOk;
   }
   if (r.status == TransportIo::kError) {
     set_fault_code(static_cast<std::uint32_t>(r.error));
     return IoStatus::kTransportFault;
   }
-  bump(c_.out_queue_full);
+  bump(kOutQueueFull);
   if (++queue_full_streak_ >= settings_->limits.out_queue_full_fault) {
     set_fault_code(ENOBUFS);
     return IoStatus::kTransportFault;
@@ -232,26 +228,15 @@ IoStatus HidDevice::on_write(double force) noexcept {
   return send(profile_->force_report(force));
 }
 
-HidCounters HidDevice::counters() const noexcept {
-  return {c_.input_reports.load(),  c_.superseded.load(),
-          c_.state_reports.load(),  c_.unknown_id.load(),
-          c_.too_short.load(),      c_.too_long.load(),
-          c_.output_reports.load(), c_.out_queue_full.load(),
-          c_.drain_limit.load(),    c_.held.load()};
-}
-
-std::vector<DeviceCounter> HidDevice::device_counters() const {
-  const HidCounters k = counters();
-  return {{"input_reports", k.input_reports, "input reports with a sample"},
-          {"superseded", k.superseded, "samples replaced by a newer one in the same tick"},
-          {"held_ticks", k.held, "ticks without a report, the position held (reports on change)"},
-          {"malformed_reports", k.unknown_id + k.too_short + k.too_long,
-           "input reports of an unknown id, too short or too long"},
-          {"out_queue_full", k.out_queue_full, "ticks whose output report was dropped"}};
+HidCounters HidDevice::hid_counts() const noexcept {
+  return {c_[kInputReports].value(),  c_[kSuperseded].value(), c_[kStateReports].value(),
+          c_[kUnknownId].value(),     c_[kTooShort].value(),   c_[kTooLong].value(),
+          c_[kOutputReports].value(), c_[kOutQueueFull].value(), c_[kDrainLimit].value(),
+          c_[kHeld].value()};
 }
 
 void HidDevice::log_counters() const {
-  const HidCounters k = counters();
+  const HidCounters k = hid_counts();
   const std::uint64_t malformed = k.unknown_id + k.too_short + k.too_long;
   if (malformed > logged_.unknown_id + logged_.too_short + logged_.too_long) {
     spdlog::warn(

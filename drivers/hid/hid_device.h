@@ -43,8 +43,8 @@ class HidDevice final : public Device {
   std::string_view driver_name() const noexcept override { return "hid"; }
   void emergency_stop() noexcept override;
   // Any thread.
-  HidCounters counters() const noexcept;
-  std::vector<DeviceCounter> device_counters() const override;
+  HidCounters hid_counts() const noexcept;
+  std::span<const base::Counter> counters() const noexcept override { return c_; }
 
  protected:
   DeviceInfo on_configure() override;
@@ -57,9 +57,19 @@ class HidDevice final : public Device {
 
  private:
   static constexpr int kMaxDrain = 256;  // reports per tick: a flooding device cannot stall it
-  struct Counters {
-    std::atomic<std::uint64_t> input_reports{0}, superseded{0}, state_reports{0}, unknown_id{0},
-        too_short{0}, too_long{0}, output_reports{0}, out_queue_full{0}, drain_limit{0}, held{0};
+  // The driver's counters (Device::counters), in this order.
+  enum CounterIndex : std::size_t {
+    kInputReports,
+    kSuperseded,
+    kStateReports,
+    kUnknownId,
+    kTooShort,
+    kTooLong,
+    kOutputReports,
+    kOutQueueFull,
+    kDrainLimit,
+    kHeld,
+    kCounterCount
   };
   struct Drained {
     std::uint32_t samples = 0;  // position reports (the newest is decoded_)
@@ -70,9 +80,7 @@ class HidDevice final : public Device {
   Drained drain() noexcept;
   IoStatus hold(PositionSample& out, std::int64_t now) noexcept;
   void await_first_sample();
-  static void bump(std::atomic<std::uint64_t>& c) noexcept {
-    c.store(c.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);  // one writer
-  }
+  void bump(CounterIndex i) noexcept { c_[i].add(); }
   IoStatus send(std::span<const std::uint8_t> report) noexcept;
   void log_counters() const;
   void drain_stale() noexcept;
@@ -90,7 +98,20 @@ class HidDevice final : public Device {
   Decoded decoded_;
   bool active_ = false;  // output enabled: the fault mask applies
   int queue_full_streak_ = 0;
-  Counters c_;
+  using K = base::CounterKind;
+  std::array<base::Counter, kCounterCount> c_{{
+      {"input_reports", K::kCount, "input reports with a sample"},
+      {"superseded", K::kCount, "samples replaced by a newer one in the same tick"},
+      {"state_reports", K::kCount, "status-only reports (PID State)"},
+      {"unknown_id_reports", K::kAnomaly, "input reports of an id the profile does not use"},
+      {"short_reports", K::kAnomaly, "input reports shorter than their layout"},
+      {"long_reports", K::kAnomaly, "input reports longer than any report can be"},
+      {"output_reports", K::kCount, "output reports handed to the transport"},
+      {"out_queue_full", K::kAnomaly, "ticks whose output report was dropped: queue full"},
+      {"drain_limit", K::kAnomaly, "ticks that stopped draining at the per-tick bound"},
+      {"held_ticks", K::kCount,
+       "ticks without a report, the position held (a device that reports on change)"},
+  }};
   mutable HidCounters logged_;  // what log_counters() last reported: each event is logged once
 };
 

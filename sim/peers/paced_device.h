@@ -21,7 +21,7 @@ class PacedDevice final : public Device {
   std::string_view driver_name() const noexcept override { return inner_->driver_name(); }
   void emergency_stop() noexcept override { inner_->emergency_stop(); }
   std::vector<std::string> notices() const override { return inner_->notices(); }
-  std::vector<DeviceCounter> device_counters() const override { return inner_->device_counters(); }
+  std::span<const base::Counter> counters() const noexcept override { return inner_->counters(); }
 
  protected:
   DeviceInfo on_configure() override {

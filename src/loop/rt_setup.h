@@ -49,12 +49,6 @@ class CpuDmaLatencyRequest {
   int fd_ = -1;
 };
 
-// RT-safe. CLOCK_MONOTONIC in ns.
-std::int64_t monotonic_ns() noexcept;
-// RT-safe: the loop's one blocking call besides the device read. Sleeps to an absolute
-// CLOCK_MONOTONIC time; a signal interrupting the sleep does not move the deadline.
-void sleep_until_ns(std::int64_t deadline_ns) noexcept;
-
 // Touches `bytes` of the calling thread's stack so the first ticks do not page-fault.
 void prefault_stack(std::size_t bytes = 256 * 1024) noexcept;
 

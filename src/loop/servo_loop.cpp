@@ -14,6 +14,7 @@
 #include <cerrno>
 #include <cmath>
 
+#include "base/clock.h"
 #include "loop/rt_setup.h"
 
 namespace hapticd::loop {
@@ -31,8 +32,8 @@ static_assert(same_bit(control::kControlNonFinite, telemetry::kFlagNonFinite));
 
 constexpr std::int64_t kNsPerS = 1'000'000'000;
 
-std::int64_t now_ns() noexcept { return monotonic_ns(); }
-void sleep_until(std::int64_t deadline_ns) noexcept { sleep_until_ns(deadline_ns); }
+std::int64_t now_ns() noexcept { return base::monotonic_ns(); }
+void sleep_until(std::int64_t deadline_ns) noexcept { base::sleep_until_ns(deadline_ns); }
 
 std::int32_t clamp_i32(std::int64_t v) noexcept {
   return static_cast<std::int32_t>(std::clamp<std::int64_t>(v, INT32_MIN, INT32_MAX));

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "base/clock.h"
 #include "loop/rt_setup.h"
 
 namespace hapticd::service {
@@ -63,11 +64,11 @@ void run_excitation(Device& device, std::span<const double> force, double period
                     ExcitationRecord& rec) noexcept {
   loop::prefault_stack();
   const auto period = static_cast<std::int64_t>(std::llround(period_s * 1e9));
-  std::int64_t deadline = loop::monotonic_ns();
+  std::int64_t deadline = base::monotonic_ns();
   int stale = 0;
   const std::size_t n = std::min(force.size(), rec.position.size());
   for (std::size_t k = 0; k < n; ++k, deadline += period) {
-    if (realtime) loop::sleep_until_ns(deadline);
+    if (realtime) base::sleep_until_ns(deadline);
     if (stop.load(std::memory_order_relaxed)) {
       rec.end = ExcitationEnd::kStopped;
       break;

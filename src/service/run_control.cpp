@@ -80,7 +80,7 @@ json RunSession::status() const {
        d.state() == DeviceState::kUnconfigured ? json(nullptr) : json(d.info().description)},
       {"output_enabled", d.output_enabled()},
       {"last_command", d.last_command()},
-      {"counters", counters_json(d.device_counters())}};
+      {"counters", counters_json(read_counters(d))}};
   j["wall"] = {{"stiffness", cfg_.wall.stiffness}, {"damping", cfg_.wall.damping}};
   j["derated"] =
       derated_ ? json{{"configured", derated_->first}, {"ran", derated_->second}} : json(nullptr);

@@ -52,10 +52,16 @@ void passivity_text(const RunSummary& s, std::ostream& os) {
 
 }  // namespace
 
-json counters_json(const std::vector<DeviceCounter>& counters) {
+json counters_json(std::span<const base::CounterReading> counters) {
   json j = json::object();
-  for (const DeviceCounter& c : counters) j[c.name] = c.value;
+  for (const base::CounterReading& c : counters) j[c.name] = c.value;
   return j;
+}
+
+std::vector<base::CounterReading> read_counters(const Device& device) {
+  base::CounterRegistry registry;
+  registry.add(device.driver_name(), device.counters());
+  return registry.read();
 }
 
 json summary_to_json(const RunSummary& s) {
@@ -176,7 +182,7 @@ std::string summary_to_text(const RunSummary& s) {
        << format_number(s.peer_applied_force) << " N)";
   }
   os << "\n";
-  for (const DeviceCounter& c : s.device_counters) {
+  for (const base::CounterReading& c : s.device_counters) {
     if (c.value == 0) continue;
     const std::size_t pad = c.name.size() < 15 ? 15 - c.name.size() : 1;
     os << "  " << c.name << std::string(pad, ' ') << c.value << " (" << c.meaning << ")\n";

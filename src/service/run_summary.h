@@ -3,10 +3,12 @@
 
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "base/counters.h"
 #include "loop/latency_histogram.h"
 #include "loop/rt_setup.h"
 #include "loop/servo_loop.h"
@@ -40,11 +42,11 @@ struct RunSummary {
   std::string device_description;           // DeviceInfo::description
   std::vector<std::string> device_notices;  // Device::notices
   std::string device_state;                 // after the run, before close: "configured", "faulted"
-  std::vector<DeviceCounter> device_counters;  // the driver's own (Device::device_counters)
-  double final_command = 0.0;                  // Device::last_command() once output was disabled
-  bool final_output_enabled = false;           // Device::output_enabled() then
-  bool loopback = false;                       // a simulated peer stood in for the device
-  double peer_applied_force = 0.0;             // what the peer's plant felt last (loopback)
+  std::vector<base::CounterReading> device_counters;  // the driver's own (Device::counters)
+  double final_command = 0.0;         // Device::last_command() once output was disabled
+  bool final_output_enabled = false;  // Device::output_enabled() then
+  bool loopback = false;              // a simulated peer stood in for the device
+  double peer_applied_force = 0.0;    // what the peer's plant felt last (loopback)
   bool peer_output_on = false;
   nlohmann::json gate;
   std::string passivity_mode;  // safety.passivity_controller: "off", "observe", "damp"
@@ -54,7 +56,9 @@ struct RunSummary {
 
 nlohmann::json summary_to_json(const RunSummary& s);
 // {"name": value, ...}: a driver's counters for the summary and `hapticctl status`.
-nlohmann::json counters_json(const std::vector<DeviceCounter>& counters);
+nlohmann::json counters_json(std::span<const base::CounterReading> counters);
+// Not RT-safe. What `device`'s own counters read now.
+std::vector<base::CounterReading> read_counters(const Device& device);
 std::string summary_to_text(const RunSummary& s);
 
 }  // namespace hapticd::service

@@ -170,7 +170,7 @@ void summarise_device(DeviceSession& session, RunSummary& s) {
   s.device_state = std::string(to_string(d.state()));
   s.final_command = d.last_command();
   s.final_output_enabled = d.output_enabled();
-  s.device_counters = d.device_counters();
+  s.device_counters = read_counters(d);
 }
 
 void summarise_peer(DeviceSession& session, RunSummary& s) {

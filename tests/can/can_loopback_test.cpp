@@ -71,7 +71,7 @@ TEST(CanCia402, AnAbortedSdoCarriesCiA301sText) {
                    "transferred or stored in the present device state"),
             std::string::npos)
       << e;
-  EXPECT_EQ(rig.can().counters().sdo_aborts.load(), 1u);
+  EXPECT_EQ(rig.can().can_counters().sdo_aborts.load(), 1u);
 }
 
 TEST(CanCia402, ANodeIdWithoutADriveIsNamedByItsTimeOut) {
@@ -114,7 +114,7 @@ TEST(CanCia402, TruncatedEmcyWrongLengthUnknownIdsAndJunkAreCountedAndNamed) {
   rig.tick(0.0, s);  // SYNC: the drive answers with a 5-byte TPDO1 and an unknown id
   EXPECT_EQ(rig.tick(0.0, s), IoStatus::kNoNewData) << "a TPDO of the wrong length is no sample";
   EXPECT_EQ(rig.tick(0.0, s), IoStatus::kOk);
-  const CanCounters& c = rig.can().counters();
+  const CanCounters& c = rig.can().can_counters();
   EXPECT_EQ(c.wrong_length.load(), 1u);
   EXPECT_GE(c.unknown_ids.load(), 1u);
   EXPECT_EQ(c.malformed_messages.load(), 1u);

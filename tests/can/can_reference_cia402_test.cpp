@@ -141,7 +141,7 @@ TEST(CanReferenceCia402, TheDrivesInternalLimitIsCounted) {
   rig.device->configure();
   rig.device->enable();
   EXPECT_EQ(rig.run(8.0, 600), IoStatus::kOk) << rig.device->describe_fault();
-  EXPECT_GT(rig.can().counters().internal_limit.load(), 3u);
+  EXPECT_GT(rig.can().can_counters().internal_limit.load(), 3u);
   EXPECT_NE(rig.can().counter_summary().find("statusword bit 11"), std::string::npos);
 }
 

@@ -106,7 +106,7 @@ TEST(CanReferenceOdrive, CyclicEstimatesAreNotTakenForAnswersAndAreNoticed) {
   EXPECT_NE(notices.find("encoder_rate_ms"), std::string::npos) << notices;
   rig.device->enable();
   ASSERT_EQ(rig.run(0.0, 500), IoStatus::kOk);
-  EXPECT_GT(rig.can().counters().unsolicited_estimates.load(), 20u);
+  EXPECT_GT(rig.can().can_counters().unsolicited_estimates.load(), 20u);
   // Each sample answered its own tick's request: none is older than the tick before it.
   for (std::size_t i = 1; i < rig.samples.size(); ++i) {
     EXPECT_GT(rig.samples[i].time_ns, rig.samples[i - 1].time_ns) << i;

@@ -236,7 +236,7 @@ TEST(HidReportDevice, TheNewestOfSeveralPendingReportsIsUsed) {
   EXPECT_NEAR(s.position, 0.004, 1e-9);
   EXPECT_EQ(s.sequence, 4u);
   EXPECT_EQ(s.flags & (kSampleHasSequence | kSampleHasTime), kSampleHasSequence | kSampleHasTime);
-  EXPECT_EQ(rig.device.counters().superseded, 4u);
+  EXPECT_EQ(rig.device.hid_counts().superseded, 4u);
   EXPECT_EQ(rig.device.read(s), IoStatus::kNoNewData);
   EXPECT_EQ(rig.device.info().sequence_modulus, 256u);
 }
@@ -282,7 +282,7 @@ TEST(HidReportDevice, ADeviceThatTakesNoReportsFaultsAfterTheConfiguredTicks) {
   }
   EXPECT_EQ(w, IoStatus::kTransportFault);
   EXPECT_EQ(rig.device.fault().code, static_cast<std::uint32_t>(ENOBUFS));
-  EXPECT_EQ(rig.device.counters().out_queue_full, 10u);
+  EXPECT_EQ(rig.device.hid_counts().out_queue_full, 10u);
   EXPECT_EQ(rig.device.describe_fault(),
             "hid: the device took no output report for 10 ticks in a row (OUT queue full)");
   rig.fake.reading.store(true);

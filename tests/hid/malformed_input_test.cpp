@@ -37,7 +37,7 @@ TEST(HidMalformed, BadReportsAreCountedByKindAndTheLoopGoesOn) {
   PositionSample sample;
   ASSERT_EQ(device.read(sample), IoStatus::kOk);
   EXPECT_NEAR(sample.position, 0.002, 1e-9);
-  const HidCounters c = device.counters();
+  const HidCounters c = device.hid_counts();
   EXPECT_EQ(c.too_short, 2u);  // the short one and the empty one
   EXPECT_EQ(c.unknown_id, 1u);
   EXPECT_EQ(c.too_long, 1u);
@@ -73,7 +73,7 @@ TEST(HidMalformed, RandomInputNeverCrashesTheDriver) {
         ASSERT_NE(st, IoStatus::kTransportFault) << device.describe_fault();
       }
     }
-    const HidCounters c = device.counters();
+    const HidCounters c = device.hid_counts();
     EXPECT_GT(c.too_short + c.unknown_id + c.input_reports + c.state_reports, 0u) << example;
   }
 }
@@ -213,7 +213,7 @@ TEST(HidMalformed, CountingBadReportsAndAFullQueueAllocateNothing) {
   EXPECT_EQ(allocations, 0u) << "over " << ticks << " ticks";
   EXPECT_EQ(read, IoStatus::kOk);
   EXPECT_EQ(written, IoStatus::kTransportFault) << "the full queue faulted it in the end";
-  const HidCounters c = device.counters();
+  const HidCounters c = device.hid_counts();
   EXPECT_EQ(c.too_short + c.unknown_id + c.too_long, 4u);
   EXPECT_EQ(c.superseded, 1u);
   EXPECT_EQ(c.out_queue_full, 10u);

@@ -57,7 +57,7 @@ TEST(HidOnChange, HeldStillTheLastPositionIsTheSampleUntilTheLivenessBound) {
     EXPECT_NEAR(h.position, 0.003, 1e-9);
     EXPECT_EQ(h.flags & kSampleHasSequence, 0) << "a held position is no new sample";
   }
-  EXPECT_GE(rig.device.counters().held, 40u);
+  EXPECT_GE(rig.device.hid_counts().held, 40u);
   // A report within the bound keeps it alive; then silence past it is a hung device.
   rig.fake.send_input(rig.input(0.003, 8));
   std::this_thread::sleep_for(std::chrono::milliseconds(5));
@@ -118,8 +118,8 @@ TEST(HidMalformedLength, AReportLongerThanDeclaredIsCountedNotDecoded) {
   std::this_thread::sleep_for(std::chrono::milliseconds(5));
   PositionSample s;
   EXPECT_EQ(rig.device.read(s), IoStatus::kNoNewData);
-  EXPECT_EQ(rig.device.counters().too_long, 1u);
-  EXPECT_EQ(rig.device.counters().input_reports, 0u);
+  EXPECT_EQ(rig.device.hid_counts().too_long, 1u);
+  EXPECT_EQ(rig.device.hid_counts().input_reports, 0u);
 }
 
 TEST(HidKeepalive, TheFirstEnabledReportMovesOnFromTheOutputOffReport) {

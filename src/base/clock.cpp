@@ -1,0 +1,25 @@
+#include "base/clock.h"
+
+#include <time.h>
+
+#include <cerrno>
+
+namespace hapticd::base {
+
+std::int64_t monotonic_ns() noexcept {
+  timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+}
+
+std::int64_t monotonic_ms() noexcept { return monotonic_ns() / 1'000'000; }
+
+void sleep_until_ns(std::int64_t deadline_ns) noexcept {
+  timespec ts;
+  ts.tv_sec = static_cast<time_t>(deadline_ns / 1'000'000'000);
+  ts.tv_nsec = static_cast<long>(deadline_ns % 1'000'000'000);
+  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+  }
+}
+
+}  // namespace hapticd::base
