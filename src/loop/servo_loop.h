@@ -4,15 +4,20 @@
 // because no host timing enters the records).
 #pragma once
 
+#include <array>
 #include <atomic>
 #include <cstdint>
+#include <span>
 
+#include "base/counters.h"
 #include "control/controller.h"
 #include "control/passivity_observer.h"
 #include "drivers/device.h"
 #include "loop/latency_histogram.h"
 #include "loop/law_swap.h"
 #include "loop/loop_fault.h"
+#include "loop/sample_check.h"
+#include "loop/schedule.h"
 #include "telemetry/spsc_ring.h"
 #include "telemetry/tick_record.h"
 
@@ -40,19 +45,28 @@ struct LoopOptions {
 };
 
 // What the loop is doing, readable from any thread while it runs (relaxed atomics, stored
-// once a tick): for `hapticctl status`.
+// once a tick): for `hapticctl status`. What it counted is in ServoLoop::counters().
 struct LiveStatus {
-  std::atomic<std::uint64_t> overruns{0};
-  std::atomic<std::uint64_t> missed_ticks{0};
-  std::atomic<std::uint64_t> stale_ticks{0};
-  std::atomic<std::uint64_t> contact_ticks{0};
-  std::atomic<std::uint64_t> reloads{0};
   std::atomic<double> position{0.0};
   std::atomic<double> penetration{0.0};
   std::atomic<double> force_commanded{0.0};
   std::atomic<double> wall_energy_j{0.0};      // LoopResult::wall_energy_j, over every run()
   std::atomic<double> observer_energy_j{0.0};  // PassivityResult::energy_j
   std::atomic<std::uint64_t> damped_ticks{0};  // PassivityResult::damped_ticks
+};
+
+// The loop's counters (ServoLoop::counters()), in this order.
+enum LoopCounter : std::size_t {
+  kCounterOverruns,
+  kCounterMissedTicks,
+  kCounterStaleTicks,
+  kCounterSequenceGaps,
+  kCounterSamplesMissed,
+  kCounterContactTicks,
+  kCounterSaturatedTicks,
+  kCounterUnarmedTicks,
+  kCounterReloads,
+  kLoopCounterCount
 };
 
 // What the passivity observer saw, over every run() of the loop so far.
@@ -66,6 +80,8 @@ struct PassivityResult {
   double damping_work_j = 0.0;       // energy its force took out of the device (J)
 };
 
+// What one run() did. The counts are that run's share of ServoLoop::counters(), which go on
+// over every run.
 struct LoopResult {
   std::uint64_t ticks = 0;
   std::uint64_t overruns = 0;      // ticks that finished after the next deadline
@@ -115,56 +131,56 @@ class ServoLoop {
   // Off-RT, after run(): wake latency and compute time of every tick.
   const LatencyHistogram& wake_latency() const noexcept { return wake_latency_; }
   const LatencyHistogram& compute_time() const noexcept { return compute_time_; }
+  // Any thread. What the loop counted over every run() (LoopCounter order): the run's
+  // counter registry lists them beside the device's.
+  std::span<const base::Counter> counters() const noexcept { return counters_; }
 
  private:
-  Device& device_;
-  control::Controller* controller_;
-  telemetry::SpscRing<telemetry::TickRecord>* ring_;
-  LoopOptions options_;
-  double max_step_ = 0.0;  // max_speed * T: cached so the tick multiplies, not divides
-  // Reads the device and checks the sample; false when there is no position to act on
-  // (none yet, or a fault, which it records). RT-safe.
-  struct SenseState {
-    double last_x = 0.0;
-    bool have_x = false;
-    int stale_streak = 0;
-    std::int64_t periods_since_x = 1;  // periods the next new sample spans
-    std::int64_t last_time_ns = 0;     // the last sample's own time (0: it had none)
-    std::uint64_t last_sequence = 0;
-    bool have_sequence = false;
-    bool fresh = false;  // the last sense() took a new sample
-  };
-  bool sense(std::uint64_t tick, std::int64_t wake_ns, PositionSample& sample, SenseState& st,
-             telemetry::TickRecord& rec, LoopResult& res) noexcept;
-  // A new sample's sequence number against the last one: counts a gap, false if it faults.
-  bool check_sequence(std::uint64_t tick, const PositionSample& sample, SenseState& st,
-                      telemetry::TickRecord& rec, LoopResult& res) noexcept;
+  // One tick's device work: read, check, step the law, write (zero after a fault). Returns
+  // what the checks made of the read. RT-safe: called every tick.
+  Sensed device_tick(std::uint64_t tick, std::int64_t wake, std::uint32_t periods,
+                     SampleCheck& check, telemetry::TickRecord& rec, LoopResult& res) noexcept;
   // Records a fault on this tick (the device's class and code for device and transport ones).
   void set_fault(Fault f, telemetry::TickRecord& rec, LoopResult& res) const noexcept;
   // Hands one record to the ring (freerun waits for room). RT-safe: called every tick.
   void log(const telemetry::TickRecord& rec, const std::atomic<bool>& stop) noexcept;
   // Swaps in a law a live reload offered, and marks it (and refusals) in the log.
   // RT-safe: called every tick (one atomic load when nothing is offered).
-  void take_reloads(std::uint64_t tick, std::int64_t scheduled_ns, LoopResult& res,
+  void take_reloads(std::uint64_t tick, std::int64_t scheduled_ns,
                     const std::atomic<bool>& stop) noexcept;
   // Marks where a run after a cleared fault starts its fresh law (kMarkerRearmed). RT-safe.
   void mark_rearmed(const std::atomic<bool>& stop) noexcept;
-  // Stores what `hapticctl status` reads (LiveStatus). RT-safe: called every tick.
-  void publish(const telemetry::TickRecord& rec, const LoopResult& res) noexcept;
-
-  // Steps the controller and the passivity observer on a tick with a position; returns the
-  // command. RT-safe: called every tick.
-  control::Damping control(std::uint64_t tick, const PositionSample& sample, bool fresh,
-                           std::uint32_t periods, telemetry::TickRecord& rec,
-                           LoopResult& res) noexcept;
+  // Counts what the tick's record says and stores what `hapticctl status` reads.
+  // RT-safe: called every tick.
+  void account(const telemetry::TickRecord& rec, const Sensed& sensed, LoopResult& res) noexcept;
+  // This run's share of the counters (LoopResult's counts). RT-safe.
+  void run_counts(const std::array<std::uint64_t, kLoopCounterCount>& before,
+                  LoopResult& res) const noexcept;
   PassivityResult passivity() const noexcept;
 
+  Device& device_;
+  control::Controller* controller_;
+  telemetry::SpscRing<telemetry::TickRecord>* ring_;
+  LoopOptions options_;
+  SampleLimits limits_;
   control::PassivityObserver observer_;
   LatencyHistogram wake_latency_;
   LatencyHistogram compute_time_;
   std::atomic<std::uint64_t> ticks_done_{0};
   std::uint64_t next_tick_ = 0;  // the first tick of the next run()
   LiveStatus live_;
+  using K = base::CounterKind;
+  std::array<base::Counter, kLoopCounterCount> counters_{{
+      {"overruns", K::kAnomaly, "ticks that finished after the next deadline"},
+      {"missed_ticks", K::kAnomaly, "whole periods skipped after a tick that ended that late"},
+      {"stale_ticks", K::kAnomaly, "ticks without a new position (the last one held)"},
+      {"sequence_gaps", K::kAnomaly, "times the device's own sequence skipped samples"},
+      {"samples_missed", K::kAnomaly, "samples those gaps skipped in all"},
+      {"contact_ticks", K::kCount, "ticks in contact with the wall"},
+      {"saturated_ticks", K::kCount, "ticks whose force was limited to device.max_force"},
+      {"unarmed_ticks", K::kCount, "ticks inside the wall before it was first left"},
+      {"reloads", K::kCount, "control laws swapped in at a tick boundary"},
+  }};
 };
 
 }  // namespace hapticd::loop

@@ -18,6 +18,9 @@ std::string num(const json& v, double scale = 1.0) {
 
 std::string text(const json& v) { return v.is_string() ? v.get<std::string>() : "-"; }
 
+// A count, whole ("-" when absent).
+std::string count(const json& v) { return v.is_number_unsigned() ? v.dump() : num(v); }
+
 std::string percentiles(const json& p) {
   if (!p.is_object()) return "-";
   return "p50 " + num(p["p50"]) + "  p99 " + num(p["p99"]) + "  p99.9 " + num(p["p999"]) +
@@ -63,17 +66,24 @@ std::string status_text(const json& s) {
   }
   out << "  wake latency  " << percentiles(s["wake_latency_us"]) << "\n";
   out << "  compute       " << percentiles(s["compute_us"]) << "\n";
-  out << "  overruns      " << num(s["overruns"]) << " (missed ticks " << num(s["missed_ticks"])
-      << "), stale " << num(s["stale_ticks"]) << ", contact " << num(s["contact_ticks"])
-      << " ticks\n";
   out << "  reloads       " << num(s["reloads"]) << "\n";
-  // The driver's own counters (missed encoder edges, malformed reports...), those not zero.
-  if (s.contains("device") && s["device"].contains("counters")) {
-    for (const auto& [name, value] : s["device"]["counters"].items()) {
-      if (value.is_number() && value.get<double>() != 0.0)
-        out << "  " << name << std::string(name.size() < 14 ? 14 - name.size() : 1, ' ')
-            << num(value) << "\n";
+  // The run's counters, the loop's and the driver's, then the anomalies among them by name.
+  if (s.contains("counters") && s["counters"].is_object()) {
+    for (const auto& [source, counters] : s["counters"].items()) {
+      out << "  " << source << std::string(source.size() < 14 ? 14 - source.size() : 1, ' ');
+      const char* sep = "";
+      for (const auto& [name, value] : counters.items()) {
+        out << sep << name << " " << count(value);
+        sep = ", ";
+      }
+      out << "\n";
     }
+  }
+  const json anomalies = s.value("anomalies", json::array());
+  out << "  anomalies     " << (anomalies.empty() ? "none" : "") << "\n";
+  for (const json& a : anomalies) {
+    out << "    " << count(a["value"]) << " " << text(a["name"]) << " (" << text(a["source"])
+        << ": " << text(a["meaning"]) << ")\n";
   }
   out << "  fault         " << (s["fault"].is_string() ? text(s["fault"]) : "none") << "\n";
   return out.str();

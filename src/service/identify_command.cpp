@@ -20,6 +20,7 @@
 #include "service/exit_codes.h"
 #include "service/identify_run.h"
 #include "service/result_output.h"
+#include "service/run_support.h"
 
 namespace hapticd::service {
 namespace {
@@ -84,12 +85,8 @@ std::string describe_end(const ExcitationRecord& rec, const Device& device, doub
   switch (rec.end) {
     case ExcitationEnd::kDone:
       return "";
-    case ExcitationEnd::kDeviceFault:
-      return device.describe_fault();
-    case ExcitationEnd::kStale:
-      return "no new position for 3 ticks";
-    case ExcitationEnd::kNonFinite:
-      return "a non-finite position";
+    case ExcitationEnd::kFault:
+      return describe_fault(rec.fault, device);
     case ExcitationEnd::kTravel:
       return "the device moved more than --max-travel " + format_number(max_travel) +
              " m from where it started";
@@ -101,8 +98,8 @@ std::string describe_end(const ExcitationRecord& rec, const Device& device, doub
 
 // The excitation on this thread, a stop signal watched on another (the tick loop only reads
 // an atomic): the one place identify runs the device.
-ExcitationRecord excite(Device& device, const Excitation& e, double period_s, bool realtime,
-                        double max_travel, SignalWatch& signals) {
+ExcitationRecord excite(Device& device, const Excitation& e, const ExcitationLimits& limits,
+                        SignalWatch& signals) {
   ExcitationRecord rec(e.force.size());
   std::atomic<bool> stop{false}, done{false};
   std::thread watch([&] {
@@ -115,7 +112,7 @@ ExcitationRecord excite(Device& device, const Excitation& e, double period_s, bo
       if (signals.take_pending()) stop.store(true);
     }
   });
-  run_excitation(device, e.force, period_s, realtime, max_travel, stop, rec);
+  run_excitation(device, e.force, limits, stop, rec);
   done.store(true);
   watch.join();
   return rec;
@@ -223,8 +220,9 @@ int identify_command(const IdentifyOptions& options, SignalWatch& signals) {
   spdlog::info("identify: exciting {} with up to {} N for {} s", device.info().description,
                format_number(e.amplitude), format_number(e.duration));
   device.enable();
-  const ExcitationRecord rec =
-      excite(device, e, cfg.loop.sample_period_s(), realtime, options.max_travel, signals);
+  const ExcitationLimits limits{sample_limits(cfg, device.info(), realtime),
+                                cfg.loop.overrun_fault_streak, options.max_travel};
+  const ExcitationRecord rec = excite(device, e, limits, signals);
   const std::string why = describe_end(rec, device, options.max_travel);
   session.shut_down();
   if (rec.end != ExcitationEnd::kDone) {

@@ -2,36 +2,35 @@
 
 #include <cmath>
 
-#include "base/clock.h"
 #include "loop/rt_setup.h"
+#include "loop/schedule.h"
 
 namespace hapticd::service {
 namespace {
 
-constexpr int kStaleTicks = 3;  // ticks in a row without a fresh sample that end it
+using loop::FaultCause;
 
-// One tick: read, check, write the planned force. RT-safe: called every tick.
-bool tick(Device& device, double force, std::size_t k, double max_travel, int& stale,
-          ExcitationRecord& rec) noexcept {
+bool ended_by(loop::Fault f, ExcitationRecord& rec) noexcept {
+  if (f.cause == FaultCause::kNone) return false;
+  rec.fault = f;
+  rec.end = ExcitationEnd::kFault;
+  return true;
+}
+
+// One tick: read, check as the loop checks, record, write the planned force. False when it
+// ends the excitation. RT-safe: called every tick.
+bool tick(Device& device, double force, std::size_t k, std::int64_t wake, double max_travel,
+          loop::SampleCheck& check, ExcitationRecord& rec) noexcept {
   PositionSample s;
   const IoStatus st = device.read(s);
-  if (st == IoStatus::kTransportFault || st == IoStatus::kDeviceFault) {
-    rec.end = ExcitationEnd::kDeviceFault;
-    return false;
-  }
-  if (st == IoStatus::kOk && !std::isfinite(s.position)) {
-    rec.end = ExcitationEnd::kNonFinite;
-    return false;
-  }
-  rec.valid[k] = st == IoStatus::kOk;
-  stale = rec.valid[k] ? 0 : stale + 1;
-  if (stale >= kStaleTicks) {
-    rec.end = ExcitationEnd::kStale;
-    return false;
-  }
-  rec.position[k] = rec.valid[k] ? s.position : (k > 0 ? rec.position[k - 1] : 0.0);
+  telemetry::TickRecord scratch;  // the checks mark a record; identify keeps its own
+  const loop::Sensed sensed = check.check(k, wake, st, s, scratch);
+  if (ended_by(sensed.fault, rec)) return false;
+  // A held position (a device that reports on change) is as good a measurement as a new one.
+  rec.valid[k] = sensed.has_position && !sensed.stale;
+  rec.position[k] = sensed.has_position ? sensed.position : 0.0;
   if (rec.valid[k] && !rec.started) {
-    rec.start = s.position;
+    rec.start = sensed.position;
     rec.started = true;
   }
   if (rec.started && std::abs(rec.position[k] - rec.start) > max_travel) {
@@ -40,7 +39,10 @@ bool tick(Device& device, double force, std::size_t k, double max_travel, int& s
   }
   const IoStatus ws = device.write(force);
   if (ws == IoStatus::kTransportFault || ws == IoStatus::kDeviceFault) {
-    rec.end = ExcitationEnd::kDeviceFault;
+    ended_by(
+        {ws == IoStatus::kDeviceFault ? FaultCause::kDeviceReported : FaultCause::kTransportWrite,
+         k, 0.0},
+        rec);
     return false;
   }
   return true;
@@ -59,22 +61,25 @@ double ExcitationRecord::travel() const {
   return t;
 }
 
-void run_excitation(Device& device, std::span<const double> force, double period_s, bool realtime,
-                    double max_travel, const std::atomic<bool>& stop,
-                    ExcitationRecord& rec) noexcept {
+void run_excitation(Device& device, std::span<const double> force, const ExcitationLimits& limits,
+                    const std::atomic<bool>& stop, ExcitationRecord& rec) noexcept {
   loop::prefault_stack();
-  const auto period = static_cast<std::int64_t>(std::llround(period_s * 1e9));
-  std::int64_t deadline = base::monotonic_ns();
-  int stale = 0;
+  loop::Schedule schedule(limits.samples.realtime, limits.samples.period_ns,
+                          limits.overrun_fault_streak);
+  loop::SampleCheck check(limits.samples);
   const std::size_t n = std::min(force.size(), rec.position.size());
-  for (std::size_t k = 0; k < n; ++k, deadline += period) {
-    if (realtime) base::sleep_until_ns(deadline);
+  for (std::size_t k = 0; k < n; ++k) {
+    telemetry::TickRecord timing;
+    const std::int64_t wake = schedule.wait(k, timing);
     if (stop.load(std::memory_order_relaxed)) {
       rec.end = ExcitationEnd::kStopped;
       break;
     }
-    if (!tick(device, force[k], k, max_travel, stale, rec)) break;
+    if (!tick(device, force[k], k, wake, limits.max_travel, check, rec)) break;
     rec.ticks = k + 1;
+    std::int64_t compute_ns = 0;
+    if (ended_by(schedule.judge(k, wake, timing, compute_ns), rec)) break;
+    check.skipped(schedule.advance());
   }
   device.write(0.0);
   device.disable();

@@ -1,6 +1,9 @@
 // The tick loop of `hapticd identify`: the planned force written every tick, the positions
-// recorded, and every way it ends (the excitation done, a device fault, stale or non-finite
-// data, the device past --max-travel, a stop) ends with zero force written and output off.
+// recorded, and every way it ends (the excitation done, a fault, the device past --max-travel,
+// a stop) ends with zero force written and output off. It keeps time and checks every sample
+// exactly as `hapticd run` does, by running the loop's own Schedule and SampleCheck: stale
+// data, a sample that old, sequence gaps, non-finite positions, safety.max_speed and a streak
+// of overruns fault it as they fault a run.
 #pragma once
 
 #include <atomic>
@@ -9,10 +12,12 @@
 #include <vector>
 
 #include "drivers/device.h"
+#include "loop/loop_fault.h"
+#include "loop/sample_check.h"
 
 namespace hapticd::service {
 
-enum class ExcitationEnd { kDone, kDeviceFault, kStale, kNonFinite, kTravel, kStopped };
+enum class ExcitationEnd { kDone, kFault, kTravel, kStopped };
 
 struct ExcitationRecord {
   std::vector<double> position;  // x_k (held over a tick without a fresh sample)
@@ -21,6 +26,7 @@ struct ExcitationRecord {
   double start = 0.0;            // the first position read
   bool started = false;
   ExcitationEnd end = ExcitationEnd::kDone;
+  loop::Fault fault;  // what faulted it (ExcitationEnd::kFault), as the loop names faults
 
   // Not RT-safe: sizes everything for `ticks` before the first tick.
   explicit ExcitationRecord(std::size_t length);
@@ -28,12 +34,18 @@ struct ExcitationRecord {
   double travel() const;
 };
 
+// How the excitation keeps time and checks samples: the loop's own limits.
+struct ExcitationLimits {
+  loop::SampleLimits samples;     // realtime: an absolute CLOCK_MONOTONIC schedule
+  int overrun_fault_streak = 10;  // loop.overrun_fault_streak
+  double max_travel = 0.1;        // m from where it started (--max-travel)
+};
+
 // Drives `force` (one value a tick) and records into `rec`; then writes zero and disables
-// output, whatever ended it. Realtime: ticks on an absolute CLOCK_MONOTONIC schedule of
-// `period_s`; otherwise back to back (a simulated device, paced by its peer). `stop` is read
-// once a tick. RT-safe: nothing allocated, locked, logged or thrown while it runs.
-void run_excitation(Device& device, std::span<const double> force, double period_s, bool realtime,
-                    double max_travel, const std::atomic<bool>& stop,
-                    ExcitationRecord& rec) noexcept;
+// output, whatever ended it. Realtime: ticks on an absolute schedule of the limits' period;
+// otherwise back to back (a simulated device, paced by its peer). `stop` is read once a tick.
+// RT-safe: nothing allocated, locked, logged or thrown while it runs.
+void run_excitation(Device& device, std::span<const double> force, const ExcitationLimits& limits,
+                    const std::atomic<bool>& stop, ExcitationRecord& rec) noexcept;
 
 }  // namespace hapticd::service

@@ -8,6 +8,7 @@
 #include "control/controller.h"
 #include "control/passivity_observer.h"
 #include "drivers/registry.h"
+#include "loop/tick.h"
 #include "service/config_source.h"
 
 namespace hapticd::service {
@@ -33,15 +34,9 @@ std::uint32_t periods_between(std::int64_t from_ns, std::int64_t to_ns, double p
   return n >= 1.0 ? static_cast<std::uint32_t>(n) : 1u;
 }
 
-// What a replayed tick computed: the controller's output (the command with the passivity
-// controller's damping) and the observer's energy and added damping.
-struct Stepped {
-  control::ControlOutput out;
-  double energy_j = 0.0;
-  double damping = 0.0;
-};
-
 // One configuration's controller and passivity observer walking the log, with its series.
+// Each tick goes through the loop's own tick (loop/tick.h), so what the run computed comes
+// back by construction.
 struct Walker {
   std::unique_ptr<control::Controller> law;
   std::unique_ptr<control::PassivityObserver> observer;  // built once: it spans re-armings
@@ -60,30 +55,26 @@ struct Walker {
     next->continue_from(*law);
     law = std::move(next);
   }
-  // One ordinary record; the output when the controller is stepped on a tick that did not
-  // fault, its force_commanded the command written (the passivity controller's included). A
-  // tick that faulted after the step was observed (the energy carries over a re-arming) and
-  // wrote zero.
-  std::optional<Stepped> step(bool stepped, bool faulted, bool fresh, std::uint32_t periods,
-                              double x) {
-    std::optional<Stepped> out;
-    control::Damping d;
-    if (stepped) observer->observe(x, fresh, periods);
-    if (stepped && !faulted) {
-      control::ControlOutput o = law->step(x);
-      d = observer->damp(o.force_commanded, law->law());
-      o.force_commanded = d.command;
-      add(d.command, o.penetration, o.flags & control::kControlContact,
-          (o.flags & control::kControlSaturated) || d.saturated);
-      out = Stepped{o, observer->energy_j(), d.alpha};
+  // One ordinary record: the loop's tick on its position when the loop stepped it, then what
+  // was written (zero on a tick that faulted). The record this law makes of it, for a tick
+  // stepped without a fault (the ones whose forces the log must reproduce).
+  std::optional<TickRecord> step(const TickRecord& logged, bool stepped, bool faulted,
+                                 std::uint32_t periods) {
+    TickRecord rec;
+    loop::TickCommand c;
+    if (stepped) {
+      c = loop::step_tick(*law, *observer, loop::TickInput::recorded(logged, periods), rec);
     }
-    if (faulted) d = control::Damping{};
-    observer->commanded(d.command, d.added);
-    series.commanded.push_back(d.command);
+    if (faulted || c.non_finite) c = {};
+    loop::end_tick(*observer, c.command, c.added, rec);
+    series.commanded.push_back(c.command);
     series.wall_energy_j = observer->wall_work_j();
     series.min_observer_energy_j = observer->min_energy_j();
     series.damped_ticks = observer->damped_ticks();
-    return out;
+    if (!stepped || faulted) return std::nullopt;
+    add(rec.force_commanded, rec.penetration, (rec.flags & telemetry::kFlagContact) != 0,
+        (rec.flags & telemetry::kFlagSaturated) != 0);
+    return rec;
   }
   void add(double u, double p, bool contact, bool saturated) {
     series.max_abs_force = std::max(series.max_abs_force, std::abs(u));
@@ -101,7 +92,7 @@ bool same_bits(double a, double b) {
 // an observer fed the logged commands, the observer's figures as recorded.
 void log_tick(ForceSeries& s, control::PassivityObserver& work, const TickRecord& r, bool stepped,
               std::uint32_t periods) {
-  if (stepped) work.observe(r.position, (r.flags & telemetry::kFlagStale) == 0, periods);
+  if (stepped) work.observe(r.position, loop::TickInput::recorded(r, periods).fresh, periods);
   work.commanded(r.force_commanded, 0.0);
   s.wall_energy_j = work.wall_work_j();
   s.min_observer_energy_j = std::min(s.min_observer_energy_j, r.observer_energy_j);
@@ -156,12 +147,12 @@ bool take_marker(State& st, const TickRecord& r, ReplayResult& out) {
 }
 
 // Forces bit for bit; from format 3 on, the observer's energy and damping too.
-void compare(const TickRecord& r, const Stepped& s, std::uint32_t version, ReplayResult& out) {
+void compare(const TickRecord& r, const TickRecord& s, std::uint32_t version, ReplayResult& out) {
   ++out.compared;
-  const bool observer_same = version < 3 || (same_bits(s.energy_j, r.observer_energy_j) &&
-                                             same_bits(s.damping, r.passivity_damping));
-  if (same_bits(s.out.force_computed, r.force_computed) &&
-      same_bits(s.out.force_commanded, r.force_commanded) && observer_same) {
+  const bool observer_same = version < 3 || (same_bits(s.observer_energy_j, r.observer_energy_j) &&
+                                             same_bits(s.passivity_damping, r.passivity_damping));
+  if (same_bits(s.force_computed, r.force_computed) &&
+      same_bits(s.force_commanded, r.force_commanded) && observer_same) {
     return;
   }
   if (out.differing++ == 0) out.first_difference = r.tick;
@@ -215,14 +206,11 @@ ReplayResult replay_log(const telemetry::LogContents& log, const std::string& lo
     const bool stepped =
         log.version >= 3 ? (r.flags & telemetry::kFlagStepped) != 0
                          : (r.flags & (telemetry::kFlagNoPosition | telemetry::kFlagFault)) == 0;
-    const bool fresh = (r.flags & telemetry::kFlagStale) == 0;
     out.ticks.push_back(r.tick);
     out.positions.push_back(r.position);
     log_tick(out.logged, *st.logged_work, r, stepped, periods);
-    if (const auto o = st.own.step(stepped, faulted, fresh, periods, r.position)) {
-      compare(r, *o, log.version, out);
-    }
-    if (other != nullptr) st.other.step(stepped, faulted, fresh, periods, r.position);
+    if (const auto o = st.own.step(r, stepped, faulted, periods)) compare(r, *o, log.version, out);
+    if (other != nullptr) st.other.step(r, stepped, faulted, periods);
   }
   out.own = std::move(st.own.series);
   if (other != nullptr) out.other = std::move(st.other.series);

@@ -15,6 +15,7 @@
 #include "gate/gate_report_format.h"
 #include "gate/number_format.h"
 #include "service/config_source.h"
+#include "service/counters_report.h"
 #include "service/exit_codes.h"
 #include "service/gate_derate.h"
 #include "service/reload_check.h"
@@ -79,8 +80,10 @@ json RunSession::status() const {
       {"description",
        d.state() == DeviceState::kUnconfigured ? json(nullptr) : json(d.info().description)},
       {"output_enabled", d.output_enabled()},
-      {"last_command", d.last_command()},
-      {"counters", counters_json(read_counters(d))}};
+      {"last_command", d.last_command()}};
+  const std::vector<base::CounterReading> counters = read_run_counters(servo_.get(), d);
+  j["counters"] = counters_json(counters);
+  j["anomalies"] = anomalies_json(counters);
   j["wall"] = {{"stiffness", cfg_.wall.stiffness}, {"damping", cfg_.wall.damping}};
   j["derated"] =
       derated_ ? json{{"configured", derated_->first}, {"ran", derated_->second}} : json(nullptr);
@@ -90,10 +93,6 @@ json RunSession::status() const {
     const loop::LiveStatus& live = servo_->live();
     constexpr auto r = std::memory_order_relaxed;
     j["tick"] = servo_->ticks_done();
-    j["overruns"] = live.overruns.load(r);
-    j["missed_ticks"] = live.missed_ticks.load(r);
-    j["stale_ticks"] = live.stale_ticks.load(r);
-    j["contact_ticks"] = live.contact_ticks.load(r);
     j["reloads"] = reloads_;
     j["position"] = live.position.load(r);
     j["penetration"] = live.penetration.load(r);

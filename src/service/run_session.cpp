@@ -131,11 +131,11 @@ int RunSession::run() {
   if (log_.writer) log_.writer->stop();
   summary_.rt = rt_;
   if (summary_.loop.fault.cause != loop::FaultCause::kNone) summary_.stop_reason = "fault";
-  if (summary_.loop.unarmed_ticks > 0) {
+  if (const std::uint64_t unarmed = servo_->counters()[loop::kCounterUnarmedTicks].value()) {
     spdlog::warn(
         "the device started inside the wall: the wall stayed off for {} ticks until it "
         "was first left",
-        summary_.loop.unarmed_ticks);
+        unarmed);
   }
   summarise_log(log_, summary_);
   return finish();
@@ -244,17 +244,9 @@ void RunSession::supervise(RtThread& rt) {
 }
 
 void RunSession::accumulate(const loop::LoopResult& r) {
+  // The counts are the loop's counters, read at the end; here what only a run's result holds.
   loop::LoopResult& t = summary_.loop;
   t.ticks += r.ticks;
-  t.overruns += r.overruns;
-  t.missed_ticks += r.missed_ticks;
-  t.stale_ticks += r.stale_ticks;
-  t.contact_ticks += r.contact_ticks;
-  t.saturated_ticks += r.saturated_ticks;
-  t.unarmed_ticks += r.unarmed_ticks;
-  t.reloads += r.reloads;
-  t.sequence_gaps += r.sequence_gaps;
-  t.samples_missed += r.samples_missed;
   t.max_penetration = std::max(t.max_penetration, r.max_penetration);
   t.wall_energy_j += r.wall_energy_j;
   t.passivity = r.passivity;  // already over every run
@@ -264,7 +256,7 @@ void RunSession::accumulate(const loop::LoopResult& r) {
 int RunSession::finish() {
   server_.reset();  // no request may arrive while the device is closed
   set_phase(Phase::kEnded);
-  summarise_device(*session_, summary_);
+  summarise_device(*session_, servo_.get(), summary_);
   session_->shut_down();
   summarise_peer(*session_, summary_);
   return report(options_, summary_);

@@ -3,6 +3,7 @@
 #include <sstream>
 
 #include "gate/number_format.h"
+#include "service/counters_report.h"
 
 namespace hapticd::service {
 namespace {
@@ -52,36 +53,17 @@ void passivity_text(const RunSummary& s, std::ostream& os) {
 
 }  // namespace
 
-json counters_json(std::span<const base::CounterReading> counters) {
-  json j = json::object();
-  for (const base::CounterReading& c : counters) j[c.name] = c.value;
-  return j;
-}
-
-std::vector<base::CounterReading> read_counters(const Device& device) {
-  base::CounterRegistry registry;
-  registry.add(device.driver_name(), device.counters());
-  return registry.read();
-}
-
 json summary_to_json(const RunSummary& s) {
   json j;
   j["ticks"] = s.loop.ticks;
   j["duration_s"] = static_cast<double>(s.loop.ticks) * s.sample_period_s;
   j["clock"] = s.realtime ? "realtime" : "freerun";
-  j["overruns"] = s.loop.overruns;
-  j["missed_ticks"] = s.loop.missed_ticks;
-  j["stale_ticks"] = s.loop.stale_ticks;
   j["wake_latency_us"] = s.realtime ? percentiles_us(s.wake_latency) : json(nullptr);
   j["compute_us"] = percentiles_us(s.compute_time);
   j["faults"] = s.faults;
   j["cleared_faults"] = s.cleared_faults;
-  j["reloads"] = s.loop.reloads;
   j["wall_energy_j"] = s.loop.wall_energy_j;
   j["stop_reason"] = s.stop_reason;
-  j["contact_ticks"] = s.loop.contact_ticks;
-  j["saturated_ticks"] = s.loop.saturated_ticks;
-  j["unarmed_ticks"] = s.loop.unarmed_ticks;
   j["max_penetration"] = s.loop.max_penetration;
   j["operator_work_j"] = s.operator_work_j ? json(*s.operator_work_j) : json(nullptr);
   j["log_path"] = s.log_path.empty() ? json(nullptr) : json(s.log_path);
@@ -99,13 +81,12 @@ json summary_to_json(const RunSummary& s) {
                  {"notices", s.device_notices},
                  {"state", s.device_state},
                  {"final_command", s.final_command},
-                 {"output_enabled", s.final_output_enabled},
-                 {"counters", counters_json(s.device_counters)}};
+                 {"output_enabled", s.final_output_enabled}};
+  j["counters"] = counters_json(s.counters);
+  j["anomalies"] = anomalies_json(s.counters);
   j["loopback"] =
       s.loopback ? json{{"applied_force", s.peer_applied_force}, {"output_on", s.peer_output_on}}
                  : json(nullptr);
-  j["sequence_gaps"] = s.loop.sequence_gaps;
-  j["samples_missed"] = s.loop.samples_missed;
   j["rt"] = {{"sched_fifo", s.rt.fifo},
              {"priority", s.rt.priority},
              {"memory_locked", s.rt.memory_locked},
@@ -147,15 +128,17 @@ std::string summary_to_text(const RunSummary& s) {
     os << "  wake latency   " << line_us(j["wake_latency_us"]) << "\n";
   }
   os << "  compute        " << line_us(j["compute_us"]) << "\n";
-  os << "  overruns       " << s.loop.overruns << " (missed ticks " << s.loop.missed_ticks << ")\n";
-  os << "  contact        " << s.loop.contact_ticks << " ticks, max penetration "
-     << format_number(s.loop.max_penetration * 1e3) << " mm, saturated " << s.loop.saturated_ticks
+  const auto loop = [&](std::string_view name) { return counter_value(s.counters, "loop", name); };
+  os << "  overruns       " << loop("overruns") << " (missed ticks " << loop("missed_ticks")
+     << ")\n";
+  os << "  contact        " << loop("contact_ticks") << " ticks, max penetration "
+     << format_number(s.loop.max_penetration * 1e3) << " mm, saturated " << loop("saturated_ticks")
      << " ticks\n";
   os << "  wall energy    " << format_number(s.loop.wall_energy_j)
      << " J (work the wall did on the device)\n";
   passivity_text(s, os);
-  if (s.loop.reloads > 0) {
-    os << "  reloads        " << s.loop.reloads << " swapped in at a tick boundary\n";
+  if (loop("reloads") > 0) {
+    os << "  reloads        " << loop("reloads") << " swapped in at a tick boundary\n";
   }
   if (s.operator_work_j) {
     os << "  operator work  " << format_number(*s.operator_work_j)
@@ -182,15 +165,7 @@ std::string summary_to_text(const RunSummary& s) {
        << format_number(s.peer_applied_force) << " N)";
   }
   os << "\n";
-  for (const base::CounterReading& c : s.device_counters) {
-    if (c.value == 0) continue;
-    const std::size_t pad = c.name.size() < 15 ? 15 - c.name.size() : 1;
-    os << "  " << c.name << std::string(pad, ' ') << c.value << " (" << c.meaning << ")\n";
-  }
-  if (s.loop.sequence_gaps > 0) {
-    os << "  sequence gaps  " << s.loop.sequence_gaps << " (" << s.loop.samples_missed
-       << " samples missed)\n";
-  }
+  counters_text(s.counters, os);
   os << "  faults         "
      << (s.faults.empty() ? std::string("none") : std::to_string(s.faults.size())) << "\n";
   for (const std::string& f : s.faults) os << "    " << f << "\n";

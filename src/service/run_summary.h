@@ -42,7 +42,8 @@ struct RunSummary {
   std::string device_description;           // DeviceInfo::description
   std::vector<std::string> device_notices;  // Device::notices
   std::string device_state;                 // after the run, before close: "configured", "faulted"
-  std::vector<base::CounterReading> device_counters;  // the driver's own (Device::counters)
+  // The loop's counters and the driver's (counters_report.h), read once output was disabled.
+  std::vector<base::CounterReading> counters;
   double final_command = 0.0;         // Device::last_command() once output was disabled
   bool final_output_enabled = false;  // Device::output_enabled() then
   bool loopback = false;              // a simulated peer stood in for the device
@@ -56,9 +57,6 @@ struct RunSummary {
 
 nlohmann::json summary_to_json(const RunSummary& s);
 // {"name": value, ...}: a driver's counters for the summary and `hapticctl status`.
-nlohmann::json counters_json(std::span<const base::CounterReading> counters);
-// Not RT-safe. What `device`'s own counters read now.
-std::vector<base::CounterReading> read_counters(const Device& device);
 std::string summary_to_text(const RunSummary& s);
 
 }  // namespace hapticd::service

@@ -1,5 +1,7 @@
 #include "service/run_support.h"
 
+#include "service/counters_report.h"
+
 #include <spdlog/spdlog.h>
 
 #include <chrono>
@@ -88,14 +90,15 @@ TickLog open_tick_log(const RunOptions& options, const config::Config& cfg, bool
 
 loop::LoopOptions loop_options(const RunOptions& options, const config::Config& cfg,
                                const DeviceInfo& info, bool realtime, bool logging) {
+  const loop::SampleLimits limits = sample_limits(cfg, info, realtime);
   loop::LoopOptions lo;
-  lo.sequence_gap_fault = cfg.safety.sequence_gap_fault;
-  lo.sequence_modulus = info.sequence_modulus;
-  lo.realtime = realtime;
-  lo.period_ns = std::llround(1e9 / cfg.loop.rate_hz);
+  lo.sequence_gap_fault = limits.sequence_gap_fault;
+  lo.sequence_modulus = limits.sequence_modulus;
+  lo.realtime = limits.realtime;
+  lo.period_ns = limits.period_ns;
   lo.overrun_fault_streak = cfg.loop.overrun_fault_streak;
-  lo.stale_fault_ticks = cfg.safety.stale_fault_ticks;
-  lo.max_speed = cfg.safety.max_speed;
+  lo.stale_fault_ticks = limits.stale_fault_ticks;
+  lo.max_speed = limits.max_speed;
   lo.wait_for_ring = !realtime && logging;  // a simulation logs every tick
   lo.observer = control::observer_params(cfg, info.transport_delay_samples);
   if (options.duration_s) {
@@ -105,10 +108,24 @@ loop::LoopOptions loop_options(const RunOptions& options, const config::Config& 
   return lo;
 }
 
+std::string describe_fault(const loop::Fault& fault, const Device& device) {
+  std::string f = loop::describe(fault);
+  if (device.fault().fault_class != FaultClass::kNone) f += ": " + device.describe_fault();
+  return f;
+}
+
+loop::SampleLimits sample_limits(const config::Config& cfg, const DeviceInfo& info, bool realtime) {
+  return {realtime,
+          std::llround(1e9 / cfg.loop.rate_hz),
+          cfg.safety.stale_fault_ticks,
+          cfg.safety.max_speed,
+          cfg.safety.sequence_gap_fault,
+          info.sequence_modulus};
+}
+
 void summarise_fault(const loop::LoopResult& result, const Device& device, RunSummary& s) {
   if (result.fault.cause == loop::FaultCause::kNone) return;
-  std::string f = loop::describe(result.fault);
-  if (device.fault().fault_class != FaultClass::kNone) f += ": " + device.describe_fault();
+  const std::string f = describe_fault(result.fault, device);
   spdlog::error("fault: {}; zero force commanded, output disabled", f);
   s.faults.push_back(f);
 }
@@ -165,12 +182,12 @@ bool stop_requested(SignalWatch& signals, RunSummary& s, const char* when, bool&
   return false;
 }
 
-void summarise_device(DeviceSession& session, RunSummary& s) {
+void summarise_device(DeviceSession& session, const loop::ServoLoop* loop, RunSummary& s) {
   const Device& d = session.device();
   s.device_state = std::string(to_string(d.state()));
   s.final_command = d.last_command();
   s.final_output_enabled = d.output_enabled();
-  s.device_counters = read_counters(d);
+  s.counters = read_run_counters(loop, d);
 }
 
 void summarise_peer(DeviceSession& session, RunSummary& s) {

@@ -37,8 +37,15 @@ loop::LoopOptions loop_options(const RunOptions& options, const config::Config& 
                                const DeviceInfo& info, bool realtime, bool logging);
 
 void summarise_fault(const loop::LoopResult& result, const Device& device, RunSummary& s);
+// Not RT-safe. The loop's sentence for a fault, the device's own after it when it latched one.
+std::string describe_fault(const loop::Fault& fault, const Device& device);
+// The limits every tick checks a sample against (safety.*, the device's sequence modulus):
+// one place for `hapticd run` and `hapticd identify`.
+loop::SampleLimits sample_limits(const config::Config& cfg, const DeviceInfo& info, bool realtime);
 void summarise_log(const TickLog& log, RunSummary& s);
-void summarise_device(DeviceSession& session, RunSummary& s);
+// The device's state after the run and the run's counters (the loop's, when it ran, and the
+// driver's).
+void summarise_device(DeviceSession& session, const loop::ServoLoop* loop, RunSummary& s);
 void summarise_peer(DeviceSession& session, RunSummary& s);
 // Prints the summary (and writes --summary-json); the exit code of the run.
 int report(const RunOptions& options, RunSummary& s);

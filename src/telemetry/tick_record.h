@@ -22,6 +22,9 @@ enum TickFlag : std::uint32_t {
   kFlagNoPosition = 1u << 9,   // no position to act on yet: the controller was not stepped
   kFlagPassivityDamped = 1u << 10,  // the passivity controller added damping on this tick
   kFlagStepped = 1u << 11,          // the controller and the passivity observer ran on this tick
+  // The device reports on change and said nothing this tick: its last position, still
+  // current, was held (no new measurement, not stale). Logs before this bit existed leave it 0.
+  kFlagHeld = 1u << 12,
 };
 
 // A record that is not a tick but an event at a tick boundary (TickRecord::marker): `tick` is

@@ -124,13 +124,14 @@ TEST_P(CanOnVcan, HapticdRunAgainstHapticdPeerRendersTheWallLikeTheSimDriver) {
   const nlohmann::json r = read_json(temp("run-" + profile + ".json"));
   const nlohmann::json s = read_json(temp("sim-" + profile + ".json"));
   EXPECT_TRUE(r["faults"].empty()) << r["faults"].dump();
-  EXPECT_GT(r["contact_ticks"].get<int>(), 100) << "the wall was reached (100 Hz)";
+  EXPECT_GT(r["counters"]["loop"]["contact_ticks"].get<int>(), 100)
+      << "the wall was reached (100 Hz)";
   const double p = r["max_penetration"].get<double>();
   const double ps = s["max_penetration"].get<double>();
   EXPECT_NEAR(p, ps, 0.1 * ps) << "vcan " << p * 1e3 << " mm, sim (delay 1) " << ps * 1e3 << " mm";
   RecordProperty("penetration_vcan_mm", std::to_string(p * 1e3));
   RecordProperty("penetration_sim_mm", std::to_string(ps * 1e3));
-  RecordProperty("stale_ticks", std::to_string(r["stale_ticks"].get<int>()));
+  RecordProperty("stale_ticks", std::to_string(r["counters"]["loop"]["stale_ticks"].get<int>()));
 }
 
 struct InjectedFault {

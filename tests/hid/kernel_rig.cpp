@@ -60,14 +60,15 @@ void expect_the_sim_drivers_wall(const char* config, const std::vector<std::stri
   EXPECT_EQ(faults(hid), "[]");
   const double p_hid = hid.summary["max_penetration"].get<double>();
   const double p_sim = sim.summary["max_penetration"].get<double>();
-  EXPECT_GT(hid.summary["contact_ticks"].get<std::uint64_t>(), 50u) << "contact reached";
+  EXPECT_GT(hid.summary["counters"]["loop"]["contact_ticks"].get<std::uint64_t>(), 50u)
+      << "contact reached";
   EXPECT_GT(p_sim, 0.002);
   EXPECT_NEAR(p_hid, p_sim, 0.1 * p_sim)
       << "hid " << p_hid * 1e3 << " mm, sim " << p_sim * 1e3 << " mm with " << delay
       << " samples of delay; " << hid.log;
   std::cout << config << ": hid " << p_hid * 1e3 << " mm, sim " << p_sim * 1e3 << " mm, delay "
-            << delay << ", stale ticks " << hid.summary["stale_ticks"] << ", sequence gaps "
-            << hid.summary["sequence_gaps"] << "\n";
+            << delay << ", stale ticks " << hid.summary["counters"]["loop"]["stale_ticks"]
+            << ", sequence gaps " << hid.summary["counters"]["loop"]["sequence_gaps"] << "\n";
   if (!over_libusb(sets)) {
     EXPECT_FALSE(peer.output_on()) << "the run left the simulated amplifier on";
   }

@@ -40,12 +40,15 @@ const std::vector<std::string> kOnChange = {"device.hid.reports_on_change=true",
 TEST(HidOnChange, HeldStillTheLastPositionIsTheSampleUntilTheLivenessBound) {
   ReportRig rig(kOnChange);
   rig.device.configure();
-  std::thread first([&] {
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    rig.fake.send_input(rig.input(0.003, 7));
-  });
-  rig.device.enable();  // waits for the first report: the device says nothing until then
-  first.join();
+  {
+    // Joined however enable() ends: a refused enable (a starved host) fails the test, not
+    // the process.
+    std::jthread first([&] {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      rig.fake.send_input(rig.input(0.003, 7));
+    });
+    rig.device.enable();  // waits for the first report: the device says nothing until then
+  }
   PositionSample s;
   ASSERT_EQ(rig.device.read(s), IoStatus::kOk);
   EXPECT_NEAR(s.position, 0.003, 1e-9);
