@@ -163,6 +163,17 @@ int main(int argc, char** argv) {
   write_seed(dir, "contact", "wall: {stiffness: 2000}\n", tel::kClockModeFreerun, 6, 6);
   // What a crash leaves: a log cut inside its last block and one cut inside its header.
   const Bytes full = read_bytes(three);
+  // How a run's log ends: its counters block after the last records.
+  Bytes counted = full;
+  for (const std::byte b :
+       tel::encode_counters_block(5,
+                                  "loop stale_ticks anomaly 3\nloop contact_ticks count 5\nhid "
+                                  "short_reports anomaly 1\n")) {
+    counted.push_back(static_cast<std::uint8_t>(b));
+  }
+  expect(tel::read_log_bytes(std::as_bytes(std::span(counted)), "seed").counters.size() == 3,
+         "with_counters: the counters block must read back");
+  write_bytes(dir / "with_counters.hlog", counted);
   write_bytes(dir / "cut_in_block.hlog", Bytes(full.begin(), full.end() - 30));
   write_bytes(dir / "cut_in_header.hlog", Bytes(full.begin(), full.begin() + 20));
   for (std::uint32_t version : {1u, 2u}) {

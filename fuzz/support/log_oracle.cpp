@@ -1,7 +1,9 @@
 #include "support/log_oracle.h"
 
+#include <cstdint>
 #include <cstring>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "support/check.h"
@@ -100,6 +102,76 @@ std::size_t check_config_at(std::span<const std::uint8_t> input, std::size_t off
   return kBlockHeaderSize + h.record_count;
 }
 
+// The oracle's own reading of a counters block's text (log_format.h), char by char: lines
+// of four non-empty fields split by single spaces, the third "count" or "anomaly", the fourth
+// decimal digits that fit in 64 bits. Empty when the text is not that (`ok` false).
+struct OracleCounter {
+  std::string source, name, kind;
+  std::uint64_t value = 0;
+};
+std::vector<OracleCounter> oracle_counters(std::string_view text, bool& ok) {
+  std::vector<OracleCounter> out;
+  std::vector<std::string> fields(1);
+  ok = false;
+  for (const char ch : text) {
+    if (ch == ' ') {
+      if (fields.size() == 4) return {};
+      fields.emplace_back();
+    } else if (ch == '\n') {
+      if (fields.size() != 4) return {};
+      OracleCounter c{fields[0], fields[1], fields[2], 0};
+      if (c.source.empty() || c.name.empty() || (c.kind != "count" && c.kind != "anomaly") ||
+          fields[3].empty() || fields[3].size() > 20) {
+        return {};
+      }
+      for (const char d : fields[3]) {
+        if (d < '0' || d > '9') return {};
+        const std::uint64_t digit = static_cast<std::uint64_t>(d - '0');
+        if (c.value > (UINT64_MAX - digit) / 10) return {};
+        c.value = c.value * 10 + digit;
+      }
+      out.push_back(c);
+      fields.assign(1, std::string());
+    } else {
+      fields.back() += ch;
+    }
+  }
+  ok = fields.size() == 1 && fields[0].empty();  // the text ends with a whole line
+  return ok ? out : std::vector<OracleCounter>{};
+}
+
+// Whether an intact, well-formed counters block is at `offset` (the reader must accept it);
+// its counters go to `counters` (the last such block is what the reader returns).
+bool counters_block_at(std::span<const std::uint8_t> input, std::size_t offset,
+                       std::vector<OracleCounter>& counters) {
+  if (offset > input.size() || input.size() - offset < kBlockHeaderSize) return false;
+  const auto block = std::as_bytes(input.subspan(offset));
+  if (std::memcmp(block.data(), kCountersMagic.data(), kCountersMagic.size()) != 0) return false;
+  const BlockHeader h = decode_block_header(block);
+  if (h.record_count > kMaxConfigBytes || block.size() - kBlockHeaderSize < h.record_count) {
+    return false;
+  }
+  const auto text = block.subspan(kBlockHeaderSize, h.record_count);
+  if (crc32_update(crc32_update(0, block.first(kBlockCrcOffset)), text) != h.crc) return false;
+  bool ok = false;
+  std::vector<OracleCounter> parsed =
+      oracle_counters({reinterpret_cast<const char*>(text.data()), text.size()}, ok);
+  if (ok) counters = std::move(parsed);
+  return ok;
+}
+
+void check_counters(const std::vector<OracleCounter>& want, const LogContents& c) {
+  require(want.size() == c.counters.size(), "counters returned differ from the last counters block",
+          std::to_string(c.counters.size()));
+  for (std::size_t i = 0; i < want.size(); ++i) {
+    const base::CounterReading& r = c.counters[i];
+    const std::string kind(base::to_string(r.kind));
+    require(r.source == want[i].source && r.name == want[i].name && kind == want[i].kind &&
+                r.value == want[i].value,
+            "a returned counter differs from its line in the counters block", std::to_string(i));
+  }
+}
+
 // Walks the input in file order as the reader reports it: accepted record and config blocks,
 // with the skipped stretches between them, each skipped stretch followed by a block. Returns
 // where it ends.
@@ -111,7 +183,19 @@ std::size_t check_file_order(std::span<const std::uint8_t> input, const LogConte
   std::size_t reloads = 0;
   std::uint64_t dropped = 0;
   bool after_skip = false;
-  while (blocks < c.complete_blocks || next_skip < c.skipped.size() || reloads < c.reloads.size()) {
+  std::vector<OracleCounter> counters;
+  for (;;) {
+    // A counters block may follow the last record block (that is where the writer puts it).
+    if (counters_block_at(input, offset, counters)) {
+      offset +=
+          kBlockHeaderSize + decode_block_header(std::as_bytes(input.subspan(offset))).record_count;
+      after_skip = false;
+      continue;
+    }
+    if (!(blocks < c.complete_blocks || next_skip < c.skipped.size() ||
+          reloads < c.reloads.size())) {
+      break;
+    }
     if (next_skip < c.skipped.size() && c.skipped[next_skip].offset == offset) {
       const SkippedRegion& s = c.skipped[next_skip++];
       require(!after_skip && s.bytes > 0 && !s.reason.empty() && s.bytes <= input.size() - offset,
@@ -133,6 +217,7 @@ std::size_t check_file_order(std::span<const std::uint8_t> input, const LogConte
     after_skip = false;
   }
   require(!after_skip, "a skipped stretch must be followed by an accepted block");
+  check_counters(counters, c);
   require(reloads == c.reloads.size(), "configurations returned outside config blocks");
   require(records == c.records.size(), "records returned outside accepted blocks");
   require(dropped == c.dropped_records, "dropped_records is not the sum of dropped_before");

@@ -6,6 +6,8 @@
 
 namespace hapticd::base {
 
+inline constexpr std::int64_t kNsPerS = 1'000'000'000;
+
 // RT-safe. CLOCK_MONOTONIC in ns.
 std::int64_t monotonic_ns() noexcept;
 // RT-safe. CLOCK_MONOTONIC in ms (time-outs of the non-RT lifecycle calls).

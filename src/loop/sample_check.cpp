@@ -3,10 +3,12 @@
 #include <algorithm>
 #include <cmath>
 
+#include "base/clock.h"
+
 namespace hapticd::loop {
 namespace {
 
-constexpr std::int64_t kNsPerS = 1'000'000'000;
+using base::kNsPerS;
 
 }  // namespace
 

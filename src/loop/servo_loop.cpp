@@ -11,13 +11,14 @@
 
 #include <algorithm>
 
+#include "base/clock.h"
 #include "loop/rt_setup.h"
 #include "loop/tick.h"
 
 namespace hapticd::loop {
 namespace {
 
-constexpr std::int64_t kNsPerS = 1'000'000'000;
+using base::kNsPerS;
 
 control::ObserverParams with_period(control::ObserverParams p, std::int64_t period_ns) {
   p.sample_period = static_cast<double>(period_ns) / kNsPerS;

@@ -45,10 +45,11 @@ std::uint64_t counter_value(std::span<const base::CounterReading> counters, std:
   return 0;
 }
 
-void counters_text(std::span<const base::CounterReading> counters, std::ostream& os) {
+void counters_text(std::span<const base::CounterReading> counters, std::ostream& os,
+                   bool with_loop) {
   std::string source;
   for (const base::CounterReading& c : counters) {
-    if (c.source == "loop") continue;  // the loop's have their own lines
+    if (c.source == "loop" && !with_loop) continue;
     if (c.source != source) {
       if (!source.empty()) os << "\n";
       source = c.source;

@@ -27,7 +27,9 @@ nlohmann::json anomalies_json(std::span<const base::CounterReading> counters);
 // The value of one counter, 0 when there is none of that name.
 std::uint64_t counter_value(std::span<const base::CounterReading> counters, std::string_view source,
                             std::string_view name);
-// The summary's lines: one per driver with its counters, then the anomalies (or "none").
-void counters_text(std::span<const base::CounterReading> counters, std::ostream& os);
+// The summary's lines: one per source with its counters (the loop's too with `with_loop`; the
+// summary shows those on lines of their own), then the anomalies (or "none").
+void counters_text(std::span<const base::CounterReading> counters, std::ostream& os,
+                   bool with_loop = false);
 
 }  // namespace hapticd::service

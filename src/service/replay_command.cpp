@@ -17,6 +17,7 @@
 #include "gate/gate.h"
 #include "gate/gate_report_format.h"
 #include "gate/number_format.h"
+#include "service/counters_report.h"
 #include "service/exit_codes.h"
 #include "service/gate_derate.h"
 #include "service/replay.h"
@@ -58,6 +59,10 @@ json result_json(const std::string& log, const telemetry::LogSet& set, const Rep
       {"compared", r.compared},
       {"differing", r.differing},
       {"first_difference_tick", r.first_difference ? json(*r.first_difference) : json(nullptr)}};
+  // The run's counters as the log recorded them when it ended (null: none recorded).
+  const auto& counters = set.contents.counters;
+  j["counters"] = counters.empty() ? json(nullptr) : counters_json(counters);
+  j["anomalies"] = counters.empty() ? json(nullptr) : anomalies_json(counters);
   j["logged"] = series_json(r.logged);
   j["replayed"] = series_json(r.own);
   j["other"] = nullptr;
@@ -97,6 +102,7 @@ std::string result_text(const std::string& log, const telemetry::LogSet& set, co
     os << "NOT reproduced: " << r.differing << " of " << r.compared
        << " ticks differ, the first at tick " << *r.first_difference << "\n";
   }
+  if (!set.contents.counters.empty()) counters_text(set.contents.counters, os, true);
   const auto col = [](const ForceSeries& s) {
     return std::array<std::string, 7>{
         format_number(s.max_abs_force) + " N", format_number(s.max_penetration * 1e3) + " mm",

@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "config/config_loader.h"
+#include "service/counters_report.h"
 #include "service/crash_guard.h"
 #include "service/exit_codes.h"
 
@@ -97,6 +98,11 @@ bool RunSession::start_up(gate::GateReport& report) {
   auto servo = std::make_unique<loop::ServoLoop>(session_->device(), *active_, log_.ring.get(), lo);
   summary_.wake_latency = &servo->wake_latency();
   summary_.compute_time = &servo->compute_time();
+  if (log_.writer) {
+    // The log ends with the run's counters (its counters block), as the summary shows them.
+    log_.writer->set_counters(
+        [this] { return read_run_counters(servo_.get(), session_->device()); });
+  }
   std::lock_guard lock(mutex_);
   servo_ = std::move(servo);
   return true;

@@ -1,7 +1,5 @@
 #include "service/run_support.h"
 
-#include "service/counters_report.h"
-
 #include <spdlog/spdlog.h>
 
 #include <chrono>
@@ -13,6 +11,7 @@
 #include "config/config_loader.h"
 #include "gate/gate_report_format.h"
 #include "gate/number_format.h"
+#include "service/counters_report.h"
 #include "service/exit_codes.h"
 #include "service/gate_derate.h"
 #include "service/result_output.h"

@@ -42,6 +42,15 @@
 //   24  u32    CRC-32 of bytes [0, 24) followed by the text
 //   28  u8[len]  the new effective configuration as UTF-8 YAML
 //
+// When the run ends, the writer adds a counters block: the run's counter registry
+// (docs/operations.md#counters), the loop's and the driver's, as they stood when output was
+// disabled. Readers that predate it see trailing bytes they skip. Counters block
+// (28 + len bytes), the config block's layout with:
+//   0   u8[4]  magic "HCNT" (48 43 4E 54)
+//   8   u64    first_tick: the tick after the last record
+//   28  u8[len]  one line per counter, "SOURCE NAME KIND VALUE\n" (KIND "count" or
+//                "anomaly", VALUE decimal), in the registry's order
+//
 // CRC-32 is the common one (zlib crc32, Python zlib.crc32: reflected polynomial 0xEDB88320,
 // initial value and final xor 0xFFFFFFFF). A reader accepts blocks in order; a block that is
 // incomplete or fails its checks is skipped up to the next "HBLK" whose block is complete and
@@ -53,9 +62,11 @@
 #include <bit>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <span>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <vector>
 
 #include "telemetry/tick_record.h"
@@ -65,6 +76,20 @@ namespace hapticd::telemetry {
 // Records are copied to and from the file as raw bytes, which is the little-endian layout
 // only on a little-endian host.
 static_assert(std::endian::native == std::endian::little, "the tick log is little-endian");
+
+// Field-by-field loads and stores at explicit offsets: the layout never depends on struct
+// padding.
+template <typename V>
+void store_field(std::byte* at, V value) noexcept {
+  static_assert(std::is_trivially_copyable_v<V>);
+  std::memcpy(at, &value, sizeof(V));
+}
+template <typename V>
+V load_field(const std::byte* at) noexcept {
+  V value;
+  std::memcpy(&value, at, sizeof(V));
+  return value;
+}
 
 inline constexpr std::array<char, 8> kFileMagic = {'H', 'A', 'P', 'T', 'L', 'O', 'G', '\0'};
 inline constexpr std::uint32_t kFormatVersion = 3;
@@ -77,6 +102,7 @@ inline constexpr std::uint32_t kMaxConfigBytes = 16u << 20;  // a sanity bound, 
 
 inline constexpr std::array<char, 4> kBlockMagic = {'H', 'B', 'L', 'K'};
 inline constexpr std::array<char, 4> kConfigMagic = {'H', 'C', 'F', 'G'};
+inline constexpr std::array<char, 4> kCountersMagic = {'H', 'C', 'N', 'T'};
 inline constexpr std::size_t kBlockHeaderSize = 28;
 inline constexpr std::size_t kBlockCrcOffset = 24;
 inline constexpr std::uint32_t kMaxBlockRecords = 65536;
@@ -147,6 +173,8 @@ std::size_t encode_block(std::span<std::byte> out, std::uint64_t first_tick,
 // A config block (layout above). Not RT-safe (allocates). Throws std::invalid_argument when
 // the text is longer than kMaxConfigBytes.
 std::vector<std::byte> encode_config_block(std::uint64_t first_tick, std::string_view text);
+// A counters block (layout above), the same way.
+std::vector<std::byte> encode_counters_block(std::uint64_t first_tick, std::string_view text);
 
 // Decodes the 28-byte block header at the start of bytes (which must hold at least
 // kBlockHeaderSize bytes, else all fields are 0). The magic is not checked here.

@@ -5,18 +5,15 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
+#include <charconv>
 #include <cstring>
+#include <optional>
+#include <string_view>
 
 namespace hapticd::telemetry {
 namespace {
-
-template <typename V>
-V load(const std::byte* at) noexcept {
-  V value;
-  std::memcpy(&value, at, sizeof(V));
-  return value;
-}
 
 // Matches the magic against however many bytes are present, so a cut inside the magic is a
 // truncation and not a foreign file.
@@ -35,65 +32,111 @@ std::size_t read_header(std::span<const std::byte> bytes, const std::string& nam
   if (!magic_prefix_matches(bytes, kFileMagic)) fail("not a hapticd tick log (bad magic)");
   // The version decides the rest of the layout, so it is checked before anything else.
   if (bytes.size() < 12) fail("truncated header");
-  const auto version = load<std::uint32_t>(bytes.data() + 8);
+  const auto version = load_field<std::uint32_t>(bytes.data() + 8);
   if (record_size_of_version(version) == 0) {
     fail("unsupported log version " + std::to_string(version));
   }
   version_out = version;
   if (bytes.size() < kFileHeaderFixedSize) fail("truncated header");
   const std::byte* p = bytes.data();
-  const auto config_len = load<std::uint32_t>(p + 36);
+  const auto config_len = load_field<std::uint32_t>(p + 36);
   if (config_len > kMaxConfigBytes) {
     fail("corrupt header (configuration length " + std::to_string(config_len) + ")");
   }
   const std::size_t crc_at = kFileHeaderFixedSize + config_len;
   if (bytes.size() < crc_at + kCrcSize) fail("truncated header");
-  if (crc32_update(0, bytes.first(crc_at)) != load<std::uint32_t>(p + crc_at)) {
+  if (crc32_update(0, bytes.first(crc_at)) != load_field<std::uint32_t>(p + crc_at)) {
     fail("header CRC mismatch");
   }
-  const auto record_size = load<std::uint32_t>(p + 12);
+  const auto record_size = load_field<std::uint32_t>(p + 12);
   if (record_size != record_size_of_version(version)) {
     fail("unsupported record size " + std::to_string(record_size));
   }
-  out.sample_period_s = load<double>(p + 16);
-  out.start_unix_ns = load<std::int64_t>(p + 24);
-  out.clock_mode = load<std::uint32_t>(p + 32);
+  out.sample_period_s = load_field<double>(p + 16);
+  out.start_unix_ns = load_field<std::int64_t>(p + 24);
+  out.clock_mode = load_field<std::uint32_t>(p + 32);
   out.config_text.assign(reinterpret_cast<const char*>(p + kFileHeaderFixedSize), config_len);
   return crc_at + kCrcSize;
 }
 
-// A config block at the start of `block`: its size when complete and intact, else 0.
-std::size_t check_config_block(std::span<const std::byte> block, std::size_t offset,
-                               std::string& why) {
+// The counters block's text: lines "SOURCE NAME KIND VALUE\n", fields separated by one space,
+// KIND "count" or "anomaly", VALUE a decimal u64; nullopt when it is anything else.
+std::optional<std::vector<base::CounterReading>> parse_counters(std::string_view text) {
+  std::vector<base::CounterReading> out;
+  while (!text.empty()) {
+    const std::size_t eol = text.find('\n');
+    if (eol == std::string_view::npos) return std::nullopt;
+    std::string_view line = text.substr(0, eol);
+    text.remove_prefix(eol + 1);
+    std::array<std::string_view, 4> f;
+    for (std::size_t i = 0; i < 3; ++i) {
+      const std::size_t sp = line.find(' ');
+      if (sp == std::string_view::npos) return std::nullopt;
+      f[i] = line.substr(0, sp);
+      line.remove_prefix(sp + 1);
+    }
+    f[3] = line;
+    base::CounterReading r;
+    const auto [end, ec] = std::from_chars(f[3].data(), f[3].data() + f[3].size(), r.value);
+    if (f[0].empty() || f[1].empty() || ec != std::errc() || end != f[3].data() + f[3].size() ||
+        (f[2] != "count" && f[2] != "anomaly")) {
+      return std::nullopt;
+    }
+    r.source = f[0];
+    r.name = f[1];
+    r.kind = f[2] == "anomaly" ? base::CounterKind::kAnomaly : base::CounterKind::kCount;
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
+// A text block (config or counters) at the start of `block`: its size when complete and
+// intact, else 0.
+std::size_t check_text_block(std::span<const std::byte> block, std::size_t offset, const char* what,
+                             std::string& why) {
   if (block.size() < kBlockHeaderSize) {
-    why = "incomplete config block" + at_byte(offset) + " (log cut short)";
+    why = std::string("incomplete ") + what + " block" + at_byte(offset) + " (log cut short)";
     return 0;
   }
   const BlockHeader h = decode_block_header(block);  // record_count holds the text length
   if (h.record_count > kMaxConfigBytes) {
-    why = "corrupt config block" + at_byte(offset);
+    why = std::string("corrupt ") + what + " block" + at_byte(offset);
     return 0;
   }
   const std::size_t size = kBlockHeaderSize + h.record_count;
   if (block.size() < size) {
-    why = "incomplete config block" + at_byte(offset) + " (log cut short)";
+    why = std::string("incomplete ") + what + " block" + at_byte(offset) + " (log cut short)";
     return 0;
   }
   const auto text = block.subspan(kBlockHeaderSize, h.record_count);
   if (crc32_update(crc32_update(0, block.first(kBlockCrcOffset)), text) != h.crc) {
-    why = "CRC mismatch in config block" + at_byte(offset);
+    why = std::string("CRC mismatch in ") + what + " block" + at_byte(offset);
     return 0;
   }
   return size;
+}
+
+bool has_magic(std::span<const std::byte> block, const std::array<char, 4>& magic) {
+  return block.size() >= magic.size() && std::memcmp(block.data(), magic.data(), magic.size()) == 0;
+}
+
+std::string_view text_of(std::span<const std::byte> block) {
+  return {reinterpret_cast<const char*>(block.data()) + kBlockHeaderSize,
+          decode_block_header(block).record_count};
 }
 
 // One block (records or configuration) at the start of `block`: its size when it is complete
 // and intact, else 0 with the reason (offset is for the message).
 std::size_t check_block(std::span<const std::byte> block, std::size_t offset, std::size_t rsize,
                         std::string& why) {
-  if (block.size() >= kConfigMagic.size() &&
-      std::memcmp(block.data(), kConfigMagic.data(), kConfigMagic.size()) == 0) {
-    return check_config_block(block, offset, why);
+  if (has_magic(block, kConfigMagic)) return check_text_block(block, offset, "config", why);
+  if (has_magic(block, kCountersMagic)) {
+    const std::size_t size = check_text_block(block, offset, "counters", why);
+    if (size != 0 && !parse_counters(text_of(block))) {
+      why = "malformed counters block" + at_byte(offset);
+      return 0;
+    }
+    return size;
   }
   if (!magic_prefix_matches(block, kBlockMagic)) {
     why = "bad block magic" + at_byte(offset);
@@ -127,9 +170,9 @@ std::size_t check_block(std::span<const std::byte> block, std::size_t offset, st
 std::size_t resynchronise(std::span<const std::byte> bytes, std::size_t from, std::size_t rsize) {
   std::string ignored;
   for (std::size_t at = from + 1; at + kBlockHeaderSize <= bytes.size(); ++at) {
-    const bool magic =
-        std::memcmp(bytes.data() + at, kBlockMagic.data(), kBlockMagic.size()) == 0 ||
-        std::memcmp(bytes.data() + at, kConfigMagic.data(), kConfigMagic.size()) == 0;
+    const auto here = bytes.subspan(at);
+    const bool magic = has_magic(here, kBlockMagic) || has_magic(here, kConfigMagic) ||
+                       has_magic(here, kCountersMagic);
     if (magic && check_block(bytes.subspan(at), at, rsize, ignored) != 0) {
       return at;
     }
@@ -139,10 +182,12 @@ std::size_t resynchronise(std::span<const std::byte> bytes, std::size_t from, st
 
 void accept_block(std::span<const std::byte> block, std::size_t rsize, LogContents& contents) {
   const BlockHeader h = decode_block_header(block);
-  if (std::memcmp(block.data(), kConfigMagic.data(), kConfigMagic.size()) == 0) {
-    contents.reloads.push_back(
-        {h.first_tick, std::string(reinterpret_cast<const char*>(block.data()) + kBlockHeaderSize,
-                                   h.record_count)});
+  if (has_magic(block, kConfigMagic)) {
+    contents.reloads.push_back({h.first_tick, std::string(text_of(block))});
+    return;
+  }
+  if (has_magic(block, kCountersMagic)) {
+    contents.counters = *parse_counters(text_of(block));  // checked by check_block
     return;
   }
   // A loss marker has no records: nothing is copied (no memcpy into a null vector).

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "base/counters.h"
 #include "telemetry/log_format.h"
 #include "telemetry/tick_record.h"
 
@@ -43,6 +44,9 @@ struct LogContents {
   // Config blocks, in order: live reloads and re-armings after a cleared fault (their marker
   // records say which); header.config_text governs before the first.
   std::vector<ConfigChange> reloads;
+  // The run's counters as the log's counters block recorded them when it ended (the last
+  // such block read); empty for a log without one (an older one, or cut short by a crash).
+  std::vector<base::CounterReading> counters;
   // "" when the whole file was read, else why reading stopped, e.g.
   // "incomplete block at byte 4242 (log cut short)", "CRC mismatch in block at byte 4242",
   // "bad block magic at byte 4242", "corrupt block header at byte 4242 (record count 9999999)".

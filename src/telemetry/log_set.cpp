@@ -92,6 +92,7 @@ LogSet read_log_set(const std::string& set) {
     if (const auto t = last_tick(c)) last = t;
     all.records.insert(all.records.end(), c.records.begin(), c.records.end());
     all.reloads.insert(all.reloads.end(), c.reloads.begin(), c.reloads.end());
+    if (!c.counters.empty()) all.counters = std::move(c.counters);  // the run's end: the last
     all.complete_blocks += c.complete_blocks;
     all.dropped_records += c.dropped_records;
     for (SkippedRegion& s : c.skipped) all.skipped.push_back({s.offset, s.bytes, named(s.reason)});

@@ -90,7 +90,26 @@ void LogWriter::stop() {
   // Drops after the last record pushed are not stamped on any record: mark them here.
   const std::uint64_t trailing = ring_.take_trailing_drops();
   if (trailing + pending_loss_ > 0) append_block({}, next_tick_, trailing);
+  append_counters_block();
   close_segment();
+}
+
+void LogWriter::set_counters(std::function<std::vector<base::CounterReading>()> counters) {
+  counters_ = std::move(counters);
+}
+
+void LogWriter::append_counters_block() noexcept {
+  if (!counters_) return;
+  try {
+    std::string text;
+    for (const base::CounterReading& c : counters_()) {
+      text += c.source + " " + c.name + " " + std::string(base::to_string(c.kind)) + " " +
+              std::to_string(c.value) + "\n";
+    }
+    write_bytes(encode_counters_block(next_tick_, text));
+  } catch (const std::exception& e) {
+    note_error(std::string("counters block not written: ") + e.what());
+  }
 }
 
 void LogWriter::close_segment() noexcept {

@@ -18,6 +18,7 @@
 #include <thread>
 #include <vector>
 
+#include "base/counters.h"
 #include "telemetry/log_format.h"
 #include "telemetry/spsc_ring.h"
 #include "telemetry/tick_record.h"
@@ -87,6 +88,11 @@ class LogWriter {
   void queue_config_change(std::string config_text);
   void withdraw_config_change();
 
+  // Before stop(), from the controlling thread: what stop() writes as the log's counters block
+  // (log_format.h), called once after the last record, when the producer has stopped. The
+  // run's counter registry, so a log carries the driver's health as the summary does.
+  void set_counters(std::function<std::vector<base::CounterReading>()> counters);
+
   // Records that are in the log (their block was written completely).
   std::uint64_t records_written() const noexcept;
   // Records the RT ring dropped because it was full, as reported to the writer so far; after
@@ -111,6 +117,7 @@ class LogWriter {
   // Appends records [0, n), cutting after each accepted-reload marker for its config block.
   void append_records(std::size_t n, std::uint64_t dropped_before);
   void append_config_block(std::uint64_t first_tick);
+  void append_counters_block() noexcept;
   bool write_bytes(std::span<const std::byte> bytes);
   void note_error(const char* what, int err);
   void note_error(const std::string& message);  // the whole message, for last_error()
@@ -121,8 +128,9 @@ class LogWriter {
   void tell(const std::string& sentence) noexcept;
 
   std::string path_;
-  LogHeader header_;     // each segment's header; config_text follows the reloads
-  Rotation rotation_;    // set before start()
+  LogHeader header_;   // each segment's header; config_text follows the reloads
+  Rotation rotation_;  // set before start()
+  std::function<std::vector<base::CounterReading>()> counters_;  // set before stop()
   std::string segment_;  // the file being written: path_, then path_.part2, ...
   std::uint32_t segment_index_ = 1;
   off_t header_bytes_ = 0;  // of the segment being written

@@ -59,6 +59,9 @@ TEST(CliReplay, AFreerunLogIsReproducedBitForBitAndItsEnergyAgrees) {
   EXPECT_EQ(j["logged"]["wall_energy_j"].get<double>(), s["wall_energy_j"].get<double>());
   EXPECT_EQ(j["replayed"]["wall_energy_j"].get<double>(), s["wall_energy_j"].get<double>());
   EXPECT_EQ(j["logged"]["contact_ticks"], s["counters"]["loop"]["contact_ticks"]);
+  // The log ends with the run's counters, the same the summary shows.
+  EXPECT_EQ(j["counters"], s["counters"]);
+  EXPECT_EQ(j["anomalies"], s["anomalies"]);
   const ProcessResult text = run_process({hapticd_binary(), "replay", log});
   EXPECT_EQ(text.exit_code, 0);
   EXPECT_TRUE(has(text.out, "reproduced bit for bit by the log's own configuration")) << text.out;

@@ -6,6 +6,7 @@
 #include <signal.h>
 #include <sys/resource.h>
 
+#include <array>
 #include <chrono>
 #include <cstring>
 #include <filesystem>
@@ -280,6 +281,47 @@ TEST(LogWriter, StopIsIdempotentAndTheDestructorFlushes) {
   }  // destructor: stop()
   EXPECT_TRUE(records_identical(read_log(dir.file("a.htl")).records, make_records(1, 1)));
   EXPECT_TRUE(records_identical(read_log(dir.file("b.htl")).records, make_records(2, 10)));
+}
+
+// The log ends with the run's counters (the counters block), read back as they were; a
+// counters block that does not parse is a damaged stretch the reader names, never a crash.
+TEST(LogWriter, TheLogEndsWithTheRunsCounters) {
+  test::TempDir dir;
+  SpscRing<TickRecord> ring(16);
+  std::array<base::Counter, 2> loop{{{"stale_ticks", base::CounterKind::kAnomaly, "stale"},
+                                     {"contact_ticks", base::CounterKind::kCount, "contact"}}};
+  loop[0].add(3);
+  loop[1].add(1234567890123ull);
+  {
+    LogWriter writer(dir.file("c.htl"), sample_header(), ring);
+    writer.set_counters([&] {
+      base::CounterRegistry r;
+      r.add("loop", loop);
+      return r.read();
+    });
+    writer.start();
+    for (std::uint64_t t = 0; t < 10; ++t) ASSERT_TRUE(ring.try_push(make_record(t)));
+    writer.stop();
+  }
+  const LogContents c = read_log(dir.file("c.htl"));
+  EXPECT_EQ(c.records.size(), 10u);
+  EXPECT_EQ(c.trailing_reason, "");
+  ASSERT_EQ(c.counters.size(), 2u);
+  EXPECT_EQ(c.counters[0].source, "loop");
+  EXPECT_EQ(c.counters[0].name, "stale_ticks");
+  EXPECT_EQ(c.counters[0].kind, base::CounterKind::kAnomaly);
+  EXPECT_EQ(c.counters[0].value, 3u);
+  EXPECT_EQ(c.counters[1].value, 1234567890123ull);
+
+  // A counters block whose text is not "SOURCE NAME KIND VALUE" lines, CRC and all intact.
+  std::vector<std::byte> bytes = test::read_bytes(dir.file("c.htl"));
+  const std::vector<std::byte> bad = encode_counters_block(10, "loop stale_ticks sometimes 3\n");
+  bytes.insert(bytes.end(), bad.begin(), bad.end());
+  const LogContents d = read_log_bytes(bytes, "bad.htl");
+  EXPECT_EQ(d.records.size(), 10u);
+  EXPECT_EQ(d.counters.size(), 2u) << "the intact block before it still counts";
+  EXPECT_NE(d.trailing_reason.find("malformed counters block"), std::string::npos)
+      << d.trailing_reason;
 }
 
 }  // namespace
