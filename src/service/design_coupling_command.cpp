@@ -55,6 +55,15 @@ analysis::CouplingSpec spec_of(const config::Config& cfg, const DesignCouplingOp
 
 void print_step(const analysis::DesignStep& s, int max_steps) {
   using O = analysis::CclResult::Outcome;
+  if (s.phase == analysis::DesignStep::Phase::kPoles) {
+    const analysis::PoleSearchStep& p = s.poles;
+    std::cerr << "design-coupling: step " << s.index << ": order " << p.order
+              << (p.step > 0.0 ? ", poles moved by up to " + format_number(p.step)
+                               : std::string(", the numerator reshaped at the poles so far"))
+              << (p.improved ? ": better" : ": no better") << "; best " << format_number(p.best)
+              << "\n";
+    return;
+  }
   const char* what = s.outcome == O::kFound          ? "reached"
                      : s.outcome == O::kInfeasible   ? "infeasible (certified)"
                      : s.outcome == O::kSolverFailed ? "solver gave up"

@@ -1,0 +1,138 @@
+#include "analysis/coupling_poles.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace hapticd::analysis {
+namespace {
+
+// The bracket each pole set's bisection starts from, below the incumbent's gamma.
+constexpr double kBracket = 0.7;
+
+// C's poles but z = 1, normalised to den[0] = 1.
+Polynomial other_poles(const TransferFunction& c) {
+  Polynomial d = poly_trim(poly_deflate(c.den, 1.0));
+  const double d0 = d.front();
+  for (double& v : d) v /= d0;
+  return d;
+}
+
+class Search {
+ public:
+  Search(const CouplingSpec& spec, const SdpSolver& solver, const PoleSearchOptions& options,
+         const std::function<void(const PoleSearchStep&)>& progress, PoleSearchResult& out)
+      : solver_(solver), options_(options), progress_(progress), out_(out), spec_(spec) {}
+
+  // One order: the incumbent's poles with one more at z = 0 (when there is room) and its
+  // numerator reshaped (a step), then the compass search (a step per sweep). False when the
+  // step budget ran out first.
+  bool order(int n) {
+    if (out_.steps >= options_.max_steps) return false;
+    spec_.order = n;
+    CouplingShaper shaper(spec_, solver_, out_.best.coupling);
+    std::vector<double> kappa = reflection_of(other_poles(out_.best.coupling));
+    kappa.resize(static_cast<std::size_t>(n - 1), 0.0);
+    report(n, 0.0, keep(shaper, kappa));
+    bool ok = true;
+    for (double h = options_.first_step; !kappa.empty() && h >= options_.last_step;) {
+      if (out_.steps >= options_.max_steps) {
+        ok = false;
+        break;
+      }
+      const bool improved = sweep(shaper, kappa, h);
+      report(n, h, improved);
+      if (!improved) h *= 0.5;
+    }
+    out_.sdp_solves += shaper.sdp_solves();
+    return ok;
+  }
+
+ private:
+  // The best numerator for kappa's poles, kept when the exact checks find it better.
+  bool keep(CouplingShaper& shaper, const std::vector<double>& kappa) {
+    const double g = out_.best.verdict.gamma;
+    std::optional<ShapedCoupling> c =
+        shaper.best(polynomial_of(kappa), kBracket * g, g, options_.tolerance);
+    if (!c || !(c->verdict.gamma < g * (1.0 - 0.1 * options_.tolerance))) return false;
+    out_.best = std::move(*c);
+    return true;
+  }
+
+  // Each kappa_i moved by +-h in turn, kept when the disks need less slack at a gamma just
+  // below the incumbent's; the pole set so reached is then shaped and kept if it is better.
+  bool sweep(CouplingShaper& shaper, std::vector<double>& kappa, double h) {
+    const double target = out_.best.verdict.gamma * (1.0 - options_.tolerance);
+    const std::vector<double> start = kappa;
+    double slack = shaper.slack(polynomial_of(kappa), target);
+    for (std::size_t i = 0; i < kappa.size(); ++i) {
+      for (double sign : {1.0, -1.0}) {
+        std::vector<double> trial = kappa;
+        trial[i] += sign * h;
+        const double s = shaper.slack(polynomial_of(trial), target);
+        if (s < slack - 1e-9) {
+          kappa = trial;
+          slack = s;
+          break;
+        }
+      }
+    }
+    if (kappa == start) return false;
+    if (keep(shaper, kappa)) return true;
+    kappa = start;
+    return false;
+  }
+
+  void report(int n, double h, bool improved) {
+    ++out_.steps;
+    if (progress_) progress_({out_.steps, n, h, improved, out_.best.verdict.gamma});
+  }
+
+  const SdpSolver& solver_;
+  const PoleSearchOptions& options_;
+  const std::function<void(const PoleSearchStep&)>& progress_;
+  PoleSearchResult& out_;
+  CouplingSpec spec_;
+};
+
+}  // namespace
+
+std::vector<double> reflection_of(const Polynomial& den) {
+  Polynomial a = den;
+  std::vector<double> kappa(a.size() - 1);
+  for (std::size_t m = a.size() - 1; m > 0; --m) {
+    const double k = std::clamp(a[m], -1.0 + 1e-12, 1.0 - 1e-12);
+    kappa[m - 1] = std::atanh(k);
+    Polynomial prev(m);
+    for (std::size_t i = 0; i < m; ++i) prev[i] = (a[i] - k * a[m - i]) / (1.0 - k * k);
+    a = prev;
+  }
+  return kappa;
+}
+
+Polynomial polynomial_of(const std::vector<double>& kappa) {
+  Polynomial a{1.0};
+  for (double x : kappa) {
+    const double k = std::tanh(x);
+    Polynomial next(a.size() + 1, 0.0);
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      next[i] += a[i];
+      next[a.size() - i] += k * a[i];
+    }
+    a = next;
+  }
+  return a;
+}
+
+PoleSearchResult search_poles(const CouplingSpec& spec, const ShapedCoupling& seed,
+                              const SdpSolver& solver, const PoleSearchOptions& options,
+                              const std::function<void(const PoleSearchStep&)>& progress) {
+  PoleSearchResult out;
+  out.best = seed;
+  Search search(spec, solver, options, progress, out);
+  const int from = std::max(1, static_cast<int>(poly_trim(seed.coupling.den).size()) - 1);
+  out.converged = true;
+  for (int n = from; n <= spec.order && out.converged; ++n) out.converged = search.order(n);
+  return out;
+}
+
+}  // namespace hapticd::analysis
