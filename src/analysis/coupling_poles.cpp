@@ -28,13 +28,16 @@ class Search {
   // step budget ran out first.
   bool order(int n) {
     if (out_.steps >= options_.max_steps) return false;
+    if (from_ == 0) from_ = n;
     spec_.order = n;
     CouplingShaper shaper(spec_, solver_, out_.best.coupling);
     std::vector<double> kappa = reflection_of(other_poles(out_.best.coupling));
     kappa.resize(static_cast<std::size_t>(n - 1), 0.0);
     report(n, 0.0, keep(shaper, kappa));
     bool ok = true;
-    for (double h = options_.first_step; !kappa.empty() && h >= options_.last_step;) {
+    // A raised order starts next to a converged lower order: smaller steps first.
+    const double first = n > from_ ? options_.raised_first_step : options_.first_step;
+    for (double h = first; !kappa.empty() && h >= options_.last_step;) {
       if (out_.steps >= options_.max_steps) {
         ok = false;
         break;
@@ -92,6 +95,7 @@ class Search {
   const std::function<void(const PoleSearchStep&)>& progress_;
   PoleSearchResult& out_;
   CouplingSpec spec_;
+  int from_ = 0;  // the first order searched
 };
 
 }  // namespace

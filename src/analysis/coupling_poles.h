@@ -16,10 +16,11 @@
 namespace hapticd::analysis {
 
 struct PoleSearchOptions {
-  int max_steps = 60;       // sweeps, over all orders together
-  double first_step = 0.5;  // of kappa
-  double last_step = 0.03;  // converged below this
-  double tolerance = 1e-3;  // gamma's bisection for each pole set kept
+  int max_steps = 60;                // sweeps, over all orders together
+  double first_step = 0.5;           // of kappa
+  double raised_first_step = 0.125;  // of kappa, at the orders raised by a pole at z = 0
+  double last_step = 0.03;           // converged below this
+  double tolerance = 1e-3;           // gamma's bisection for each pole set kept
 };
 
 struct PoleSearchStep {

@@ -20,7 +20,7 @@ constexpr int kRefinements = 4;  // grid points added per candidate before givin
 // the weights of interest live, and linear over the upper half, where Theorem 1 bites.
 std::vector<double> initial_grid() {
   std::vector<double> th;
-  constexpr int kLog = 200, kLin = 60;
+  constexpr int kLog = 100, kLin = 30;
   for (int i = 0; i < kLog; ++i) th.push_back(1e-4 * std::pow(kPi / 1e-4, i / (kLog - 1.0)));
   for (int i = 1; i < kLin; ++i) th.push_back(0.5 * kPi * (1.0 + i / double(kLin)));
   return th;
@@ -152,15 +152,26 @@ double CouplingShaper::slack(const Polynomial& den, double gamma) {
 std::optional<ShapedCoupling> CouplingShaper::best(const Polynomial& den, double lo, double hi,
                                                    double tolerance) {
   std::optional<ShapedCoupling> out;
-  while (hi > lo * (1.0 + tolerance)) {
-    const double g = std::sqrt(lo * hi);
+  const auto reaches = [&](double g) {
     std::optional<ShapedCoupling> c = verified(den, g);
-    if (c) {
-      if (!out || c->verdict.gamma < out->verdict.gamma) out = std::move(c);
-      hi = g;
-    } else {
-      lo = g;
+    if (!c) return false;
+    if (!out || c->verdict.gamma < out->verdict.gamma) out = std::move(c);
+    return true;
+  };
+  // Below hi by a gap that doubles while it is reached (most moves gain little), then
+  // bisection of the last gap missed.
+  double reached = hi, missed = lo;
+  for (double gap = tolerance; hi * (1.0 - gap) > lo; gap *= 2.0) {
+    const double g = hi * (1.0 - gap);
+    if (!reaches(g)) {
+      missed = g;
+      break;
     }
+    reached = g;
+  }
+  while (reached > missed * (1.0 + tolerance)) {
+    const double g = std::sqrt(missed * reached);
+    (reaches(g) ? reached : missed) = g;
   }
   return out;
 }

@@ -35,8 +35,8 @@ class CouplingShaper {
   // +inf when the SDP is infeasible or fails. One SDP.
   double slack(const Polynomial& den, double gamma);
 
-  // The most transparent numerator for den: bisection of gamma in [lo, hi] until hi <= lo (1 +
-  // tolerance). The best candidate the exact checks pass, nothing when none does.
+  // The most transparent numerator for den: gamma searched in [lo, hi] to a relative
+  // tolerance. The best candidate the exact checks pass, nothing when none does.
   std::optional<ShapedCoupling> best(const Polynomial& den, double lo, double hi, double tolerance);
 
   int sdp_solves() const { return sdp_solves_; }
