@@ -44,7 +44,7 @@ class Search {
       }
       const bool improved = sweep(shaper, kappa, h);
       report(n, h, improved);
-      if (!improved) h *= 0.5;
+      h = improved ? std::min(2.0 * h, options_.first_step) : 0.5 * h;  // strides while they pay
     }
     out_.sdp_solves += shaper.sdp_solves();
     return ok;

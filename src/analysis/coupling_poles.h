@@ -4,7 +4,8 @@
 // (its numerator is that of the lower order with a zero coefficient), so each order starts
 // where the one below ended and can only do better. The poles other than z = 1 are held as
 // the reflection coefficients k_i = tanh(kappa_i) of their polynomial, so every pole set tried
-// is stable; a compass search over kappa, its step halved when a sweep finds nothing, is
+// is stable; a compass search over kappa, its step doubled (up to first_step) after a sweep
+// that gains and halved after one that does not, is
 // converged when the step falls below last_step. Every coupling it keeps passed the exact
 // checks (evaluate_coupling). Not RT-safe.
 #pragma once

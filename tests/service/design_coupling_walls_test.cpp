@@ -20,19 +20,24 @@ namespace {
 
 using nlohmann::json;
 
-// A design's gamma is known to the search's resolution only: it stops when gamma is within
-// 2 % of the bracket's lower end (analysis::DesignOptions::tolerance), and that lower end is
-// where a cone complementarity run stopped short, as the paper's step 5 stops, not a proof.
-// Two designs of the same wall compare within that much. On Example 1 with the felt weight
-// they measured 6.636 (order 3), 6.664 (order 4) and 6.631 (order 5): equal to the
-// resolution, so a strict order between them would test the solver's last digits.
-constexpr double kSearchResolution = 0.02;
-
 std::vector<std::string> example_with(const std::vector<std::string>& extra) {
   return concat({"--config", coupling_example()}, extra);
 }
 
-TEST(DesignCoupling, Example1BeatsThePapersCouplingByBothMeasuresAndPassesTheGate) {
+double felt(const json& d) {
+  return d.contains("designed") ? d["designed"]["gamma_felt"].get<double>()
+                                : std::numeric_limits<double>::infinity();
+}
+
+// Order 3 (the paper's) against the paper's printed C(z), by both measures, and through the
+// gate and `verify`. Then what the order buys on the felt measure: order 3 against the family
+// d z/(z-1) + D_c alone (order 1: measured 7.099 against 5.518), and order 5 against order 3
+// (measured 5.465, 0.95 % better; order 4 5.490): order 5 is reached from order 3's design by
+// poles added at z = 0, which keep order 3's coupling in reach, and must beat it by at least
+// half of what it measured. The paper's own measure cannot show any of this: every admissible
+// coupling sits on its floor |W(1) E(1)|^2 (docs/math.md). One test, so that order 3 is
+// designed once (ctest runs each test in a process of its own).
+TEST(DesignCoupling, Example1BeatsThePapersCouplingAndOrder5ImprovesOnOrder3) {
   const json d3 = design_coupling_json(example_with({"--order", "3"}));
   ASSERT_EQ(d3["exit_code"], 0) << d3.dump(1);
   EXPECT_EQ(d3["status"], "designed");
@@ -44,8 +49,11 @@ TEST(DesignCoupling, Example1BeatsThePapersCouplingByBothMeasuresAndPassesTheGat
   EXPECT_NEAR(paper["gamma_configured"].get<double>(), 16900.0, 0.1);
   EXPECT_NEAR(paper["gamma_felt"].get<double>(), 27.82, 0.01);
   const json& des = d3["designed"];
-  EXPECT_LE(des["gamma_configured"].get<double>(), 16900.0 * (1.0 + 1e-9));  // at the floor
-  EXPECT_LT(des["gamma_felt"].get<double>(), 7.0);        // measured 6.64: a quarter of the paper's
+  EXPECT_NEAR(des["gamma_configured"].get<double>(), 16900.0, 16900.0 * 1e-9);  // the floor
+  // Measured 5.518, a fifth of the paper's; the cone complementarity stage alone 6.636. A
+  // scan of the stable order-3 pole pairs found none below 5.52 (docs/math.md).
+  EXPECT_LT(felt(d3), 5.6);
+  EXPECT_LT(felt(d3), 0.9 * d3["gamma_seed"].get<double>());
   EXPECT_EQ(des["static_stiffness"].get<double>(), 0.0);  // Theorem 1's pole at z = 1
   // The gate itself, with the YAML pasted in, and the measured passivity threshold.
   const std::vector<std::string> pasted = example_with(pasted_coupling(d3));
@@ -53,22 +61,17 @@ TEST(DesignCoupling, Example1BeatsThePapersCouplingByBothMeasuresAndPassesTheGat
   const ProcessResult v = run_process(concat({hapticd_binary(), "verify", "--json"}, pasted));
   ASSERT_EQ(v.exit_code, 0) << v.out << v.err;
   EXPECT_EQ(json::parse(v.out)["verdict"], "agree");
-}
 
-// What the order buys, stated to the search's resolution: order 3 does better than the family
-// d z/(z-1) + D_c alone (order 1: measured 7.110 against 6.636, 7 %, beyond it), and order 5
-// is no worse than order 3 (the paper expects better; here Theorem 1's Re C >= T/(2b) at
-// Nyquist is the limit, docs/math.md). Fails if order 5 comes out clearly worse.
-TEST(DesignCoupling, Example1HigherOrdersDoNoWorseToTheSearchsResolution) {
-  const auto felt = [](const char* order) {
-    const json d = design_coupling_json(example_with({"--order", order}));
-    EXPECT_EQ(d["exit_code"], 0) << d.dump(1);
-    return d.contains("designed") ? d["designed"]["gamma_felt"].get<double>()
-                                  : std::numeric_limits<double>::infinity();
-  };
-  const double g1 = felt("1"), g3 = felt("3"), g5 = felt("5");
-  EXPECT_LT(g3 * (1.0 + kSearchResolution), g1) << g3 << " against " << g1;
-  EXPECT_LE(g5, g3 * (1.0 + kSearchResolution)) << g5 << " against " << g3;
+  const json d1 = design_coupling_json(example_with({"--order", "1"}));
+  const json d5 = design_coupling_json(example_with({"--order", "5"}));
+  for (const json* d : {&d1, &d5}) {
+    ASSERT_EQ((*d)["exit_code"], 0) << d->dump(1);
+    EXPECT_TRUE((*d)["gate"]["pass"].get<bool>());
+    EXPECT_NEAR((*d)["designed"]["gamma_configured"].get<double>(), 16900.0, 16900.0 * 1e-9);
+  }
+  const double g1 = felt(d1), g3 = felt(d3), g5 = felt(d5);
+  EXPECT_GT(g1, 1.2 * g3) << g1 << " against " << g3;
+  EXPECT_LT(g5, (1.0 - 0.005) * g3) << g5 << " against " << g3;
 }
 
 // Over the last n ticks: the largest distance the device moved back against its net direction
