@@ -1,6 +1,7 @@
 #include "analysis/coupling_poles.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 namespace hapticd::analysis {
@@ -8,6 +9,33 @@ namespace {
 
 // The bracket each pole set's bisection starts from, below the incumbent's gamma.
 constexpr double kBracket = 0.7;
+// The scan before the compass search, for up to two poles: real poles, and pairs at these
+// radii and angles (rad per sample), ranked at this fraction of the incumbent's gamma; the
+// best few are shaped.
+constexpr std::size_t kScanDimensions = 2;
+constexpr std::array<double, 6> kScanReal{-0.8, 0.0, 0.5, 0.8, 0.9, 0.95};
+constexpr std::array<double, 3> kScanRadius{0.7, 0.85, 0.93};
+constexpr std::array<double, 6> kScanAngle{0.03, 0.06, 0.12, 0.25, 0.5, 1.0};
+constexpr double kScanTarget = 0.8;
+constexpr std::size_t kScanShaped = 3;
+
+// Pole polynomials (in w = z^-1) of n = 1 or 2 poles on the scan's grid.
+std::vector<Polynomial> scan_grid(std::size_t n) {
+  std::vector<Polynomial> out;
+  for (std::size_t i = 0; i < kScanReal.size(); ++i) {
+    const Polynomial one{1.0, -kScanReal[i]};
+    if (n == 1) out.push_back(one);
+    for (std::size_t j = i; n == 2 && j < kScanReal.size(); ++j) {
+      out.push_back(poly_mul(one, {1.0, -kScanReal[j]}));
+    }
+  }
+  for (double r : kScanRadius) {
+    for (double a : kScanAngle) {
+      if (n == 2) out.push_back({1.0, -2.0 * r * std::cos(a), r * r});
+    }
+  }
+  return out;
+}
 
 // C's poles but z = 1, normalised to den[0] = 1.
 Polynomial other_poles(const TransferFunction& c) {
@@ -34,6 +62,9 @@ class Search {
     std::vector<double> kappa = reflection_of(other_poles(out_.best.coupling));
     kappa.resize(static_cast<std::size_t>(n - 1), 0.0);
     report(n, 0.0, keep(shaper, kappa));
+    if (kappa.size() <= kScanDimensions && !kappa.empty() && out_.steps < options_.max_steps) {
+      report(n, 0.0, scan(shaper, kappa));
+    }
     bool ok = true;
     // A raised order starts next to a converged lower order: smaller steps first.
     const double first = n > from_ ? options_.raised_first_step : options_.first_step;
@@ -51,6 +82,27 @@ class Search {
   }
 
  private:
+  // The compass search finds the basin it starts in; with one or two poles to place, the
+  // basins are visited first: pole sets on a grid of radii and angles (kappa is too coarse a
+  // grid: a pair's angle lives in the last digits of k_1) are ranked by the slack their disks
+  // need at an ambitious gamma, and the best few shaped; the best of those is kept if better.
+  bool scan(CouplingShaper& shaper, std::vector<double>& kappa) {
+    const double target = kScanTarget * out_.best.verdict.gamma;
+    std::vector<std::pair<double, Polynomial>> ranked;
+    for (const Polynomial& den : scan_grid(kappa.size())) {
+      ranked.emplace_back(shaper.slack(den, target), den);
+    }
+    std::sort(ranked.begin(), ranked.end());
+    bool kept = false;
+    for (std::size_t i = 0; i < std::min(kScanShaped, ranked.size()); ++i) {
+      if (keep(shaper, reflection_of(ranked[i].second))) {
+        kappa = reflection_of(ranked[i].second);
+        kept = true;
+      }
+    }
+    return kept;
+  }
+
   // The best numerator for kappa's poles, kept when the exact checks find it better.
   bool keep(CouplingShaper& shaper, const std::vector<double>& kappa) {
     const double g = out_.best.verdict.gamma;
