@@ -12,12 +12,18 @@ constexpr double kBracket = 0.7;
 // The scan before the compass search, for up to two poles: real poles, and pairs at these
 // radii and angles (rad per sample), ranked at this fraction of the incumbent's gamma; the
 // best few are shaped.
-constexpr std::size_t kScanDimensions = 2;
-constexpr std::array<double, 6> kScanReal{-0.8, 0.0, 0.5, 0.8, 0.9, 0.95};
+constexpr std::array<double, 8> kScanReal{-0.8, 0.0, 0.5, 0.8, 0.9, 0.95, 0.98, 0.99};
 constexpr std::array<double, 3> kScanRadius{0.7, 0.85, 0.93};
 constexpr std::array<double, 6> kScanAngle{0.03, 0.06, 0.12, 0.25, 0.5, 1.0};
 constexpr double kScanTarget = 0.8;
 constexpr std::size_t kScanShaped = 3;
+
+// den with one more real pole, on the scan's grid.
+std::vector<Polynomial> added_pole(const Polynomial& den) {
+  std::vector<Polynomial> out;
+  for (double p : kScanReal) out.push_back(poly_mul(den, {1.0, -p}));
+  return out;
+}
 
 // Pole polynomials (in w = z^-1) of n = 1 or 2 poles on the scan's grid.
 std::vector<Polynomial> scan_grid(std::size_t n) {
@@ -61,35 +67,46 @@ class Search {
     CouplingShaper shaper(spec_, solver_, out_.best.coupling);
     std::vector<double> kappa = reflection_of(other_poles(out_.best.coupling));
     kappa.resize(static_cast<std::size_t>(n - 1), 0.0);
-    report(n, 0.0, keep(shaper, kappa));
-    if (kappa.size() <= kScanDimensions && !kappa.empty() && out_.steps < options_.max_steps) {
-      report(n, 0.0, scan(shaper, kappa));
+    report(n, PoleSearchStep::Kind::kReshape, 0.0, keep(shaper, kappa));
+    if (out_.steps < options_.max_steps && !kappa.empty()) {
+      if (n > from_) {
+        report(n, PoleSearchStep::Kind::kScan, 0.0,
+               scan(shaper, kappa, added_pole(other_poles(out_.best.coupling))));
+      } else if (kappa.size() <= 2) {
+        report(n, PoleSearchStep::Kind::kScan, 0.0, scan(shaper, kappa, scan_grid(kappa.size())));
+      }
     }
     bool ok = true;
     // A raised order starts next to a converged lower order: smaller steps first.
     const double first = n > from_ ? options_.raised_first_step : options_.first_step;
+    int streak = 0;  // sweeps in a row that gained
     for (double h = first; !kappa.empty() && h >= options_.last_step;) {
       if (out_.steps >= options_.max_steps) {
         ok = false;
         break;
       }
       const bool improved = sweep(shaper, kappa, h);
-      report(n, h, improved);
-      h = improved ? std::min(2.0 * h, options_.first_step) : 0.5 * h;  // strides while they pay
+      report(n, PoleSearchStep::Kind::kSweep, h, improved);
+      streak = improved ? streak + 1 : 0;
+      if (!improved) h *= 0.5;
+      if (streak >= 2) h = std::min(2.0 * h, options_.first_step);  // longer strides pay
     }
     out_.sdp_solves += shaper.sdp_solves();
     return ok;
   }
 
  private:
-  // The compass search finds the basin it starts in; with one or two poles to place, the
-  // basins are visited first: pole sets on a grid of radii and angles (kappa is too coarse a
-  // grid: a pair's angle lives in the last digits of k_1) are ranked by the slack their disks
-  // need at an ambitious gamma, and the best few shaped; the best of those is kept if better.
-  bool scan(CouplingShaper& shaper, std::vector<double>& kappa) {
+  // The compass search finds the basin it starts in, so the basins are visited first: at the
+  // first order searched with one or two poles, pole sets on a grid of radii and angles
+  // (kappa is too coarse a grid: a pair's angle lives in the last digits of k_1); at a raised
+  // order, the lower order's poles with the new one on the grid of real poles. They are ranked
+  // by the slack their disks need at an ambitious gamma, the best few shaped, and the best of
+  // those kept if better.
+  bool scan(CouplingShaper& shaper, std::vector<double>& kappa,
+            const std::vector<Polynomial>& grid) {
     const double target = kScanTarget * out_.best.verdict.gamma;
     std::vector<std::pair<double, Polynomial>> ranked;
-    for (const Polynomial& den : scan_grid(kappa.size())) {
+    for (const Polynomial& den : grid) {
       ranked.emplace_back(shaper.slack(den, target), den);
     }
     std::sort(ranked.begin(), ranked.end());
@@ -137,9 +154,9 @@ class Search {
     return false;
   }
 
-  void report(int n, double h, bool improved) {
+  void report(int n, PoleSearchStep::Kind kind, double h, bool improved) {
     ++out_.steps;
-    if (progress_) progress_({out_.steps, n, h, improved, out_.best.verdict.gamma});
+    if (progress_) progress_({out_.steps, n, kind, h, improved, out_.best.verdict.gamma});
   }
 
   const SdpSolver& solver_;

@@ -17,7 +17,7 @@
 namespace hapticd::analysis {
 
 struct PoleSearchOptions {
-  int max_steps = 60;                // sweeps, over all orders together
+  int max_steps = 100;               // sweeps, over all orders together
   double first_step = 0.5;           // of kappa
   double raised_first_step = 0.125;  // of kappa, at the orders raised by a pole at z = 0
   double last_step = 0.03;           // converged below this
@@ -25,9 +25,11 @@ struct PoleSearchOptions {
 };
 
 struct PoleSearchStep {
-  int index = 0;  // sweeps so far, this one included
+  enum class Kind { kReshape, kScan, kSweep };
+  int index = 0;  // steps so far, this one included
   int order = 0;
-  double step = 0.0;
+  Kind kind = Kind::kSweep;
+  double step = 0.0;  // kSweep: how far each kappa_i was moved
   bool improved = false;
   double best = 0.0;  // exact gamma of the best coupling so far
 };

@@ -31,13 +31,13 @@ double felt(const json& d) {
 
 // Order 3 (the paper's) against the paper's printed C(z), by both measures, and through the
 // gate and `verify`. Then what the order buys on the felt measure: order 3 against the family
-// d z/(z-1) + D_c alone (order 1: measured 7.099 against 5.518), and order 5 against order 3
-// (measured 5.465, 0.95 % better; order 4 5.490): order 5 is reached from order 3's design by
-// poles added at z = 0, which keep order 3's coupling in reach, and must beat it by at least
-// half of what it measured. The paper's own measure cannot show any of this: every admissible
+// d z/(z-1) + D_c alone (order 1: measured 7.099 against 5.364), and order 4 against order 3
+// (measured 5.224, 2.6 % better; order 5 5.185): order 4 is reached from order 3's design by a
+// pole added at z = 0, which keeps order 3's coupling in reach, then placed and moved, and
+// must beat it by 1 %. The paper's own measure cannot show any of this: every admissible
 // coupling sits on its floor |W(1) E(1)|^2 (docs/math.md). One test, so that order 3 is
 // designed once (ctest runs each test in a process of its own).
-TEST(DesignCoupling, Example1BeatsThePapersCouplingAndOrder5ImprovesOnOrder3) {
+TEST(DesignCoupling, Example1BeatsThePapersCouplingAndOrder4ImprovesOnOrder3) {
   const json d3 = design_coupling_json(example_with({"--order", "3"}));
   ASSERT_EQ(d3["exit_code"], 0) << d3.dump(1);
   EXPECT_EQ(d3["status"], "designed");
@@ -50,9 +50,9 @@ TEST(DesignCoupling, Example1BeatsThePapersCouplingAndOrder5ImprovesOnOrder3) {
   EXPECT_NEAR(paper["gamma_felt"].get<double>(), 27.82, 0.01);
   const json& des = d3["designed"];
   EXPECT_NEAR(des["gamma_configured"].get<double>(), 16900.0, 16900.0 * 1e-9);  // the floor
-  // Measured 5.518, a fifth of the paper's; the cone complementarity stage alone 6.636. A
-  // scan of the stable order-3 pole pairs found none below 5.52 (docs/math.md).
-  EXPECT_LT(felt(d3), 5.6);
+  // Measured 5.364, a fifth of the paper's; the cone complementarity stage alone 6.636. A
+  // dense scan of the stable order-3 pole pairs found none below 5.36 (docs/math.md).
+  EXPECT_LT(felt(d3), 5.45);
   EXPECT_LT(felt(d3), 0.9 * d3["gamma_seed"].get<double>());
   EXPECT_EQ(des["static_stiffness"].get<double>(), 0.0);  // Theorem 1's pole at z = 1
   // The gate itself, with the YAML pasted in, and the measured passivity threshold.
@@ -63,15 +63,15 @@ TEST(DesignCoupling, Example1BeatsThePapersCouplingAndOrder5ImprovesOnOrder3) {
   EXPECT_EQ(json::parse(v.out)["verdict"], "agree");
 
   const json d1 = design_coupling_json(example_with({"--order", "1"}));
-  const json d5 = design_coupling_json(example_with({"--order", "5"}));
-  for (const json* d : {&d1, &d5}) {
+  const json d4 = design_coupling_json(example_with({"--order", "4"}));
+  for (const json* d : {&d1, &d4}) {
     ASSERT_EQ((*d)["exit_code"], 0) << d->dump(1);
     EXPECT_TRUE((*d)["gate"]["pass"].get<bool>());
     EXPECT_NEAR((*d)["designed"]["gamma_configured"].get<double>(), 16900.0, 16900.0 * 1e-9);
   }
-  const double g1 = felt(d1), g3 = felt(d3), g5 = felt(d5);
+  const double g1 = felt(d1), g3 = felt(d3), g4 = felt(d4);
   EXPECT_GT(g1, 1.2 * g3) << g1 << " against " << g3;
-  EXPECT_LT(g5, (1.0 - 0.005) * g3) << g5 << " against " << g3;
+  EXPECT_LT(g4, 0.99 * g3) << g4 << " against " << g3;
 }
 
 // Over the last n ticks: the largest distance the device moved back against its net direction
@@ -116,9 +116,10 @@ bool designs_a_safe_coupling(const std::vector<std::string>& sets, const std::st
   EXPECT_EQ(run.exit_code, 0) << run.err;
   const auto records = telemetry::read_log(log).records;
   EXPECT_FALSE(records.empty());
-  // No oscillation over the last quarter: back by at most 2 encoder counts (1e-5 m each).
+  // No oscillation over the last quarter: back by at most 2 encoder counts (1e-5 m each),
+  // counted whole (a difference of two positions in metres is 2 counts give or take a bit).
   if (!records.empty()) {
-    EXPECT_LE(retrace_in_last(records, records.size() / 4), 2e-5);
+    EXPECT_LE(std::round(retrace_in_last(records, records.size() / 4) / 1e-5), 2.0);
   }
   return true;
 }
