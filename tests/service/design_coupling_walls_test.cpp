@@ -49,7 +49,7 @@ TEST(DesignCoupling, Example1BeatsThePapersCouplingAndOrder4ImprovesOnOrder3) {
   EXPECT_NEAR(paper["gamma_configured"].get<double>(), 16900.0, 0.1);
   EXPECT_NEAR(paper["gamma_felt"].get<double>(), 27.82, 0.01);
   const json& des = d3["designed"];
-  EXPECT_NEAR(des["gamma_configured"].get<double>(), 16900.0, 16900.0 * 1e-9);  // the floor
+  EXPECT_NEAR(des["gamma_configured"].get<double>(), 16900.0, 16900.0 * 1e-6);  // the floor
   // Measured 5.364, a fifth of the paper's; the cone complementarity stage alone 6.636. A
   // dense scan of the stable order-3 pole pairs found none below 5.36 (docs/math.md).
   EXPECT_LT(felt(d3), 5.45);
@@ -67,7 +67,8 @@ TEST(DesignCoupling, Example1BeatsThePapersCouplingAndOrder4ImprovesOnOrder3) {
   for (const json* d : {&d1, &d4}) {
     ASSERT_EQ((*d)["exit_code"], 0) << d->dump(1);
     EXPECT_TRUE((*d)["gate"]["pass"].get<bool>());
-    EXPECT_NEAR((*d)["designed"]["gamma_configured"].get<double>(), 16900.0, 16900.0 * 1e-9);
+    // On the floor: no admissible coupling goes below it, and these barely rise above it.
+    EXPECT_NEAR((*d)["designed"]["gamma_configured"].get<double>(), 16900.0, 16900.0 * 1e-6);
   }
   const double g1 = felt(d1), g3 = felt(d3), g4 = felt(d4);
   EXPECT_GT(g1, 1.2 * g3) << g1 << " against " << g3;
