@@ -1,10 +1,11 @@
-// `hapticd design-coupling`'s mathematics: Naghshtabrizi and Hespanha's procedure (Section
-// III-B) with both of its loops bounded. The outer loop searches nu = (d, D_c) and gamma: a
-// screen of the family d z/(z-1) + D_c alone (exact checks, no solver), then a bisection of
-// gamma by cone complementarity runs (coupling_synthesis.h) at the best nu, then moves of nu
-// that must beat the best gamma found. Every coupling it returns passed the exact checks
-// (evaluate_coupling); the service verifies it once more with the gate itself. Not RT-safe; no
-// I/O: progress goes to a callback.
+// `hapticd design-coupling`'s mathematics, in two stages. First Naghshtabrizi and Hespanha's
+// procedure (Section III-B) with both of its loops bounded, at order min(N, 3): a screen of the
+// family d z/(z-1) + D_c alone (exact checks, no solver), cone complementarity runs
+// (coupling_synthesis.h) at a few nu = (d, D_c), then a bisection of gamma at the best. Then the
+// pole search (coupling_poles.h): the numerator shaped by a convex problem for each pole set,
+// the poles placed and moved, the order raised to N. Every coupling it returns passed the
+// exact checks (evaluate_coupling); the service verifies it once more with the gate itself.
+// Not RT-safe; no I/O: progress goes to a callback.
 #pragma once
 
 #include <functional>
