@@ -69,12 +69,9 @@ class Search {
     kappa.resize(static_cast<std::size_t>(n - 1), 0.0);
     report(n, PoleSearchStep::Kind::kReshape, 0.0, keep(shaper, kappa));
     if (out_.steps < options_.max_steps && !kappa.empty()) {
-      if (n > from_) {
-        report(n, PoleSearchStep::Kind::kScan, 0.0,
-               scan(shaper, kappa, added_pole(other_poles(out_.best.coupling))));
-      } else if (kappa.size() <= 2) {
-        report(n, PoleSearchStep::Kind::kScan, 0.0, scan(shaper, kappa, scan_grid(kappa.size())));
-      }
+      const std::vector<Polynomial> grid =
+          kappa.size() <= 2 ? scan_grid(kappa.size()) : added_pole(other_poles(out_.best.coupling));
+      report(n, PoleSearchStep::Kind::kScan, 0.0, scan(shaper, kappa, grid));
     }
     bool ok = true;
     // A raised order starts next to a converged lower order: smaller steps first.
@@ -96,12 +93,12 @@ class Search {
   }
 
  private:
-  // The compass search finds the basin it starts in, so the basins are visited first: at the
-  // first order searched with one or two poles, pole sets on a grid of radii and angles
-  // (kappa is too coarse a grid: a pair's angle lives in the last digits of k_1); at a raised
-  // order, the lower order's poles with the new one on the grid of real poles. They are ranked
-  // by the slack their disks need at an ambitious gamma, the best few shaped, and the best of
-  // those kept if better.
+  // The compass search finds the basin it starts in, so the basins are visited first: with one
+  // or two poles, pole sets on a grid of real poles and of pairs by radius and angle (kappa is
+  // too coarse a grid: a pair's angle lives in the last digits of k_1); with more, the lower
+  // order's poles with the new one on the grid of real poles. They are ranked by the slack
+  // their disks need at an ambitious gamma, the best few shaped, and the best of those kept if
+  // better.
   bool scan(CouplingShaper& shaper, std::vector<double>& kappa,
             const std::vector<Polynomial>& grid) {
     const double target = kScanTarget * out_.best.verdict.gamma;
