@@ -137,15 +137,16 @@ std::vector<std::string> wall(int rate_hz, double b, double k, double damping, i
 // Three refused walls from the sweep below, one per delay the gate sees, chosen to span it: a
 // stiff wall at 50 Hz (the paper's situation), one sample of delay at 200 Hz with a light
 // device, two samples at 500 Hz, whose coupled wall creeps the longest (the settle measure's
-// hardest case). About 10 s of CPU.
+// hardest case). About 12 s of CPU.
 TEST(DesignCoupling, ThreeRefusedWallsEveryPrintedDesignPassesVerifiesAndSettles) {
   EXPECT_TRUE(designs_a_safe_coupling(wall(50, 3.5, 2680, 0.5, 0), "50hz_delay0"));
   EXPECT_TRUE(designs_a_safe_coupling(wall(200, 2.7, 2885, 0.37, 1), "200hz_delay1"));
   EXPECT_TRUE(designs_a_safe_coupling(wall(500, 4.06, 1651, 2.54, 2), "500hz_delay2"));
 }
 
-// The 20 random refused walls (K, B, T, b, delay 0-2): about 50 s of CPU, labelled
-// `slow` (tests/service/CMakeLists.txt). All 20 were designed on CSDP 6.2 (2026-11-25).
+// The 20 random refused walls (K, B, T, b, delay 0-2): about 75 s of CPU, labelled
+// `slow` (tests/service/CMakeLists.txt). All 20 were designed on CSDP 6.2 (2026-11-27), the pole
+// search 12 to 52 % below the cone complementarity stage's gamma on each.
 TEST(DesignCouplingSweep, TwentyRandomRefusedWallsEveryPrintedDesignPassesVerifiesAndSettles) {
   std::mt19937 rng(2025);
   const auto uniform = [&](double lo, double hi) {
