@@ -13,7 +13,7 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kPi = std::numbers::pi;
 // Re P >= this many T/(2b) on the grid, so that Theorem 1's strict inequality survives between
 // grid points (the exact check decides; a point is added where it does not).
-constexpr double kDsprMargin = 1e-4;
+constexpr double kDsprMargin = 1e-2;
 constexpr int kRefinements = 4;  // grid points added per candidate before giving it up
 
 // Grid: logarithmic from 1e-4 rad (a hundredth of a hertz and below for T <= 20 ms), where
