@@ -58,8 +58,8 @@ class Search {
       : solver_(solver), options_(options), progress_(progress), out_(out), spec_(spec) {}
 
   // One order: the incumbent's poles with one more at z = 0 (when there is room) and its
-  // numerator reshaped (a step), then the compass search (a step per sweep). False when the
-  // step budget ran out first.
+  // numerator reshaped (a step), the poles placed from a grid (a step), then the compass search
+  // (a step per sweep). False when the step budget ran out first.
   bool order(int n) {
     if (out_.steps >= options_.max_steps) return false;
     if (from_ == 0) from_ = n;

@@ -1,5 +1,6 @@
 #include "analysis/coupling_shaping.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -12,12 +13,13 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kPi = std::numbers::pi;
 // Re P >= this many T/(2b) on the grid, so that Theorem 1's strict inequality survives between
-// grid points (the exact check decides; a point is added where it does not).
+// grid points (the exact check decides; a point is added where it does not) with the margin
+// the cone complementarity stage's designs have (min Re P about 1e-5 on Example 1).
 constexpr double kDsprMargin = 1e-2;
 constexpr int kRefinements = 4;  // grid points added per candidate before giving it up
 
-// Grid: logarithmic from 1e-4 rad (a hundredth of a hertz and below for T <= 20 ms), where
-// the weights of interest live, and linear over the upper half, where Theorem 1 bites.
+// Grid: logarithmic from 1e-4 rad (0.016 Hz at 1 kHz, less at slower rates), where the weights
+// of interest live, and linear over the upper half, where Theorem 1 bites.
 std::vector<double> initial_grid() {
   std::vector<double> th;
   constexpr int kLog = 100, kLin = 30;
