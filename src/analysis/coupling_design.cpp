@@ -158,8 +158,16 @@ class Search {
       s.lo = std::max(s.lo, target);
     }
     if (progress_) {
-      progress_({out_.steps, s.best.nu, target, r.outcome, r.iterations,
-                 r.improved ? r.verdict.gamma : 0.0, s.best.verdict.gamma, s.lo});
+      progress_({out_.steps,
+                 s.best.nu,
+                 target,
+                 r.outcome,
+                 r.iterations,
+                 r.improved ? r.verdict.gamma : 0.0,
+                 s.best.verdict.gamma,
+                 s.lo,
+                 DesignStep::Phase::kConeComplementarity,
+                 {}});
     }
   }
 
@@ -171,6 +179,69 @@ class Search {
   CouplingDesign& out_;
   CouplingScales scales_;
 };
+
+}  // namespace
+
+namespace {
+
+// The cone complementarity stage at the spec's order (at most kConeComplementarityOrder): the
+// family screen, a run at each of a few families a decade apart, a golden-section search of
+// log d around the best, bisection of gamma at the best. Sets out's bracket and steps; false
+// when its budget ran out first.
+bool cone_complementarity_stage(const CouplingSpec& spec, const std::vector<Candidate>& screened,
+                                const DesignOptions& options, const SdpSolver& solver,
+                                const std::function<void(const DesignStep&)>& progress,
+                                CouplingDesign& out, Candidate& best) {
+  Search search(spec, options, solver, progress, out);
+  std::vector<Site> sites;
+  for (const Candidate& c : probes(screened, 4)) {
+    if (!search.budget_left()) break;
+    sites.push_back(search.open(c));
+    search.step(sites.back());
+  }
+  const auto by_gamma = [](const Site& a, const Site& b) {
+    return a.best.verdict.gamma < b.best.verdict.gamma;
+  };
+  const double d0 = std::min_element(sites.begin(), sites.end(), by_gamma)->best.nu.d;
+  double a = std::log10(d0) - 1.0, b = std::log10(d0) + 1.0;
+  const double g = 0.5 * (std::sqrt(5.0) - 1.0);
+  const auto probe = [&](double x) {
+    const Candidate c = family_at(spec, std::pow(10.0, x));
+    if (!c.verdict.valid() || !search.budget_left()) return kInf;
+    sites.push_back(search.open(c));
+    search.step(sites.back());
+    return sites.back().best.verdict.gamma;
+  };
+  double x1 = b - g * (b - a), x2 = a + g * (b - a);
+  double f1 = probe(x1), f2 = probe(x2);
+  for (int i = 0; i < options.golden_steps && search.budget_left(); ++i) {
+    if (f1 <= f2) {
+      b = x2;
+      x2 = x1;
+      f2 = f1;
+      x1 = b - g * (b - a);
+      f1 = probe(x1);
+    } else {
+      a = x1;
+      x1 = x2;
+      f1 = f2;
+      x2 = a + g * (b - a);
+      f2 = probe(x2);
+    }
+  }
+  Site* site = &*std::min_element(sites.begin(), sites.end(), by_gamma);
+  while (search.budget_left() && !search.closed(*site)) search.step(*site);
+  best = site->best;
+  out.gamma_lower = site->lo;
+  return search.closed(*site);
+}
+
+// nu of a coupling with a pole at z = 1: d its residue there, D_c what is left at infinity.
+CouplingFamily family_of(const TransferFunction& c) {
+  const Polynomial rest = poly_deflate(c.den, 1.0);
+  const double d = poly_eval(c.num, 1.0) / poly_eval(rest, 1.0);
+  return {d, c.num.front() / c.den.front() - d};
+}
 
 }  // namespace
 
@@ -189,59 +260,40 @@ CouplingDesign design_coupling(const CouplingSpec& spec, const DesignOptions& op
   }
   Candidate best = screened.front();
   bool closed = true;
-  if (spec.order > 1) {
-    Search search(spec, options, solver, progress, out);
-    // One run at each of a few families a decade apart, then bisection at the best of them.
-    std::vector<Site> sites;
-    for (const Candidate& c : probes(screened, 4)) {
-      if (!search.budget_left()) break;
-      sites.push_back(search.open(c));
-      search.step(sites.back());
+  CouplingSpec seed_spec = spec;
+  seed_spec.order = std::min(spec.order, kConeComplementarityOrder);
+  if (seed_spec.order > 1) {
+    closed = cone_complementarity_stage(seed_spec, screened, options, solver, progress, out, best);
+  }
+  out.gamma_seed = best.verdict.gamma;
+  // At the floor no coupling does better (H(1) = 0): nothing is left to search.
+  if (closed && best.verdict.gamma > out.gamma_floor * (1.0 + 1e-9)) {
+    const int before = out.steps;
+    const PoleSearchResult r = search_poles(spec, {best.coupling, best.verdict}, solver,
+                                            options.poles, [&](const PoleSearchStep& p) {
+                                              if (!progress) return;
+                                              DesignStep s;
+                                              s.phase = DesignStep::Phase::kPoles;
+                                              s.index = before + p.index;
+                                              s.best = p.best;
+                                              s.poles = p;
+                                              progress(s);
+                                            });
+    out.steps += r.steps;
+    out.sdp_solves += r.sdp_solves;
+    best = {family_of(r.best.coupling), r.best.coupling, r.best.verdict};
+    if (!r.converged) {
+      closed = false;
+      out.note = "the pole search did not converge within its " +
+                 std::to_string(options.poles.max_steps) + " sweeps";
     }
-    const auto by_gamma = [](const Site& a, const Site& b) {
-      return a.best.verdict.gamma < b.best.verdict.gamma;
-    };
-    // Golden-section search of log d around the best probe.
-    {
-      const double d0 = std::min_element(sites.begin(), sites.end(), by_gamma)->best.nu.d;
-      double a = std::log10(d0) - 1.0, b = std::log10(d0) + 1.0;
-      const double g = 0.5 * (std::sqrt(5.0) - 1.0);
-      const auto probe = [&](double x) {
-        const Candidate c = family_at(spec, std::pow(10.0, x));
-        if (!c.verdict.valid() || !search.budget_left()) return kInf;
-        sites.push_back(search.open(c));
-        search.step(sites.back());
-        return sites.back().best.verdict.gamma;
-      };
-      double x1 = b - g * (b - a), x2 = a + g * (b - a);
-      double f1 = probe(x1), f2 = probe(x2);
-      for (int i = 0; i < options.golden_steps && search.budget_left(); ++i) {
-        if (f1 <= f2) {
-          b = x2;
-          x2 = x1;
-          f2 = f1;
-          x1 = b - g * (b - a);
-          f1 = probe(x1);
-        } else {
-          a = x1;
-          x1 = x2;
-          f1 = f2;
-          x2 = a + g * (b - a);
-          f2 = probe(x2);
-        }
-      }
-    }
-    Site* site = &*std::min_element(sites.begin(), sites.end(), by_gamma);
-    while (search.budget_left() && !search.closed(*site)) search.step(*site);
-    closed = search.closed(*site);
-    best = site->best;
-    out.gamma_lower = site->lo;
+  } else if (!closed) {
+    out.note = "gamma's bracket did not close within the step budget";
   }
   out.coupling = best.coupling;
   out.nu = best.nu;
   out.verdict = best.verdict;
   out.status = closed ? CouplingDesign::Status::kDesigned : CouplingDesign::Status::kNotConverged;
-  if (!closed) out.note = "gamma's bracket did not close within the step budget";
   return out;
 }
 

@@ -108,9 +108,11 @@ CouplingVerdict evaluate_coupling(const CouplingSpec& spec, const TransferFuncti
   const CouplingCheck cc = coupling_check(coupling, spec.sample_period, spec.device_damping);
   v.theorem1 = cc.admissible && cc.dspr;
   v.dspr_min_real = cc.dspr_min_real;
+  if (cc.admissible) v.dspr_worst_theta = cc.dspr_worst_theta;
   const TransferFunction h = contact_map(spec.environment, coupling);
   const PassivityBound pb = passivity_bound(h, spec.sample_period, spec.delay_samples, 0.0);
   v.required_damping = pb.required_damping;
+  v.passivity_worst_theta = pb.worst_theta;
   v.passive = std::isfinite(pb.required_damping) && pb.required_damping <= spec.allowed_damping;
   const Extremum g = transparency_gamma(h, spec.environment, spec.weight);
   v.gamma = g.value;

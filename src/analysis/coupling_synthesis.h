@@ -19,9 +19,11 @@ namespace hapticd::analysis {
 struct CouplingVerdict {
   bool theorem1 = false;  // C admissible and (z-1)/(Tz)(C - T/(2b)) DSPR
   double dspr_min_real = 0.0;
-  double required_damping = 0.0;  // b_req of E/(1 + E C) with the delay
-  bool passive = false;           // b_req <= spec.allowed_damping
-  double gamma = 0.0;             // max |W (H - E)|^2
+  double dspr_worst_theta = -1.0;  // where it is attained (rad per sample), -1 if not reached
+  double required_damping = 0.0;   // b_req of E/(1 + E C) with the delay
+  double passivity_worst_theta = 0.0;
+  bool passive = false;  // b_req <= spec.allowed_damping
+  double gamma = 0.0;    // max |W (H - E)|^2
   double gamma_frequency_theta = 0.0;
   bool valid() const { return theorem1 && passive && std::isfinite(gamma); }
   std::string note;  // the first check that fails

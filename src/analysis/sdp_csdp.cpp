@@ -4,6 +4,7 @@
 // entries in the upper triangle. Its easy_sdp() reads param.csdp from the working directory and
 // prints every iteration on stdout, so this calls sdp() itself with the parameters below and
 // print level 0: nothing is read or printed.
+#include <algorithm>
 #include <cstdlib>
 #include <memory>
 #include <vector>
@@ -66,18 +67,27 @@ Problem convert(const SdpProblem& p) {
     const int size = blk.size;
     q.n += size;
     blockrec& rec = q.c.blocks[b];
-    rec.blockcategory = MATRIX;
     rec.blocksize = size;
-    rec.data.mat = zeroed<double>(static_cast<std::size_t>(size) * static_cast<std::size_t>(size));
-    for (int i = 1; i <= size; ++i) rec.data.mat[ijtok(i, i, size)] = p.margin;
+    // A block of scalar inequalities (only diagonal entries) is CSDP's DIAG: linear in its
+    // size, where a dense MATRIX block costs its cube per iteration.
+    const bool diagonal = std::all_of(blk.entries.begin(), blk.entries.end(),
+                                      [](const LmiEntry& e) { return e.row == e.col; });
+    rec.blockcategory = diagonal ? DIAG : MATRIX;
+    const std::size_t stored =
+        diagonal ? static_cast<std::size_t>(size) + 1
+                 : static_cast<std::size_t>(size) * static_cast<std::size_t>(size);
+    double* data = zeroed<double>(stored);
+    (diagonal ? rec.data.vec : rec.data.mat) = data;
+    const auto at = [&](int i, int j) -> double& { return data[diagonal ? i : ijtok(i, j, size)]; };
+    for (int i = 1; i <= size; ++i) at(i, i) = p.margin;
     std::vector<std::vector<const LmiEntry*>> per_var(static_cast<std::size_t>(q.k));
     for (const LmiEntry& e : blk.entries) {
       if (e.var >= 0) {
         per_var[static_cast<std::size_t>(e.var)].push_back(&e);
         continue;
       }
-      rec.data.mat[ijtok(e.row + 1, e.col + 1, size)] -= e.value;
-      if (e.row != e.col) rec.data.mat[ijtok(e.col + 1, e.row + 1, size)] -= e.value;
+      at(e.row + 1, e.col + 1) -= e.value;
+      if (e.row != e.col) at(e.col + 1, e.row + 1) -= e.value;
     }
     for (int v = 0; v < q.k; ++v) {
       const auto& list = per_var[static_cast<std::size_t>(v)];
@@ -98,7 +108,8 @@ Problem convert(const SdpProblem& p) {
       // Dense storage when the block is well filled (CSDP's own rule of thumb for its
       // Schur complement products).
       const double kk = q.k, nnz = static_cast<double>(list.size()), sz = size;
-      sb->issparse = (kk * kk * nnz * nnz > 0.125 * kk * sz * sz * sz && list.size() > 5) ? 0 : 1;
+      sb->issparse =
+          (!diagonal && kk * kk * nnz * nnz > 0.125 * kk * sz * sz * sz && list.size() > 5) ? 0 : 1;
       sb->next = q.constraints[v + 1].blocks;
       q.constraints[v + 1].blocks = sb;
     }

@@ -55,6 +55,17 @@ analysis::CouplingSpec spec_of(const config::Config& cfg, const DesignCouplingOp
 
 void print_step(const analysis::DesignStep& s, int max_steps) {
   using O = analysis::CclResult::Outcome;
+  if (s.phase == analysis::DesignStep::Phase::kPoles) {
+    using K = analysis::PoleSearchStep::Kind;
+    const analysis::PoleSearchStep& p = s.poles;
+    std::cerr << "design-coupling: step " << s.index << ": order " << p.order << ", "
+              << (p.kind == K::kReshape ? std::string("numerator reshaped at the poles so far")
+                  : p.kind == K::kScan  ? std::string("poles placed from a grid")
+                                        : "poles moved by up to " + format_number(p.step))
+              << (p.improved ? ": better" : ": no better") << "; best " << format_number(p.best)
+              << "\n";
+    return;
+  }
   const char* what = s.outcome == O::kFound          ? "reached"
                      : s.outcome == O::kInfeasible   ? "infeasible (certified)"
                      : s.outcome == O::kSolverFailed ? "solver gave up"

@@ -1,5 +1,6 @@
 #include "service/design_coupling_report.h"
 
+#include <algorithm>
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <numbers>
@@ -180,6 +181,7 @@ std::string design_report_json(const DesignReport& r) {
   j["designed"] = measures_json(measures(r, d.coupling));
   j["gamma_designed_for"] = d.verdict.gamma;
   j["gamma_lower"] = d.gamma_lower;
+  j["gamma_seed"] = d.gamma_seed;
   j["nu"] = {{"d", d.nu.d}, {"dc", d.nu.dc}};
   j["creep_m_per_s_per_n"] = d.nu.d / r.spec.sample_period;
   j["gate"] = {{"pass", r.gate.pass},
@@ -218,8 +220,10 @@ std::string design_report_text(const DesignReport& r) {
     return os.str();
   }
   line("designed coupling:    ", measures(r, d.coupling));
-  os << "  gamma search          " << format_number(d.verdict.gamma) << " found, "
-     << format_number(d.gamma_lower) << " the bracket's lower end; the configured weight's floor "
+  os << "  gamma search          " << format_number(d.verdict.gamma) << " found ("
+     << format_number(d.gamma_seed) << " by cone complementarity at order "
+     << std::min(r.spec.order, analysis::kConeComplementarityOrder)
+     << ", then the pole search); the configured weight's floor "
      << format_number(configured_floor(r)) << " (H(1) = 0 for every admissible C)\n"
      << "  creep                 " << format_number(d.nu.d / r.spec.sample_period)
      << " m/s per N under a steady push (d = " << format_number(d.nu.d)

@@ -20,19 +20,24 @@ namespace {
 
 using nlohmann::json;
 
-// A design's gamma is known to the search's resolution only: it stops when gamma is within
-// 2 % of the bracket's lower end (analysis::DesignOptions::tolerance), and that lower end is
-// where a cone complementarity run stopped short, as the paper's step 5 stops, not a proof.
-// Two designs of the same wall compare within that much. On Example 1 with the felt weight
-// they measured 6.636 (order 3), 6.664 (order 4) and 6.631 (order 5): equal to the
-// resolution, so a strict order between them would test the solver's last digits.
-constexpr double kSearchResolution = 0.02;
-
 std::vector<std::string> example_with(const std::vector<std::string>& extra) {
   return concat({"--config", coupling_example()}, extra);
 }
 
-TEST(DesignCoupling, Example1BeatsThePapersCouplingByBothMeasuresAndPassesTheGate) {
+double felt(const json& d) {
+  return d.contains("designed") ? d["designed"]["gamma_felt"].get<double>()
+                                : std::numeric_limits<double>::infinity();
+}
+
+// Order 3 (the paper's) against the paper's printed C(z), by both measures, and through the
+// gate and `verify`. Then what the order buys on the felt measure: order 3 against the family
+// d z/(z-1) + D_c alone (order 1: measured 7.100 against 5.369), and order 4 against order 3
+// (measured 5.229, 2.6 % better; order 5 5.218): order 4 is reached from order 3's design by a
+// pole added at z = 0, which keeps order 3's coupling in reach, then placed and moved, and
+// must beat it by 1 %. The paper's own measure cannot show any of this: every admissible
+// coupling sits on its floor |W(1) E(1)|^2 (docs/math.md). One test, so that order 3 is
+// designed once (ctest runs each test in a process of its own).
+TEST(DesignCoupling, Example1BeatsThePapersCouplingAndOrder4ImprovesOnOrder3) {
   const json d3 = design_coupling_json(example_with({"--order", "3"}));
   ASSERT_EQ(d3["exit_code"], 0) << d3.dump(1);
   EXPECT_EQ(d3["status"], "designed");
@@ -44,8 +49,11 @@ TEST(DesignCoupling, Example1BeatsThePapersCouplingByBothMeasuresAndPassesTheGat
   EXPECT_NEAR(paper["gamma_configured"].get<double>(), 16900.0, 0.1);
   EXPECT_NEAR(paper["gamma_felt"].get<double>(), 27.82, 0.01);
   const json& des = d3["designed"];
-  EXPECT_LE(des["gamma_configured"].get<double>(), 16900.0 * (1.0 + 1e-9));  // at the floor
-  EXPECT_LT(des["gamma_felt"].get<double>(), 7.0);        // measured 6.64: a quarter of the paper's
+  EXPECT_NEAR(des["gamma_configured"].get<double>(), 16900.0, 16900.0 * 1e-6);  // the floor
+  // Measured 5.369, a fifth of the paper's; the cone complementarity stage alone 6.636. A
+  // dense scan of the stable order-3 pole pairs found none below 5.36 (docs/math.md).
+  EXPECT_LT(felt(d3), 5.45);
+  EXPECT_LT(felt(d3), 0.9 * d3["gamma_seed"].get<double>());
   EXPECT_EQ(des["static_stiffness"].get<double>(), 0.0);  // Theorem 1's pole at z = 1
   // The gate itself, with the YAML pasted in, and the measured passivity threshold.
   const std::vector<std::string> pasted = example_with(pasted_coupling(d3));
@@ -53,22 +61,18 @@ TEST(DesignCoupling, Example1BeatsThePapersCouplingByBothMeasuresAndPassesTheGat
   const ProcessResult v = run_process(concat({hapticd_binary(), "verify", "--json"}, pasted));
   ASSERT_EQ(v.exit_code, 0) << v.out << v.err;
   EXPECT_EQ(json::parse(v.out)["verdict"], "agree");
-}
 
-// What the order buys, stated to the search's resolution: order 3 does better than the family
-// d z/(z-1) + D_c alone (order 1: measured 7.110 against 6.636, 7 %, beyond it), and order 5
-// is no worse than order 3 (the paper expects better; here Theorem 1's Re C >= T/(2b) at
-// Nyquist is the limit, docs/math.md). Fails if order 5 comes out clearly worse.
-TEST(DesignCoupling, Example1HigherOrdersDoNoWorseToTheSearchsResolution) {
-  const auto felt = [](const char* order) {
-    const json d = design_coupling_json(example_with({"--order", order}));
-    EXPECT_EQ(d["exit_code"], 0) << d.dump(1);
-    return d.contains("designed") ? d["designed"]["gamma_felt"].get<double>()
-                                  : std::numeric_limits<double>::infinity();
-  };
-  const double g1 = felt("1"), g3 = felt("3"), g5 = felt("5");
-  EXPECT_LT(g3 * (1.0 + kSearchResolution), g1) << g3 << " against " << g1;
-  EXPECT_LE(g5, g3 * (1.0 + kSearchResolution)) << g5 << " against " << g3;
+  const json d1 = design_coupling_json(example_with({"--order", "1"}));
+  const json d4 = design_coupling_json(example_with({"--order", "4"}));
+  for (const json* d : {&d1, &d4}) {
+    ASSERT_EQ((*d)["exit_code"], 0) << d->dump(1);
+    EXPECT_TRUE((*d)["gate"]["pass"].get<bool>());
+    // On the floor: no admissible coupling goes below it, and these barely rise above it.
+    EXPECT_NEAR((*d)["designed"]["gamma_configured"].get<double>(), 16900.0, 16900.0 * 1e-6);
+  }
+  const double g1 = felt(d1), g3 = felt(d3), g4 = felt(d4);
+  EXPECT_GT(g1, 1.2 * g3) << g1 << " against " << g3;
+  EXPECT_LT(g4, 0.99 * g3) << g4 << " against " << g3;
 }
 
 // Over the last n ticks: the largest distance the device moved back against its net direction
@@ -113,9 +117,10 @@ bool designs_a_safe_coupling(const std::vector<std::string>& sets, const std::st
   EXPECT_EQ(run.exit_code, 0) << run.err;
   const auto records = telemetry::read_log(log).records;
   EXPECT_FALSE(records.empty());
-  // No oscillation over the last quarter: back by at most 2 encoder counts (1e-5 m each).
+  // No oscillation over the last quarter: back by at most 2 encoder counts (1e-5 m each),
+  // counted whole (a difference of two positions in metres is 2 counts give or take a bit).
   if (!records.empty()) {
-    EXPECT_LE(retrace_in_last(records, records.size() / 4), 2e-5);
+    EXPECT_LE(std::round(retrace_in_last(records, records.size() / 4) / 1e-5), 2.0);
   }
   return true;
 }
@@ -132,15 +137,16 @@ std::vector<std::string> wall(int rate_hz, double b, double k, double damping, i
 // Three refused walls from the sweep below, one per delay the gate sees, chosen to span it: a
 // stiff wall at 50 Hz (the paper's situation), one sample of delay at 200 Hz with a light
 // device, two samples at 500 Hz, whose coupled wall creeps the longest (the settle measure's
-// hardest case). About 10 s of CPU.
+// hardest case). About 12 s of CPU.
 TEST(DesignCoupling, ThreeRefusedWallsEveryPrintedDesignPassesVerifiesAndSettles) {
   EXPECT_TRUE(designs_a_safe_coupling(wall(50, 3.5, 2680, 0.5, 0), "50hz_delay0"));
   EXPECT_TRUE(designs_a_safe_coupling(wall(200, 2.7, 2885, 0.37, 1), "200hz_delay1"));
   EXPECT_TRUE(designs_a_safe_coupling(wall(500, 4.06, 1651, 2.54, 2), "500hz_delay2"));
 }
 
-// The 20 random refused walls (K, B, T, b, delay 0-2): about 50 s of CPU, labelled
-// `slow` (tests/service/CMakeLists.txt). All 20 were designed on CSDP 6.2 (2026-11-25).
+// The 20 random refused walls (K, B, T, b, delay 0-2): about 75 s of CPU, labelled
+// `slow` (tests/service/CMakeLists.txt). All 20 were designed on CSDP 6.2 (2026-11-27), the pole
+// search 12 to 52 % below the cone complementarity stage's gamma on each.
 TEST(DesignCouplingSweep, TwentyRandomRefusedWallsEveryPrintedDesignPassesVerifiesAndSettles) {
   std::mt19937 rng(2025);
   const auto uniform = [&](double lo, double hi) {
