@@ -164,6 +164,10 @@ TEST_F(OwnDemo, ReloadAppliesAChangedWallAndARefusedOneLeavesTheOldWallAndSaysWh
 // Also the excerpts docs/operations.md shows, printed to the test's log.
 TEST_F(OwnDemo, StopEndsWithZeroForceExit0TheSummaryInTheJournalAndAReadableTickLog) {
   Instance demo("demo", demo_yaml());
+  // For the excerpt as a user reads it: this unit's journal from now on (the suite's own
+  // hapticd@demo ended tests ago).
+  std::string since = sh("date +@%s").out;
+  since.erase(since.find_last_not_of('\n') + 1);
   ASSERT_EQ(demo.systemctl("start").status, 0) << demo.journal();
   std::this_thread::sleep_for(std::chrono::milliseconds(2500));  // through the press and back
   std::cout << "$ systemctl status hapticd@demo\n" << demo.systemctl("status").out << "\n";
@@ -171,7 +175,8 @@ TEST_F(OwnDemo, StopEndsWithZeroForceExit0TheSummaryInTheJournalAndAReadableTick
   EXPECT_EQ(stop.status, 0) << stop.out;
   // The unit is unloaded once stopped (its properties with it): systemd's word is the journal's.
   const std::string j = demo.wait_journal("Deactivated successfully");
-  std::cout << "$ journalctl -u hapticd@demo\n" << j << "\n";
+  std::cout << "$ journalctl -u hapticd@demo\n"
+            << sh("journalctl --no-pager -u hapticd@demo --since=" + since).out << "\n";
   EXPECT_TRUE(contains(j, "hapticd@demo.service: Deactivated successfully.")) << j;
   EXPECT_FALSE(contains(j, "Main process exited")) << "logged for any exit but 0";
   EXPECT_TRUE(contains(j, "SIGTERM received: stopping")) << j;
