@@ -158,7 +158,6 @@ TEST_F(OwnDemo, ReloadAppliesAChangedWallAndARefusedOneLeavesTheOldWallAndSaysWh
                        "reload from /etc/hapticd/reload.yaml refused: the gate refuses it: "
                        "passivity: required damping b_req = 5.2 N s/m exceeds"))
       << why;
-  EXPECT_TRUE(contains(why, "Reload failed for hapticd@reload.service")) << why;
 }
 
 // Also the excerpts docs/operations.md shows, printed to the test's log.
