@@ -67,8 +67,14 @@ long wait_for_contact(const Instance& instance, long ticks, std::chrono::millise
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
     const Shell r = sh("hapticctl -i " + instance.name() + " --json status");
     const auto j = nlohmann::json::parse(r.out, nullptr, false);
-    if (j.is_object() && j["status"]["contact_ticks"].is_number()) {
-      contact = j["status"]["contact_ticks"].get<long>();
+    // The loop's count: `contact_ticks` of the status, or of its `counters.loop` once the
+    // status lists the run's counters by source (main's counters registry).
+    using Ptr = nlohmann::json::json_pointer;
+    for (const char* at : {"/status/counters/loop/contact_ticks", "/status/contact_ticks"}) {
+      if (j.is_object() && j.contains(Ptr(at)) && j[Ptr(at)].is_number()) {
+        contact = j[Ptr(at)].get<long>();
+        break;
+      }
     }
   }
   return contact;
