@@ -10,7 +10,8 @@
 #   tools/quickstart.sh packages  installs what test needs and builds nothing (tools/fuzz.sh)
 # The test command's stages, each timed, all run even when one fails:
 #   main    Release build (warnings are errors) and the whole suite, the kernel tests in the
-#           kernel test machine included (HAPTICD_KERNEL_TESTS=0 skips those, and says so)
+#           kernel test machine and the service under that machine's systemd included
+#           (HAPTICD_KERNEL_TESTS=0 skips both boots, and says so)
 #   asan    one clang build under AddressSanitizer + UndefinedBehaviorSanitizer with the
 #           libFuzzer targets: the suite (kernel tests aside), every fuzz target's corpus and
 #           regressions replayed, a few seconds of fuzzing each (HAPTICD_FUZZ=0 leaves the
@@ -39,8 +40,11 @@ packages=(
 )
 [[ $mode == demo ]] || packages+=(python3-matplotlib)   # tools/hapticd-plot (and its test)
 test_packages=(
-  systemd man-db file                                   # the unit and man page checked
-  rt-tests util-linux                                   # cyclictest, jitter_bench.py; prlimit
+  systemd man-db file                                   # the unit and man page checked;
+                                                        # systemd is PID 1 of tests/systemd's boot
+                                                        # (run from /lib/systemd/systemd: no
+                                                        # systemd-sysv, dbus or procps needed)
+  rt-tests util-linux                                   # cyclictest, jitter_bench.py; prlimit; runuser
   qemu-system-x86 busybox-static cpio kmod xz-utils zstd  # tools/kernel-vm, the kernel test machine
   udev iproute2                                         # udevd applying an instance's rules there; ip
   clang llvm                                            # the asan stage; llvm-symbolizer

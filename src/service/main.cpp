@@ -1,11 +1,20 @@
 // hapticd: the one place where the sub-commands are wired to the command line and where
 // every error class is mapped to its exit code (docs/operations.md).
+#include <spdlog/pattern_formatter.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
+#include <sys/stat.h>
+#include <systemd/sd-daemon.h>
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <ctime>
 #include <iostream>
+#include <memory>
 #include <optional>
 
 #include "config/config_loader.h"
@@ -53,6 +62,56 @@ std::string check_duration(const std::string& text) {
     return "must be a finite number of seconds > 0, got '" + text + "'";
   if (v > 1e9) return "must be at most 1e9 s (about 31 years), got '" + text + "'";
   return "";
+}
+
+// Whether standard error is a stream to the journal (a service's, as systemd sets
+// $JOURNAL_STREAM to its device and inode): journald then reads a "<N>" prefix as the line's
+// syslog priority (sd-daemon(3)), so `journalctl -p warning` finds the warnings and errors.
+bool stderr_is_journal() {
+  const char* stream = std::getenv("JOURNAL_STREAM");
+  struct stat st {};
+  if (stream == nullptr || fstat(STDERR_FILENO, &st) != 0) return false;
+  unsigned long long dev = 0, ino = 0;
+  return std::sscanf(stream, "%llu:%llu", &dev, &ino) == 2 && dev == st.st_dev && ino == st.st_ino;
+}
+
+// The "<N>" of an event's level; the journal has its own time stamps and unit name.
+class JournalPriority : public spdlog::custom_flag_formatter {
+ public:
+  static const char* priority(spdlog::level::level_enum level) {
+    switch (level) {
+      case spdlog::level::critical:
+        return SD_CRIT;
+      case spdlog::level::err:
+        return SD_ERR;
+      case spdlog::level::warn:
+        return SD_WARNING;
+      case spdlog::level::info:
+        return SD_INFO;
+      default:
+        return SD_DEBUG;  // trace, debug
+    }
+  }
+  void format(const spdlog::details::log_msg& msg, const std::tm&,
+              spdlog::memory_buf_t& dest) override {
+    const char* p = priority(msg.level);
+    dest.append(p, p + std::strlen(p));
+  }
+  std::unique_ptr<custom_flag_formatter> clone() const override {
+    return std::make_unique<JournalPriority>();
+  }
+};
+
+// Events (gate verdict, faults, lifecycle) go to stderr; stdout carries only the results a
+// script reads (the check table or JSON, the run summary). Returns the prefix of an error
+// line written to stderr directly.
+const char* set_up_event_log() {
+  spdlog::set_default_logger(spdlog::stderr_color_mt("hapticd"));
+  if (!stderr_is_journal()) return "";
+  auto formatter = std::make_unique<spdlog::pattern_formatter>();
+  formatter->add_flag<JournalPriority>('*').set_pattern("%*[%l] %v");
+  spdlog::set_formatter(std::move(formatter));
+  return SD_ERR;
 }
 
 }  // namespace
@@ -243,9 +302,7 @@ int main(int argc, char** argv) {
       "List the devices the drivers find attached (HID through hidapi's hidraw and libusb "
       "backends), each with the configuration keys that select it.");
 
-  // Events (gate verdict, faults, lifecycle) go to stderr; stdout carries only the results a
-  // script reads (the check table or JSON, the run summary).
-  spdlog::set_default_logger(spdlog::stderr_color_mt("hapticd"));
+  const char* const error_prefix = set_up_event_log();
 
   try {
     app.parse(argc, argv);
@@ -282,13 +339,13 @@ int main(int argc, char** argv) {
       return hapticd::service::identify_command(id_opts, signals);
     }
   } catch (const hapticd::config::ConfigError& e) {
-    for (const std::string& m : e.messages()) std::cerr << "hapticd: " << m << "\n";
+    for (const std::string& m : e.messages()) std::cerr << error_prefix << "hapticd: " << m << "\n";
     return hapticd::kExitUsage;
   } catch (const hapticd::DeviceError& e) {
-    std::cerr << "hapticd: device error: " << e.what() << "\n";
+    std::cerr << error_prefix << "hapticd: device error: " << e.what() << "\n";
     return hapticd::kExitDevice;
   } catch (const std::exception& e) {
-    std::cerr << "hapticd: " << e.what() << "\n";
+    std::cerr << error_prefix << "hapticd: " << e.what() << "\n";
     return hapticd::kExitRuntimeFault;
   }
   return hapticd::kExitUsage;

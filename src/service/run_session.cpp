@@ -7,7 +7,9 @@
 #include <unistd.h>
 #include <csignal>
 
+#include <algorithm>
 #include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <optional>
 #include <system_error>
@@ -26,6 +28,38 @@ void drain(int fd) {
   while (read(fd, &n, sizeof n) > 0) {
   }
 }
+
+// A loop asked to stop ends at its next tick, writing zero. One still running well after that
+// is stuck (its thread blocked or starved of the CPU: what systemd's watchdog catches) and
+// writes nothing more, so the device's emergency stop is written from here, once; the loop
+// still ends the ordinary way if it ever ticks again (docs/operations.md, the watchdog).
+class StuckLoopGuard {
+ public:
+  explicit StuckLoopGuard(double period_s)
+      : limit_(std::chrono::duration_cast<Clock::duration>(
+            std::chrono::duration<double>(std::max(0.5, 10 * period_s)))) {}
+  void check(bool stopping, Device& device) {
+    if (!stopping || written_) return;
+    const Clock::time_point now = Clock::now();
+    if (!stopping_seen_) since_ = now;
+    stopping_seen_ = true;
+    if (now - since_ < limit_) return;
+    device.emergency_stop();
+    written_ = true;
+    spdlog::error(
+        "the servo loop has not ended {} ms after the stop (its thread is stuck): wrote the "
+        "device's emergency stop (zero force, output off)",
+        std::chrono::duration_cast<std::chrono::milliseconds>(now - since_).count());
+    sd_notify(0, "STATUS=servo loop stuck: emergency stop written");
+  }
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  Clock::duration limit_;
+  Clock::time_point since_{};  // when the stop was first seen
+  bool stopping_seen_ = false;
+  bool written_ = false;
+};
 
 }  // namespace
 
@@ -223,6 +257,7 @@ void RunSession::supervise(RtThread& rt) {
   const bool watchdog = sd_watchdog_enabled(0, &watchdog_usec) > 0;
   std::uint64_t last_ticks = servo_->ticks_done();
   PassivityWatch passivity;
+  StuckLoopGuard stuck(summary_.sample_period_s);
   pollfd fds[4] = {{signals_.fd(), POLLIN, 0},
                    {signals_.pipe_fd(), POLLIN, 0},
                    {rt.ended_fd(), POLLIN, 0},
@@ -235,13 +270,16 @@ void RunSession::supervise(RtThread& rt) {
     poll(fds, 4, 50);  // the time-out paces the watchdog
     if (const auto sig = signals_.take_pending()) on_signal(*sig, &rt);
     drain(wake_fd_);
+    bool stopping = false;
     {
       std::lock_guard lock(mutex_);
       if (stop_asked_ && summary_.stop_reason == "duration") {
         summary_.stop_reason = "control socket: stop";
       }
       if (stop_asked_) rt.request_stop();
+      stopping = stop_asked_;
     }
+    stuck.check(stopping, session_->device());
     const std::uint64_t ticks = servo_->ticks_done();
     if (watchdog && ticks != last_ticks) sd_notify(0, "WATCHDOG=1");
     last_ticks = ticks;

@@ -1,5 +1,6 @@
 #include "service/run_threads.h"
 
+#include <pthread.h>
 #include <sys/eventfd.h>
 #include <unistd.h>
 
@@ -29,6 +30,8 @@ RtThread::RtThread(loop::ServoLoop& loop, int priority, int cpu, bool realtime, 
     // Cannot fail short of a bad descriptor; the supervisor's poll time-out is the fallback.
     [[maybe_unused]] const ssize_t n = write(ended_fd_, &one, sizeof one);
   });
+  // So `ps -L` and top show which thread is the loop (the others are named too).
+  pthread_setname_np(thread_.native_handle(), "hapticd-rt");
 }
 
 void RtThread::open_gate(Gate to) noexcept {

@@ -3,7 +3,9 @@
 // and runs each as `report BINARY --gtest_filter=Suite.Name`. Listing needs no kernel
 // facility, so that runs BINARY on the host; a test is answered from the gtest JSON that the
 // single boot of the "kernel.vm" test wrote for BINARY in HAPTICD_KERNEL_RESULTS, so every
-// kernel test is its own ctest result while the guest boots once for all of them.
+// kernel test is its own ctest result while the guest boots once for all of them. The tests
+// under a real systemd (tests/systemd) have their own copy of this program, built with their
+// own results directory, boot test and label.
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -20,6 +22,12 @@
 namespace {
 
 const std::string kResults = HAPTICD_KERNEL_RESULTS;
+#ifndef HAPTICD_KERNEL_VM_TEST
+#define HAPTICD_KERNEL_VM_TEST "kernel.vm"
+#define HAPTICD_KERNEL_LABEL "kernel"
+#endif
+const std::string kBootTest = HAPTICD_KERNEL_VM_TEST;  // the ctest test that boots the guest
+const std::string kLabel = HAPTICD_KERNEL_LABEL;
 
 std::string read_file(const std::string& path) {
   std::ifstream in(path);
@@ -48,9 +56,9 @@ int report_missing(const std::string& name) {
               << ".log) ends:\n"
               << last_lines(read_file(base + ".log"), 30) << "\n";
   } else {
-    std::cout << "FAILED: no results for " << name << " in " << kResults
-              << ": the kernel.vm test, which boots the guest once for every kernel test, did "
-                 "not run it (run the tests labelled kernel: `ctest -L kernel`).\n";
+    std::cout << "FAILED: no results for " << name << " in " << kResults << ": the " << kBootTest
+              << " test, which boots the guest once for all of these tests, did not run it (run "
+              << "the tests labelled " << kLabel << ": `ctest -L " << kLabel << "`).\n";
   }
   return 1;
 }
@@ -85,7 +93,7 @@ int report(const std::string& binary, const std::string& filter) {
   if (!exists(json_path, &json_stat)) return report_missing(name);
   if (exists(binary, &binary_stat) && binary_stat.st_mtime > json_stat.st_mtime) {
     std::cout << "FAILED: " << json_path << " is older than " << binary
-              << ": the results are from another build (run `ctest -L kernel`).\n";
+              << ": the results are from another build (run `ctest -L " << kLabel << "`).\n";
     return 1;
   }
   const auto results = nlohmann::json::parse(read_file(json_path));
