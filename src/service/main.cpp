@@ -278,7 +278,9 @@ int main(int argc, char** argv) {
                      "configured: analysis.transparency_weight as is (the paper's criterion)");
   design->add_option("--felt-from-hz", design_opts.felt_from_hz,
                      "Lower edge of the felt band (default 1 Hz): below it a push is steady");
-  design->add_option("--max-steps", design_opts.max_steps, "Outer steps (default 24)");
+  design->add_option("--max-steps", design_opts.max_steps,
+                     "Outer steps of the first stage (default 24; the pole search that shapes "
+                     "its result has its own budget of 100)");
   design->add_option("--max-iterations", design_opts.max_iterations,
                      "Cone complementarity iterations per step (default 12)");
   design->add_flag("--json", design_opts.json, "Print exactly one JSON object");

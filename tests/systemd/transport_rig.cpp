@@ -67,15 +67,9 @@ long wait_for_contact(const Instance& instance, long ticks, std::chrono::millise
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
     const Shell r = sh("hapticctl -i " + instance.name() + " --json status");
     const auto j = nlohmann::json::parse(r.out, nullptr, false);
-    // The loop's count: `contact_ticks` of the status, or of its `counters.loop` once the
-    // status lists the run's counters by source (main's counters registry).
-    using Ptr = nlohmann::json::json_pointer;
-    for (const char* at : {"/status/counters/loop/contact_ticks", "/status/contact_ticks"}) {
-      if (j.is_object() && j.contains(Ptr(at)) && j[Ptr(at)].is_number()) {
-        contact = j[Ptr(at)].get<long>();
-        break;
-      }
-    }
+    // The loop's count, from the run's counters (docs/operations.md#counters).
+    const nlohmann::json::json_pointer at("/status/counters/loop/contact_ticks");
+    if (j.is_object() && j.contains(at) && j[at].is_number()) contact = j[at].get<long>();
   }
   return contact;
 }
