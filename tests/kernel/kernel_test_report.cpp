@@ -22,11 +22,10 @@
 namespace {
 
 const std::string kResults = HAPTICD_KERNEL_RESULTS;
-#ifndef HAPTICD_KERNEL_VM_TEST
-#define HAPTICD_KERNEL_VM_TEST "kernel.vm"
+#ifndef HAPTICD_KERNEL_LABEL
 #define HAPTICD_KERNEL_LABEL "kernel"
 #endif
-const std::string kBootTest = HAPTICD_KERNEL_VM_TEST;  // the ctest test that boots the guest
+const std::string kBootTest = "kernel.vm";  // the ctest test that boots the guests
 const std::string kLabel = HAPTICD_KERNEL_LABEL;
 
 std::string read_file(const std::string& path) {
