@@ -17,10 +17,6 @@
 namespace hapticd::testing {
 namespace {
 
-bool has(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
-
 TEST(CliHostile, AnOverflowingDampingIsAConfigurationErrorNotAPass) {
   for (const std::vector<std::string>& cmd :
        {std::vector<std::string>{"check"}, std::vector<std::string>{"run", "--duration", "1"}}) {

@@ -18,15 +18,12 @@
 #include <vector>
 
 #include "daemon.h"
+#include "process.h"
 
 namespace hapticd::testing {
 namespace {
 
 using nlohmann::json;
-
-bool has(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
 
 json answer(RawClient& c) { return json::parse(c.line(), nullptr, false); }
 

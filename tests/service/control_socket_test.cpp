@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "daemon.h"
+#include "process.h"
 #include "telemetry/log_reader.h"
 
 namespace hapticd::testing {
@@ -19,10 +20,6 @@ namespace {
 
 using nlohmann::json;
 using telemetry::TickRecord;
-
-bool has(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
 
 std::string write(const std::string& name, const std::string& text) {
   const std::string path = temp_path(name);

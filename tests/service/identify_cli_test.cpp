@@ -12,10 +12,6 @@ namespace {
 
 using nlohmann::json;
 
-bool has(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
-
 void expect_recovers(const std::vector<std::string>& args, double mass, double damping) {
   std::vector<std::string> cmd = {hapticd_binary(), "identify", "--json"};
   cmd.insert(cmd.end(), args.begin(), args.end());

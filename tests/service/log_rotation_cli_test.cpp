@@ -17,10 +17,6 @@ namespace {
 
 using nlohmann::json;
 
-bool has(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
-
 TEST(CliRotation, ARunUnderASmallCapKeepsItsNewestSegmentsAndExportReadsThemInOrder) {
   const std::string log = temp_path("rotated.hlog"), sum = temp_path("rotated.json");
   // 60000 ticks of 112 bytes are 6.7 MB: seven segments of 1 MB, of which the 3 MB cap keeps two.

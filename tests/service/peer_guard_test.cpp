@@ -14,18 +14,17 @@
 #include "service/peer_endpoint.h"
 #include "service/peer_guard.h"
 #if HAPTICD_WITH_CAN
+#include "process.h"
 #include "service/peer_can_listen.h"
 #endif
 
 namespace hapticd::service {
 namespace {
 
+using hapticd::testing::has;
+
 namespace fs = std::filesystem;
 using Kind = EndpointVerdict::Kind;
-
-bool has(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
 
 TEST(PeerGuard, OnlyVcanAndVxcanAreSimulatedCanBuses) {
   EXPECT_EQ(judge_can_link("vcan0", {true, kArphrdCan, "vcan"}).kind, Kind::kSimulated);

@@ -24,13 +24,11 @@
 namespace hapticd::service {
 namespace {
 
+using hapticd::testing::has;
+
 using hapticd::testing::ProcessResult;
 using hapticd::testing::run_process;
 using Kind = EndpointVerdict::Kind;
-
-bool has(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
 
 std::string example(const std::string& name) {
   return std::string(HAPTICD_SOURCE_DIR) + "/config/" + name;

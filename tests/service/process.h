@@ -4,6 +4,7 @@
 #include <sys/types.h>
 
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace hapticd::testing {
@@ -69,5 +70,9 @@ std::string source_dir();                        // the project root
 std::string build_dir();                         // the build tree the tests belong to
 std::string temp_path(const std::string& name);  // a fresh path under the test's temp dir
 std::string read_file(const std::string& path);
+// Whether `text` (a command's output, a file) holds `part`.
+inline bool has(std::string_view text, std::string_view part) {
+  return text.find(part) != std::string_view::npos;
+}
 
 }  // namespace hapticd::testing

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "daemon.h"
+#include "process.h"
 #include "telemetry/log_reader.h"
 #include "telemetry/log_writer.h"
 
@@ -18,10 +19,6 @@ namespace hapticd::testing {
 namespace {
 
 using nlohmann::json;
-
-bool has(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
 
 // A damped wall behind a coupling and two samples of delay: every history a replay must rebuild.
 const std::vector<std::string> kCoupledDelayed = {

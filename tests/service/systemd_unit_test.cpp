@@ -12,10 +12,6 @@
 namespace hapticd::testing {
 namespace {
 
-bool has(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
-
 // `cmake --install` of the build into `prefix`.
 ProcessResult install_to(const std::string& prefix) {
   return run_process(

@@ -21,16 +21,14 @@
 namespace hapticd::service {
 namespace {
 
+using hapticd::testing::has;
+
 using hapticd::testing::ProcessResult;
 using hapticd::testing::run_process;
 
 // The guest runs its tests in a chroot, where udevadm would otherwise ignore every request.
 ProcessResult sh(const std::string& command) {
   return run_process({"/bin/sh", "-c", command}, {"SYSTEMD_IGNORE_CHROOT=1"});
-}
-
-bool has(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
 }
 
 struct stat stat_of(const std::string& path) {

@@ -9,15 +9,14 @@
 #include <sstream>
 
 #include "config/config_loader.h"
+#include "process.h"
 #include "service/config_source.h"
 #include "service/udev_rules.h"
 
 namespace hapticd::service {
 namespace {
 
-bool has(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
+using hapticd::testing::has;
 
 config::Config example(const std::string& name, const std::vector<std::string>& sets = {}) {
   return load_config({std::string(HAPTICD_SOURCE_DIR) + "/config/" + name, sets});
