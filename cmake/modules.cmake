@@ -8,9 +8,12 @@
 #   hapticd_module(<target> <name> <folder> [SOURCES ...] [PUBLIC ...] [PRIVATE ...])
 #     A static library of SOURCES (an interface library without them) whose headers are
 #     included as "<name>/file.h"; PUBLIC libraries are part of its interface, PRIVATE only of
-#     its implementation.
+#     its implementation. Every module stands on the floor, hapticd_base (src/base/).
 function(hapticd_module target name folder)
   cmake_parse_arguments(M "" "" "SOURCES;PUBLIC;PRIVATE" ${ARGN})
+  if(NOT target STREQUAL hapticd_base)
+    list(APPEND M_PUBLIC hapticd_base)
+  endif()
   set(root ${PROJECT_BINARY_DIR}/include/${name})
   if(NOT EXISTS ${root}/${name})
     file(MAKE_DIRECTORY ${root})
