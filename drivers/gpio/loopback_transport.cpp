@@ -2,23 +2,14 @@
 
 #include <poll.h>
 #include <sys/socket.h>
-#include <time.h>
 
 #include <cerrno>
 #include <cstring>
 
+#include "base/clock.h"
 #include "drivers/device.h"
 
 namespace hapticd::drivers::gpio {
-namespace {
-
-std::int64_t monotonic_ms() {
-  timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1000 + ts.tv_nsec / 1'000'000;
-}
-
-}  // namespace
 
 wire::Levels LoopbackTransport::exchange_levels() {
   std::array<std::uint8_t, wire::kHelloSize> hello{};
@@ -26,9 +17,9 @@ wire::Levels LoopbackTransport::exchange_levels() {
   if (::send(fd_.get(), hello.data(), hello.size(), MSG_NOSIGNAL) < 0) {
     throw DeviceError(std::string("gpio: the loopback peer is gone: ") + std::strerror(errno));
   }
-  const std::int64_t deadline = monotonic_ms() + kHelloTimeoutMs;
+  const std::int64_t deadline = base::monotonic_ms() + kHelloTimeoutMs;
   for (;;) {
-    const std::int64_t left = deadline - monotonic_ms();
+    const std::int64_t left = deadline - base::monotonic_ms();
     pollfd p{fd_.get(), POLLIN, 0};
     if (left <= 0 || ::poll(&p, 1, static_cast<int>(left)) == 0) {
       throw DeviceError("gpio: the loopback peer did not answer within " +
