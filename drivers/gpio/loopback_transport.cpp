@@ -4,9 +4,9 @@
 #include <sys/socket.h>
 
 #include <cerrno>
-#include <cstring>
 
 #include "base/clock.h"
+#include "base/errno_text.h"
 #include "drivers/device.h"
 
 namespace hapticd::drivers::gpio {
@@ -15,7 +15,7 @@ wire::Levels LoopbackTransport::exchange_levels() {
   std::array<std::uint8_t, wire::kHelloSize> hello{};
   wire::encode_hello(hello);
   if (::send(fd_.get(), hello.data(), hello.size(), MSG_NOSIGNAL) < 0) {
-    throw DeviceError(std::string("gpio: the loopback peer is gone: ") + std::strerror(errno));
+    throw DeviceError(std::string("gpio: the loopback peer is gone: ") + base::errno_text(errno));
   }
   const std::int64_t deadline = base::monotonic_ms() + kHelloTimeoutMs;
   for (;;) {
@@ -44,7 +44,8 @@ std::uint8_t LoopbackTransport::open(const OutputState& off) {
   open_ = true;
   if (const int e = write_output(off)) {
     open_ = false;
-    throw DeviceError(std::string("gpio: cannot write to the loopback peer: ") + std::strerror(e));
+    throw DeviceError(std::string("gpio: cannot write to the loopback peer: ") +
+                      base::errno_text(e));
   }
   return l.levels;
 }

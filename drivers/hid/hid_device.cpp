@@ -3,10 +3,10 @@
 #include <spdlog/spdlog.h>
 
 #include <cerrno>
-#include <cstring>
 #include <thread>
 
 #include "base/clock.h"
+#include "base/errno_text.h"
 
 namespace hapticd::drivers::hid {
 
@@ -55,7 +55,7 @@ void HidDevice::await_first_sample() {
     const Drained d = drain();
     if (d.error != 0) {
       throw DeviceError(std::string("hid: reading the device at enable: ") +
-                        std::strerror(d.error));
+                        base::errno_text(d.error));
     }
     if (d.samples > 0) {
       have_position_ = true;
@@ -264,9 +264,9 @@ std::string HidDevice::describe(const DeviceFault& fault) const {
         " ms): its firmware is hung or the link is stalled";
   } else if (e == ENODEV || e == EIO || e == ESHUTDOWN || e == EPROTO) {
     // EPROTO: hidraw's write while usbhid tears the unplugged device down.
-    s = std::string("hid: the device is gone (") + std::strerror(e) + "): unplugged or reset?";
+    s = std::string("hid: the device is gone (") + base::errno_text(e) + "): unplugged or reset?";
   } else {
-    s = std::string("hid: the transport failed: ") + std::strerror(e);
+    s = std::string("hid: the transport failed: ") + base::errno_text(e);
   }
   const std::string detail = transport_ ? transport_->last_error() : "";
   return detail.empty() ? s : s + " (" + detail + ")";

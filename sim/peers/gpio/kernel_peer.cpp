@@ -12,6 +12,7 @@
 #include <system_error>
 
 #include "base/clock.h"
+#include "base/errno_text.h"
 #include "drivers/device.h"
 #include "drivers/io/unique_fd.h"
 #include "sim/peers/gpio/gpio_peer.h"
@@ -23,7 +24,7 @@ namespace {
 io::UniqueFd open_or_throw(const std::string& path, int flags) {
   io::UniqueFd fd(::open(path.c_str(), flags | O_CLOEXEC));
   if (!fd) {
-    throw DeviceError("gpio peer: cannot open " + path + ": " + std::strerror(errno));
+    throw DeviceError("gpio peer: cannot open " + path + ": " + base::errno_text(errno));
   }
   return fd;
 }
