@@ -13,13 +13,13 @@
 
 #include "analysis/free_motion_fit.h"
 #include "config/config_loader.h"
-#include "drivers/registry.h"
 #include "gate/number_format.h"
 #include "loop/rt_setup.h"
 #include "service/device_session.h"
 #include "service/exit_codes.h"
 #include "service/identify_run.h"
 #include "service/result_output.h"
+#include "wiring/registry.h"
 
 namespace hapticd::service {
 namespace {
