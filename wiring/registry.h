@@ -2,7 +2,7 @@
 // its device (drivers/<name>/, drivers/device_entry.h) joined by driver name with its
 // simulated device (sim/peers/<name>/, sim/peers/peer_entry.h). `check`, `verify` and `run`
 // all analyse the delay declared here, so they analyse the same loop. Adding a driver touches
-// its own folders and one line of registry.cpp.
+// its own folders, one line of registry.cpp and HAPTICD_DRIVER_NAMES (CMakeLists.txt).
 #pragma once
 
 #include <memory>

@@ -43,6 +43,20 @@ std::unique_ptr<Device> can_loopback_device(const config::Config& cfg, io::Uniqu
   return std::make_unique<Cia402Device>(s, period, std::move(open), cfg.loop.rt_priority);
 }
 
+// The frames the driver of cfg's profile needs to see.
+std::vector<IdFilter> receive_filters(const config::Config& cfg) {
+  const CanSettings& s = can_settings(cfg);
+  const std::uint32_t n = s.node_id;
+  if (s.profile == Profile::kOdrive) {
+    return {{odrive::frame_id(s.node_id, 0), 0x7E0}};  // the node's 32 command ids
+  }
+  return {{canopen::kTpdo1Base + n},
+          {canopen::kTpdo2Base + n},
+          {canopen::kEmcyBase + n},
+          {canopen::kSdoTxBase + n},
+          {canopen::kHeartbeatBase + n}};
+}
+
 std::unique_ptr<Device> can_device(const config::Config& cfg) {
   const CanSettings& s = can_settings(cfg);
   const std::vector<IdFilter> filters = receive_filters(cfg);
@@ -58,19 +72,6 @@ std::vector<std::string> can_notes(const config::Config& cfg) {
 }
 
 }  // namespace
-
-std::vector<IdFilter> receive_filters(const config::Config& cfg) {
-  const CanSettings& s = can_settings(cfg);
-  const std::uint32_t n = s.node_id;
-  if (s.profile == Profile::kOdrive) {
-    return {{odrive::frame_id(s.node_id, 0), 0x7E0}};  // the node's 32 command ids
-  }
-  return {{canopen::kTpdo1Base + n},
-          {canopen::kTpdo2Base + n},
-          {canopen::kEmcyBase + n},
-          {canopen::kSdoTxBase + n},
-          {canopen::kHeartbeatBase + n}};
-}
 
 std::unique_ptr<Device> make_can_device(const config::Config& cfg,
                                         std::function<CanSocket()> open) {

@@ -5,7 +5,6 @@
 
 #include <functional>
 #include <memory>
-#include <vector>
 
 #include "drivers/can/can_socket.h"
 #include "drivers/device_entry.h"
@@ -17,7 +16,5 @@ DeviceEntry device_entry();
 // The device of cfg's profile, opening its transport with `open` at configure (the tests
 // build their own rigs with it).
 std::unique_ptr<Device> make_can_device(const config::Config& cfg, std::function<CanSocket()> open);
-// The receive filters of cfg's profile: the frames the driver needs to see.
-std::vector<IdFilter> receive_filters(const config::Config& cfg);
 
 }  // namespace hapticd::drivers::can
