@@ -12,8 +12,8 @@
 #include <vector>
 
 #include "config/config_loader.h"
-#include "drivers/registry.h"
 #include "sim/peers/loopback_peer.h"
+#include "wiring/registry.h"
 
 namespace hapticd::bench {
 
@@ -25,7 +25,7 @@ inline config::Config load_example(const char* name, const std::vector<std::stri
   std::vector<config::Override> o = {config::parse_override("loop.clock=freerun")};
   for (const std::string& s : sets) o.push_back(config::parse_override(s));
   return config::load_config_text(text.str(), path, o, HAPTICD_SOURCE_DIR "/config",
-                                  drivers::driver_schemas());
+                                  wiring::driver_schemas());
 }
 
 // One tick per iteration: the device's read and a write of +-`force` (alternating), then the

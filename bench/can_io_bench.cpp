@@ -9,8 +9,8 @@
 
 #include "bench_support.h"
 #include "drivers/can/can_device_base.h"
-#include "drivers/registry.h"
 #include "sim/peers/peer_runner.h"
+#include "wiring/registry.h"
 
 namespace {
 
@@ -18,7 +18,7 @@ using namespace hapticd;
 
 void tick_bench(benchmark::State& state, const char* example, bool driver_only) {
   const config::Config cfg = bench::load_example(example);
-  drivers::Loopback pair = drivers::find_driver("can").make_loopback(cfg);
+  wiring::Loopback pair = wiring::find_driver("can").make_loopback(cfg);
   {
     sim::PeerRunner runner(*pair.peer);  // answers configure's and enable's requests
     pair.device->configure();

@@ -18,7 +18,7 @@
 #include "config/config_loader.h"
 #include "drivers/gpio/quadrature_decoder.h"
 #include "drivers/gpio/sysfs_pwm.h"
-#include "drivers/registry.h"
+#include "wiring/registry.h"
 
 namespace {
 
@@ -30,7 +30,7 @@ void BM_GpioLoopbackTick(benchmark::State& state) {
   const config::Config cfg = bench::load_example(
       "gpio.yaml",
       {"device.sim.operator={kind: motion, offset: -0.02, amplitude: 0.005, frequency_hz: 2}"});
-  drivers::Loopback pair = drivers::find_driver("gpio").make_loopback(cfg);
+  wiring::Loopback pair = wiring::find_driver("gpio").make_loopback(cfg);
   Device& d = *pair.device;
   // configure() waits for the peer's answer to hello: answer it from this thread.
   std::thread helper([&] {

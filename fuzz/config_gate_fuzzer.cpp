@@ -5,8 +5,8 @@
 #include <string_view>
 
 #include "config/config_loader.h"
-#include "drivers/registry.h"
 #include "support/config_oracle.h"
+#include "wiring/registry.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string_view yaml(reinterpret_cast<const char*>(data), size);
@@ -15,7 +15,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   hapticd::fuzz::check_load_then_gate(
       [&] {
         return hapticd::config::load_config_text(yaml, "fuzz.yaml", {}, "/fuzz",
-                                                 hapticd::drivers::driver_schemas());
+                                                 hapticd::wiring::driver_schemas());
       },
       {"fuzz.yaml:"});
   return 0;

@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "config/config_loader.h"
-#include "drivers/registry.h"
 #include "support/config_oracle.h"
+#include "wiring/registry.h"
 
 namespace {
 
@@ -42,7 +42,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const bool empty_base = input.starts_with(kEmptyBase);
   if (empty_base) input.remove_prefix(kEmptyBase.size());
   const std::vector<config::Override> overrides = parse_lines(input);
-  const config::DriverSchemas& drivers = hapticd::drivers::driver_schemas();
+  const config::DriverSchemas& drivers = hapticd::wiring::driver_schemas();
   if (empty_base) {
     fuzz::check_load_then_gate(
         [&] { return config::load_config_text("", "empty.yaml", overrides, "/fuzz", drivers); },

@@ -1,9 +1,10 @@
 #include "sim/sim_device.h"
 
 #include <cerrno>
-#include <cstdio>
-#include <cstring>
 #include <utility>
+
+#include "base/errno_text.h"
+#include "base/hex.h"
 
 namespace hapticd::sim {
 
@@ -84,15 +85,12 @@ IoStatus SimDevice::on_write(double force) noexcept {
 }
 
 std::string SimDevice::describe(const DeviceFault& fault) const {
-  char buf[128];
   if (fault.fault_class == FaultClass::kDevice) {
-    std::snprintf(buf, sizeof buf, "sim: the simulated device reported a fault (status 0x%x)",
-                  fault.code);
-  } else {
-    std::snprintf(buf, sizeof buf, "sim: the simulated transport failed (%s)",
-                  std::strerror(static_cast<int>(fault.code)));
+    return "sim: the simulated device reported a fault (status " +
+           base::hex(fault.code, 1, base::HexCase::kLower) + ")";
   }
-  return buf;
+  return "sim: the simulated transport failed (" + base::errno_text(static_cast<int>(fault.code)) +
+         ")";
 }
 
 }  // namespace hapticd::sim

@@ -2,14 +2,19 @@
 """The layering of docs/architecture.md, checked on every source file of the project.
 
 Each module may include the headers of the modules listed for it and nothing else; the core
-(analysis, config, control, gate) includes no OS header and does no I/O. The build already
-refuses most violations (each module's include root reaches only what it links,
-cmake/modules.cmake); this check states the rules in one place and catches what include roots
-cannot: a module that links a library for one header may not use its others.
+(analysis, config, control, gate) includes no OS header and does no I/O; of drivers/, the loop
+and verify see the Device seam alone and the simulator the seam, the fd helpers and each
+driver's pure codecs. The build already refuses what include roots can refuse
+(cmake/modules.cmake; tests/layering/ probes every edge of the picture, with the table this
+file prints); this check states the rules in one place, catches what include roots cannot (a
+module that links a library for one header may not use its others), and keeps the picture in
+docs/architecture.md equal to the rules.
 
-Usage: check_layering.py [ROOT] [--inject FILE=INCLUDE ...]
+Usage: check_layering.py [ROOT] [--inject FILE=INCLUDE ...] [--picture]
   --inject pretends FILE (relative to ROOT) also has `#include "INCLUDE"`, so a test can prove
   a forbidden include is caught. Exit 0 when every rule holds, 1 with one line per violation.
+  --picture prints the modules and what each may use, one per line, for the build's probes:
+  "module NAME: MODULE..." ("*" for everything), "only NAME drivers: HEADER...".
 """
 import argparse
 import pathlib
@@ -18,7 +23,8 @@ import sys
 
 # Module folder -> the modules (first path component of a quoted include) it may include.
 ALLOWED = {
-    # The floor (monotonic clock, counters): every module may stand on it, it on nothing.
+    # The floor (monotonic clock, counters, errno text, hex): every module may stand on it, it
+    # on nothing.
     "src/base": {"base"},
     "src/analysis": {"analysis", "base"},
     "src/config": {"config", "base"},
@@ -28,24 +34,41 @@ ALLOWED = {
     "src/loop": {"loop", "control", "analysis", "config", "telemetry", "drivers", "base"},
     "src/verify": {"verify", "loop", "control", "analysis", "config", "sim", "drivers",
                    "telemetry", "base"},
-    "src/service": None,  # main() wires everything
-    "drivers": {"drivers", "config", "sim", "base"},
+    "drivers": {"drivers", "config", "base"},
     "sim": {"sim", "drivers", "config", "telemetry", "base"},
+    # The composition root: each driver's device joined with its simulated device.
+    "wiring": {"wiring", "drivers", "sim", "config", "base"},
+    "src/service": None,  # main() and the commands use everything
     # Reference devices are written from a firmware's published source or a specification,
     # never from our codecs: a device that shares the driver's reading of a spec cannot find
     # where that reading is wrong (tests/reference/README.md).
     "tests/reference": {"reference"},
 }
+# The modules of the picture, in its order (tests/reference is no module of the daemon).
+MODULES = ("base", "analysis", "config", "control", "gate", "telemetry", "loop", "verify",
+           "drivers", "sim", "wiring", "service")
 
-# Headers of another module that are off limits even where the module is linked: only the
-# Device seam of drivers/ may be seen by the loop, verify and the simulator.
-SEAM_ONLY = {
-    "src/loop": {"drivers": ("drivers/device.h",)},
-    "src/verify": {"drivers": ("drivers/device.h",)},
-    "sim": {"drivers": ("drivers/device.h", "drivers/io/", "drivers/hid/", "drivers/can/",
-                        "drivers/gpio/")},  # peers speak a driver's pure codec
+# A driver's pure codecs: no OS header, no Device (checked below). A driver's simulated
+# device speaks the driver's bytes through them, so both read the protocol the same way.
+PURE_CODECS = (
+    "drivers/can/can_frame.h", "drivers/can/canopen.h", "drivers/can/cia402.h",
+    "drivers/can/odrive_protocol.h", "drivers/can/can_bus_load.h", "drivers/can/can_settings.h",
+    "drivers/hid/report_field.h", "drivers/hid/report_layout.h",
+    "drivers/hid/report_descriptor.h", "drivers/hid/pid_protocol.h",
+    "drivers/hid/descriptor_builder.h", "drivers/hid/hid_framing.h", "drivers/hid/hid_settings.h",
+    "drivers/gpio/quadrature_decoder.h", "drivers/gpio/gpio_wire.h", "drivers/gpio/gpio_settings.h",
+)
+SEAM = ("drivers/device.h",)
+# The transports a driver and its simulated device both speak on: the fd helpers, and the
+# SocketCAN socket the simulated drives send their frames through.
+SHARED_TRANSPORTS = ("drivers/io/unique_fd.h", "drivers/can/can_socket.h")
+
+# The only headers of drivers/ a module that may use drivers/ sees, where it may not see all.
+ONLY_OF_DRIVERS = {
+    "src/loop": SEAM,
+    "src/verify": SEAM,
+    "sim": SEAM + SHARED_TRANSPORTS + PURE_CODECS,
 }
-SEAM_EXCEPTIONS = {"drivers/registry.h"}
 
 # Where a bare `#include "x.h"` of a module may come from (its target's include paths could
 # reach further): reference devices use the kernel test rig's helpers, never a driver's file.
@@ -83,7 +106,7 @@ def violations(rel, text):
     for number, kind, header in includes(text):
         where = f"{rel}:{number}: "
         if kind == "<":
-            if module in NO_OS and OS_HEADER.search(header):
+            if (module in NO_OS or rel in PURE_CODECS) and OS_HEADER.search(header):
                 yield where + f"<{header}>: {module} is OS- and I/O-free"
             continue
         first = header.split("/", 1)[0]
@@ -96,23 +119,75 @@ def violations(rel, text):
         if allowed is not None and first not in allowed:
             yield where + f'"{header}": {module} may not include {first}/'
             continue
-        seam = SEAM_ONLY.get(module, {}).get(first)
-        if seam and (header in SEAM_EXCEPTIONS or not header.startswith(seam)):
-            yield where + f'"{header}": {module} may use only {", ".join(seam)} of {first}/'
+        only = ONLY_OF_DRIVERS.get(module)
+        if first == "drivers" and only is not None and header not in only:
+            yield where + f'"{header}": {module} may use of drivers/ only {", ".join(only)}'
+        if rel in PURE_CODECS and first not in ("config", "base") and header not in PURE_CODECS:
+            yield where + f'"{header}": a pure codec includes only config/, base/ and other ' \
+                'pure codecs (no Device, no transport)'
+
+
+def name_of(folder):
+    return folder.rsplit("/", 1)[-1]
+
+
+def picture():
+    """The modules and what each may use, for the build's probes (tests/layering/)."""
+    lines = []
+    for folder, allowed in ALLOWED.items():
+        module = name_of(folder)
+        if module not in MODULES:
+            continue
+        uses = "*" if allowed is None else " ".join(m for m in MODULES if m in allowed - {module})
+        lines.append(f"module {module}: {uses}")
+    for folder, only in ONLY_OF_DRIVERS.items():
+        lines.append(f"only {name_of(folder)} drivers: {' '.join(only)}")
+    return lines
+
+
+# The table of docs/architecture.md: "| module | may use | ... |", one row per module.
+DOC_ROW = re.compile(r"^\|\s*(\w+)\s*\|\s*([^|]*)\|")
+
+
+def picture_differences(root):
+    """Where docs/architecture.md's table of modules says other than ALLOWED."""
+    doc = root / "docs" / "architecture.md"
+    stated = {}
+    for line in doc.read_text().splitlines():
+        m = DOC_ROW.match(line)
+        if m and m.group(1) in MODULES:
+            cell = m.group(2).strip()
+            uses = set(re.findall(r"\w+", cell)) & set(MODULES)
+            stated[m.group(1)] = None if cell == "everything" else uses
+    for folder, allowed in ALLOWED.items():
+        module = name_of(folder)
+        if module not in MODULES:
+            continue
+        want = None if allowed is None else allowed - {module}
+        if module not in stated:
+            yield f"docs/architecture.md: the table of modules has no row for {module}"
+        elif stated[module] != want:
+            said = "everything" if stated[module] is None else ", ".join(sorted(stated[module]))
+            rule = "everything" if want is None else ", ".join(sorted(want))
+            yield f"docs/architecture.md: {module} may use {rule}, the table says {said}"
 
 
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("root", nargs="?", default=pathlib.Path(__file__).resolve().parents[1])
     parser.add_argument("--inject", action="append", default=[])
+    parser.add_argument("--picture", action="store_true")
     args = parser.parse_args()
+    if args.picture:
+        print("\n".join(picture()))
+        return 0
     global ROOT
     root = ROOT = pathlib.Path(args.root)
     injected = {}
     for item in args.inject:
         path, _, header = item.partition("=")
         injected.setdefault(path, []).append(f'#include "{header}"')
-    found = []
+    found = list(picture_differences(root))
     for path in sorted(root.glob("**/*")):
         rel = path.relative_to(root).as_posix()
         if path.suffix not in (".h", ".cpp") or rel.startswith(("build", "fuzz/")):
@@ -121,6 +196,9 @@ def main():
             continue
         text = path.read_text(errors="replace") + "\n" + "\n".join(injected.get(rel, []))
         found.extend(violations(rel, text))
+    for header in PURE_CODECS + SEAM + SHARED_TRANSPORTS:
+        if not (root / header).exists():
+            found.append(f"{header}: listed in tools/check_layering.py, not in the tree")
     for line in found:
         print(line)
     return 1 if found else 0

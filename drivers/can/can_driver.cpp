@@ -5,16 +5,13 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <cstring>
 
-#include "config/config_loader.h"
+#include "base/errno_text.h"
 #include "drivers/can/can_bus_load.h"
 #include "drivers/can/canopen.h"
 #include "drivers/can/cia402_device.h"
 #include "drivers/can/odrive_device.h"
 #include "drivers/can/odrive_protocol.h"
-#include "sim/peers/can/cia402_peer.h"
-#include "sim/peers/can/odrive_peer.h"
 
 namespace hapticd::drivers::can {
 namespace {
@@ -23,53 +20,49 @@ bool realtime_clock(const config::Config& cfg) {
   return cfg.loop.clock == config::ClockMode::kRealtime;
 }
 
-Loopback can_loopback(const config::Config& cfg) {
-  auto [driver_end, peer_end] = io::seqpacket_pair();
+std::unique_ptr<Device> can_loopback_device(const config::Config& cfg, io::UniqueFd end) {
   // The device keeps the pair's end and hands its transport a duplicate at each configure,
   // so closing and configuring again works like unplugging and replugging a cable.
-  auto kept = std::make_shared<io::UniqueFd>(std::move(driver_end));
+  auto kept = std::make_shared<io::UniqueFd>(std::move(end));
   auto open = [kept] {
     const int fd = ::fcntl(kept->get(), F_DUPFD_CLOEXEC, 0);
-    if (fd < 0) throw DeviceError(std::string("can: loopback: dup: ") + std::strerror(errno));
+    if (fd < 0) throw DeviceError("can: loopback: dup: " + base::errno_text(errno));
     return CanSocket::adopt(io::UniqueFd(fd), "loopback");
   };
-  std::unique_ptr<Device> device;
-  if (realtime_clock(cfg)) {
-    // The simulated drive answers at once unless the host holds its thread up: configure's
-    // waits (an SDO answer, a heartbeat, a state) get seconds, not the bus's milliseconds.
-    CanSettings s = can_settings(cfg);
-    s.sdo_timeout_ms = std::max(s.sdo_timeout_ms, 2000);
-    s.state_timeout_ms = std::max(s.state_timeout_ms, 5000);
-    s.heartbeat_timeout_ms = std::max(s.heartbeat_timeout_ms, 2000);
-    const double period = cfg.loop.sample_period_s();
-    if (s.profile == Profile::kOdrive) {
-      device = std::make_unique<OdriveDevice>(s, period, std::move(open));
-    } else {
-      device = std::make_unique<Cia402Device>(s, period, std::move(open), cfg.loop.rt_priority);
-    }
-  } else {
-    device = make_can_device(cfg, std::move(open));
+  if (!realtime_clock(cfg)) return make_can_device(cfg, std::move(open));
+  // The simulated drive answers at once unless the host holds its thread up: configure's
+  // waits (an SDO answer, a heartbeat, a state) get seconds, not the bus's milliseconds.
+  CanSettings s = can_settings(cfg);
+  s.sdo_timeout_ms = std::max(s.sdo_timeout_ms, 2000);
+  s.state_timeout_ms = std::max(s.state_timeout_ms, 5000);
+  s.heartbeat_timeout_ms = std::max(s.heartbeat_timeout_ms, 2000);
+  const double period = cfg.loop.sample_period_s();
+  if (s.profile == Profile::kOdrive) {
+    return std::make_unique<OdriveDevice>(s, period, std::move(open));
   }
-  // In the same process the simulated drive's clock is its protocol trigger (SYNC, the
-  // encoder request) in real-time runs too: its heartbeats and watchdogs count those, so a
-  // host that holds every thread up (sim/peers/peer_runner.h) cannot make it see a lost
-  // master. `hapticd peer` on a real interface keeps wall-clock watchdogs (can_peer_on).
-  auto peer = make_can_peer(cfg, CanSocket::adopt(std::move(peer_end), "loopback peer"), false);
-  return {std::move(device), std::move(peer)};
+  return std::make_unique<Cia402Device>(s, period, std::move(open), cfg.loop.rt_priority);
+}
+
+// The frames the driver of cfg's profile needs to see.
+std::vector<IdFilter> receive_filters(const config::Config& cfg) {
+  const CanSettings& s = can_settings(cfg);
+  const std::uint32_t n = s.node_id;
+  if (s.profile == Profile::kOdrive) {
+    return {{odrive::frame_id(s.node_id, 0), 0x7E0}};  // the node's 32 command ids
+  }
+  return {{canopen::kTpdo1Base + n},
+          {canopen::kTpdo2Base + n},
+          {canopen::kEmcyBase + n},
+          {canopen::kSdoTxBase + n},
+          {canopen::kHeartbeatBase + n}};
 }
 
 std::unique_ptr<Device> can_device(const config::Config& cfg) {
   const CanSettings& s = can_settings(cfg);
-  const std::vector<IdFilter> filters = receive_filters(cfg, false);
+  const std::vector<IdFilter> filters = receive_filters(cfg);
   return make_can_device(cfg, [interface = s.interface, filters] {
     return CanSocket::open_interface(interface, filters, true);
   });
-}
-
-std::unique_ptr<sim::LoopbackPeer> can_peer_on(const config::Config& cfg,
-                                               const std::string& endpoint) {
-  return make_can_peer(cfg, CanSocket::open_interface(endpoint, receive_filters(cfg, true), false),
-                       true);
 }
 
 std::vector<std::string> can_notes(const config::Config& cfg) {
@@ -79,26 +72,6 @@ std::vector<std::string> can_notes(const config::Config& cfg) {
 }
 
 }  // namespace
-
-std::vector<IdFilter> receive_filters(const config::Config& cfg, bool peer) {
-  const CanSettings& s = can_settings(cfg);
-  const std::uint32_t n = s.node_id;
-  if (s.profile == Profile::kOdrive) {
-    return {{odrive::frame_id(s.node_id, 0), 0x7E0}};  // the node's 32 command ids
-  }
-  if (peer) {
-    return {{canopen::kNmtId},
-            {canopen::kSyncId},
-            {canopen::kRpdo1Base + n},
-            {canopen::kSdoRxBase + n},
-            {canopen::kHeartbeatBase + s.cia402.master_node_id}};
-  }
-  return {{canopen::kTpdo1Base + n},
-          {canopen::kTpdo2Base + n},
-          {canopen::kEmcyBase + n},
-          {canopen::kSdoTxBase + n},
-          {canopen::kHeartbeatBase + n}};
-}
 
 std::unique_ptr<Device> make_can_device(const config::Config& cfg,
                                         std::function<CanSocket()> open) {
@@ -111,27 +84,14 @@ std::unique_ptr<Device> make_can_device(const config::Config& cfg,
   return std::make_unique<Cia402Device>(s, period, std::move(open), keeper);
 }
 
-std::unique_ptr<sim::LoopbackPeer> make_can_peer(const config::Config& cfg, CanSocket socket,
-                                                 bool realtime) {
-  try {
-    if (can_settings(cfg).profile == Profile::kOdrive) {
-      return std::make_unique<sim::OdrivePeer>(cfg, std::move(socket), realtime);
-    }
-    return std::make_unique<sim::Cia402Peer>(cfg, std::move(socket), realtime);
-  } catch (const std::invalid_argument& e) {
-    throw config::ConfigError({cfg.locate("device.sim") + ": device.sim: " + e.what()});
-  }
-}
-
-DriverEntry can_driver() {
-  DriverEntry e;
+DeviceEntry device_entry() {
+  DeviceEntry e;
   e.name = "can";
   e.summary = "SocketCAN: a CiA 402 drive (cyclic synchronous torque) or an ODrive (CAN Simple)";
   e.read_section = &read_can_section;
   e.declared_delay = &declared_delay;
   e.make_device = &can_device;
-  e.make_loopback = &can_loopback;
-  e.make_peer_on = &can_peer_on;
+  e.make_loopback_device = &can_loopback_device;
   e.notes = &can_notes;
   return e;
 }

@@ -2,7 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
+
+#include "base/errno_text.h"
 
 namespace hapticd::drivers::gpio {
 namespace {
@@ -26,8 +27,7 @@ std::string schema_number(double v) {
 }
 
 std::string errno_text(std::uint32_t detail) {
-  return std::string(std::strerror(static_cast<int>(detail))) + " (errno " +
-         std::to_string(detail) + ")";
+  return base::errno_text(static_cast<int>(detail)) + " (errno " + std::to_string(detail) + ")";
 }
 
 }  // namespace

@@ -1,12 +1,12 @@
-// The GPIO driver's entry in the registry (drivers/registry.h): device.gpio, the declared
-// delay from the PWM period and T, the device on the kernel's lines and sysfs PWM, the
-// device against its loopback peer, and the peer on gpio-sim and the PWM simulator.
+// The GPIO driver's half of its registration (drivers/device_entry.h): device.gpio, the
+// declared delay from the PWM period and T, the device on the kernel's lines and sysfs PWM, and
+// the device over a loopback socketpair.
 #pragma once
 
-#include "drivers/registry.h"
+#include "drivers/device_entry.h"
 
 namespace hapticd::drivers::gpio {
 
-DriverEntry gpio_driver();
+DeviceEntry device_entry();
 
 }  // namespace hapticd::drivers::gpio

@@ -43,7 +43,7 @@ struct GpioSettings final : config::DriverSettings {
   // level Linux's PWM API defines (docs/drivers/gpio.md, "Stopping the motor").
 };
 
-// The registry's read_section for device.gpio.
+// The device entry's read_section for device.gpio.
 std::shared_ptr<const config::DriverSettings> read_gpio_section(config::schema::MapReader& section,
                                                                 const config::Config& cfg);
 

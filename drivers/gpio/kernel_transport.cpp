@@ -1,6 +1,6 @@
 #include "drivers/gpio/kernel_transport.h"
 
-#include <time.h>
+#include "base/clock.h"
 
 namespace hapticd::drivers::gpio {
 
@@ -44,9 +44,7 @@ EdgeRead KernelTransport::read_edges(std::span<Edge> buffer) noexcept {
   // Taken before the reads: every edge up to here has been timestamped by the kernel. (One
   // still in its interrupt thread may come next tick, older than this: the decoder counts
   // such an edge as out of order.)
-  timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  r.complete_until_ns = static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+  r.complete_until_ns = base::monotonic_ns();
   r.error = lines_.read_events(buffer, r.count, r.lost);
   return r;
 }

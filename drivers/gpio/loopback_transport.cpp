@@ -2,33 +2,24 @@
 
 #include <poll.h>
 #include <sys/socket.h>
-#include <time.h>
 
 #include <cerrno>
-#include <cstring>
 
+#include "base/clock.h"
+#include "base/errno_text.h"
 #include "drivers/device.h"
 
 namespace hapticd::drivers::gpio {
-namespace {
-
-std::int64_t monotonic_ms() {
-  timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1000 + ts.tv_nsec / 1'000'000;
-}
-
-}  // namespace
 
 wire::Levels LoopbackTransport::exchange_levels() {
   std::array<std::uint8_t, wire::kHelloSize> hello{};
   wire::encode_hello(hello);
   if (::send(fd_.get(), hello.data(), hello.size(), MSG_NOSIGNAL) < 0) {
-    throw DeviceError(std::string("gpio: the loopback peer is gone: ") + std::strerror(errno));
+    throw DeviceError(std::string("gpio: the loopback peer is gone: ") + base::errno_text(errno));
   }
-  const std::int64_t deadline = monotonic_ms() + kHelloTimeoutMs;
+  const std::int64_t deadline = base::monotonic_ms() + kHelloTimeoutMs;
   for (;;) {
-    const std::int64_t left = deadline - monotonic_ms();
+    const std::int64_t left = deadline - base::monotonic_ms();
     pollfd p{fd_.get(), POLLIN, 0};
     if (left <= 0 || ::poll(&p, 1, static_cast<int>(left)) == 0) {
       throw DeviceError("gpio: the loopback peer did not answer within " +
@@ -53,7 +44,8 @@ std::uint8_t LoopbackTransport::open(const OutputState& off) {
   open_ = true;
   if (const int e = write_output(off)) {
     open_ = false;
-    throw DeviceError(std::string("gpio: cannot write to the loopback peer: ") + std::strerror(e));
+    throw DeviceError(std::string("gpio: cannot write to the loopback peer: ") +
+                      base::errno_text(e));
   }
   return l.levels;
 }

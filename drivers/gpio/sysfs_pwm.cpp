@@ -7,8 +7,8 @@
 
 #include <cerrno>
 #include <charconv>
-#include <cstring>
 
+#include "base/errno_text.h"
 #include "drivers/device.h"
 
 namespace hapticd::drivers::gpio {
@@ -16,10 +16,10 @@ namespace {
 
 std::string err_text(int e) {
   if (e == EACCES || e == EPERM) {
-    return std::string(std::strerror(e)) +
+    return base::errno_text(e) +
            " (`hapticd udev-rules` writes the rules that give group hapticd access)";
   }
-  return std::strerror(e);
+  return base::errno_text(e);
 }
 
 // Not RT-safe: set-up writes of whole text values.

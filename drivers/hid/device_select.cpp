@@ -1,15 +1,12 @@
 #include "drivers/hid/device_select.h"
 
-#include <cstdio>
+#include "base/hex.h"
 
 namespace hapticd::drivers::hid {
 namespace {
 
-std::string hex4(std::uint16_t v) {
-  char buf[8];
-  std::snprintf(buf, sizeof buf, "0x%04x", v);
-  return buf;
-}
+// USB ids and usages in lower case, as lsusb and the kernel show them.
+std::string hex4(std::uint16_t v) { return base::hex(v, 4, base::HexCase::kLower); }
 
 std::string one_line(const DeviceListing& d) {
   std::string s = hex4(d.vendor_id).substr(2) + ":" + hex4(d.product_id).substr(2);

@@ -3,10 +3,10 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
-#include <cstdio>
 #include <map>
 #include <string>
 
+#include "base/hex.h"
 #include "drivers/hid/hid_settings.h"
 
 namespace hapticd::drivers::hid {
@@ -58,11 +58,9 @@ std::optional<std::uint32_t> read_hex(Diagnostics& d, const Field& f, std::uint3
   std::uint64_t v = 0;
   const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v, base);
   if (s.empty() || ec != std::errc() || ptr != s.data() + s.size() || v > max) {
-    char range[48];
-    std::snprintf(range, sizeof range, "0..%u (0x%X)", max, max);
     d.error(f.key_mark, f.path,
-            std::string("must be an integer in ") + range + ", decimal or 0x hexadecimal, got " +
-                config::schema::describe_value(f.node));
+            "must be an integer in 0.." + std::to_string(max) + " (" + base::hex(max) +
+                "), decimal or 0x hexadecimal, got " + config::schema::describe_value(f.node));
     return std::nullopt;
   }
   return static_cast<std::uint32_t>(v);

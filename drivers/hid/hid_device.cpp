@@ -1,22 +1,14 @@
 #include "drivers/hid/hid_device.h"
 
 #include <spdlog/spdlog.h>
-#include <time.h>
 
 #include <cerrno>
-#include <cstring>
 #include <thread>
 
+#include "base/clock.h"
+#include "base/errno_text.h"
+
 namespace hapticd::drivers::hid {
-namespace {
-
-std::int64_t monotonic_ns() noexcept {
-  timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
-}
-
-}  // namespace
 
 HidDevice::HidDevice(std::shared_ptr<const HidSettings> settings,
                      std::function<std::unique_ptr<HidTransport>()> open, double sample_period_s)
@@ -63,11 +55,11 @@ void HidDevice::await_first_sample() {
     const Drained d = drain();
     if (d.error != 0) {
       throw DeviceError(std::string("hid: reading the device at enable: ") +
-                        std::strerror(d.error));
+                        base::errno_text(d.error));
     }
     if (d.samples > 0) {
       have_position_ = true;
-      last_report_ns_ = monotonic_ns();
+      last_report_ns_ = base::monotonic_ns();
       return;
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
@@ -119,7 +111,7 @@ IoStatus HidDevice::on_read(PositionSample& out) noexcept {
     set_fault_code(decoded_.status);
     return IoStatus::kDeviceFault;
   }
-  const std::int64_t now = monotonic_ns();
+  const std::int64_t now = base::monotonic_ns();
   if (d.reports > 0) last_report_ns_ = now;
   if (d.samples == 0) return hold(out, now);
   have_position_ = true;
@@ -272,9 +264,9 @@ std::string HidDevice::describe(const DeviceFault& fault) const {
         " ms): its firmware is hung or the link is stalled";
   } else if (e == ENODEV || e == EIO || e == ESHUTDOWN || e == EPROTO) {
     // EPROTO: hidraw's write while usbhid tears the unplugged device down.
-    s = std::string("hid: the device is gone (") + std::strerror(e) + "): unplugged or reset?";
+    s = std::string("hid: the device is gone (") + base::errno_text(e) + "): unplugged or reset?";
   } else {
-    s = std::string("hid: the transport failed: ") + std::strerror(e);
+    s = std::string("hid: the transport failed: ") + base::errno_text(e);
   }
   const std::string detail = transport_ ? transport_->last_error() : "";
   return detail.empty() ? s : s + " (" + detail + ")";

@@ -3,16 +3,12 @@
 #include <fcntl.h>
 
 #include <cerrno>
-#include <cstring>
 
+#include "base/errno_text.h"
 #include "drivers/hid/hid_config.h"
 #include "drivers/hid/hid_device.h"
 #include "drivers/hid/hidapi_transport.h"
 #include "drivers/hid/socket_transport.h"
-#include "sim/peers/hid/hidg_peer.h"
-#include "sim/peers/hid/raw_gadget_peer.h"
-#include "sim/peers/hid/socket_hid_peer.h"
-#include "sim/peers/hid/uhid_peer.h"
 
 namespace hapticd::drivers::hid {
 namespace {
@@ -33,47 +29,17 @@ std::unique_ptr<Device> make_device(const config::Config& cfg) {
       s, [s] { return open_hidapi(*s); }, cfg.loop.sample_period_s());
 }
 
-Loopback make_loopback(const config::Config& cfg) {
+std::unique_ptr<Device> make_loopback_device(const config::Config& cfg, io::UniqueFd end) {
   auto s = settings_of(cfg);
-  auto [ours, theirs] = io::seqpacket_pair();
-  auto peer = std::make_unique<sim::hid::SocketHidPeer>(
-      std::move(theirs), sim::hid::make_firmware(cfg, declared_delay(cfg)));
   // The device opens a duplicate at each configure, so it can be closed and configured again.
-  auto end = std::make_shared<io::UniqueFd>(std::move(ours));
+  auto kept = std::make_shared<io::UniqueFd>(std::move(end));
   const std::chrono::milliseconds timeout(static_cast<long>(s->limits.timeout_ms));
-  auto open = [end, timeout]() -> std::unique_ptr<HidTransport> {
-    io::UniqueFd fd(fcntl(end->get(), F_DUPFD_CLOEXEC, 0));
-    if (!fd) throw DeviceError(std::string("hid loopback: dup: ") + std::strerror(errno));
+  auto open = [kept, timeout]() -> std::unique_ptr<HidTransport> {
+    io::UniqueFd fd(fcntl(kept->get(), F_DUPFD_CLOEXEC, 0));
+    if (!fd) throw DeviceError("hid loopback: dup: " + base::errno_text(errno));
     return std::make_unique<SocketTransport>(std::move(fd), timeout);
   };
-  auto device = std::make_unique<HidDevice>(s, std::move(open), cfg.loop.sample_period_s());
-  return {std::move(device), std::move(peer)};
-}
-
-bool ends_with(const std::string& s, const std::string& tail) {
-  return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
-}
-
-// /dev/hidgN (a USB HID gadget: usbhid, hidraw and libusb see a USB device, but f_hid answers
-// no feature report), /dev/raw-gadget (a USB device this process answers for entirely,
-// feature reports included) or /dev/uhid (a HID device made by the kernel's uhid: hidraw only,
-// with feature reports).
-std::unique_ptr<sim::LoopbackPeer> make_peer_on(const config::Config& cfg,
-                                                const std::string& endpoint) {
-  const auto s = settings_of(cfg);
-  // On a real link the link is the delay: the simulated firmware adds none.
-  auto firmware = sim::hid::make_firmware(cfg, 0);
-  sim::hid::DeviceIdentity id;
-  id.vendor_id = s->select.vendor_id.value_or(id.vendor_id);
-  id.product_id = s->select.product_id.value_or(id.product_id);
-  if (!s->select.serial.empty()) id.serial = s->select.serial;
-  if (ends_with(endpoint, "uhid")) {
-    return std::make_unique<sim::hid::UhidPeer>(endpoint, id, std::move(firmware));
-  }
-  if (ends_with(endpoint, "raw-gadget")) {
-    return std::make_unique<sim::hid::RawGadgetPeer>(endpoint, id, std::move(firmware));
-  }
-  return std::make_unique<sim::hid::HidgPeer>(endpoint, std::move(firmware));
+  return std::make_unique<HidDevice>(s, std::move(open), cfg.loop.sample_period_s());
 }
 
 std::string list_devices() {
@@ -91,15 +57,14 @@ std::string list_devices() {
 
 }  // namespace
 
-DriverEntry hid_driver() {
-  DriverEntry e;
+DeviceEntry device_entry() {
+  DeviceEntry e;
   e.name = "hid";
   e.summary = "USB HID through hidapi (hidraw or libusb): vendor reports or the PID page";
   e.read_section = read_hid_section;
   e.declared_delay = &declared_delay;
   e.make_device = &make_device;
-  e.make_loopback = &make_loopback;
-  e.make_peer_on = &make_peer_on;
+  e.make_loopback_device = &make_loopback_device;
   e.list_devices = &list_devices;
   return e;
 }

@@ -1,13 +1,12 @@
-// The HID driver's entry in the registry (drivers/registry.h): its section device.hid, the
-// delay it declares from the polling interval and T, the device over hidapi, the loopback pair
-// over a socketpair, the same simulated device on a USB HID gadget (`hapticd peer --endpoint
-// /dev/hidgN`), and `hapticd devices`.
+// The HID driver's half of its registration (drivers/device_entry.h): its section device.hid,
+// the delay it declares from the polling interval and T, the device over hidapi, the device
+// over a loopback socketpair, and `hapticd devices`.
 #pragma once
 
-#include "drivers/registry.h"
+#include "drivers/device_entry.h"
 
 namespace hapticd::drivers::hid {
 
-DriverEntry hid_driver();
+DeviceEntry device_entry();
 
 }  // namespace hapticd::drivers::hid

@@ -15,6 +15,8 @@
 #include <mutex>
 #include <thread>
 
+#include "base/errno_text.h"
+#include "base/hex.h"
 #include "drivers/device.h"
 #include "drivers/hid/report_descriptor.h"
 #include "drivers/hid/sysfs_descriptor.h"
@@ -198,9 +200,10 @@ HidapiTransport::HidapiTransport(const Api& a, Backend b, hid_device* dev, Devic
       slots_(static_cast<std::size_t>(s.limits.out_queue) * kSlotBytes),
       sizes_(static_cast<std::size_t>(s.limits.out_queue)),
       capacity_(static_cast<std::size_t>(s.limits.out_queue)) {
-  char ids[16];
-  std::snprintf(ids, sizeof ids, "%04x:%04x", l.vendor_id, l.product_id);
-  description_ = std::string("hid ") + ids + (l.product.empty() ? "" : " '" + l.product + "'") +
+  // USB ids as lsusb shows them.
+  const std::string ids = base::hex(l.vendor_id, 4, base::HexCase::kLower).substr(2) + ":" +
+                          base::hex(l.product_id, 4, base::HexCase::kLower).substr(2);
+  description_ = "hid " + ids + (l.product.empty() ? "" : " '" + l.product + "'") +
                  (l.serial.empty() ? "" : " serial '" + l.serial + "'") + " at " + l.path + " (" +
                  to_string(b) + ", hidapi " + a.version() + ")";
   if (b == Backend::kHidraw)
@@ -208,7 +211,7 @@ HidapiTransport::HidapiTransport(const Api& a, Backend b, hid_device* dev, Devic
   wake_fd_ = eventfd(0, EFD_CLOEXEC);
   if (wake_fd_ < 0) {
     if (emergency_fd_ >= 0) ::close(emergency_fd_);
-    throw DeviceError(std::string("hid: eventfd: ") + std::strerror(errno));
+    throw DeviceError(std::string("hid: eventfd: ") + base::errno_text(errno));
   }
   writer_ = std::thread([this] { run(); });
   pthread_setname_np(writer_.native_handle(), "hapticd-hidout");

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "base/hex.h"
 #include "drivers/device.h"
 #include "drivers/hid/hid_profile.h"
 
@@ -153,10 +154,9 @@ class PidProfile final : public HidProfile {
     for (unsigned i = 0; i < 6; ++i) {
       if (status & (1u << i)) s += (s.empty() ? "" : ", ") + std::string(kNames[i]);
     }
-    char buf[64];
-    std::snprintf(buf, sizeof buf, " (PID State bits 0x%x, fault mask 0x%x)", status,
-                  s_.fault_mask);
-    return "the device reports " + (s.empty() ? std::string("nothing wrong") : s) + buf;
+    return "the device reports " + (s.empty() ? std::string("nothing wrong") : s) +
+           " (PID State bits " + base::hex(status, 1, base::HexCase::kLower) + ", fault mask " +
+           base::hex(s_.fault_mask, 1, base::HexCase::kLower) + ")";
   }
 
  private:

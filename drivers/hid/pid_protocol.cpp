@@ -1,15 +1,14 @@
 #include "drivers/hid/pid_protocol.h"
 
 #include <algorithm>
-#include <cstdio>
+
+#include "base/hex.h"
 
 namespace hapticd::drivers::hid {
 namespace {
 
 std::string usage_text(std::uint32_t u) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "0x%02X:0x%02X", usage_page_of(u), u & 0xFFFFu);
-  return buf;
+  return base::hex(usage_page_of(u), 2) + ":" + base::hex(u & 0xFFFFu, 2);
 }
 
 Slot slot_of(const ReportField& f, std::uint32_t element) {

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "base/hex.h"
+
 namespace hapticd::drivers::hid {
 namespace {
 
@@ -13,11 +15,6 @@ constexpr std::size_t kMaxUsages = 4096;
 constexpr std::uint32_t kMaxReportSize = 256;    // bits per element (Linux's limit)
 constexpr std::uint32_t kMaxReportCount = 4096;  // elements per main item
 constexpr std::uint64_t kMaxReportBits = 4096 * 8;
-
-std::string hex_byte(std::uint8_t b) {
-  static const char* const kDigits = "0123456789abcdef";
-  return std::string("0x") + kDigits[b >> 4] + kDigits[b & 15];
-}
 
 enum ItemType : std::uint8_t { kMain = 0, kGlobal = 1, kLocal = 2, kReserved = 3 };
 
@@ -99,9 +96,9 @@ DescriptorParse Parser::run() {
     }
     const std::size_t size = (prefix & 3) == 3 ? 4 : (prefix & 3);
     if (pos + size > bytes_.size()) {
-      return {std::nullopt, "byte " + std::to_string(at) + ": item " + hex_byte(prefix) +
-                                " needs " + std::to_string(size) +
-                                " data bytes; the descriptor ends first"};
+      return {std::nullopt, "byte " + std::to_string(at) + ": item " +
+                                base::hex(prefix, 2, base::HexCase::kLower) + " needs " +
+                                std::to_string(size) + " data bytes; the descriptor ends first"};
     }
     Raw data{0, static_cast<std::uint8_t>(size)};
     for (std::size_t i = 0; i < size; ++i) data.value |= std::uint32_t{bytes_[pos + i]} << (8 * i);

@@ -1,7 +1,7 @@
 // The `report` profile: vendor-defined reports in a configured layout (report_layout.h).
-#include <cstdio>
-#include <cstring>
 
+#include "base/errno_text.h"
+#include "base/hex.h"
 #include "drivers/device.h"
 #include "drivers/hid/hid_profile.h"
 #include "drivers/hid/report_descriptor.h"
@@ -100,10 +100,10 @@ class ReportProfile final : public HidProfile {
   }
 
   std::string describe_status(std::uint32_t status) const override {
-    char buf[128];
-    std::snprintf(buf, sizeof buf, "status 0x%x (fault bits 0x%x of mask 0x%x)", status,
-                  status & l_.input.fault_mask, l_.input.fault_mask);
-    return buf;
+    constexpr base::HexCase kLower = base::HexCase::kLower;
+    return "status " + base::hex(status, 1, kLower) + " (fault bits " +
+           base::hex(status & l_.input.fault_mask, 1, kLower) + " of mask " +
+           base::hex(l_.input.fault_mask, 1, kLower) + ")";
   }
 
  private:
@@ -190,7 +190,7 @@ void send_now(HidTransport& t, std::span<const std::uint8_t> report, const std::
   if (r.status == TransportIo::kEmpty && t.flush(timeout)) r = t.write(report);
   if (r.status != TransportIo::kOk || !t.flush(timeout)) {
     const std::string why =
-        r.status == TransportIo::kError ? std::strerror(r.error)
+        r.status == TransportIo::kError ? base::errno_text(r.error)
         : r.status == TransportIo::kEmpty
             ? "the output queue stayed full"
             : "it was not taken within " + std::to_string(timeout.count()) + " ms";

@@ -6,19 +6,14 @@
 #include <cerrno>
 #include <cstring>
 
+#include "base/errno_text.h"
 #include "drivers/device.h"
 
 namespace hapticd::drivers::hid {
-namespace {
-
-std::string errno_text(int e) { return std::strerror(e); }
-
-}  // namespace
-
 std::vector<std::uint8_t> SocketTransport::transact(const std::vector<std::uint8_t>& request,
                                                     FrameType expected, const char* what) {
   if (::send(fd_.get(), request.data(), request.size(), MSG_DONTWAIT | MSG_NOSIGNAL) < 0) {
-    throw DeviceError(std::string("hid: ") + what + ": " + errno_text(errno));
+    throw DeviceError(std::string("hid: ") + what + ": " + base::errno_text(errno));
   }
   const auto deadline = std::chrono::steady_clock::now() + timeout_;
   while (true) {
@@ -33,14 +28,14 @@ std::vector<std::uint8_t> SocketTransport::transact(const std::vector<std::uint8
     if (n == 0) throw DeviceError(std::string("hid: ") + what + ": the device is gone");
     if (n < 0) {
       if (errno == EAGAIN || errno == EINTR) continue;
-      throw DeviceError(std::string("hid: ") + what + ": " + errno_text(errno));
+      throw DeviceError(std::string("hid: ") + what + ": " + base::errno_text(errno));
     }
     const auto f = parse_frame({rx_.data(), static_cast<std::size_t>(n)});
     if (!f || f->type != expected) continue;  // input reports meanwhile, a late reply
     if (f->payload.empty()) throw DeviceError(std::string("hid: ") + what + ": empty reply");
     if (f->payload[0] != 0) {
       throw DeviceError(std::string("hid: ") + what + ": the device refused (" +
-                        errno_text(f->payload[0]) + ")");
+                        base::errno_text(f->payload[0]) + ")");
     }
     return {f->payload.begin() + 1, f->payload.end()};
   }

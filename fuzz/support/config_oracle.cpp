@@ -7,10 +7,10 @@
 #include <unordered_set>
 
 #include "control/control_law.h"
-#include "drivers/registry.h"
 #include "gate/gate.h"
 #include "gate/gate_report_format.h"
 #include "support/check.h"
+#include "wiring/registry.h"
 
 namespace hapticd::fuzz {
 namespace {
@@ -99,7 +99,7 @@ void check_config_error(const config::ConfigError& e,
 void check_gate(const config::Config& cfg) {
   if (!first_time(cfg)) return;
   // The delay the driver declares from its own settings, as `check`, `verify` and `run` take it.
-  const int device_delay = drivers::find_driver(cfg.device.driver).declared_delay(cfg);
+  const int device_delay = wiring::find_driver(cfg.device.driver).declared_delay(cfg);
   const gate::GateReport r = gate::evaluate_gate(cfg, device_delay);
   // `check` renders every verdict, passing or not.
   require(!gate::gate_to_json(r).dump().empty(), "empty JSON gate report");

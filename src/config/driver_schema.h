@@ -1,5 +1,5 @@
 // How the loader reads a driver's own section, device.<driver>, without knowing the driver:
-// the driver registry (drivers/registry.h) hands the loader one DriverSchema per driver this
+// the driver registry (wiring/registry.h) hands the loader one DriverSchema per driver this
 // build has, and the selected driver's code parses its section with the same reader and the
 // same "FILE:LINE: key: what" messages as the rest of the file.
 #pragma once

@@ -13,8 +13,9 @@
 
 #include <cerrno>
 #include <cstdint>
-#include <cstring>
 #include <stdexcept>
+
+#include "base/errno_text.h"
 
 namespace hapticd::loop {
 
@@ -24,7 +25,7 @@ void lock_process_memory(RtStatus& status) {
     mallopt(M_TRIM_THRESHOLD, -1);  // never give heap back: a later sbrk would fault pages in
     mallopt(M_MMAP_MAX, 0);         // keep large blocks on the locked heap
   } else {
-    status.warnings.push_back(std::string("mlockall failed (") + std::strerror(errno) +
+    status.warnings.push_back(std::string("mlockall failed (") + base::errno_text(errno) +
                               "): pages of the RT thread may fault; run as root or with "
                               "CAP_IPC_LOCK and LimitMEMLOCK=infinity");
   }
@@ -42,7 +43,7 @@ void keep_off_cpu(int cpu, RtStatus& status) {
     status.others_off_rt_cpu = true;
   } else {
     status.warnings.push_back("keeping the non-RT threads off CPU " + std::to_string(cpu) +
-                              " failed (" + std::strerror(rc) + ")");
+                              " failed (" + base::errno_text(rc) + ")");
   }
 }
 
@@ -61,7 +62,7 @@ void configure_rt_thread(int priority, int cpu, RtStatus& status) {
       status.cpu = cpu;
     } else {
       status.warnings.push_back("pinning to CPU " + std::to_string(cpu) + " failed (" +
-                                std::strerror(rc) + ")");
+                                base::errno_text(rc) + ")");
     }
   }
   sched_param sp{};
@@ -72,7 +73,7 @@ void configure_rt_thread(int priority, int cpu, RtStatus& status) {
     status.priority = priority;
   } else {
     status.warnings.push_back(std::string("SCHED_FIFO priority ") + std::to_string(priority) +
-                              " refused (" + std::strerror(rc) +
+                              " refused (" + base::errno_text(rc) +
                               "): running SCHED_OTHER with 1 ns timer slack; wake latency will "
                               "suffer; run as root or with CAP_SYS_NICE and LimitRTPRIO");
   }
@@ -89,7 +90,7 @@ CpuDmaLatencyRequest::CpuDmaLatencyRequest(RtStatus& status) {
     status.cpu_dma_latency_zero = true;
     return;
   }
-  status.warnings.push_back(std::string("/dev/cpu_dma_latency: ") + std::strerror(errno) +
+  status.warnings.push_back(std::string("/dev/cpu_dma_latency: ") + base::errno_text(errno) +
                             ": CPUs may enter deep idle states and wake the loop late");
   if (fd_ >= 0) close(fd_);
   fd_ = -1;

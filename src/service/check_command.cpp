@@ -1,12 +1,12 @@
 #include "service/check_command.h"
 
-#include "drivers/registry.h"
 #include "gate/gate.h"
 #include "gate/gate_report_format.h"
 #include "gate/number_format.h"
 #include "service/exit_codes.h"
 #include "service/gate_derate.h"
 #include "service/result_output.h"
+#include "wiring/registry.h"
 
 namespace hapticd::service {
 namespace {
@@ -21,7 +21,7 @@ constexpr const char* kDesignHint =
 int check_command(const ConfigOptions& options, bool json) {
   const config::Config cfg = load_config(options);
   // The delay the driver declares from its own settings: the one `run` and `verify` use.
-  const drivers::DriverEntry& driver = drivers::find_driver(cfg.device.driver);
+  const wiring::DriverEntry& driver = wiring::find_driver(cfg.device.driver);
   const int delay = driver.declared_delay(cfg);
   const gate::GateReport r = gate::evaluate_gate(cfg, delay);
   // What `run` would do under safety.gate: derate (the verdict stays the configured wall's).

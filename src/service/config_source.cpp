@@ -9,7 +9,7 @@
 
 #include "config/config_loader.h"
 #include "control/derived_check.h"
-#include "drivers/registry.h"
+#include "wiring/registry.h"
 
 namespace hapticd::service {
 // The config library parses text; reading the file is the service's (it owns all I/O).
@@ -42,7 +42,7 @@ config::Config load_config_text_checked(const std::string& text, const std::stri
   std::vector<config::Override> overrides;
   for (const std::string& s : sets) overrides.push_back(config::parse_override(s));
   config::Config cfg =
-      config::load_config_text(text, source, overrides, base_dir, drivers::driver_schemas());
+      config::load_config_text(text, source, overrides, base_dir, wiring::driver_schemas());
   control::check_derived_quantities(cfg);
   return cfg;
 }
@@ -57,7 +57,7 @@ config::Config load_config(const ConfigOptions& options) {
     return load_config_text_checked(read_config_file(options.path), options.path, base_dir,
                                     options.sets);
   }
-  config::Config cfg = config::load_embedded_default(overrides, drivers::driver_schemas());
+  config::Config cfg = config::load_embedded_default(overrides, wiring::driver_schemas());
   control::check_derived_quantities(cfg);
   return cfg;
 }

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cstring>
 
+#include "base/errno_text.h"
 #include "service/control_protocol.h"
 
 namespace hapticd::service {
@@ -23,7 +24,7 @@ struct Fd {
 };
 
 ClientError failure(const std::string& socket, const std::string& what, int err) {
-  return ClientError(socket + ": " + what + ": " + std::strerror(err));
+  return ClientError(socket + ": " + what + ": " + base::errno_text(err));
 }
 
 int connect_to(const std::string& socket) {

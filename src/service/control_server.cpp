@@ -15,6 +15,8 @@
 #include <cstring>
 #include <vector>
 
+#include "base/errno_text.h"
+
 namespace hapticd::service {
 
 struct ControlServer::Client {
@@ -29,7 +31,7 @@ struct ControlServer::Client {
 namespace {
 
 std::runtime_error failure(const std::string& path, const std::string& what) {
-  return std::runtime_error(path + ": control socket: " + what + ": " + std::strerror(errno));
+  return std::runtime_error(path + ": control socket: " + what + ": " + base::errno_text(errno));
 }
 
 // The socket's group: `hapticd` where the system has it (the service's group), else ours.
@@ -134,7 +136,7 @@ bool ControlServer::allowed(int fd) const {
   socklen_t len = sizeof peer;
   if (getsockopt(fd, SOL_SOCKET, SO_PEERCRED, &peer, &len) != 0) {
     spdlog::warn("control socket: refused a client whose credentials cannot be read: {}",
-                 std::strerror(errno));
+                 base::errno_text(errno));
     return false;
   }
   if (peer.uid == 0 || peer.uid == geteuid() || peer.gid == group_ || peer_in_group(fd, group_)) {

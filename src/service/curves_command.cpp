@@ -4,12 +4,12 @@
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
-#include "drivers/registry.h"
 #include "gate/curves.h"
 #include "gate/gate.h"
 #include "service/exit_codes.h"
 #include "service/result_output.h"
 #include "verify/passivity_sweep.h"
+#include "wiring/registry.h"
 
 namespace hapticd::service {
 namespace {
@@ -109,7 +109,7 @@ json nyquist_json(const config::Config& cfg, int delay, const gate::GateReport& 
 
 int curves_command(const ConfigOptions& options, bool measure) {
   const config::Config cfg = load_config(options);
-  const int delay = drivers::find_driver(cfg.device.driver).declared_delay(cfg);
+  const int delay = wiring::find_driver(cfg.device.driver).declared_delay(cfg);
   const gate::GateReport report = gate::evaluate_gate(cfg, delay);
   const json j{
       {"config", cfg.source_name},

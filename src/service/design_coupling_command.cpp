@@ -8,11 +8,11 @@
 #include "analysis/wall_model.h"
 #include "config/config_loader.h"
 #include "control/control_law.h"
-#include "drivers/registry.h"
 #include "gate/number_format.h"
 #include "service/design_coupling_report.h"
 #include "service/exit_codes.h"
 #include "service/result_output.h"
+#include "wiring/registry.h"
 
 namespace hapticd::service {
 namespace {
@@ -81,7 +81,7 @@ void print_step(const analysis::DesignStep& s, int max_steps) {
 
 int design_coupling_command(const DesignCouplingOptions& o) {
   const config::Config cfg = load_config(o.config);
-  const int device_delay = drivers::find_driver(cfg.device.driver).declared_delay(cfg);
+  const int device_delay = wiring::find_driver(cfg.device.driver).declared_delay(cfg);
   const analysis::CouplingSpec spec = spec_of(cfg, o, cfg.wall.delay_samples + device_delay);
   analysis::DesignOptions options;
   options.max_steps = o.max_steps;

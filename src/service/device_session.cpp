@@ -5,12 +5,12 @@
 namespace hapticd::service {
 
 DeviceSession::DeviceSession(const config::Config& cfg, bool loopback, bool realtime)
-    : driver_(drivers::find_driver(cfg.device.driver)) {
+    : driver_(wiring::find_driver(cfg.device.driver)) {
   if (!loopback && driver_.make_device != nullptr) {
     device_ = driver_.make_device(cfg);
     return;
   }
-  drivers::Loopback pair = driver_.make_loopback(cfg);
+  wiring::Loopback pair = driver_.make_loopback(cfg);
   peer_ = std::move(pair.peer);
   // A device answers on its own clock: just below the loop's priority, so it is not starved;
   // and the loop waits for its answers (peer_runner.h: a host may hold any thread up).

@@ -10,9 +10,9 @@
 
 #include "config/config.h"
 #include "drivers/device.h"
-#include "drivers/registry.h"
 #include "sim/peers/loopback_peer.h"
 #include "sim/peers/peer_runner.h"
+#include "wiring/registry.h"
 
 namespace hapticd::service {
 
@@ -27,7 +27,7 @@ class DeviceSession {
 
   Device& device() { return *device_; }
   const Device& device() const { return *device_; }
-  const drivers::DriverEntry& driver() const { return driver_; }
+  const wiring::DriverEntry& driver() const { return driver_; }
   // The simulated device behind a loopback (null for real hardware).
   sim::LoopbackPeer* peer() { return peer_.get(); }
   // Not RT-safe. Closes the device and stops the peer's thread; afterwards peer() may be
@@ -37,7 +37,7 @@ class DeviceSession {
   std::string peer_error() const;
 
  private:
-  const drivers::DriverEntry& driver_;
+  const wiring::DriverEntry& driver_;
   std::unique_ptr<sim::LoopbackPeer> peer_;
   std::unique_ptr<sim::PeerRunner> runner_;
   std::unique_ptr<Device> device_;

@@ -4,11 +4,11 @@
 
 #include <cerrno>
 #include <cstdio>
-#include <cstring>
 #include <fstream>
 #include <iostream>
 #include <utility>
 
+#include "base/errno_text.h"
 #include "service/exit_codes.h"
 #include "service/result_output.h"
 #include "telemetry/log_reader.h"
@@ -34,9 +34,8 @@ int export_command(const std::string& log_path, const std::string& out_path) {
     errno = 0;
     file.open(out_path);
     if (!file) {
-      std::cerr << "hapticd: " << out_path
-                << ": cannot open for writing: " << (errno != 0 ? std::strerror(errno) : "failed")
-                << "\n";
+      std::cerr << "hapticd: " << out_path << ": cannot open for writing: "
+                << (errno != 0 ? base::errno_text(errno) : "failed") << "\n";
       return kExitUsage;
     }
   }

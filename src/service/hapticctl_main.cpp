@@ -4,12 +4,12 @@
 // invalid configuration, 3 a reload the gate refused.
 #include <CLI/CLI.hpp>
 #include <cerrno>
-#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <sstream>
 
+#include "base/errno_text.h"
 #include "service/control_client.h"
 #include "service/ctl_output.h"
 #include "service/exit_codes.h"
@@ -91,7 +91,8 @@ int main(int argc, char** argv) {
   if (command == "reload") {
     std::string text;
     if (!read_text(file, text)) {
-      std::cerr << "hapticctl: " << file << ": cannot read: " << std::strerror(errno) << "\n";
+      std::cerr << "hapticctl: " << file << ": cannot read: " << hapticd::base::errno_text(errno)
+                << "\n";
       return hapticd::kExitUsage;
     }
     req["config"] = text;

@@ -13,7 +13,6 @@
 
 #include "analysis/free_motion_fit.h"
 #include "config/config_loader.h"
-#include "drivers/registry.h"
 #include "gate/number_format.h"
 #include "loop/rt_setup.h"
 #include "service/device_session.h"
@@ -21,6 +20,7 @@
 #include "service/identify_run.h"
 #include "service/result_output.h"
 #include "service/run_support.h"
+#include "wiring/registry.h"
 
 namespace hapticd::service {
 namespace {

@@ -4,10 +4,10 @@
 
 #include <cerrno>
 #include <chrono>
-#include <cstdio>
-#include <cstring>
 #include <vector>
 
+#include "base/errno_text.h"
+#include "base/hex.h"
 #include "drivers/can/can_socket.h"
 #include "drivers/can/canopen.h"
 #include "drivers/can/odrive_protocol.h"
@@ -33,12 +33,6 @@ bool odrive_sends(std::uint8_t command) {
          command == odrive::kTxSdo || command == odrive::kGetEncoderEstimates;
 }
 
-std::string hex_id(std::uint32_t id) {
-  char buf[16];
-  std::snprintf(buf, sizeof buf, "0x%03X", static_cast<unsigned>(id));
-  return buf;
-}
-
 }  // namespace
 
 bool sent_by_node(const can::CanFrame& f, const can::CanSettings& s) {
@@ -56,10 +50,10 @@ std::string describe_node_frame(const can::CanFrame& f, const can::CanSettings& 
   const std::string node = "node " + std::to_string(s.node_id);
   std::string what;
   if (s.profile == can::Profile::kOdrive) {
-    what =
-        odrive::command_of(f.id) == odrive::kHeartbeat
-            ? "the heartbeat of ODrive " + node
-            : "an answer of ODrive " + node + " (command " + hex_id(odrive::command_of(f.id)) + ")";
+    what = odrive::command_of(f.id) == odrive::kHeartbeat
+               ? "the heartbeat of ODrive " + node
+               : "an answer of ODrive " + node + " (command " +
+                     base::hex(odrive::command_of(f.id), 3) + ")";
   } else if (f.id == canopen::kHeartbeatBase + s.node_id) {
     const auto state = canopen::decode_heartbeat(f);
     what = "the heartbeat of " + node +
@@ -71,7 +65,7 @@ std::string describe_node_frame(const can::CanFrame& f, const can::CanSettings& 
   } else {
     what = "a TPDO of " + node;
   }
-  return hex_id(f.id) + ", " + what;
+  return base::hex(f.id, 3) + ", " + what;
 }
 
 can::CanFrame node_probe(const can::CanSettings& s) {
@@ -93,7 +87,7 @@ std::optional<can::CanFrame> listen_for_node(const can::CanSettings& s,
   int error = 0;
   if (socket.send(node_probe(s), error) == can::CanSocket::Io::kFailed) {
     throw DeviceError("peer: cannot ask node " + std::to_string(s.node_id) + " on " + interface +
-                      ": " + std::strerror(error));
+                      ": " + base::errno_text(error));
   }
   using Clock = std::chrono::steady_clock;
   const auto end = Clock::now() + std::chrono::duration<double>(seconds);

@@ -6,23 +6,23 @@
 #include <chrono>
 #include <sstream>
 
-#include "drivers/registry.h"
 #include "gate/number_format.h"
 #include "service/exit_codes.h"
 #include "service/result_output.h"
 #include "sim/peers/peer_runner.h"
+#include "wiring/registry.h"
 
 namespace hapticd::service {
 
 int peer_command(const PeerOptions& options, SignalWatch& signals) {
   const config::Config cfg = load_config(options.config);
-  const drivers::DriverEntry& driver = drivers::find_driver(cfg.device.driver);
-  if (driver.make_peer_on == nullptr) {
+  const wiring::DriverEntry& driver = wiring::find_driver(cfg.device.driver);
+  if (driver.peer.make_peer_on == nullptr) {
     throw DeviceError("device.driver '" + cfg.device.driver +
                       "' has no simulated peer for a kernel endpoint");
   }
   check_peer_endpoint(cfg, options.endpoint, options.policy);
-  const std::unique_ptr<sim::LoopbackPeer> peer = driver.make_peer_on(cfg, options.endpoint);
+  const std::unique_ptr<sim::LoopbackPeer> peer = driver.peer.make_peer_on(cfg, options.endpoint);
   std::string error;
   {
     sim::PeerRunner runner(*peer);

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <vector>
 
+#include "base/errno_text.h"
 #include "config/config_loader.h"
 #include "drivers/device.h"
 #include "drivers/io/unique_fd.h"
@@ -24,7 +25,7 @@ namespace fs = std::filesystem;
 
 [[noreturn]] void netlink_failed(const std::string& interface, const char* what, int e) {
   throw DeviceError("peer: cannot ask the kernel about " + interface + " (" + what +
-                    "): " + std::strerror(e));
+                    "): " + base::errno_text(e));
 }
 
 // Calls f(type, payload, length) for each attribute of an rtattr list.

@@ -7,9 +7,9 @@
 
 #include "control/controller.h"
 #include "control/passivity_observer.h"
-#include "drivers/registry.h"
 #include "loop/tick.h"
 #include "service/config_source.h"
+#include "wiring/registry.h"
 
 namespace hapticd::service {
 namespace {
@@ -20,7 +20,7 @@ using telemetry::TickRecord;
 // driver this build does not have (replay then takes 0 and says so: only the observer's
 // figures depend on it, and the controller's forces only in damp mode).
 std::optional<int> declared_delay(const config::Config& cfg) {
-  for (const drivers::DriverEntry& d : drivers::registered_drivers()) {
+  for (const wiring::DriverEntry& d : wiring::registered_drivers()) {
     if (d.name == cfg.device.driver) return d.declared_delay(cfg);
   }
   return std::nullopt;

@@ -13,7 +13,6 @@
 #include <optional>
 #include <sstream>
 
-#include "drivers/registry.h"
 #include "gate/gate.h"
 #include "gate/gate_report_format.h"
 #include "gate/number_format.h"
@@ -23,6 +22,7 @@
 #include "service/replay.h"
 #include "service/result_output.h"
 #include "telemetry/log_set.h"
+#include "wiring/registry.h"
 
 namespace hapticd::service {
 namespace {
@@ -156,7 +156,7 @@ std::optional<WhatIf> what_if(const ReplayOptions& o, const telemetry::LogConten
                                          o.log_path + " (its configuration, with --set)", ".",
                                          o.other.sets)
               : load_config(o.other);
-  const drivers::DriverEntry& driver = drivers::find_driver(w.cfg.device.driver);
+  const wiring::DriverEntry& driver = wiring::find_driver(w.cfg.device.driver);
   w.gate = gate::evaluate_gate(w.cfg, driver.declared_delay(w.cfg));
   // Under safety.gate: derate the what-if runs the stiffness `run` would (and says so).
   if (const auto d = derate_stiffness(w.cfg, driver.declared_delay(w.cfg), w.gate)) {

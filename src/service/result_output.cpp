@@ -1,8 +1,9 @@
 #include "service/result_output.h"
 
 #include <cerrno>
-#include <cstring>
 #include <iostream>
+
+#include "base/errno_text.h"
 
 namespace hapticd::service {
 
@@ -17,7 +18,7 @@ bool finish_output(std::ostream& out, const std::string& what) {
   if (out) return true;
   const int err = errno;
   std::cerr << "hapticd: " << what
-            << ": cannot write: " << (err != 0 ? std::strerror(err) : "output stream failed")
+            << ": cannot write: " << (err != 0 ? base::errno_text(err) : "output stream failed")
             << std::endl;
   return false;
 }

@@ -1,9 +1,9 @@
 #include "service/udev_rules.h"
 
-#include <cstdio>
 #include <filesystem>
 #include <sstream>
 
+#include "base/hex.h"
 #include "config/config_loader.h"
 #include "service/exit_codes.h"
 #include "service/result_output.h"
@@ -40,10 +40,9 @@ bool literal(const std::string& s) {
                              "_ - . : are matched literally); write that rule by hand"});
 }
 
+// A USB id as sysfs writes it and udev matches it: four lower-case digits, no 0x.
 [[maybe_unused]] std::string hex4(unsigned v) {
-  char buf[8];
-  std::snprintf(buf, sizeof buf, "%04x", v & 0xFFFFu);
-  return buf;
+  return base::hex(v & 0xFFFFu, 4, base::HexCase::kLower).substr(2);
 }
 
 [[maybe_unused]] std::string group_mode() {

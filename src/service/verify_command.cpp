@@ -4,11 +4,11 @@
 #include <sstream>
 
 #include "config/config_loader.h"
-#include "drivers/registry.h"
 #include "gate/number_format.h"
 #include "service/exit_codes.h"
 #include "service/result_output.h"
 #include "verify/passivity_sweep.h"
+#include "wiring/registry.h"
 
 namespace hapticd::service {
 
@@ -16,7 +16,7 @@ int verify_command(const ConfigOptions& options, bool json) {
   const config::Config cfg = load_config(options);
   verify::VerifyResult r;
   try {
-    r = verify::verify_passivity(cfg, drivers::find_driver(cfg.device.driver).declared_delay(cfg));
+    r = verify::verify_passivity(cfg, wiring::find_driver(cfg.device.driver).declared_delay(cfg));
   } catch (const std::invalid_argument& e) {
     throw config::ConfigError({cfg.source_name + ": " + e.what()});
   }

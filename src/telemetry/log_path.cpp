@@ -7,9 +7,10 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <cstring>
 #include <set>
 #include <string_view>
+
+#include "base/errno_text.h"
 
 namespace hapticd::telemetry {
 namespace {
@@ -76,7 +77,7 @@ std::vector<Entry> scan_family(const std::string& path) {
   DIR* d = ::opendir(dir.c_str());
   if (d == nullptr && errno == ENOENT) return {};
   if (d == nullptr) {
-    throw std::runtime_error(dir + ": cannot list the tick logs: " + std::strerror(errno));
+    throw std::runtime_error(dir + ": cannot list the tick logs: " + base::errno_text(errno));
   }
   std::vector<Entry> out;
   const std::string prefix = path.substr(0, path.size() - base.size());
@@ -127,7 +128,8 @@ std::vector<FamilyFile> list_log_set(const std::string& set) {
 std::string keep_previous_log(const std::string& path) {
   struct stat st {};
   if (lstat(path.c_str(), &st) != 0 && errno != ENOENT) {
-    throw std::runtime_error(path + ": cannot inspect the tick log path: " + std::strerror(errno));
+    throw std::runtime_error(path +
+                             ": cannot inspect the tick log path: " + base::errno_text(errno));
   }
   std::vector<FamilyFile> current;
   std::set<std::uint32_t> taken;
@@ -157,7 +159,7 @@ std::string keep_previous_log(const std::string& path) {
       }
       if (errno == EEXIST && moved == 0) break;  // taken since the scan: try the next N
       throw std::runtime_error(path + ": cannot keep the previous tick log " + current[moved].path +
-                               " as " + to + ": " + std::strerror(errno));
+                               " as " + to + ": " + base::errno_text(errno));
     }
     if (moved == current.size()) return kept;
   }

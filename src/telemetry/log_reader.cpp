@@ -12,6 +12,8 @@
 #include <optional>
 #include <string_view>
 
+#include "base/errno_text.h"
+
 namespace hapticd::telemetry {
 namespace {
 
@@ -230,7 +232,7 @@ LogContents read_log_bytes(std::span<const std::byte> bytes, const std::string& 
 
 LogContents read_log(const std::string& path) {
   const auto fail = [&](int err) {
-    throw LogFormatError(path + ": cannot read: " + std::strerror(err));
+    throw LogFormatError(path + ": cannot read: " + base::errno_text(err));
   };
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) fail(errno);

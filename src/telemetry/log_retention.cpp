@@ -4,9 +4,9 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <cstring>
 #include <map>
 
+#include "base/errno_text.h"
 #include "telemetry/log_path.h"
 
 namespace hapticd::telemetry {
@@ -49,7 +49,7 @@ RetentionResult enforce_retention(const std::string& path, const std::string& ke
     if (others + reserve <= max_total) break;
     if (f.path == keep) continue;
     if (::unlink(f.path.c_str()) != 0 && errno != ENOENT) {
-      result.errors.push_back(f.path + ": cannot delete: " + std::strerror(errno));
+      result.errors.push_back(f.path + ": cannot delete: " + base::errno_text(errno));
       continue;
     }
     others -= f.bytes;

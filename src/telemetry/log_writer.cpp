@@ -6,9 +6,9 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <cstring>
 #include <stdexcept>
 
+#include "base/errno_text.h"
 #include "telemetry/log_path.h"
 #include "telemetry/log_retention.h"
 
@@ -24,7 +24,7 @@ void check_block_records(std::size_t max_block_records) {
 
 int open_log(const std::string& path) {
   const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
-  if (fd < 0) throw std::runtime_error(path + ": cannot open tick log: " + std::strerror(errno));
+  if (fd < 0) throw std::runtime_error(path + ": cannot open tick log: " + base::errno_text(errno));
   return fd;
 }
 
@@ -58,7 +58,7 @@ LogWriter::LogWriter(const std::string& path, const LogHeader& header, SpscRing<
     ::close(fd_);
     fd_ = -1;
     throw std::runtime_error(
-        path_ + ": cannot open tick log: writing the header failed: " + std::strerror(err));
+        path_ + ": cannot open tick log: writing the header failed: " + base::errno_text(err));
   }
   good_end_ = static_cast<off_t>(head.size());
   header_bytes_ = good_end_;
@@ -252,7 +252,7 @@ void LogWriter::note_error(const char* what, int err) {
     std::lock_guard lock(error_mutex_);
     if (first_error_.empty()) {
       try {
-        first_error_ = segment_ + ": " + what + ": " + std::strerror(err);
+        first_error_ = segment_ + ": " + what + ": " + base::errno_text(err);
       } catch (...) {
         // Out of memory while formatting: the count below still records the error.
       }
@@ -369,7 +369,8 @@ void write_log_file(const std::string& path, const LogHeader& header,
   }
   if (err == 0 && ::fdatasync(fd) != 0) err = errno;
   if (::close(fd) != 0 && err == 0) err = errno;
-  if (err != 0) throw std::runtime_error(path + ": cannot write tick log: " + std::strerror(err));
+  if (err != 0)
+    throw std::runtime_error(path + ": cannot write tick log: " + base::errno_text(err));
 }
 
 }  // namespace hapticd::telemetry

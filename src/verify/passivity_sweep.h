@@ -33,7 +33,7 @@ struct VerifyResult {
 inline constexpr double kVerifyTolerance = 1e-3;
 
 // Not RT-safe (builds many loops). `device_delay_samples` is what the configured driver
-// declares (drivers/registry.h): the measured loop is the sim with that much more delay.
+// declares (wiring/registry.h): the measured loop is the sim with that much more delay.
 // Throws std::invalid_argument for a configuration this measurement cannot cover (an infinite
 // bound, or a wall that leaves contact), and std::runtime_error if a measurement loop faults.
 VerifyResult verify_passivity(const config::Config& cfg, int device_delay_samples);

@@ -28,9 +28,9 @@ std::vector<CanFrame> capture_run(const config::Config& cfg, int ticks, double f
   // kernel drops the end of it as candump's default buffer would.
   const int room = 8 << 20;
   EXPECT_EQ(setsockopt(listener.fd(), SOL_SOCKET, SO_RCVBUFFORCE, &room, sizeof room), 0);
-  auto peer = find_driver("can").make_peer_on(cfg, "vcan0");
+  auto peer = wiring::find_driver("can").peer.make_peer_on(cfg, "vcan0");
   sim::PeerRunner runner(*peer);
-  auto device = find_driver("can").make_device(cfg);
+  auto device = wiring::find_driver("can").make_device(cfg);
   device->configure();
   device->enable();
   // Each tick waits for the drive's answer before the next, so the capture shows the

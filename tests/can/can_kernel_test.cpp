@@ -160,7 +160,7 @@ TEST_P(CanOnVcan, EachInjectedFaultEndsTheRunWithExit1AndTheCauseNamed) {
     SCOPED_TRACE(f.name);
     kernel_test::VcanInterface bus("vcan0");
     const config::Config cfg = load_example("can-" + profile + ".yaml", vm_sets(profile), false);
-    auto peer = find_driver("can").make_peer_on(cfg, "vcan0");
+    auto peer = wiring::find_driver("can").peer.make_peer_on(cfg, "vcan0");
     sim::PeerRunner runner(*peer);
     const std::string log = temp(profile + "-" + f.name + ".hlog");
     std::vector<std::string> args = run_args(profile, 30, temp("fault.json"));
@@ -204,7 +204,7 @@ TEST_P(CanOnVcan, AKilledHapticdLeavesADriveThatSwitchesItselfOff) {
   kernel_test::VcanInterface bus("vcan0");
   const std::string profile = GetParam();
   const config::Config cfg = load_example("can-" + profile + ".yaml", vm_sets(profile), false);
-  auto peer = find_driver("can").make_peer_on(cfg, "vcan0");
+  auto peer = wiring::find_driver("can").peer.make_peer_on(cfg, "vcan0");
   sim::PeerRunner runner(*peer);
   ChildProcess run(run_args(profile, 30, temp("killed.json")), temp("killed.out"));
   kernel_test::wait_until([&] { return peer->output_on(); }, milliseconds(30'000),
@@ -237,9 +237,9 @@ TEST_P(CanOnVcan, AnInterfaceThatVanishesMidRunIsATransportFault) {
   // vanishes (seen once in CI's emulated guest). That watchdog is tested above.
   if (profile == "cia402") sets.push_back("device.can.cia402.drive_watchdog_ms=1000");
   const config::Config cfg = load_example("can-" + profile + ".yaml", sets, false);
-  auto peer = find_driver("can").make_peer_on(cfg, "vcan0");
+  auto peer = wiring::find_driver("can").peer.make_peer_on(cfg, "vcan0");
   sim::PeerRunner runner(*peer);
-  auto device = find_driver("can").make_device(cfg);
+  auto device = wiring::find_driver("can").make_device(cfg);
   device->configure();
   device->enable();
   PositionSample s;

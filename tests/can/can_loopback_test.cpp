@@ -228,7 +228,7 @@ TEST(CanOdrive, WatchdogEndpointsAreWrittenAndReadBackOn06) {
 TEST(CanOdrive, CyclicEstimatesDeclareTheirPeriod) {
   const config::Config cfg = load_example(kOdrive, {"device.can.odrive.position_source=cyclic",
                                                     "device.can.odrive.cyclic_period_ms=2"});
-  EXPECT_EQ(find_driver("can").declared_delay(cfg), 2);
+  EXPECT_EQ(wiring::find_driver("can").declared_delay(cfg), 2);
   CanRig rig(cfg);
   rig.device().configure();
   EXPECT_EQ(rig.device().info().transport_delay_samples, 2);

@@ -114,14 +114,15 @@ TEST(CanReferenceOdrive, CyclicEstimatesAreNotTakenForAnswersAndAreNoticed) {
 }
 
 TEST(CanReferenceOdrive, CheckWarnsOfTheTorqueModeVelocityLimitInAxisUnits) {
-  const auto notes = find_driver("can").notes(odrive_config());
+  const auto notes = wiring::find_driver("can").notes(odrive_config());
   const std::string all = joined(notes);
   EXPECT_NE(all.find("controller.config.vel_limit = 2 turn/s (0.196 axis units/s"),
             std::string::npos)
       << all;
-  EXPECT_EQ(joined(find_driver("can").notes(odrive_config({"device.can.odrive.vel_limit=0"})))
-                .find("vel_limit"),
-            std::string::npos);
+  EXPECT_EQ(
+      joined(wiring::find_driver("can").notes(odrive_config({"device.can.odrive.vel_limit=0"})))
+          .find("vel_limit"),
+      std::string::npos);
 }
 
 }  // namespace

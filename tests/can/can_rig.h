@@ -10,9 +10,10 @@
 #include "config/config_loader.h"
 #include "drivers/can/can_device_base.h"
 #include "drivers/can/can_driver.h"
-#include "drivers/registry.h"
 #include "sim/peers/can/can_peer_base.h"
+#include "sim/peers/can/can_peer_entry.h"
 #include "sim/peers/peer_runner.h"
+#include "wiring/registry.h"
 
 namespace hapticd::drivers::can::testing {
 
@@ -30,23 +31,23 @@ inline config::Config load_example(const std::string& name, std::vector<std::str
   if (freerun) sets.push_back("loop.clock=freerun");
   for (const std::string& s : sets) overrides.push_back(config::parse_override(s));
   return config::load_config_text(text.str(), path, overrides, HAPTICD_SOURCE_DIR "/config",
-                                  driver_schemas());
+                                  wiring::driver_schemas());
 }
 
 struct CanRig {
   explicit CanRig(const config::Config& c)
-      : cfg(c), pair(find_driver("can").make_loopback(c)), runner(*pair.peer) {}
+      : cfg(c), pair(wiring::find_driver("can").make_loopback(c)), runner(*pair.peer) {}
   // The device configured one way, the simulated drive another (a firmware the driver must
   // find out about).
   CanRig(const config::Config& device_cfg, const config::Config& peer_cfg)
       : cfg(device_cfg), pair(split(device_cfg, peer_cfg)), runner(*pair.peer) {}
-  static Loopback split(const config::Config& device_cfg, const config::Config& peer_cfg) {
+  static wiring::Loopback split(const config::Config& device_cfg, const config::Config& peer_cfg) {
     auto [mine, theirs] = io::seqpacket_pair();
     auto fd = std::make_shared<io::UniqueFd>(std::move(mine));
-    Loopback l;
+    wiring::Loopback l;
     l.device =
         make_can_device(device_cfg, [fd] { return CanSocket::adopt(std::move(*fd), "pair"); });
-    l.peer = make_can_peer(peer_cfg, CanSocket::adopt(std::move(theirs), "pair peer"), false);
+    l.peer = sim::make_can_peer(peer_cfg, CanSocket::adopt(std::move(theirs), "pair peer"), false);
     return l;
   }
   ~CanRig() {
@@ -79,7 +80,7 @@ struct CanRig {
   }
 
   config::Config cfg;
-  Loopback pair;
+  wiring::Loopback pair;
   sim::PeerRunner runner;
 };
 

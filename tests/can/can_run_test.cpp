@@ -29,7 +29,7 @@ loop::LoopOptions options(const config::Config& cfg, std::uint64_t ticks) {
 loop::LoopResult run_sim(const char* example, int delay) {
   const config::Config cfg = load_example(example, {"device.driver=sim", "device.can=null",
                                                     "wall.delay_samples=" + std::to_string(delay)});
-  Loopback pair = find_driver("sim").make_loopback(cfg);
+  wiring::Loopback pair = wiring::find_driver("sim").make_loopback(cfg);
   pair.device->configure();
   pair.device->enable();
   control::Controller controller(control::make_control_law(cfg));
@@ -137,7 +137,7 @@ namespace {
 // sample; a drive on a real bus (`hapticd peer`) keeps its wall-clock watchdogs.
 TEST(CanRealTimeLoopback, AHostStallIsNeitherALostMasterNorAnOldSample) {
   const config::Config cfg = load_example("can-cia402.yaml", {"loop.clock=realtime"}, false);
-  Loopback pair = find_driver("can").make_loopback(cfg);
+  wiring::Loopback pair = wiring::find_driver("can").make_loopback(cfg);
   sim::PeerRunner runner(*pair.peer);
   sim::PacedDevice device(std::move(pair.device), runner);
   device.configure();

@@ -15,10 +15,10 @@
 #include "alloc_counter.h"
 #include "config/config_loader.h"
 #include "control/controller.h"
-#include "drivers/registry.h"
 #include "loop/servo_loop.h"
 #include "sim/peers/paced_device.h"
 #include "sim/peers/peer_runner.h"
+#include "wiring/registry.h"
 
 namespace hapticd::drivers {
 namespace {
@@ -60,14 +60,14 @@ config::Config load(const Case& c, const std::vector<std::string>& sets = {}) {
   for (const std::string& s : sets) overrides.push_back(config::parse_override(s));
   overrides.push_back(config::parse_override("loop.clock=freerun"));
   return config::load_config_text(text.str(), path, overrides, HAPTICD_SOURCE_DIR "/config",
-                                  driver_schemas());
+                                  wiring::driver_schemas());
 }
 
 // The driver wired to its peer, the peer on its own thread, paced as in a freerun run.
 struct Rig {
   explicit Rig(const config::Config& c)
       : cfg(c),
-        pair(find_driver(c.device.driver).make_loopback(c)),
+        pair(wiring::find_driver(c.device.driver).make_loopback(c)),
         runner(*pair.peer),
         device(std::move(pair.device), runner) {}
   ~Rig() { device.close(); }
@@ -76,7 +76,7 @@ struct Rig {
   void settle() { runner.wait_idle(); }
 
   config::Config cfg;
-  Loopback pair;
+  wiring::Loopback pair;
   sim::PeerRunner runner;
   sim::PacedDevice device;
 };
@@ -111,7 +111,7 @@ TEST_P(Conformance, LifecycleIsEnforcedAndOutputFollowsIt) {
   d.configure();
   EXPECT_EQ(d.state(), DeviceState::kConfigured);
   EXPECT_EQ(d.info().transport_delay_samples,
-            find_driver(rig.cfg.device.driver).declared_delay(rig.cfg))
+            wiring::find_driver(rig.cfg.device.driver).declared_delay(rig.cfg))
       << "the device must declare what `check` analyses";
   EXPECT_EQ(d.write(2.0), IoStatus::kTransportFault) << "no force before enable";
   rig.settle();
@@ -274,7 +274,7 @@ std::string case_name(const ::testing::TestParamInfo<Case>& p) {
 INSTANTIATE_TEST_SUITE_P(Drivers, Conformance, ::testing::ValuesIn(kCases), case_name);
 
 TEST(Conformance, EveryRegisteredDriverIsCovered) {
-  for (const DriverEntry& d : registered_drivers()) {
+  for (const wiring::DriverEntry& d : wiring::registered_drivers()) {
     bool covered = false;
     for (const Case& c : kCases) covered = covered || d.name == c.driver;
     EXPECT_TRUE(covered) << "driver '" << d.name << "' has no conformance case";

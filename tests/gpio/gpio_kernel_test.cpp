@@ -20,12 +20,12 @@
 #include "drivers/gpio/gpio_device.h"
 #include "drivers/gpio/gpiod_lines.h"
 #include "drivers/gpio/sysfs_pwm.h"
-#include "drivers/registry.h"
 #include "gpio_sim_chip.h"
 #include "pwm_sim.h"
 #include "sim/peers/gpio/gpio_peer.h"
 #include "sim/peers/peer_runner.h"
 #include "sysfs.h"
+#include "wiring/registry.h"
 
 namespace hapticd::drivers::gpio {
 namespace {
@@ -98,7 +98,7 @@ config::Config load(const std::vector<std::string>& sets) {
   std::vector<config::Override> o;
   for (const auto& s : sets) o.push_back(config::parse_override(s));
   return config::load_config_text(text.str(), "config/gpio.yaml", o, HAPTICD_SOURCE_DIR "/config",
-                                  driver_schemas());
+                                  wiring::driver_schemas());
 }
 
 TEST(GpioKernel, DeviceOnGpioSimAndThePwmSimulator) {
@@ -107,7 +107,7 @@ TEST(GpioKernel, DeviceOnGpioSimAndThePwmSimulator) {
   std::cout << "driver built against " << GpiodLines::api() << "\n";
   const config::Config cfg = load(m.sets());
   m.chip.set_pull(3, true);  // nFAULT released
-  auto device = find_driver("gpio").make_device(cfg);
+  auto device = wiring::find_driver("gpio").make_device(cfg);
   device->configure();
   EXPECT_NE(device->info().description.find("hapticd-gpio-sim"), std::string::npos)
       << device->info().description;
@@ -298,7 +298,7 @@ class GpioKernelRun : public testing::Test {
     return run_hapticd(
         m_, duration_s, {},
         [this]() -> sim::gpio::GpioPeer& {
-          auto peer = find_driver("gpio").make_peer_on(*cfg_, m_.endpoint());
+          auto peer = wiring::find_driver("gpio").peer.make_peer_on(*cfg_, m_.endpoint());
           peer_.reset(dynamic_cast<sim::gpio::GpioPeer*>(peer.release()));
           runner_ = std::make_unique<sim::PeerRunner>(*peer_, 50);
           return *peer_;

@@ -17,11 +17,11 @@
 #include "control/controller.h"
 #include "drivers/gpio/gpio_device.h"
 #include "drivers/gpio/loopback_transport.h"
-#include "drivers/registry.h"
 #include "loop/servo_loop.h"
 #include "sim/peers/gpio/gpio_peer.h"
 #include "sim/peers/paced_device.h"
 #include "sim/peers/peer_runner.h"
+#include "wiring/registry.h"
 
 namespace hapticd::drivers::gpio {
 namespace {
@@ -36,13 +36,13 @@ config::Config load(const char* file, const std::vector<std::string>& sets = {},
   for (const auto& s : sets) o.push_back(config::parse_override(s));
   o.push_back(config::parse_override(std::string("loop.clock=") + clock));
   return config::load_config_text(text.str(), file, o, HAPTICD_SOURCE_DIR "/config",
-                                  driver_schemas());
+                                  wiring::driver_schemas());
 }
 
 struct Rig {
   explicit Rig(const config::Config& c)
       : cfg(c),
-        pair(find_driver(c.device.driver).make_loopback(c)),
+        pair(wiring::find_driver(c.device.driver).make_loopback(c)),
         runner(*pair.peer),
         device(std::move(pair.device), runner) {}
   ~Rig() { device.close(); }
@@ -80,7 +80,7 @@ struct Rig {
   }
 
   config::Config cfg;
-  Loopback pair;
+  wiring::Loopback pair;
   sim::PeerRunner runner;
   sim::PacedDevice device;
 };
@@ -346,7 +346,7 @@ TEST(GpioLoopback, FaultLineActiveAtConfigureRefusesAndClearFaultChecksIt) {
 TEST(GpioLoopback, ASampleWithoutEdgesCarriesTheReadTimeAndSaysSo) {
   const config::Config c =
       load("gpio.yaml", {"device.sim.operator={kind: force, force: {shape: constant, value: 0}}"});
-  auto pair = find_driver(c.device.driver).make_loopback(c);
+  auto pair = wiring::find_driver(c.device.driver).make_loopback(c);
   sim::PeerRunner runner(*pair.peer);
   Device& device = *pair.device;
   device.configure();

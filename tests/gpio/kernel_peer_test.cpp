@@ -11,9 +11,9 @@
 #include <thread>
 
 #include "config/config_loader.h"
-#include "drivers/registry.h"
 #include "sim/peers/gpio/gpio_peer.h"
 #include "sim/peers/peer_runner.h"
+#include "wiring/registry.h"
 
 namespace hapticd::drivers::gpio {
 namespace {
@@ -27,7 +27,7 @@ config::Config load(const std::vector<std::string>& sets) {
   std::vector<config::Override> o;
   for (const auto& s : sets) o.push_back(config::parse_override(s));
   return config::load_config_text(text.str(), "gpio.yaml", o, HAPTICD_SOURCE_DIR "/config",
-                                  driver_schemas());
+                                  wiring::driver_schemas());
 }
 
 struct FakeChip {
@@ -66,7 +66,7 @@ TEST(GpioKernelPeer, AtRestItPutsTheLevelsOnceAndNothingMore) {
       {"loop.rate_hz=200", "device.gpio.counts_per_unit=20000", "device.sim.counts_per_unit=20000",
        "device.gpio.start_count=-400", "device.sim.operator.setpoint.start=4",
        "device.sim.initial_position=-0.020025", "device.sim.operator.setpoint.rest=-0.020025"});
-  auto peer = find_driver("gpio").make_peer_on(
+  auto peer = wiring::find_driver("gpio").peer.make_peer_on(
       cfg, chip.root.string() + "," + (chip.root / "channel0").string());
   sim::PeerRunner runner(*peer);
   std::this_thread::sleep_for(std::chrono::milliseconds(300));

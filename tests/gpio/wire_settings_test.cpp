@@ -10,7 +10,7 @@
 #include "config/config_loader.h"
 #include "drivers/gpio/gpio_settings.h"
 #include "drivers/gpio/gpio_wire.h"
-#include "drivers/registry.h"
+#include "wiring/registry.h"
 
 namespace hapticd::drivers::gpio {
 namespace {
@@ -105,7 +105,7 @@ config::Config load(const std::vector<std::string>& sets) {
   std::vector<config::Override> o;
   for (const auto& s : sets) o.push_back(config::parse_override(s));
   return config::load_config_text(example(), "gpio.yaml", o, HAPTICD_SOURCE_DIR "/config",
-                                  driver_schemas());
+                                  wiring::driver_schemas());
 }
 
 std::string errors_of(const std::vector<std::string>& sets) {
@@ -131,7 +131,7 @@ TEST(GpioSettings, TheExampleLoads) {
   EXPECT_EQ(s.counts_per_unit, 100000.0);
   EXPECT_EQ(s.start_count, -2000);
   EXPECT_EQ(s.pwm_period_ns, 50'000u);
-  EXPECT_EQ(find_driver("gpio").declared_delay(cfg), 0);
+  EXPECT_EQ(wiring::find_driver("gpio").declared_delay(cfg), 0);
 }
 
 TEST(GpioSettings, EveryWrongKeyIsNamedWithItsPlace) {
@@ -164,7 +164,8 @@ TEST(GpioSettings, EveryWrongKeyIsNamedWithItsPlace) {
   std::string text = example();
   text.replace(text.find("max_edge_rate: 200000"), 21, "max_edge_rate: fast  ");
   try {
-    config::load_config_text(text, "gpio.yaml", {}, HAPTICD_SOURCE_DIR "/config", driver_schemas());
+    config::load_config_text(text, "gpio.yaml", {}, HAPTICD_SOURCE_DIR "/config",
+                             wiring::driver_schemas());
     FAIL() << "accepted a word for a number";
   } catch (const config::ConfigError& e) {
     EXPECT_NE(e.messages().front().find("gpio.yaml:"), std::string::npos);
@@ -186,7 +187,7 @@ TEST(GpioSettings, DeclaredDelayFollowsThePwmPeriod) {
   }
   // `check` analyses it: a slow PWM adds its delay to the gate's loop.
   const config::Config cfg = load({"device.gpio.pwm.period_ns=2500000"});
-  EXPECT_EQ(find_driver("gpio").declared_delay(cfg), 2);
+  EXPECT_EQ(wiring::find_driver("gpio").declared_delay(cfg), 2);
 }
 
 }  // namespace

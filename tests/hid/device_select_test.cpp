@@ -2,7 +2,7 @@
 #include <gtest/gtest.h>
 
 #include "drivers/hid/device_select.h"
-#include "drivers/registry.h"
+#include "wiring/registry.h"
 
 namespace hapticd::drivers::hid {
 namespace {
@@ -68,7 +68,7 @@ TEST(HidSelect, ADeviceListedOncePerCollectionIsOneEntryNamingEachUsage) {
 }
 
 TEST(HidSelect, TheDevicesCommandAsksBothBackends) {
-  const DriverEntry& hid = find_driver("hid");
+  const wiring::DriverEntry& hid = wiring::find_driver("hid");
   ASSERT_NE(hid.list_devices, nullptr);
   const std::string text = hid.list_devices();
   EXPECT_NE(text.find("hid (hidraw backend):"), std::string::npos) << text;

@@ -8,7 +8,7 @@
 
 #include "config/config_loader.h"
 #include "drivers/hid/hid_settings.h"
-#include "drivers/registry.h"
+#include "wiring/registry.h"
 
 namespace hapticd::drivers::hid {
 namespace {
@@ -23,7 +23,7 @@ std::string file(const char* name) {
 config::Config load(const std::string& text, std::vector<std::string> sets = {}) {
   std::vector<config::Override> o;
   for (const std::string& s : sets) o.push_back(config::parse_override(s));
-  return config::load_config_text(text, "hid.yaml", o, ".", driver_schemas());
+  return config::load_config_text(text, "hid.yaml", o, ".", wiring::driver_schemas());
 }
 
 // The messages of a load that must fail.
@@ -77,7 +77,7 @@ TEST(HidConfig, TheDeclaredDelayFollowsThePollingIntervalAndT) {
   EXPECT_EQ(declared_delay_samples(0.125, 1e-3), 0);  // high speed, one microframe
   EXPECT_EQ(declared_delay_samples(1.0, 0.5e-3), 3);  // 2 kHz over 1 ms polling
   const config::Config c = load(file("hid-report.yaml"), {"device.hid.poll_interval_ms=4"});
-  EXPECT_EQ(find_driver("hid").declared_delay(c), 7);
+  EXPECT_EQ(wiring::find_driver("hid").declared_delay(c), 7);
 }
 
 TEST(HidConfig, OverlappingFieldsAreReportedAtTheirLine) {

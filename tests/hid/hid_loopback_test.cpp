@@ -23,7 +23,7 @@ struct RunResult {
 };
 
 RunResult run(const config::Config& cfg, double seconds) {
-  Loopback pair = find_driver(cfg.device.driver).make_loopback(cfg);
+  wiring::Loopback pair = wiring::find_driver(cfg.device.driver).make_loopback(cfg);
   RunResult out;
   {
     sim::PeerRunner runner(*pair.peer);
@@ -63,7 +63,7 @@ RunResult sim_twin(const char* example, int delay) {
 
 void expect_same_wall(const char* example) {
   const config::Config cfg = testing::load_example(example, {"loop.clock=freerun"});
-  const int delay = find_driver("hid").declared_delay(cfg);
+  const int delay = wiring::find_driver("hid").declared_delay(cfg);
   ASSERT_EQ(delay, 1);
   const RunResult hid = run(cfg, 3.0);
   const RunResult sim = sim_twin(example, delay);
@@ -94,7 +94,7 @@ TEST(HidLoopback, AtALowerRateTheLinkDelayVanishesFromTheLoop) {
   const std::vector<std::string> sets = {"loop.clock=freerun", "loop.rate_hz=250",
                                          "wall.stiffness=200"};
   config::Config cfg = testing::load_example("hid-report.yaml", sets);
-  ASSERT_EQ(find_driver("hid").declared_delay(cfg), 0);
+  ASSERT_EQ(wiring::find_driver("hid").declared_delay(cfg), 0);
   const RunResult hid = run(cfg, 3.0);
   std::vector<std::string> sim_sets = sets;
   sim_sets.insert(sim_sets.end(), {"device.driver=sim", "device.hid="});

@@ -9,7 +9,7 @@
 
 #include "config/config_loader.h"
 #include "drivers/hid/hid_settings.h"
-#include "drivers/registry.h"
+#include "wiring/registry.h"
 
 namespace hapticd::drivers::hid::testing {
 
@@ -21,7 +21,7 @@ inline config::Config load_example(const char* name, const std::vector<std::stri
   std::vector<config::Override> o;
   for (const std::string& s : sets) o.push_back(config::parse_override(s));
   return config::load_config_text(text.str(), path, o, HAPTICD_SOURCE_DIR "/config",
-                                  driver_schemas());
+                                  wiring::driver_schemas());
 }
 
 inline std::shared_ptr<const HidSettings> settings_of(const config::Config& c) {

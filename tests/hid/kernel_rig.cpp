@@ -47,7 +47,7 @@ bool wait_listed(bool present) {
 void expect_the_sim_drivers_wall(const char* config, const std::vector<std::string>& sets,
                                  const sim::LoopbackPeer& peer) {
   const config::Config cfg = load_example(config, sets);
-  const int delay = find_driver("hid").declared_delay(cfg);
+  const int delay = wiring::find_driver("hid").declared_delay(cfg);
   const Hapticd hid =
       run_hapticd(with_sets({"run", "--config", example(config), "--duration", "4"}, sets));
   ASSERT_EQ(hid.status, 0) << hid.log;

@@ -16,10 +16,10 @@
 #include <thread>
 #include <vector>
 
-#include "drivers/registry.h"
 #include "hapticd_process.h"
 #include "hid_test_support.h"
 #include "sim/peers/peer_runner.h"
+#include "wiring/registry.h"
 
 namespace hapticd::drivers::hid::testing {
 
@@ -52,7 +52,7 @@ inline std::vector<std::string> with_sets(std::vector<std::string> args,
 // The simulated device on `endpoint`, serviced by its own thread as firmware runs.
 struct KernelPeer {
   KernelPeer(const config::Config& cfg, const std::string& endpoint)
-      : peer(find_driver("hid").make_peer_on(cfg, endpoint)), runner(*peer, 70) {}
+      : peer(wiring::find_driver("hid").peer.make_peer_on(cfg, endpoint)), runner(*peer, 70) {}
   // The simulated device must not have failed on its side (a transfer error, a thread that
   // died): its watchdog would have stopped with it.
   ~KernelPeer() {

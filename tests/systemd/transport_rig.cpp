@@ -11,12 +11,12 @@
 #include <thread>
 
 #include "config/config_loader.h"
-#include "drivers/registry.h"
+#include "wiring/registry.h"
 
 namespace hapticd::systemd_test {
 
 config::Config load_config(const std::string& yaml, const std::string& path) {
-  return config::load_config_text(yaml, path, {}, "/etc/hapticd", drivers::driver_schemas());
+  return config::load_config_text(yaml, path, {}, "/etc/hapticd", wiring::driver_schemas());
 }
 
 InstanceRules::InstanceRules(const Instance& instance, const std::string& trigger)
@@ -51,7 +51,7 @@ DropIn::DropIn(const Instance& instance, const std::string& text)
 DropIn::~DropIn() { std::filesystem::remove_all(dir_); }
 
 SimulatedDevice::SimulatedDevice(const config::Config& cfg, const std::string& endpoint)
-    : peer(drivers::find_driver(cfg.device.driver).make_peer_on(cfg, endpoint)),
+    : peer(wiring::find_driver(cfg.device.driver).peer.make_peer_on(cfg, endpoint)),
       runner(std::make_unique<sim::PeerRunner>(*peer, 70)) {}
 
 SimulatedDevice::~SimulatedDevice() {

@@ -11,6 +11,8 @@
 #include <optional>
 #include <system_error>
 
+#include "base/clock.h"
+#include "base/errno_text.h"
 #include "drivers/device.h"
 #include "drivers/io/unique_fd.h"
 #include "sim/peers/gpio/gpio_peer.h"
@@ -19,16 +21,10 @@
 namespace hapticd::sim::gpio {
 namespace {
 
-std::int64_t monotonic_ns() {
-  timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
-}
-
 io::UniqueFd open_or_throw(const std::string& path, int flags) {
   io::UniqueFd fd(::open(path.c_str(), flags | O_CLOEXEC));
   if (!fd) {
-    throw DeviceError("gpio peer: cannot open " + path + ": " + std::strerror(errno));
+    throw DeviceError("gpio peer: cannot open " + path + ": " + base::errno_text(errno));
   }
   return fd;
 }
@@ -55,14 +51,14 @@ class GpioKernelPeer final : public GpioPeer {
     for (int i = 0; i < 4; ++i) {
       if (pull_[i]) put(i, (levels >> i) & 1u);
     }
-    next_step_ = monotonic_ns() + enc_.period_ns();
+    next_step_ = base::monotonic_ns() + enc_.period_ns();
     arm(next_step_);
   }
 
   void service() override {
     std::uint64_t expirations = 0;
     [[maybe_unused]] const ssize_t r = ::read(timer_.get(), &expirations, sizeof expirations);
-    std::int64_t now = monotonic_ns();
+    std::int64_t now = base::monotonic_ns();
     while (now >= next_step_) {  // the plant follows the wall clock, period by period
       apply_faults(now);
       enc_.apply_output(read_output());
@@ -160,11 +156,11 @@ class GpioKernelPeer final : public GpioPeer {
       const std::int64_t at =
           p.paced ? std::max(p.due_ns, last_put_ + spacing_ns_)
                   : std::max(p.due_ns + shift_ns_, line_put_[line] + enc_.injected_spacing_ns());
-      const std::int64_t now = monotonic_ns();
+      const std::int64_t now = base::monotonic_ns();
       if (at > now) return at;
       if (!p.paced) shift_ns_ = now - p.due_ns;
       put(static_cast<int>(p.line), p.raw_level);
-      last_put_ = line_put_[line] = monotonic_ns();
+      last_put_ = line_put_[line] = base::monotonic_ns();
       enc_.sent(p);
       q.pop_front();
     }

@@ -5,9 +5,9 @@
 #include <unistd.h>
 
 #include <cerrno>
-#include <cstring>
 #include <system_error>
 
+#include "base/errno_text.h"
 #include "drivers/device.h"
 
 namespace hapticd::sim::hid {
@@ -24,7 +24,7 @@ HidgPeer::HidgPeer(const std::string& path, std::unique_ptr<HidFirmware> firmwar
       fd_(::open(path.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC)) {
   if (!fd_) {
     throw DeviceError("hid peer: cannot open the gadget endpoint " + path + ": " +
-                      std::strerror(errno) + " (a USB HID gadget's /dev/hidgN)");
+                      base::errno_text(errno) + " (a USB HID gadget's /dev/hidgN)");
   }
 }
 

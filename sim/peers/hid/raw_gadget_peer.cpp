@@ -15,6 +15,7 @@
 #include <cstring>
 #include <filesystem>
 
+#include "base/errno_text.h"
 #include "drivers/device.h"
 #include "sim/peers/hid/raw_gadget_io.h"
 
@@ -97,10 +98,10 @@ RawGadgetPeer::RawGadgetPeer(const std::string& path, const DeviceIdentity& id,
       gadget_(::open(path.c_str(), O_RDWR | O_CLOEXEC)),
       timer_(eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK)) {
   if (!gadget_) {
-    throw DeviceError("hid peer: cannot open " + path + ": " + std::strerror(errno) +
+    throw DeviceError("hid peer: cannot open " + path + ": " + base::errno_text(errno) +
                       " (the raw_gadget module, and root)");
   }
-  if (!timer_) throw DeviceError(std::string("hid peer: eventfd: ") + std::strerror(errno));
+  if (!timer_) throw DeviceError(std::string("hid peer: eventfd: ") + base::errno_text(errno));
   const auto [udc, driver] = first_udc();
   usb_raw_init init{};
   copy_name(init.driver_name, driver);
@@ -109,7 +110,7 @@ RawGadgetPeer::RawGadgetPeer(const std::string& path, const DeviceIdentity& id,
   if (ioctl(gadget_.get(), USB_RAW_IOCTL_INIT, &init) < 0 ||
       ioctl(gadget_.get(), USB_RAW_IOCTL_RUN, 0) < 0) {
     throw DeviceError("hid peer: the raw gadget cannot bind to " + udc + " (" + driver +
-                      "): " + std::strerror(errno) + " (is another gadget bound to it?)");
+                      "): " + base::errno_text(errno) + " (is another gadget bound to it?)");
   }
   install_wake_handler();
   control_ = std::thread([this] { control_loop(); });
@@ -155,7 +156,7 @@ void RawGadgetPeer::service() {
 
 void RawGadgetPeer::fail(const std::string& what) {
   const std::lock_guard lock(error_mutex_);
-  if (error_.empty()) error_ = "hid peer: " + what + ": " + std::strerror(errno);
+  if (error_.empty()) error_ = "hid peer: " + what + ": " + base::errno_text(errno);
 }
 
 void RawGadgetPeer::control_loop() {

@@ -9,6 +9,7 @@
 #include <cstring>
 #include <system_error>
 
+#include "base/errno_text.h"
 #include "drivers/device.h"
 
 namespace hapticd::sim::hid {
@@ -32,7 +33,7 @@ UhidPeer::UhidPeer(const std::string& path, const DeviceIdentity& id,
     : FirmwarePeer(std::move(firmware)),
       fd_(::open(path.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC)) {
   if (!fd_) {
-    throw DeviceError("hid peer: cannot open " + path + ": " + std::strerror(errno) +
+    throw DeviceError("hid peer: cannot open " + path + ": " + base::errno_text(errno) +
                       " (the uhid module, and root or the uhid group)");
   }
   const std::vector<std::uint8_t>& d = fw_->descriptor();

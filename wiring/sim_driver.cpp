@@ -1,12 +1,13 @@
-#include "drivers/sim/sim_driver.h"
+#include "wiring/sim_driver.h"
 
 #include <stdexcept>
+#include <vector>
 
 #include "config/config_loader.h"
 #include "sim/replay_log.h"
 #include "sim/sim_device.h"
 
-namespace hapticd::drivers::sim_driver {
+namespace hapticd::wiring {
 namespace {
 
 int no_delay(const config::Config&) { return 0; }  // in-process: written at k, acts from k
@@ -34,8 +35,9 @@ DriverEntry sim_driver() {
   e.name = "sim";
   e.summary = "the exact simulated device, in-process (device.sim)";
   e.declared_delay = &no_delay;
-  e.make_loopback = &sim_loopback;
+  e.peer.driver = "sim";
+  e.make_in_process = &sim_loopback;
   return e;
 }
 
-}  // namespace hapticd::drivers::sim_driver
+}  // namespace hapticd::wiring
