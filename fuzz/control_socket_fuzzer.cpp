@@ -24,8 +24,8 @@
 #include <string_view>
 
 #include "config/config_loader.h"
-#include "service/control_server.h"
-#include "service/reload_check.h"
+#include "service/control/control_server.h"
+#include "service/run/reload_check.h"
 #include "support/check.h"
 
 namespace {

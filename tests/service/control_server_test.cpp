@@ -1,7 +1,7 @@
 // The control socket's server in-process, with a handler of the test's own: how it frames
 // requests and answers, whatever the daemon behind it does. (The daemon's own answers are
 // tested end to end in control_socket_test.cpp.)
-#include "service/control_server.h"
+#include "service/control/control_server.h"
 
 #include <gtest/gtest.h>
 #include <poll.h>

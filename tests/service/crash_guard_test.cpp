@@ -7,7 +7,7 @@
 
 #include <cstdlib>
 
-#include "service/crash_guard.h"
+#include "service/run/crash_guard.h"
 
 namespace hapticd::service {
 namespace {

@@ -1,6 +1,6 @@
 // identify's tick loop on the in-process sim device: a realtime run allocates nothing and
 // records every tick; every way it ends leaves zero force written and output off.
-#include "service/identify_run.h"
+#include "service/commands/identify_run.h"
 
 #include <gtest/gtest.h>
 

@@ -16,8 +16,8 @@
 #include "gpio_sim_chip.h"
 #include "process.h"
 #include "pwm_sim.h"
-#include "service/peer_endpoint.h"
-#include "service/peer_guard.h"
+#include "service/commands/peer_endpoint.h"
+#include "service/commands/peer_guard.h"
 #include "slcan_tty.h"
 #include "vcan_interface.h"
 

@@ -10,7 +10,7 @@
 #include "control/passivity_observer.h"
 #include "loop/servo_loop.h"
 #include "scripted_device.h"
-#include "service/replay.h"
+#include "service/commands/replay.h"
 #include "telemetry/spsc_ring.h"
 
 namespace hapticd::service {

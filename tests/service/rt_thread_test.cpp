@@ -10,7 +10,7 @@
 #include "config/config_loader.h"
 #include "control/controller.h"
 #include "loop/servo_loop.h"
-#include "service/run_threads.h"
+#include "service/run/run_threads.h"
 #include "sim/sim_device.h"
 
 namespace hapticd::service {

@@ -15,7 +15,7 @@
 #include "process.h"
 #include "pwm_sim.h"
 #include "service/config_source.h"
-#include "service/udev_rules.h"
+#include "service/commands/udev_rules.h"
 #include "slcan_tty.h"
 
 namespace hapticd::service {

@@ -11,7 +11,7 @@
 #include "config/config_loader.h"
 #include "process.h"
 #include "service/config_source.h"
-#include "service/udev_rules.h"
+#include "service/commands/udev_rules.h"
 
 namespace hapticd::service {
 namespace {

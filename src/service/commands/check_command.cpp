@@ -1,0 +1,57 @@
+#include "service/commands/check_command.h"
+
+#include "gate/gate.h"
+#include "gate/gate_report_format.h"
+#include "gate/number_format.h"
+#include "service/exit_codes.h"
+#include "service/run/gate_derate.h"
+#include "service/result_output.h"
+#include "wiring/registry.h"
+
+namespace hapticd::service {
+namespace {
+
+constexpr const char* kDesignHint =
+    "hint: `hapticd design-coupling` (same --config and --set) designs a virtual coupling C(z) "
+    "that makes this wall pass at this rate and device damping, verified by this gate, and "
+    "says what it costs in transparency";
+
+}  // namespace
+
+int check_command(const ConfigOptions& options, bool json) {
+  const config::Config cfg = load_config(options);
+  // The delay the driver declares from its own settings: the one `run` and `verify` use.
+  const wiring::DriverEntry& driver = wiring::find_driver(cfg.device.driver);
+  const int delay = driver.declared_delay(cfg);
+  const gate::GateReport r = gate::evaluate_gate(cfg, delay);
+  // What `run` would do under safety.gate: derate (the verdict stays the configured wall's).
+  config::Config derated_cfg = cfg;
+  gate::GateReport derated_report = r;
+  const auto derated = derate_stiffness(derated_cfg, delay, derated_report);
+  // What the driver adds about its own transport (e.g. the CAN bus load).
+  const std::vector<std::string> notes =
+      driver.notes != nullptr ? driver.notes(cfg) : std::vector<std::string>{};
+  std::string text;
+  if (json) {
+    nlohmann::json j = gate::gate_to_json(r);
+    j["driver"] = cfg.device.driver;
+    j["driver_notes"] = notes;
+    if (!r.pass) j["design_coupling"] = kDesignHint;
+    j["derated"] = derated
+                       ? nlohmann::json{{"configured", derated->first}, {"ran", derated->second}}
+                       : nlohmann::json(nullptr);
+    text = j.dump(2) + "\n";
+  } else {
+    text = gate::gate_to_text(r, cfg);
+    for (const std::string& line : notes) text += line + "\n";
+    if (!r.pass) text += std::string(kDesignHint) + "\n";
+    if (derated) {
+      text += "safety.gate: derate: `run` would run wall.stiffness at " +
+              gate::format_number(derated->second, 10) + " N/m, the largest that passes\n";
+    }
+  }
+  if (!write_stdout(text)) return kExitRuntimeFault;  // a verdict nobody can read is no verdict
+  return r.pass ? kExitOk : kExitGateRefused;
+}
+
+}  // namespace hapticd::service

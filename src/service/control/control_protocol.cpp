@@ -1,0 +1,76 @@
+#include "service/control/control_protocol.h"
+
+namespace hapticd::service {
+namespace {
+
+using nlohmann::json;
+
+std::optional<Command> command_named(const std::string& name) {
+  if (name == "status") return Command::kStatus;
+  if (name == "stop") return Command::kStop;
+  if (name == "reload") return Command::kReload;
+  if (name == "clear-fault") return Command::kClearFault;
+  return std::nullopt;
+}
+
+std::string line(json j) {
+  // Invalid UTF-8 in an echoed id or a message is replaced, never an exception.
+  return j.dump(-1, ' ', false, json::error_handler_t::replace) + "\n";
+}
+
+}  // namespace
+
+std::optional<Request> parse_request(std::string_view text, std::string& error, json& id) {
+  id = nullptr;
+  if (text.size() > kMaxRequestBytes) {
+    error = "request longer than " + std::to_string(kMaxRequestBytes) + " bytes";
+    return std::nullopt;
+  }
+  const json j = json::parse(text, nullptr, /*allow_exceptions=*/false);
+  if (j.is_discarded() || !j.is_object()) {
+    error = "not a JSON object";
+    return std::nullopt;
+  }
+  if (j.contains("id")) id = j["id"];
+  const auto v = j.find("v");
+  if (v == j.end() || !v->is_number_integer() || v->get<long long>() != kProtocolVersion) {
+    error = "unsupported protocol version (this daemon speaks \"v\": 1)";
+    return std::nullopt;
+  }
+  const auto cmd = j.find("cmd");
+  const std::optional<Command> c =
+      cmd != j.end() && cmd->is_string() ? command_named(cmd->get<std::string>()) : std::nullopt;
+  if (!c) {
+    error = "\"cmd\" must be one of status, stop, reload, clear-fault";
+    return std::nullopt;
+  }
+  Request r;
+  r.command = *c;
+  r.id = id;
+  if (*c == Command::kReload) {
+    const auto config = j.find("config");
+    if (config == j.end() || !config->is_string()) {
+      error = "reload needs \"config\": the YAML text of the new configuration";
+      return std::nullopt;
+    }
+    r.config_text = config->get<std::string>();
+    const auto source = j.find("source");
+    r.source = source != j.end() && source->is_string() ? source->get<std::string>() : "reload";
+  }
+  return r;
+}
+
+std::string ok_response(const json& id, const json& payload) {
+  json j = {{"v", kProtocolVersion}, {"id", id}, {"ok", true}};
+  if (payload.is_object()) {
+    for (auto it = payload.begin(); it != payload.end(); ++it) j[it.key()] = it.value();
+  }
+  return line(std::move(j));
+}
+
+std::string error_response(const json& id, const std::string& error, int code) {
+  return line(
+      {{"v", kProtocolVersion}, {"id", id}, {"ok", false}, {"error", error}, {"code", code}});
+}
+
+}  // namespace hapticd::service

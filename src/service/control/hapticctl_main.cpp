@@ -1,0 +1,111 @@
+// hapticctl: the control socket's command-line client (docs/operations.md). One request per
+// run; human output by default, the daemon's answer as one JSON object with --json. Exit codes
+// follow docs/operations.md: 0 done, 1 refused or failed (or no daemon to ask), 2 usage or an
+// invalid configuration, 3 a reload the gate refused.
+#include <CLI/CLI.hpp>
+#include <cerrno>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+
+#include "base/errno_text.h"
+#include "service/control/control_client.h"
+#include "service/control/ctl_output.h"
+#include "service/exit_codes.h"
+
+namespace {
+
+using nlohmann::json;
+
+// The file a reload sends, read here: the daemon may not be allowed to read it.
+bool read_text(const std::string& path, std::string& text) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return false;
+  std::ostringstream s;
+  s << in.rdbuf();
+  text = s.str();
+  return !in.bad();
+}
+
+// Prints the answer; the exit code it means.
+int report(const json& answer, const std::string& command, bool as_json) {
+  const bool ok = answer.value("ok", false);
+  if (as_json) {
+    std::cout << answer.dump(-1, ' ', false, json::error_handler_t::replace) << "\n";
+  } else if (!ok) {
+    std::cerr << "hapticctl: " << command << ": "
+              << answer.value("error", std::string("refused without a reason")) << "\n";
+  } else if (command == "status") {
+    std::cout << hapticd::service::status_text(answer["status"]);
+  } else if (command == "reload") {
+    std::cout << hapticd::service::reload_text(answer["reload"]);
+  } else if (command == "stop") {
+    std::cout << "stopping: zero force, output disabled, log flushed\n";
+  } else {
+    std::cout << "fault cleared: output enabled again through the gate\n";
+  }
+  if (ok) return hapticd::kExitOk;
+  const int code = answer.value("code", 1);
+  return code >= 1 && code <= 4 ? code : hapticd::kExitRuntimeFault;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "hapticctl: ask a running hapticd through its control socket (status, stop, reload, "
+      "clear-fault). Exit 0 done, 1 refused or failed, 2 usage or invalid configuration, 3 a "
+      "reload the gate refused."};
+  app.require_subcommand(1);
+  std::string socket, instance = "hapticd";
+  bool as_json = false;
+  double timeout_s = 30.0;
+  app.add_option("--socket", socket, "The daemon's control socket (hapticd run --socket)");
+  app.add_option("-i,--instance", instance,
+                 "Instance of hapticd@.service: the socket /run/hapticd/INSTANCE/control.sock "
+                 "(default: hapticd)")
+      ->excludes("--socket");
+  app.add_flag("--json", as_json, "Print the daemon's answer as one JSON object");
+  app.add_option("--timeout", timeout_s, "Seconds to wait for the answer")
+      ->check(CLI::Range(0.1, 3600.0));
+  app.add_subcommand("status", "State, tick, timing, gate verdict, wall energy, fault");
+  app.add_subcommand("stop", "Stop the servo: zero force, output disabled, log flushed");
+  std::string file;
+  CLI::App* reload =
+      app.add_subcommand("reload",
+                         "Send FILE's configuration: parsed, checked and gated by the daemon, then "
+                         "swapped in at a tick boundary, or refused with the reason");
+  reload->add_option("FILE", file, "YAML configuration")->required();
+  app.add_subcommand("clear-fault",
+                     "Re-arm after a latched fault (hapticd run --on-fault hold): only through "
+                     "the gate and with the device outside the wall");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int rc = app.exit(e);
+    return rc == 0 ? hapticd::kExitOk : hapticd::kExitUsage;
+  }
+  const std::string command = app.get_subcommands().front()->get_name();
+  json req = {{"cmd", command}};
+  if (command == "reload") {
+    std::string text;
+    if (!read_text(file, text)) {
+      std::cerr << "hapticctl: " << file << ": cannot read: " << hapticd::base::errno_text(errno)
+                << "\n";
+      return hapticd::kExitUsage;
+    }
+    req["config"] = text;
+    // Absolute: the daemon resolves the file's relative paths (a replay log) against it.
+    req["source"] = std::filesystem::absolute(file).lexically_normal().string();
+  }
+  if (socket.empty()) socket = hapticd::service::instance_socket(instance);
+  try {
+    const json answer =
+        hapticd::service::request(socket, req, static_cast<int>(timeout_s * 1000.0));
+    return report(answer, command, as_json);
+  } catch (const hapticd::service::ClientError& e) {
+    std::cerr << "hapticctl: " << e.what() << "\n";
+    return hapticd::kExitRuntimeFault;
+  }
+}

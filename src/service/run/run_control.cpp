@@ -1,0 +1,341 @@
+// RunSession's answers to the control socket and SIGHUP: status, stop, gated live reload,
+// clear-fault, and the held state a fault leaves the run in with `--on-fault hold`.
+#include <poll.h>
+#include <spdlog/spdlog.h>
+#include <systemd/sd-daemon.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <optional>
+#include <thread>
+
+#include "config/config_loader.h"
+#include "gate/gate_report_format.h"
+#include "gate/number_format.h"
+#include "service/config_source.h"
+#include "service/run/counters_report.h"
+#include "service/exit_codes.h"
+#include "service/run/gate_derate.h"
+#include "service/run/reload_check.h"
+#include "service/run/run_session.h"
+
+namespace hapticd::service {
+namespace {
+
+using nlohmann::json;
+
+// How long a reload waits for the running loop to take the new law: the loop takes it at its
+// next tick, so only an RT thread starved for this long fails to (then the reload is refused).
+constexpr std::chrono::milliseconds kSwapTimeout{10000};
+
+json percentiles_us(const loop::LatencyHistogram& h) {
+  if (h.count() == 0) return nullptr;
+  const auto us = [&](double q) { return static_cast<double>(h.percentile_ns(q)) / 1e3; };
+  return {{"p50", us(0.5)}, {"p99", us(0.99)}, {"p999", us(0.999)}, {"max", us(1.0)}};
+}
+
+std::string joined(const std::vector<std::string>& lines) {
+  std::string out;
+  for (const std::string& l : lines) out += (out.empty() ? "" : "; ") + l;
+  return out;
+}
+
+}  // namespace
+
+json RunSession::handle(const Request& request) {
+  switch (request.command) {
+    case Command::kStatus:
+      return {{"status", status()}};
+    case Command::kStop: {
+      {
+        std::lock_guard lock(mutex_);
+        stop_asked_ = true;
+      }
+      const std::uint64_t one = 1;
+      [[maybe_unused]] const ssize_t n = write(wake_fd_, &one, sizeof one);
+      spdlog::info("control socket: stop requested");
+      return {{"stopping", true}};
+    }
+    case Command::kReload:
+      return reload(request.config_text, request.source, {});
+    case Command::kClearFault:
+      return clear_fault();
+  }
+  throw ControlRefusal("unknown command");
+}
+
+json RunSession::status() const {
+  std::lock_guard lock(mutex_);
+  json j;
+  j["state"] = name(phase_);
+  j["driver"] = cfg_.device.driver;
+  j["config"] = cfg_.source_name;
+  j["rate_hz"] = cfg_.loop.rate_hz;
+  j["clock"] = realtime_ ? "realtime" : "freerun";
+  const Device& d = session_->device();
+  j["device"] = {
+      {"state", std::string(to_string(d.state()))},
+      {"description",
+       d.state() == DeviceState::kUnconfigured ? json(nullptr) : json(d.info().description)},
+      {"output_enabled", d.output_enabled()},
+      {"last_command", d.last_command()}};
+  const std::vector<base::CounterReading> counters = read_run_counters(servo_.get(), d);
+  j["counters"] = counters_json(counters);
+  j["anomalies"] = anomalies_json(counters);
+  j["wall"] = {{"stiffness", cfg_.wall.stiffness}, {"damping", cfg_.wall.damping}};
+  j["derated"] =
+      derated_ ? json{{"configured", derated_->first}, {"ran", derated_->second}} : json(nullptr);
+  j["fault"] = fault_.empty() ? json(nullptr) : json(fault_);
+  j["gate"] = gate_;
+  if (servo_) {
+    const loop::LiveStatus& live = servo_->live();
+    constexpr auto r = std::memory_order_relaxed;
+    j["tick"] = servo_->ticks_done();
+    j["reloads"] = reloads_;
+    j["position"] = live.position.load(r);
+    j["penetration"] = live.penetration.load(r);
+    j["force_commanded"] = live.force_commanded.load(r);
+    j["wall_energy_j"] = live.wall_energy_j.load(r);
+    j["observer_energy_j"] = live.observer_energy_j.load(r);
+    j["passivity_damped_ticks"] = live.damped_ticks.load(r);
+    j["wake_latency_us"] = realtime_ ? percentiles_us(servo_->wake_latency()) : json(nullptr);
+    j["compute_us"] = percentiles_us(servo_->compute_time());
+  }
+  return j;
+}
+
+// Parsed, checked, gated and built off the RT thread; swapped in at a tick boundary.
+json RunSession::reload(const std::string& text, const std::string& source,
+                        const std::vector<std::string>& sets) {
+  std::lock_guard serial(reload_mutex_);
+  config::Config running;
+  Phase phase = Phase::kStarting;
+  {
+    std::lock_guard lock(mutex_);
+    running = cfg_;
+    phase = phase_;
+  }
+  Prepared next;
+  try {
+    if (phase == Phase::kStarting || phase == Phase::kEnded) {
+      throw ControlRefusal(std::string("the run is ") + name(phase) + "; nothing to reload into");
+    }
+    next = prepare(running, text, source, sets);
+  } catch (const std::exception& e) {  // ControlRefusal, or whatever checking it threw
+    swap_.note_refused();              // the RT thread marks it in the tick log
+    spdlog::warn("reload from {} refused: {}", source, e.what());
+    const auto* refusal = dynamic_cast<const ControlRefusal*>(&e);
+    throw ControlRefusal(std::string("reload refused: ") + e.what(),
+                         refusal != nullptr ? refusal->code() : 1);
+  }
+  std::optional<std::uint64_t> first_tick;
+  if (phase == Phase::kRunning) first_tick = swap_in(next, source);
+  const double k = next.cfg.wall.stiffness, b = next.cfg.wall.damping;
+  json out = {{"accepted", true},
+              {"applied_at_tick", first_tick ? json(*first_tick) : json(nullptr)},
+              {"gate", gate::gate_to_json(next.report)},
+              {"derated", next.derated ? json{{"configured", next.derated->first},
+                                              {"ran", next.derated->second}}
+                                       : json(nullptr)}};
+  {
+    std::lock_guard lock(mutex_);
+    cfg_ = std::move(next.cfg);
+    ++reloads_;
+    gate_ = out["gate"];
+    summary_.gate = gate_;
+    if (next.derated) {  // the last derating stays said
+      summary_.derated_stiffness = next.derated;
+      derated_ = next.derated;
+    }
+  }
+  spdlog::info("reload from {} accepted: wall K {} N/m B {} N s/m {}", source, k, b,
+               first_tick ? "from tick " + std::to_string(*first_tick) : "for the next arming");
+  return {{"reload", out}};
+}
+
+// Everything a reload needs before the swap, off the RT thread. Throws ControlRefusal with
+// every reason when it may not be applied.
+RunSession::Prepared RunSession::prepare(const config::Config& running, const std::string& text,
+                                         const std::string& source,
+                                         const std::vector<std::string>& sets) const {
+  Prepared p;
+  const std::string base = std::filesystem::path(source).parent_path().string();
+  try {
+    p.cfg = load_config_text_checked(text, source, base.empty() ? "." : base, sets);
+  } catch (const config::ConfigError& e) {
+    throw ControlRefusal(joined(e.messages()), kExitUsage);
+  }
+  if (const auto blockers = reload_blockers(running, p.cfg); !blockers.empty()) {
+    throw ControlRefusal(joined(blockers), kExitUsage);
+  }
+  const int delay = session_->device().info().transport_delay_samples;
+  p.report = gate::evaluate_gate(p.cfg, delay);
+  const gate::GateReport configured = p.report;
+  if (const auto derated = (p.derated = derate_stiffness(p.cfg, delay, p.report))) {
+    spdlog::warn(
+        "reload from {}: DERATED (safety.gate: derate): wall.stiffness {} N/m fails the gate ({}), "
+        "swapping in {} N/m, the largest that passes",
+        source, gate::format_number(derated->first), joined(configured.reasons),
+        gate::format_number(derated->second));
+  }
+  if (!gate_allows(p.report, p.cfg)) {
+    throw ControlRefusal("the gate refuses it: " + joined(p.report.reasons), kExitGateRefused);
+  }
+  if (!p.report.pass) {
+    spdlog::error(
+        "reload from {}: the gate FAILED but safety.gate is 'warn': swapping in a loop that is "
+        "not proven passive ({})",
+        source, joined(p.report.reasons));
+  }
+  p.law = std::make_unique<control::Controller>(control::make_control_law(p.cfg));
+  return p;
+}
+
+// Offers the new law to the RT thread and waits for the tick boundary it is taken at (none
+// when the loop ended first). The law it replaced is destroyed here, off the RT thread. An
+// offer the running loop does not take in kSwapTimeout is withdrawn and the reload refused:
+// the answer, the status and the tick log never name a wall the loop is not rendering.
+std::optional<std::uint64_t> RunSession::swap_in(Prepared& next, const std::string& source) {
+  const std::uint64_t before = swap_.swaps();
+  if (log_.writer) log_.writer->queue_config_change(next.cfg.effective_yaml);
+  if (!swap_.offer(next.law.get())) {  // reload_mutex_ serialises offers: not expected
+    if (log_.writer) log_.writer->withdraw_config_change();
+    throw ControlRefusal("reload refused: a previous reload is still being applied");
+  }
+  const loop::SwapOutcome outcome = loop::await_swap(swap_, next.law.get(), before, kSwapTimeout);
+  if (outcome != loop::SwapOutcome::kTaken) {
+    if (log_.writer) log_.writer->withdraw_config_change();
+    if (outcome == loop::SwapOutcome::kLoopEnded) return std::nullopt;
+    swap_.note_refused();
+    const std::string why = "the servo loop reached no tick boundary in " +
+                            std::to_string(kSwapTimeout.count() / 1000) +
+                            " s (starved of the CPU?); nothing changed";
+    spdlog::warn("reload from {} refused: {}", source, why);
+    throw ControlRefusal("reload refused: " + why);
+  }
+  const std::uint64_t tick = swap_.last_swap_tick();
+  swap_.retire();  // the replaced law: `active_` owns it and lets it go below
+  std::lock_guard lock(mutex_);
+  active_ = std::move(next.law);
+  return tick;
+}
+
+// SIGHUP: the file the run was started with, read again, with the same --set arguments.
+json RunSession::reload_file() {
+  if (options_.config.path.empty()) {
+    spdlog::warn(
+        "SIGHUP: running the embedded default configuration: nothing to reload "
+        "(start with --config FILE)");
+    return nullptr;
+  }
+  std::string text;
+  try {
+    text = read_config_file(options_.config.path);
+  } catch (const config::ConfigError& e) {
+    spdlog::warn("SIGHUP: reload refused: {}", e.what());
+    swap_.note_refused();
+    return nullptr;
+  }
+  try {
+    return reload(text, options_.config.path, options_.config.sets);
+  } catch (const std::exception&) {
+    return nullptr;  // refused: already logged and marked in the tick log
+  }
+}
+
+json RunSession::clear_fault() {
+  std::unique_lock lock(mutex_);
+  if (phase_ != Phase::kHeld) {
+    throw ControlRefusal(std::string("no fault to clear: the run is ") + name(phase_));
+  }
+  clear_asked_ = true;
+  clear_result_.reset();
+  const std::uint64_t one = 1;
+  [[maybe_unused]] const ssize_t n = write(wake_fd_, &one, sizeof one);
+  if (!cleared_.wait_for(lock, std::chrono::seconds(10),
+                         [&] { return clear_result_.has_value(); })) {
+    throw ControlRefusal("clear-fault: no answer from the supervisor within 10 s");
+  }
+  if (!clear_result_->empty()) throw ControlRefusal("clear-fault refused: " + *clear_result_);
+  return {{"cleared", true}};
+}
+
+// A fault is latched (output off); wait for clear-fault (true: re-arm) or a stop (false).
+bool RunSession::hold() {
+  set_phase(Phase::kHeld);
+  spdlog::error("fault latched, output disabled: waiting for `hapticctl clear-fault` or a stop");
+  sd_notify(0, "STATUS=faulted: output disabled, waiting for clear-fault");
+  pollfd fds[3] = {
+      {signals_.fd(), POLLIN, 0}, {signals_.pipe_fd(), POLLIN, 0}, {wake_fd_, POLLIN, 0}};
+  for (;;) {
+    poll(fds, 3, 500);
+    sd_notify(0, "WATCHDOG=1");  // alive and safe: the loop is meant not to run
+    if (const auto sig = signals_.take_pending()) on_signal(*sig, nullptr);
+    std::uint64_t drained = 0;
+    while (read(wake_fd_, &drained, sizeof drained) > 0) {
+    }
+    std::unique_lock lock(mutex_);
+    if (stop_asked_) {
+      if (summary_.stop_reason == "duration") summary_.stop_reason = "control socket: stop";
+      return false;
+    }
+    if (!clear_asked_) continue;
+    clear_asked_ = false;
+    lock.unlock();
+    const std::string why = try_clear();
+    lock.lock();
+    clear_result_ = why;
+    cleared_.notify_all();
+    if (why.empty()) {
+      fault_.clear();
+      // Cleared: history, not a failure of the run (the summary lists it apart).
+      summary_.cleared_faults.insert(summary_.cleared_faults.end(), summary_.faults.begin(),
+                                     summary_.faults.end());
+      summary_.faults.clear();
+      spdlog::info("fault cleared: re-arming through the gate");
+      return true;
+    }
+    spdlog::warn("clear-fault refused: {}", why);
+  }
+}
+
+// Re-arms only through the same gate and only with the device outside the wall; "" when it
+// may, else why not.
+std::string RunSession::try_clear() {
+  config::Config cfg;
+  {
+    std::lock_guard lock(mutex_);
+    cfg = cfg_;
+  }
+  Device& device = session_->device();
+  const gate::GateReport report = gate::evaluate_gate(cfg, device.info().transport_delay_samples);
+  if (!gate_allows(report, cfg)) {
+    return "the gate refuses the configuration: " + joined(report.reasons);
+  }
+  try {
+    if (device.state() == DeviceState::kFaulted) device.clear_fault();
+  } catch (const DeviceError& e) {
+    return e.what();
+  }
+  for (int attempt = 0; attempt < 100; ++attempt) {
+    PositionSample s;
+    const IoStatus st = device.read(s);
+    if (st == IoStatus::kTransportFault || st == IoStatus::kDeviceFault) {
+      return "the device faults again: " + device.describe_fault();
+    }
+    if (st == IoStatus::kOk && std::isfinite(s.position)) {
+      const double p = cfg.wall.normal * (s.position - cfg.wall.position);
+      if (p > 0.0) {
+        return "the device is " + gate::format_number(p * 1e3) +
+               " mm inside the wall: move it out first";
+      }
+      return "";
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  return "no position from the device to check it is outside the wall";
+}
+
+}  // namespace hapticd::service

@@ -1,0 +1,108 @@
+// One `hapticd run`: start-up (device configured, gate, log, loop), the servo (enable, RT
+// thread, supervision of signals, the watchdog and the control socket), and the end (zero,
+// disable, close, summary). With `--on-fault hold` a fault does not end the run: the device
+// stays latched with output off and the daemon waits for `clear-fault`, which re-arms only
+// through the same gate and only with the device outside the wall. It answers the control
+// socket (status, stop, reload, clear-fault) on the socket's thread; a reload is parsed,
+// checked and gated off the RT thread and swapped in at a tick boundary (loop/law_swap.h).
+#pragma once
+
+#include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "config/config.h"
+#include "control/controller.h"
+#include "loop/law_swap.h"
+#include "loop/rt_setup.h"
+#include "loop/servo_loop.h"
+#include "service/control/control_server.h"
+#include "service/run/device_session.h"
+#include "service/run/run_command.h"
+#include "service/run/run_summary.h"
+#include "service/run/run_support.h"
+#include "service/run/run_threads.h"
+#include "service/stop_signals.h"
+
+namespace hapticd::service {
+
+class RunSession final : public ControlHandler {
+ public:
+  RunSession(const RunOptions& options, config::Config cfg, SignalWatch& signals);
+  ~RunSession() override;
+
+  // The whole run; returns the exit code (docs/operations.md).
+  int run();
+
+  // Control socket thread: status, stop, reload, clear-fault.
+  nlohmann::json handle(const Request& request) override;
+
+ private:
+  enum class Phase { kStarting, kRunning, kHeld, kEnded };
+  static const char* name(Phase p);
+
+  bool start_up(gate::GateReport& report);
+  loop::LoopResult arm();
+  void supervise(RtThread& rt);
+  bool hold();
+  std::string try_clear();
+  void on_signal(int sig, RtThread* rt);
+  void accumulate(const loop::LoopResult& r);
+  int finish();
+
+  // A reload's new configuration, its gate report and the law built from it.
+  struct Prepared {
+    config::Config cfg;
+    gate::GateReport report;
+    std::unique_ptr<control::Controller> law;
+    std::optional<std::pair<double, double>> derated;  // safety.gate: derate lowered K
+  };
+
+  nlohmann::json status() const;
+  nlohmann::json reload(const std::string& text, const std::string& source,
+                        const std::vector<std::string>& sets);
+  Prepared prepare(const config::Config& running, const std::string& text,
+                   const std::string& source, const std::vector<std::string>& sets) const;
+  std::optional<std::uint64_t> swap_in(Prepared& next, const std::string& source);
+  config::Config config_snapshot() const;
+  nlohmann::json reload_file();
+  nlohmann::json clear_fault();
+  void set_phase(Phase p);
+
+  const RunOptions& options_;
+  SignalWatch& signals_;
+  const bool realtime_;
+  RunSummary summary_;
+  // What safety.gate: derate last did, for `status` (guarded by mutex_).
+  std::optional<std::pair<double, double>> derated_;
+  std::optional<DeviceSession> session_;
+  TickLog log_;
+  loop::RtStatus rt_;
+  std::optional<loop::CpuDmaLatencyRequest> pm_qos_;
+  loop::LawSwap swap_;
+  std::unique_ptr<control::Controller> active_;  // the law the loop runs
+  std::unique_ptr<loop::ServoLoop> servo_;
+  std::unique_ptr<ControlServer> server_;
+  int wake_fd_ = -1;  // eventfd: the control thread wakes the supervisor (stop, clear-fault)
+  bool reload_pending_ = false;  // a SIGHUP taken before the servo ran (supervisor thread)
+
+  mutable std::mutex mutex_;   // guards what the control thread reads or asks for, below
+  config::Config cfg_;         // replaced by an accepted reload
+  nlohmann::json gate_;        // the verdict on cfg_, as JSON
+  std::uint64_t reloads_ = 0;  // accepted reloads: cfg_ and the law swapped in agree
+  Phase phase_ = Phase::kStarting;
+  std::string fault_;  // the last fault, described
+  bool stop_asked_ = false;
+  bool clear_asked_ = false;
+  std::optional<std::string> clear_result_;  // "" cleared, else why not
+  std::condition_variable cleared_;
+
+  std::mutex reload_mutex_;  // one reload at a time (socket, SIGHUP)
+};
+
+}  // namespace hapticd::service
