@@ -45,7 +45,12 @@ ControlOutput Controller::step(double position) noexcept {
     }
     armed_ = true;
   }
+  out.force_computed = wall_force(out.penetration, out.flags);
+  out.force_commanded = command(delayed(out.force_computed), out.force_computed, out.flags);
+  return out;
+}
 
+double Controller::wall_force(double penetration, std::uint32_t& flags) noexcept {
   // C(z)[f]_k = c0 f_k + c_past; the proxy penetration without c0 f_k is q = p - c_past.
   double c_past = 0.0;
   if (law_.has_coupling) {
@@ -53,7 +58,7 @@ ControlOutput Controller::step(double position) noexcept {
     for (std::size_t i = 1; i < c.num_taps; ++i) c_past += c.num[i] * force_.at(i - 1);
     for (std::size_t i = 1; i < c.den_taps; ++i) c_past -= c.den[i] * proxy_.at(i - 1);
   }
-  const double q = out.penetration - c_past;
+  const double q = penetration - c_past;
 
   // E(z)[xi]_k = e0 xi_k + r: r holds everything that depends on past samples only.
   const FilterCoefficients& e = law_.environment;
@@ -67,34 +72,37 @@ ControlOutput Controller::step(double position) noexcept {
   if (law_.linear_contact || q - law_.c0 * r > 0.0) {
     f = (r + law_.e0 * q) * law_.inv_one_plus_e0c0;
     xi = q - law_.c0 * f;
-    out.flags |= kControlContact;
+    flags |= kControlContact;
   }
   xi_.push(xi);
   force_.push(f);
   proxy_.push(law_.c0 * f + c_past);
-  out.force_computed = f;
+  return f;
+}
 
+double Controller::delayed(double f) noexcept {
   // Delay line of d + 1 slots: after writing f_k, the slot after it holds f_{k-d}.
   const std::size_t n = delay_line_.size();
   delay_head_ = delay_head_ + 1 == n ? 0 : delay_head_ + 1;
   delay_line_[delay_head_] = f;
-  double applied = delay_line_[delay_head_ + 1 == n ? 0 : delay_head_ + 1];
+  return delay_line_[delay_head_ + 1 == n ? 0 : delay_head_ + 1];
+}
 
+double Controller::command(double applied, double f, std::uint32_t& flags) const noexcept {
   if (law_.no_pull && applied < 0.0) {
     applied = 0.0;
-    out.flags |= kControlNoPullClamped;
+    flags |= kControlNoPullClamped;
   }
   double u = -law_.normal * applied;
   if (!std::isfinite(f) || !std::isfinite(u)) {
     // Never saturate a NaN into +-max_force: command nothing and let the loop fault.
     u = 0.0;
-    out.flags |= kControlNonFinite;
+    flags |= kControlNonFinite;
   } else if (std::abs(u) > law_.max_force) {
     u = std::copysign(law_.max_force, u);
-    out.flags |= kControlSaturated;
+    flags |= kControlSaturated;
   }
-  out.force_commanded = u;
-  return out;
+  return u;
 }
 
 }  // namespace hapticd::control

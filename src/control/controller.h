@@ -51,6 +51,15 @@ class Controller {
   const ControlLaw& law() const noexcept { return law_; }
 
  private:
+  // The steps of step(), each RT-safe. The wall force f_k from the penetration: the coupling's
+  // and the environment's histories and the unique solution of the algebraic loop; sets
+  // kControlContact.
+  double wall_force(double penetration, std::uint32_t& flags) noexcept;
+  // f_k into the delay line; f_{k-d} out.
+  double delayed(double f) noexcept;
+  // The force to write from the delayed one: no_pull, finiteness (of f_k too), saturation.
+  double command(double applied, double f, std::uint32_t& flags) const noexcept;
+
   // Past values of one signal: at(i) is the value i+1 samples ago.
   class History {
    public:

@@ -61,27 +61,12 @@ void analyse_oscillation(const config::Config& cfg, const TransferFunction& e,
                    o.tsai_colgate_margin, o.tsypkin_margin, to_hz(o.worst_theta, t)};
 }
 
-}  // namespace
-
-GateReport evaluate_gate(const config::Config& cfg, int device_delay_samples) {
-  GateReport r;
-  const double t = cfg.loop.sample_period_s();
-  const double b = cfg.device.damping;
+// Passivity (Roberts, Moore & Colgate) of what will run: H delayed by the wall's and the
+// driver's samples, and the largest stiffness that passes.
+void analyse_passivity(const config::Config& cfg, const TransferFunction& h,
+                       const std::optional<TransferFunction>& c, GateReport& r) {
+  const double t = r.sample_period_s, b = r.device_damping;
   const double eta = cfg.safety.operator_passivity_shortage;
-  r.sample_period_s = t;
-  r.wall_delay_samples = cfg.wall.delay_samples;
-  r.device_delay_samples = device_delay_samples;
-  r.delay_samples = cfg.wall.delay_samples + device_delay_samples;
-  r.device_damping = b;
-
-  const TransferFunction e =
-      analysis::environment_filter(control::wall_params(cfg, cfg.wall.stiffness));
-  const std::optional<TransferFunction> c = control::coupling_filter(cfg);
-  const TransferFunction h = analysis::contact_map(e, c);
-  r.static_stiffness = analysis::static_stiffness(e, c);
-
-  // Passivity (Roberts, Moore & Colgate) of what will run: H delayed by the wall's and the driver's
-  // samples.
   const analysis::PassivityBound pb = analysis::passivity_bound(h, t, r.delay_samples, eta);
   PassivityReport& p = r.passivity;
   p.required_damping = pb.required_damping;
@@ -101,40 +86,40 @@ GateReport evaluate_gate(const config::Config& cfg, int device_delay_samples) {
         return analysis::contact_map(analysis::environment_filter(control::wall_params(cfg, k)), c);
       },
       t, r.delay_samples, eta, p.available_damping);
+}
 
-  // Coupling (Naghshtabrizi & Hespanha).
-  r.coupling.present = c.has_value();
-  if (c) {
-    const analysis::CouplingCheck cc = analysis::coupling_check(*c, t, b);
-    r.coupling.admissible = cc.admissible;
-    r.coupling.dspr = cc.dspr;
-    r.coupling.dspr_min_real = cc.dspr_min_real;
-    r.coupling.note = cc.note;
-    const TransferFunction w{cfg.analysis.transparency_weight_numerator,
-                             cfg.analysis.transparency_weight_denominator};
-    const analysis::Extremum g = analysis::transparency_gamma(h, e, w);
-    r.coupling.transparency_gamma = g.value;
-    r.coupling.transparency_frequency_hz = to_hz(g.theta, t);
-  }
+// The coupling (Naghshtabrizi & Hespanha): admissible, DSPR, and its transparency.
+void analyse_coupling(const config::Config& cfg, const TransferFunction& h,
+                      const TransferFunction& e, const TransferFunction& c, GateReport& r) {
+  const double t = r.sample_period_s;
+  const analysis::CouplingCheck cc = analysis::coupling_check(c, t, r.device_damping);
+  r.coupling.admissible = cc.admissible;
+  r.coupling.dspr = cc.dspr;
+  r.coupling.dspr_min_real = cc.dspr_min_real;
+  r.coupling.note = cc.note;
+  const TransferFunction w{cfg.analysis.transparency_weight_numerator,
+                           cfg.analysis.transparency_weight_denominator};
+  const analysis::Extremum g = analysis::transparency_gamma(h, e, w);
+  r.coupling.transparency_gamma = g.value;
+  r.coupling.transparency_frequency_hz = to_hz(g.theta, t);
+}
 
-  analyse_oscillation(cfg, e, c, r);
-
-  // Verdict: passivity decides; the other checks inform.
-  if (!p.passive) r.reasons.push_back(passivity_reason(cfg, r));
-  if (c && !r.coupling.admissible) r.reasons.push_back("coupling: " + r.coupling.note);
-  r.pass = r.reasons.empty();
-
-  if (c && r.coupling.admissible && !r.coupling.dspr) {
+// What passes but deserves saying: the coupling's theorem where it does not hold or apply,
+// a limit cycle not excluded, and what lies outside the theorems (Tustin's pole at -1,
+// saturation, no_pull).
+void add_warnings(const config::Config& cfg, bool coupled, GateReport& r) {
+  if (coupled && r.coupling.admissible && !r.coupling.dspr) {
     r.warnings.push_back("coupling: Naghshtabrizi and Hespanha's Theorem 1 does not hold (" +
                          r.coupling.note + ")");
   }
-  if (c && r.delay_samples > 0) {
+  if (coupled && r.delay_samples > 0) {
     r.warnings.push_back(
-        "coupling: Naghshtabrizi and Hespanha's Theorem 1 assumes no delay; with " +
+        "coupling: Naghshtabrizi and Hespanha's Theorem 1 assumes no delay; "
+        "with " +
         std::to_string(r.delay_samples) +
         " samples the passivity bound is what guarantees the loop");
   }
-  if (!r.oscillation.applicable && !r.oscillation.note.empty() && !c) {
+  if (!r.oscillation.applicable && !r.oscillation.note.empty() && !coupled) {
     r.warnings.push_back("oscillation: " + r.oscillation.note);
   } else if (r.oscillation.applicable && !r.oscillation.tsai_colgate) {
     r.warnings.push_back(
@@ -158,6 +143,33 @@ GateReport evaluate_gate(const config::Config& cfg, int device_delay_samples) {
         "wall.no_pull clamps f >= 0: outside the theorems, which cover the linear wall only "
         "(the clamped pull can be the part that was dissipating energy on release)");
   }
+}
+
+}  // namespace
+
+GateReport evaluate_gate(const config::Config& cfg, int device_delay_samples) {
+  GateReport r;
+  r.sample_period_s = cfg.loop.sample_period_s();
+  r.wall_delay_samples = cfg.wall.delay_samples;
+  r.device_delay_samples = device_delay_samples;
+  r.delay_samples = cfg.wall.delay_samples + device_delay_samples;
+  r.device_damping = cfg.device.damping;
+
+  const TransferFunction e =
+      analysis::environment_filter(control::wall_params(cfg, cfg.wall.stiffness));
+  const std::optional<TransferFunction> c = control::coupling_filter(cfg);
+  const TransferFunction h = analysis::contact_map(e, c);
+  r.static_stiffness = analysis::static_stiffness(e, c);
+  analyse_passivity(cfg, h, c, r);
+  r.coupling.present = c.has_value();
+  if (c) analyse_coupling(cfg, h, e, *c, r);
+  analyse_oscillation(cfg, e, c, r);
+
+  // Verdict: passivity decides; the other checks inform.
+  if (!r.passivity.passive) r.reasons.push_back(passivity_reason(cfg, r));
+  if (c && !r.coupling.admissible) r.reasons.push_back("coupling: " + r.coupling.note);
+  r.pass = r.reasons.empty();
+  add_warnings(cfg, c.has_value(), r);
   return r;
 }
 

@@ -16,6 +16,58 @@
 
 namespace hapticd::service {
 
+namespace {
+
+// One CSV row a record: every field of the log format, flags as 0/1 columns.
+void write_rows(const telemetry::LogContents& log, std::ostream& out) {
+  out << "tick,scheduled_s,wake_latency_us,compute_us,position,penetration,velocity,"
+         "force_computed,force_commanded,contact,saturated,fault,overrun,no_pull_clamped,stale,"
+         "unarmed,non_finite,sequence_gap,no_position,device_status,sample_time_s,sequence,"
+         "fault_cause,fault_class,fault_code,marker,observer_energy_j,passivity_damping,"
+         "passivity_damped,stepped,held\n";
+  char row[512];
+  for (const telemetry::TickRecord& r : log.records) {
+    const auto bit = [&](std::uint32_t f) { return (r.flags & f) ? 1 : 0; };
+    std::snprintf(
+        row, sizeof row,
+        "%llu,%.9f,%.3f,%.3f,%.17g,%.17g,%.17g,%.17g,%.17g,%d,%d,%d,%d,%d,%d,%d,%d,%d,%d,%u,"
+        "%.9f,%u,%u,%u,%u,%u,%.17g,%.17g,%d,%d,%d\n",
+        static_cast<unsigned long long>(r.tick), static_cast<double>(r.scheduled_ns) * 1e-9,
+        r.wake_latency_ns * 1e-3, r.compute_ns * 1e-3, r.position, r.penetration, r.velocity,
+        r.force_computed, r.force_commanded, bit(telemetry::kFlagContact),
+        bit(telemetry::kFlagSaturated), bit(telemetry::kFlagFault), bit(telemetry::kFlagOverrun),
+        bit(telemetry::kFlagNoPullClamped), bit(telemetry::kFlagStale),
+        bit(telemetry::kFlagUnarmed), bit(telemetry::kFlagNonFinite),
+        bit(telemetry::kFlagSequenceGap), bit(telemetry::kFlagNoPosition), r.device_status,
+        static_cast<double>(r.sample_time_ns) * 1e-9, r.sequence, unsigned{r.fault_cause},
+        unsigned{r.fault_class}, r.fault_code, r.marker, r.observer_energy_j, r.passivity_damping,
+        bit(telemetry::kFlagPassivityDamped), bit(telemetry::kFlagStepped),
+        bit(telemetry::kFlagHeld));
+    out << row;
+  }
+}
+
+// What the log lost, said once the rows are out: ticks the writer marked missing, damaged
+// stretches skipped, a cut end.
+void warn_losses(const std::string& log_path, const telemetry::LogContents& log) {
+  if (log.dropped_records > 0) {
+    spdlog::warn(
+        "{}: {} records are missing, marked by the writer (dropped by a full ring or lost to "
+        "write errors; gaps in 'tick')",
+        log_path, log.dropped_records);
+  }
+  for (const telemetry::SkippedRegion& r : log.skipped) {
+    spdlog::warn("{}: {}; skipped {} damaged bytes to the next intact block (gap in 'tick')",
+                 log_path, r.reason, r.bytes);
+  }
+  if (!log.trailing_reason.empty()) {
+    spdlog::warn("{}: {}; {} bytes after the last complete block ignored", log_path,
+                 log.trailing_reason, log.trailing_bytes_ignored);
+  }
+}
+
+}  // namespace
+
 int export_command(const std::string& log_path, const std::string& out_path) {
   telemetry::LogContents log;
   try {
@@ -41,47 +93,11 @@ int export_command(const std::string& log_path, const std::string& out_path) {
   }
   std::ostream& out = out_path.empty() ? std::cout : file;
   errno = 0;  // finish_output reports the error of the write that failed
-  out << "tick,scheduled_s,wake_latency_us,compute_us,position,penetration,velocity,"
-         "force_computed,force_commanded,contact,saturated,fault,overrun,no_pull_clamped,stale,"
-         "unarmed,non_finite,sequence_gap,no_position,device_status,sample_time_s,sequence,"
-         "fault_cause,fault_class,fault_code,marker,observer_energy_j,passivity_damping,"
-         "passivity_damped,stepped\n";
-  char row[512];
-  for (const telemetry::TickRecord& r : log.records) {
-    const auto bit = [&](std::uint32_t f) { return (r.flags & f) ? 1 : 0; };
-    std::snprintf(
-        row, sizeof row,
-        "%llu,%.9f,%.3f,%.3f,%.17g,%.17g,%.17g,%.17g,%.17g,%d,%d,%d,%d,%d,%d,%d,%d,%d,%d,%u,"
-        "%.9f,%u,%u,%u,%u,%u,%.17g,%.17g,%d,%d\n",
-        static_cast<unsigned long long>(r.tick), static_cast<double>(r.scheduled_ns) * 1e-9,
-        r.wake_latency_ns * 1e-3, r.compute_ns * 1e-3, r.position, r.penetration, r.velocity,
-        r.force_computed, r.force_commanded, bit(telemetry::kFlagContact),
-        bit(telemetry::kFlagSaturated), bit(telemetry::kFlagFault), bit(telemetry::kFlagOverrun),
-        bit(telemetry::kFlagNoPullClamped), bit(telemetry::kFlagStale),
-        bit(telemetry::kFlagUnarmed), bit(telemetry::kFlagNonFinite),
-        bit(telemetry::kFlagSequenceGap), bit(telemetry::kFlagNoPosition), r.device_status,
-        static_cast<double>(r.sample_time_ns) * 1e-9, r.sequence, unsigned{r.fault_cause},
-        unsigned{r.fault_class}, r.fault_code, r.marker, r.observer_energy_j, r.passivity_damping,
-        bit(telemetry::kFlagPassivityDamped), bit(telemetry::kFlagStepped));
-    out << row;
-  }
+  write_rows(log, out);
   if (!finish_output(out, out_path.empty() ? "standard output" : out_path)) {
     return kExitRuntimeFault;
   }
-  if (log.dropped_records > 0) {
-    spdlog::warn(
-        "{}: {} records are missing, marked by the writer (dropped by a full ring or lost to "
-        "write errors; gaps in 'tick')",
-        log_path, log.dropped_records);
-  }
-  for (const telemetry::SkippedRegion& r : log.skipped) {
-    spdlog::warn("{}: {}; skipped {} damaged bytes to the next intact block (gap in 'tick')",
-                 log_path, r.reason, r.bytes);
-  }
-  if (!log.trailing_reason.empty()) {
-    spdlog::warn("{}: {}; {} bytes after the last complete block ignored", log_path,
-                 log.trailing_reason, log.trailing_bytes_ignored);
-  }
+  warn_losses(log_path, log);
   return kExitOk;
 }
 

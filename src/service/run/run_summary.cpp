@@ -8,6 +8,7 @@
 namespace hapticd::service {
 namespace {
 
+using gate::format_number;
 using nlohmann::json;
 
 json percentiles_us(const loop::LatencyHistogram* h) {
@@ -18,7 +19,6 @@ json percentiles_us(const loop::LatencyHistogram* h) {
 
 std::string line_us(const json& p) {
   if (p.is_null()) return "n/a (freerun: nothing waits)";
-  using gate::format_number;
   return "p50 " + format_number(p["p50"].get<double>()) + "  p99 " +
          format_number(p["p99"].get<double>()) + "  p99.9 " +
          format_number(p["p999"].get<double>()) + "  max " + format_number(p["max"].get<double>()) +
@@ -35,7 +35,6 @@ json passivity_json(const RunSummary& s) {
 }
 
 void passivity_text(const RunSummary& s, std::ostream& os) {
-  using gate::format_number;
   const loop::PassivityResult& p = s.loop.passivity;
   if (!p.observed) {
     os << "  passivity      observer off (safety.passivity_controller: off)\n";
@@ -49,6 +48,67 @@ void passivity_text(const RunSummary& s, std::ostream& os) {
        << format_number(p.max_damping) << " N s/m, taking out " << format_number(p.damping_work_j)
        << " J\n";
   }
+}
+
+// The RT set-up, and how the loop kept time.
+void timing_text(const RunSummary& s, const json& j, std::ostream& os) {
+  if (s.realtime) {
+    os << "  RT             "
+       << (s.rt.fifo ? "SCHED_FIFO " + std::to_string(s.rt.priority) : "SCHED_OTHER")
+       << (s.rt.memory_locked ? ", memory locked" : ", memory NOT locked")
+       << (s.rt.cpu_dma_latency_zero ? ", cpu_dma_latency 0" : "")
+       << (s.rt.cpu >= 0 ? ", CPU " + std::to_string(s.rt.cpu) : "") << "\n";
+    os << "  wake latency   " << line_us(j["wake_latency_us"]) << "\n";
+  }
+  os << "  compute        " << line_us(j["compute_us"]) << "\n";
+  os << "  overruns       " << counter_value(s.counters, "loop", "overruns") << " (missed ticks "
+     << counter_value(s.counters, "loop", "missed_ticks") << ")\n";
+}
+
+// What the wall did: contact, its energy, the passivity observer, reloads, the operator.
+void wall_text(const RunSummary& s, std::ostream& os) {
+  const auto loop = [&](std::string_view name) { return counter_value(s.counters, "loop", name); };
+  os << "  contact        " << loop("contact_ticks") << " ticks, max penetration "
+     << format_number(s.loop.max_penetration * 1e3) << " mm, saturated " << loop("saturated_ticks")
+     << " ticks\n";
+  os << "  wall energy    " << format_number(s.loop.wall_energy_j)
+     << " J (work the wall did on the device)\n";
+  passivity_text(s, os);
+  if (loop("reloads") > 0) {
+    os << "  reloads        " << loop("reloads") << " swapped in at a tick boundary\n";
+  }
+  if (s.operator_work_j) {
+    os << "  operator work  " << format_number(*s.operator_work_j)
+       << " J (done by the operator on the device)\n";
+  }
+}
+
+void log_text(const RunSummary& s, std::ostream& os) {
+  if (s.log_path.empty()) return;
+  os << "  tick log       " << s.log_path << ": " << s.log_records_written << " records, "
+     << s.log_records_dropped << " dropped";
+  if (s.log_io_errors) os << ", " << s.log_records_lost << " lost to WRITE ERRORS";
+  if (s.log_segments > 1) os << ", " << s.log_segments << " segments";
+  os << "\n";
+  if (s.log_files_deleted > 0) {
+    os << "                 (retention deleted " << s.log_files_deleted << " old files, "
+       << format_number(static_cast<double>(s.log_bytes_deleted) / (1u << 20)) << " MB)\n";
+  }
+  if (!s.previous_log.empty()) {
+    os << "                 (the previous log is now " << s.previous_log << ")\n";
+  }
+}
+
+// The device's end state: zero force and output off, or loudly not.
+void output_text(const RunSummary& s, std::ostream& os) {
+  os << "  output         " << s.device_name << " " << s.device_state << ", "
+     << (s.final_output_enabled ? "STILL ENABLED" : "disabled") << ", last command "
+     << format_number(s.final_command) << " N";
+  if (s.loopback) {
+    os << " (peer: " << (s.peer_output_on ? "AMPLIFIER ON" : "amplifier off") << ", force "
+       << format_number(s.peer_applied_force) << " N)";
+  }
+  os << "\n";
 }
 
 }  // namespace
@@ -105,7 +165,6 @@ json summary_to_json(const RunSummary& s) {
 }
 
 std::string summary_to_text(const RunSummary& s) {
-  using gate::format_number;
   const json j = summary_to_json(s);
   std::ostringstream os;
   os << "hapticd run: " << s.loop.ticks << " ticks, "
@@ -119,52 +178,10 @@ std::string summary_to_text(const RunSummary& s) {
        << " N/m: the largest that passes the gate (safety.gate: derate; the last derating of "
           "the run, at start or by a reload)\n";
   }
-  if (s.realtime) {
-    os << "  RT             "
-       << (s.rt.fifo ? "SCHED_FIFO " + std::to_string(s.rt.priority) : "SCHED_OTHER")
-       << (s.rt.memory_locked ? ", memory locked" : ", memory NOT locked")
-       << (s.rt.cpu_dma_latency_zero ? ", cpu_dma_latency 0" : "")
-       << (s.rt.cpu >= 0 ? ", CPU " + std::to_string(s.rt.cpu) : "") << "\n";
-    os << "  wake latency   " << line_us(j["wake_latency_us"]) << "\n";
-  }
-  os << "  compute        " << line_us(j["compute_us"]) << "\n";
-  const auto loop = [&](std::string_view name) { return counter_value(s.counters, "loop", name); };
-  os << "  overruns       " << loop("overruns") << " (missed ticks " << loop("missed_ticks")
-     << ")\n";
-  os << "  contact        " << loop("contact_ticks") << " ticks, max penetration "
-     << format_number(s.loop.max_penetration * 1e3) << " mm, saturated " << loop("saturated_ticks")
-     << " ticks\n";
-  os << "  wall energy    " << format_number(s.loop.wall_energy_j)
-     << " J (work the wall did on the device)\n";
-  passivity_text(s, os);
-  if (loop("reloads") > 0) {
-    os << "  reloads        " << loop("reloads") << " swapped in at a tick boundary\n";
-  }
-  if (s.operator_work_j) {
-    os << "  operator work  " << format_number(*s.operator_work_j)
-       << " J (done by the operator on the device)\n";
-  }
-  if (!s.log_path.empty()) {
-    os << "  tick log       " << s.log_path << ": " << s.log_records_written << " records, "
-       << s.log_records_dropped << " dropped";
-    if (s.log_io_errors) os << ", " << s.log_records_lost << " lost to WRITE ERRORS";
-    if (s.log_segments > 1) os << ", " << s.log_segments << " segments";
-    os << "\n";
-    if (s.log_files_deleted > 0) {
-      os << "                 (retention deleted " << s.log_files_deleted << " old files, "
-         << format_number(static_cast<double>(s.log_bytes_deleted) / (1u << 20)) << " MB)\n";
-    }
-    if (!s.previous_log.empty())
-      os << "                 (the previous log is now " << s.previous_log << ")\n";
-  }
-  os << "  output         " << s.device_name << " " << s.device_state << ", "
-     << (s.final_output_enabled ? "STILL ENABLED" : "disabled") << ", last command "
-     << format_number(s.final_command) << " N";
-  if (s.loopback) {
-    os << " (peer: " << (s.peer_output_on ? "AMPLIFIER ON" : "amplifier off") << ", force "
-       << format_number(s.peer_applied_force) << " N)";
-  }
-  os << "\n";
+  timing_text(s, j, os);
+  wall_text(s, os);
+  log_text(s, os);
+  output_text(s, os);
   counters_text(s.counters, os);
   os << "  faults         "
      << (s.faults.empty() ? std::string("none") : std::to_string(s.faults.size())) << "\n";
