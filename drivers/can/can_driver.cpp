@@ -9,9 +9,8 @@
 
 #include "config/config_loader.h"
 #include "drivers/can/can_bus_load.h"
+#include "drivers/can/can_device.h"
 #include "drivers/can/canopen.h"
-#include "drivers/can/cia402_device.h"
-#include "drivers/can/odrive_device.h"
 #include "drivers/can/odrive_protocol.h"
 #include "sim/peers/can/cia402_peer.h"
 #include "sim/peers/can/odrive_peer.h"
@@ -41,12 +40,8 @@ Loopback can_loopback(const config::Config& cfg) {
     s.sdo_timeout_ms = std::max(s.sdo_timeout_ms, 2000);
     s.state_timeout_ms = std::max(s.state_timeout_ms, 5000);
     s.heartbeat_timeout_ms = std::max(s.heartbeat_timeout_ms, 2000);
-    const double period = cfg.loop.sample_period_s();
-    if (s.profile == Profile::kOdrive) {
-      device = std::make_unique<OdriveDevice>(s, period, std::move(open));
-    } else {
-      device = std::make_unique<Cia402Device>(s, period, std::move(open), cfg.loop.rt_priority);
-    }
+    device = std::make_unique<CanDevice>(s, cfg.loop.sample_period_s(), std::move(open),
+                                         cfg.loop.rt_priority);
   } else {
     device = make_can_device(cfg, std::move(open));
   }
@@ -102,13 +97,10 @@ std::vector<IdFilter> receive_filters(const config::Config& cfg, bool peer) {
 
 std::unique_ptr<Device> make_can_device(const config::Config& cfg,
                                         std::function<CanSocket()> open) {
-  const CanSettings& s = can_settings(cfg);
-  const double period = cfg.loop.sample_period_s();
-  if (s.profile == Profile::kOdrive)
-    return std::make_unique<OdriveDevice>(s, period, std::move(open));
   // A stop keeps SYNC going on the loop's clock: at its priority where the loop runs in real time.
   const int keeper = realtime_clock(cfg) ? cfg.loop.rt_priority : 0;
-  return std::make_unique<Cia402Device>(s, period, std::move(open), keeper);
+  return std::make_unique<CanDevice>(can_settings(cfg), cfg.loop.sample_period_s(), std::move(open),
+                                     keeper);
 }
 
 std::unique_ptr<sim::LoopbackPeer> make_can_peer(const config::Config& cfg, CanSocket socket,

@@ -11,13 +11,9 @@
 #include <cerrno>
 #include <system_error>
 
-namespace hapticd::drivers::can {
+#include "base/clock.h"
 
-std::int64_t PeriodicSender::now_ns() noexcept {
-  timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
-}
+namespace hapticd::drivers::can {
 
 void PeriodicSender::start(int fd, std::vector<Entry> entries, int priority) {
   if (thread_.joinable()) return;
@@ -52,18 +48,18 @@ void PeriodicSender::run(int fd, std::vector<Entry> entries, int priority) noexc
     pthread_setschedparam(pthread_self(), SCHED_FIFO, &sp);
   }
   std::vector<std::int64_t> due;
-  const std::int64_t start = now_ns();
+  const std::int64_t start = base::monotonic_ns();
   for (const Entry& e : entries) due.push_back(e.first_ns == 0 ? start : e.first_ns);
   pollfd p{stop_fd_, POLLIN, 0};
   while (!entries.empty()) {
     const std::int64_t next = *std::min_element(due.begin(), due.end());
-    const std::int64_t wait = std::max<std::int64_t>(0, next - now_ns());
+    const std::int64_t wait = std::max<std::int64_t>(0, next - base::monotonic_ns());
     const timespec ts{static_cast<time_t>(wait / 1'000'000'000),
                       static_cast<long>(wait % 1'000'000'000)};
     const int r = ppoll(&p, 1, &ts, nullptr);
     if (r > 0) return;  // stop() was called
     if (r < 0 && errno != EINTR) return;
-    const std::int64_t now = now_ns();
+    const std::int64_t now = base::monotonic_ns();
     for (std::size_t i = 0; i < entries.size(); ++i) {
       if (now < due[i]) continue;
       const WireFrame w = CanSocket::to_wire(entries[i].frame);

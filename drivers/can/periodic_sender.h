@@ -44,8 +44,6 @@ class PeriodicSender {
   // Not RT-safe: blocks until the first entry has been written `n` times (or stop()).
   void wait_written(std::uint64_t n) const noexcept;
 
-  static std::int64_t now_ns() noexcept;
-
  private:
   void run(int fd, std::vector<Entry> entries, int priority) noexcept;
 
