@@ -75,21 +75,21 @@ class CanLink {
   // Async-signal-safe: write(2) of those frames on the open socket.
   void emergency_stop() noexcept;
 
-  // --- RT-safe: called every tick ---
-  // One frame out, counted as sent or as refused by a full TX queue (kEmpty).
+  // RT-safe: called every tick. One frame out, counted as sent or as refused by a full TX
+  // queue (kEmpty). The socket is open.
   CanSocket::Io send_now(const CanFrame& f, int& error) noexcept;
-  // The next frame or bus event in, counted (malformed messages too).
+  // RT-safe: called every tick. The next frame or bus event in, counted (malformed messages
+  // too). The socket is open.
   CanSocket::Io receive(CanSocket::Received& rx, int& error) noexcept;
-  // Counts what the controller reported; the kind of fault when the report means frames no
-  // longer get through (bus-off, error passive, RX overflow), kNone when it is only counted.
+  // RT-safe: called every tick. Counts what the controller reported; the kind of fault when
+  // the report means frames no longer get through (bus-off, error passive, RX overflow),
+  // kNone when it is only counted.
   CanFaultKind on_bus_event(const BusEvent& e) noexcept;
+  // RT-safe: called every tick.
   void count(CanCounter c) noexcept { counters_[static_cast<std::size_t>(c)].add(); }
 
   // Any thread.
   std::span<const base::Counter> counters() const noexcept { return counters_; }
-  std::uint64_t value(CanCounter c) const noexcept {
-    return counters_[static_cast<std::size_t>(c)].value();
-  }
   // Not RT-safe. "1 frames of the wrong length (...), 2 SDO aborts": the anomalies that are
   // not zero, "" when there are none.
   std::string anomalies() const;

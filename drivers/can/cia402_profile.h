@@ -51,12 +51,14 @@ class Cia402Profile final : public CanProfile {
   void clear_fault() override;
   void close() noexcept override { keeper_.stop(); }
   std::vector<std::string> notices() const override { return notices_; }
+  // RT-safe: called every tick (the three below).
   FrameMeaning on_frame(const CanSocket::Received& rx, bool active) noexcept override;
   void sample(PositionSample& out) const noexcept override;
   std::span<const CanFrame> tick_frames(double force) noexcept override;
   std::string describe(const CanFault& fault, const std::string& bus) const override;
 
  private:
+  // RT-safe: called every tick (on_frame's parts).
   FrameMeaning on_tpdo1(const CanSocket::Received& rx, bool active) noexcept;
   FrameMeaning on_emcy(const CanFrame& f) noexcept;
   FrameMeaning on_heartbeat(const CanFrame& f, bool active) noexcept;
