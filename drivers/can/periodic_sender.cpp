@@ -3,13 +3,10 @@
 #include <poll.h>
 #include <pthread.h>
 #include <sched.h>
-#include <sys/eventfd.h>
 #include <time.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
-#include <system_error>
 
 #include "base/clock.h"
 
@@ -17,8 +14,7 @@ namespace hapticd::drivers::can {
 
 void PeriodicSender::start(int fd, std::vector<Entry> entries, int priority) {
   if (thread_.joinable()) return;
-  stop_fd_ = eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
-  if (stop_fd_ < 0) throw std::system_error(errno, std::system_category(), "eventfd");
+  stop_.emplace();
   first_written_.store(0);
   thread_ = std::thread(
       [this, fd, e = std::move(entries), priority]() mutable { run(fd, std::move(e), priority); });
@@ -27,16 +23,14 @@ void PeriodicSender::start(int fd, std::vector<Entry> entries, int priority) {
 
 void PeriodicSender::stop() noexcept {
   if (!thread_.joinable()) return;
-  const std::uint64_t one = 1;
-  [[maybe_unused]] const ssize_t n = write(stop_fd_, &one, sizeof one);
+  stop_->signal();
   thread_.join();
-  close(stop_fd_);
-  stop_fd_ = -1;
+  stop_.reset();
 }
 
 void PeriodicSender::wait_written(std::uint64_t n) const noexcept {
   while (thread_.joinable() && first_written_.load() < n) {
-    pollfd p{stop_fd_, POLLIN, 0};
+    pollfd p{stop_->fd(), POLLIN, 0};
     if (poll(&p, 1, 1) > 0) return;  // stopping
   }
 }
@@ -50,7 +44,7 @@ void PeriodicSender::run(int fd, std::vector<Entry> entries, int priority) noexc
   std::vector<std::int64_t> due;
   const std::int64_t start = base::monotonic_ns();
   for (const Entry& e : entries) due.push_back(e.first_ns == 0 ? start : e.first_ns);
-  pollfd p{stop_fd_, POLLIN, 0};
+  pollfd p{stop_->fd(), POLLIN, 0};
   while (!entries.empty()) {
     const std::int64_t next = *std::min_element(due.begin(), due.end());
     const std::int64_t wait = std::max<std::int64_t>(0, next - base::monotonic_ns());

@@ -14,10 +14,12 @@
 
 #include <atomic>
 #include <cstdint>
+#include <optional>
 #include <thread>
 #include <vector>
 
 #include "drivers/can/can_socket.h"
+#include "drivers/io/stop_event.h"
 
 namespace hapticd::drivers::can {
 
@@ -48,7 +50,7 @@ class PeriodicSender {
   void run(int fd, std::vector<Entry> entries, int priority) noexcept;
 
   std::thread thread_;
-  int stop_fd_ = -1;
+  std::optional<io::StopEvent> stop_;  // while running
   std::atomic<std::uint64_t> first_written_{0};
 };
 
