@@ -26,24 +26,6 @@ SimDevice::SimDevice(const config::DeviceConfig& config, double sample_period_s,
                      std::vector<double> replay_positions)
     : axis_(config, sample_period_s, std::move(replay_positions)) {}
 
-bool SimDevice::inject(PeerFault fault) noexcept {
-  switch (fault) {
-    case PeerFault::kStopAnswering:
-      stop_answering_.store(true);
-      return true;
-    case PeerFault::kSkipSequence:
-      skip_sequence_.store(true);
-      return true;
-    case PeerFault::kDeviceFault:
-      device_fault_.store(true);
-      return true;
-    case PeerFault::kTransportFault:
-      transport_fault_.store(true);
-      return true;
-  }
-  return false;
-}
-
 DeviceInfo SimDevice::on_configure() {
   axis_.reset();
   first_read_ = true;
@@ -56,22 +38,22 @@ void SimDevice::on_enable() { axis_.set_output(true); }
 void SimDevice::on_disable() noexcept { axis_.set_output(false); }
 
 IoStatus SimDevice::on_read(PositionSample& out) noexcept {
-  if (transport_fault_.load(std::memory_order_relaxed)) {
+  if (faults_.active(PeerFault::kTransportFault)) {
     set_fault_code(ENODEV);
     return IoStatus::kTransportFault;
   }
-  if (stop_answering_.load(std::memory_order_relaxed)) return IoStatus::kNoNewData;
+  if (faults_.active(PeerFault::kStopAnswering)) return IoStatus::kNoNewData;
   if (first_read_) {
     first_read_ = false;
   } else {
     axis_.step();
   }
-  if (skip_sequence_.exchange(false, std::memory_order_relaxed)) sequence_ += 3;
+  if (faults_.take(PeerFault::kSkipSequence)) sequence_ += 3;
   out.position = axis_.encoder_position();
   out.sequence = sequence_++;
   out.status = axis_.output_on() ? kStatusOutputEnabled : 0u;
   out.flags = kSampleHasSequence;
-  if (device_fault_.load(std::memory_order_relaxed)) {
+  if (faults_.active(PeerFault::kDeviceFault)) {
     out.status |= kStatusFault;
     set_fault_code(kStatusFault);
     return IoStatus::kDeviceFault;

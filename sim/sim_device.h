@@ -14,6 +14,7 @@
 #include "config/config.h"
 #include "drivers/device.h"
 #include "sim/peers/loopback_peer.h"
+#include "sim/peers/peer_state.h"
 #include "sim/sim_axis.h"
 
 namespace hapticd::sim {
@@ -32,7 +33,7 @@ class SimDevice final : public hapticd::Device {
   std::string_view driver_name() const noexcept override { return "sim"; }
   const SimAxis& axis() const noexcept { return axis_; }
   // Any thread: make the next reads or writes fail the way `fault` says.
-  bool inject(PeerFault fault) noexcept;
+  bool inject(PeerFault fault) noexcept { return faults_.inject(fault); }
 
  protected:
   // Back to the configured initial state at t = 0, output disabled, command zero.
@@ -52,10 +53,8 @@ class SimDevice final : public hapticd::Device {
   SimAxis axis_;
   bool first_read_ = true;
   std::uint64_t sequence_ = 0;
-  std::atomic<bool> stop_answering_{false};
-  std::atomic<bool> skip_sequence_{false};
-  std::atomic<bool> device_fault_{false};
-  std::atomic<bool> transport_fault_{false};
+  FaultFlags<PeerFault> faults_{PeerFault::kStopAnswering, PeerFault::kSkipSequence,
+                                PeerFault::kDeviceFault, PeerFault::kTransportFault};
 };
 
 // The sim device seen as its own peer: what the plant feels, and fault injection.

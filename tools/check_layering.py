@@ -59,9 +59,10 @@ PURE_CODECS = (
     "drivers/gpio/quadrature_decoder.h", "drivers/gpio/gpio_wire.h", "drivers/gpio/gpio_settings.h",
 )
 SEAM = ("drivers/device.h",)
-# The transports a driver and its simulated device both speak on: the fd helpers, and the
-# SocketCAN socket the simulated drives send their frames through.
-SHARED_TRANSPORTS = ("drivers/io/unique_fd.h", "drivers/can/can_socket.h")
+# The transports a driver and its simulated device both speak on: the fd helpers (an owning
+# descriptor, the eventfd that stops a polling thread), and the SocketCAN socket the simulated
+# drives send their frames through.
+SHARED_TRANSPORTS = ("drivers/io/unique_fd.h", "drivers/io/stop_event.h", "drivers/can/can_socket.h")
 
 # The only headers of drivers/ a module that may use drivers/ sees, where it may not see all.
 ONLY_OF_DRIVERS = {

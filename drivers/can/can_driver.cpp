@@ -8,9 +8,8 @@
 
 #include "base/errno_text.h"
 #include "drivers/can/can_bus_load.h"
+#include "drivers/can/can_device.h"
 #include "drivers/can/canopen.h"
-#include "drivers/can/cia402_device.h"
-#include "drivers/can/odrive_device.h"
 #include "drivers/can/odrive_protocol.h"
 
 namespace hapticd::drivers::can {
@@ -36,11 +35,8 @@ std::unique_ptr<Device> can_loopback_device(const config::Config& cfg, io::Uniqu
   s.sdo_timeout_ms = std::max(s.sdo_timeout_ms, 2000);
   s.state_timeout_ms = std::max(s.state_timeout_ms, 5000);
   s.heartbeat_timeout_ms = std::max(s.heartbeat_timeout_ms, 2000);
-  const double period = cfg.loop.sample_period_s();
-  if (s.profile == Profile::kOdrive) {
-    return std::make_unique<OdriveDevice>(s, period, std::move(open));
-  }
-  return std::make_unique<Cia402Device>(s, period, std::move(open), cfg.loop.rt_priority);
+  return std::make_unique<CanDevice>(s, cfg.loop.sample_period_s(), std::move(open),
+                                     cfg.loop.rt_priority);
 }
 
 // The frames the driver of cfg's profile needs to see.
@@ -75,13 +71,10 @@ std::vector<std::string> can_notes(const config::Config& cfg) {
 
 std::unique_ptr<Device> make_can_device(const config::Config& cfg,
                                         std::function<CanSocket()> open) {
-  const CanSettings& s = can_settings(cfg);
-  const double period = cfg.loop.sample_period_s();
-  if (s.profile == Profile::kOdrive)
-    return std::make_unique<OdriveDevice>(s, period, std::move(open));
   // A stop keeps SYNC going on the loop's clock: at its priority where the loop runs in real time.
   const int keeper = realtime_clock(cfg) ? cfg.loop.rt_priority : 0;
-  return std::make_unique<Cia402Device>(s, period, std::move(open), keeper);
+  return std::make_unique<CanDevice>(can_settings(cfg), cfg.loop.sample_period_s(), std::move(open),
+                                     keeper);
 }
 
 DeviceEntry device_entry() {

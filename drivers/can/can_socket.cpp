@@ -13,6 +13,7 @@
 #include <cstring>
 #include <vector>
 
+#include "base/clock.h"
 #include "drivers/device.h"
 
 namespace hapticd::drivers::can {
@@ -75,25 +76,19 @@ std::int64_t to_ns(const timespec& ts) noexcept {
 // two is read now (vDSO, no system call), so a step of the wall clock moves at most this frame;
 // the monotonic read is bracketed by two realtime reads and taken again when the bracket is
 // wide (the thread was preempted between them), so the offset is good to a few microseconds.
+// (CLOCK_REALTIME is read here only: base/clock.h is the monotonic clock.)
 std::int64_t realtime_to_monotonic(std::int64_t realtime_ns) noexcept {
   std::int64_t offset = 0;
   for (int attempt = 0; attempt < 4; ++attempt) {
     timespec r1;
-    timespec mono;
     timespec r2;
     clock_gettime(CLOCK_REALTIME, &r1);
-    clock_gettime(CLOCK_MONOTONIC, &mono);
+    const std::int64_t mono = base::monotonic_ns();
     clock_gettime(CLOCK_REALTIME, &r2);
-    offset = (to_ns(r1) + (to_ns(r2) - to_ns(r1)) / 2) - to_ns(mono);
+    offset = (to_ns(r1) + (to_ns(r2) - to_ns(r1)) / 2) - mono;
     if (to_ns(r2) - to_ns(r1) < 20'000) break;
   }
   return realtime_ns - offset;
-}
-
-std::int64_t monotonic_now() noexcept {
-  timespec mono;
-  clock_gettime(CLOCK_MONOTONIC, &mono);
-  return to_ns(mono);
 }
 
 void enable_timestamps(int fd, const std::string& what) {
@@ -208,7 +203,7 @@ CanSocket::Io CanSocket::receive(Received& out, int& error) noexcept {
       out.time_ns = realtime_to_monotonic(to_ns(ts));
     }
   }
-  const std::int64_t now = monotonic_now();
+  const std::int64_t now = base::monotonic_ns();
   // Never in the future (a wall-clock step between the stamp and now would put it there).
   if (out.time_ns == 0 || out.time_ns > now) out.time_ns = now;
   out.is_event = (cf.can_id & CAN_ERR_FLAG) != 0;

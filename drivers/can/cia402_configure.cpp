@@ -1,13 +1,12 @@
-// The CiA 402 drive's start-up over SDO (cia402_device.h): the SDO client, and configure's
+// The CiA 402 drive's start-up over SDO (cia402_profile.h): the SDO client, and configure's
 // steps, each object written, read, or - for those a drive may lack - skipped with a notice.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <ctime>
 #include <map>
 
-#include "drivers/can/cia402.h"
-#include "drivers/can/cia402_device.h"
+#include "base/clock.h"
+#include "drivers/can/cia402_profile.h"
 
 namespace hapticd::drivers::can {
 namespace {
@@ -27,20 +26,19 @@ std::string number(double v) {
 
 }  // namespace
 
-std::string Cia402Device::node_name() const {
-  return "can: node " + std::to_string(settings_.node_id) + " on " +
-         (socket_ ? socket_->description() : settings_.interface);
+std::string Cia402Profile::node_name() const {
+  return "can: node " + std::to_string(settings_.node_id) + " on " + link_.description();
 }
 
 // --- SDO client ---
 
-std::string Cia402Device::sdo_where(SdoAddress at, const char* name) const {
+std::string Cia402Profile::sdo_where(SdoAddress at, const char* name) const {
   char buf[24];
   std::snprintf(buf, sizeof buf, "0x%04X:%02X", at.index, at.subindex);
   return node_name() + ": SDO " + buf + " (" + name + ")";
 }
 
-void Cia402Device::note_async(const CanFrame& f) {
+void Cia402Profile::note_async(const CanFrame& f) {
   if (f.id == canopen::kEmcyBase + settings_.node_id) {
     const auto e = canopen::decode_emcy(f);
     if (e && e->code == 0) return;  // an error reset is good news
@@ -51,12 +49,12 @@ void Cia402Device::note_async(const CanFrame& f) {
   }
 }
 
-SdoReply Cia402Device::sdo_exchange(const CanFrame& request, SdoAddress at, const char* name,
-                                    bool may_lack) {
-  send_or_throw(request, "an SDO request");
+SdoReply Cia402Profile::sdo_exchange(const CanFrame& request, SdoAddress at, const char* name,
+                                     bool may_lack) {
+  link_.send(request, "an SDO request");
   const std::uint32_t reply_id = canopen::kSdoTxBase + settings_.node_id;
   SdoReply reply;
-  const bool answered = await(
+  const bool answered = link_.await(
       settings_.sdo_timeout_ms,
       [&](const CanFrame& f) {
         if (f.id != reply_id) return false;
@@ -70,7 +68,7 @@ SdoReply Cia402Device::sdo_exchange(const CanFrame& request, SdoAddress at, cons
                       " ms (node id, bitrate, wiring, or the drive is not powered)");
   }
   if (reply.kind == SdoReply::Kind::kAbort) {
-    counters_.sdo_aborts.fetch_add(1, std::memory_order_relaxed);
+    link_.count(CanCounter::kSdoAborts);
     if (may_lack && (reply.abort_code == kAbortNoObject || reply.abort_code == kAbortNoSubindex)) {
       return reply;
     }
@@ -83,7 +81,7 @@ SdoReply Cia402Device::sdo_exchange(const CanFrame& request, SdoAddress at, cons
   return reply;
 }
 
-std::optional<std::uint32_t> Cia402Device::sdo_read_optional(SdoAddress at, const char* name) {
+std::optional<std::uint32_t> Cia402Profile::sdo_read_optional(SdoAddress at, const char* name) {
   const SdoReply r =
       sdo_exchange(canopen::sdo_upload_request(settings_.node_id, at), at, name, true);
   if (r.kind == SdoReply::Kind::kAbort) return std::nullopt;
@@ -93,7 +91,7 @@ std::optional<std::uint32_t> Cia402Device::sdo_read_optional(SdoAddress at, cons
   return r.value;
 }
 
-std::uint32_t Cia402Device::sdo_read(SdoAddress at, const char* name) {
+std::uint32_t Cia402Profile::sdo_read(SdoAddress at, const char* name) {
   const SdoReply r = sdo_exchange(canopen::sdo_upload_request(settings_.node_id, at), at, name);
   if (r.kind != SdoReply::Kind::kUploadValue) {
     throw DeviceError(sdo_where(at, name) + ": answered a read with a write confirmation");
@@ -101,8 +99,8 @@ std::uint32_t Cia402Device::sdo_read(SdoAddress at, const char* name) {
   return r.value;
 }
 
-bool Cia402Device::sdo_write_optional(SdoAddress at, std::uint32_t value, std::uint8_t size,
-                                      const char* name) {
+bool Cia402Profile::sdo_write_optional(SdoAddress at, std::uint32_t value, std::uint8_t size,
+                                       const char* name) {
   const SdoReply r = sdo_exchange(canopen::sdo_download_request(settings_.node_id, at, value, size),
                                   at, name, true);
   if (r.kind == SdoReply::Kind::kAbort) return false;
@@ -112,8 +110,8 @@ bool Cia402Device::sdo_write_optional(SdoAddress at, std::uint32_t value, std::u
   return true;
 }
 
-void Cia402Device::sdo_write(SdoAddress at, std::uint32_t value, std::uint8_t size,
-                             const char* name) {
+void Cia402Profile::sdo_write(SdoAddress at, std::uint32_t value, std::uint8_t size,
+                              const char* name) {
   const SdoReply r =
       sdo_exchange(canopen::sdo_download_request(settings_.node_id, at, value, size), at, name);
   if (r.kind != SdoReply::Kind::kDownloadConfirmed) {
@@ -123,12 +121,12 @@ void Cia402Device::sdo_write(SdoAddress at, std::uint32_t value, std::uint8_t si
 
 // --- configure ---
 
-PowerState Cia402Device::read_state(std::uint16_t& statusword) {
+PowerState Cia402Profile::read_state(std::uint16_t& statusword) {
   statusword = static_cast<std::uint16_t>(sdo_read(cia402::kStatusword, "statusword"));
   return cia402::decode_statusword(statusword);
 }
 
-std::string Cia402Device::drive_error_text() {
+std::string Cia402Profile::drive_error_text() {
   try {
     const auto code = static_cast<std::uint16_t>(sdo_read(cia402::kErrorCode, "error code"));
     return "error code 0x603F = " + canopen::describe_emcy_code(code);
@@ -137,9 +135,9 @@ std::string Cia402Device::drive_error_text() {
   }
 }
 
-void Cia402Device::switch_off_and_identify() {
+void Cia402Profile::switch_off_and_identify() {
   const std::uint8_t node = settings_.node_id;
-  send_or_throw(canopen::nmt_command(canopen::NmtCommand::kEnterPreOperational, node), "NMT");
+  link_.send(canopen::nmt_command(canopen::NmtCommand::kEnterPreOperational, node), "NMT");
   const std::uint32_t type = sdo_read(cia402::kDeviceType, "device type");
   if ((type & 0xFFFF) != cia402::kDeviceProfile402) {
     throw DeviceError("can: node " + std::to_string(node) + " is not a CiA 402 drive (device " +
@@ -164,7 +162,7 @@ void Cia402Device::switch_off_and_identify() {
 // passed and the configuration promises, saying nothing (the axis goes through it with no
 // fault). Refused, with the two ways out: a warning would leave the wall that was asked for
 // unrendered, and the gate cannot see a force limit (its saturation warning would be wrong).
-void Cia402Device::check_torque_limit() {
+void Cia402Profile::check_torque_limit() {
   const auto limit = sdo_read_optional(cia402::kMaxTorque, "max torque");
   if (!limit) {
     notices_.push_back(node_name() +
@@ -188,18 +186,18 @@ void Cia402Device::check_torque_limit() {
   }
 }
 
-void Cia402Device::select_mode() {
+void Cia402Profile::select_mode() {
   sdo_write(cia402::kModesOfOperation,
             static_cast<std::uint8_t>(cia402::kModeCyclicSynchronousTorque), 1,
             "modes of operation");
   // Drives switch mode on their own cycle and show it in 0x6061 when done, some ms later.
-  const std::int64_t deadline = now_ms() + settings_.state_timeout_ms;
+  const std::int64_t deadline = base::monotonic_ms() + settings_.state_timeout_ms;
   std::int8_t shown = 0;
   while ((shown = static_cast<std::int8_t>(
               sdo_read(cia402::kModesOfOperationDisplay, "modes of operation display"))) !=
              cia402::kModeCyclicSynchronousTorque &&
-         now_ms() < deadline) {
-    socket_->wait_readable(2);
+         base::monotonic_ms() < deadline) {
+    link_.wait_readable(2);
   }
   if (shown != cia402::kModeCyclicSynchronousTorque) {
     throw DeviceError("can: node " + std::to_string(settings_.node_id) +
@@ -210,7 +208,7 @@ void Cia402Device::select_mode() {
 }
 
 // 0x1006 and 0x60C2: the cycle, for drives that watch SYNC or interpolate on it.
-void Cia402Device::write_cycle_objects() {
+void Cia402Profile::write_cycle_objects() {
   const auto cycle_us = static_cast<std::uint32_t>(std::lround(period_s_ * 1e6));
   has_cycle_period_ = sdo_write_optional(cia402::kCommunicationCyclePeriod, cycle_us, 4,
                                          "communication cycle period");
@@ -237,7 +235,7 @@ void Cia402Device::write_cycle_objects() {
   }
 }
 
-void Cia402Device::write_parameters() {
+void Cia402Profile::write_parameters() {
   const Cia402Settings& c = settings_.cia402;
   select_mode();
   write_cycle_objects();
@@ -258,7 +256,7 @@ void Cia402Device::write_parameters() {
   sdo_write(cia402::kTargetTorque, 0, 2, "target torque");
 }
 
-void Cia402Device::map_pdos() {
+void Cia402Profile::map_pdos() {
   const bool verify = settings_.cia402.pdo_mapping == PdoMapping::kVerify;
   std::map<std::uint16_t, std::uint32_t> cob_ids;  // each PDO's COB-ID as the drive holds it
   for (const cia402::MappingEntry& e :
@@ -291,10 +289,9 @@ void Cia402Device::map_pdos() {
   }
 }
 
-DeviceInfo Cia402Device::on_configure() {
+DeviceInfo Cia402Profile::configure() {
   notices_.clear();
   stopped_ = true;
-  open_transport();
   switch_off_and_identify();
   check_torque_limit();
   write_parameters();
@@ -309,10 +306,11 @@ DeviceInfo Cia402Device::on_configure() {
   master_heartbeat_ticks_ =
       hb == 0 ? 0 : std::max<std::uint32_t>(1, static_cast<std::uint32_t>(hb * 1e-3 / period_s_));
   // A crash: zero torque and the power stage off at one SYNC, then pre-operational.
-  set_emergency_frames({canopen::rpdo1_frame(node, cia402::kCwShutdown, 0), canopen::sync_frame(),
-                        canopen::nmt_command(canopen::NmtCommand::kEnterPreOperational, node)});
+  link_.set_emergency_frames(
+      {canopen::rpdo1_frame(node, cia402::kCwShutdown, 0), canopen::sync_frame(),
+       canopen::nmt_command(canopen::NmtCommand::kEnterPreOperational, node)});
   DeviceInfo info;
-  info.description = "cia402 node " + std::to_string(node) + " on " + socket_->description() +
+  info.description = "cia402 node " + std::to_string(node) + " on " + link_.description() +
                      " (vendor " + hex(vendor, 8) + ", rated torque " +
                      std::to_string(rated_torque_mnm_) + " mN m)";
   info.transport_delay_samples = 1;

@@ -3,26 +3,18 @@
 #include <poll.h>
 #include <pthread.h>
 #include <sched.h>
-#include <sys/eventfd.h>
 #include <time.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
-#include <system_error>
+
+#include "base/clock.h"
 
 namespace hapticd::drivers::can {
 
-std::int64_t PeriodicSender::now_ns() noexcept {
-  timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
-}
-
 void PeriodicSender::start(int fd, std::vector<Entry> entries, int priority) {
   if (thread_.joinable()) return;
-  stop_fd_ = eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
-  if (stop_fd_ < 0) throw std::system_error(errno, std::system_category(), "eventfd");
+  stop_.emplace();
   first_written_.store(0);
   thread_ = std::thread(
       [this, fd, e = std::move(entries), priority]() mutable { run(fd, std::move(e), priority); });
@@ -31,16 +23,14 @@ void PeriodicSender::start(int fd, std::vector<Entry> entries, int priority) {
 
 void PeriodicSender::stop() noexcept {
   if (!thread_.joinable()) return;
-  const std::uint64_t one = 1;
-  [[maybe_unused]] const ssize_t n = write(stop_fd_, &one, sizeof one);
+  stop_->signal();
   thread_.join();
-  close(stop_fd_);
-  stop_fd_ = -1;
+  stop_.reset();
 }
 
 void PeriodicSender::wait_written(std::uint64_t n) const noexcept {
   while (thread_.joinable() && first_written_.load() < n) {
-    pollfd p{stop_fd_, POLLIN, 0};
+    pollfd p{stop_->fd(), POLLIN, 0};
     if (poll(&p, 1, 1) > 0) return;  // stopping
   }
 }
@@ -52,18 +42,18 @@ void PeriodicSender::run(int fd, std::vector<Entry> entries, int priority) noexc
     pthread_setschedparam(pthread_self(), SCHED_FIFO, &sp);
   }
   std::vector<std::int64_t> due;
-  const std::int64_t start = now_ns();
+  const std::int64_t start = base::monotonic_ns();
   for (const Entry& e : entries) due.push_back(e.first_ns == 0 ? start : e.first_ns);
-  pollfd p{stop_fd_, POLLIN, 0};
+  pollfd p{stop_->fd(), POLLIN, 0};
   while (!entries.empty()) {
     const std::int64_t next = *std::min_element(due.begin(), due.end());
-    const std::int64_t wait = std::max<std::int64_t>(0, next - now_ns());
+    const std::int64_t wait = std::max<std::int64_t>(0, next - base::monotonic_ns());
     const timespec ts{static_cast<time_t>(wait / 1'000'000'000),
                       static_cast<long>(wait % 1'000'000'000)};
     const int r = ppoll(&p, 1, &ts, nullptr);
     if (r > 0) return;  // stop() was called
     if (r < 0 && errno != EINTR) return;
-    const std::int64_t now = now_ns();
+    const std::int64_t now = base::monotonic_ns();
     for (std::size_t i = 0; i < entries.size(); ++i) {
       if (now < due[i]) continue;
       const WireFrame w = CanSocket::to_wire(entries[i].frame);

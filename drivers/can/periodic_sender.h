@@ -14,10 +14,12 @@
 
 #include <atomic>
 #include <cstdint>
+#include <optional>
 #include <thread>
 #include <vector>
 
 #include "drivers/can/can_socket.h"
+#include "drivers/io/stop_event.h"
 
 namespace hapticd::drivers::can {
 
@@ -44,13 +46,11 @@ class PeriodicSender {
   // Not RT-safe: blocks until the first entry has been written `n` times (or stop()).
   void wait_written(std::uint64_t n) const noexcept;
 
-  static std::int64_t now_ns() noexcept;
-
  private:
   void run(int fd, std::vector<Entry> entries, int priority) noexcept;
 
   std::thread thread_;
-  int stop_fd_ = -1;
+  std::optional<io::StopEvent> stop_;  // while running
   std::atomic<std::uint64_t> first_written_{0};
 };
 

@@ -2,67 +2,57 @@
 // events has its own event descriptor and its own 16-event kernel FIFO; an overflow drops the
 // newest events silently (no sequence numbers), so lost edges show only as the decoder's
 // illegal transitions. Event timestamps are CLOCK_MONOTONIC (Linux >= 5.7).
-#include <fcntl.h>
 #include <gpiod.h>
 
+#include <algorithm>
 #include <array>
 #include <cerrno>
-#include <cstring>
 #include <vector>
 
 #include "drivers/device.h"
 #include "drivers/gpio/gpio_wire.h"
 #include "drivers/gpio/gpiod_lines.h"
+#include "drivers/gpio/gpiod_lines_common.h"
 
 namespace hapticd::drivers::gpio {
 namespace {
 
-constexpr const char* kConsumer = "hapticd";
-constexpr unsigned kKernelFifo = 16;  // uAPI v1: events a line's FIFO holds
+using gpiod_common::InputLine;
+using gpiod_common::kConsumer;
+using gpiod_common::why;
 
-std::string why(int err) {
-  if (err == EBUSY) return "busy (another process or a kernel driver holds it: see gpioinfo)";
-  if (err == EACCES || err == EPERM) {
-    return std::string(std::strerror(err)) +
-           " (`hapticd udev-rules` writes the rules that give group hapticd access)";
-  }
-  return std::strerror(err);
-}
+constexpr unsigned kKernelFifo = 16;  // uAPI v1: events a line's FIFO holds
 
 }  // namespace
 
 struct GpiodLines::Impl {
   gpiod_chip* chip = nullptr;
   std::string chip_desc;
-  struct Input {
-    gpiod_line* line = nullptr;
-    Line role = Line::kA;
-    unsigned offset = 0;
-    int fd = -1;
-  };
-  std::vector<Input> inputs;  // fixed after open: the RT path only indexes it
+  // Index-aligned and fixed after open: the RT path only indexes them.
+  std::vector<InputLine> inputs;
+  std::vector<gpiod_line*> lines;
+  std::vector<int> fds;  // each input line's own event descriptor
   gpiod_line* direction = nullptr;
   unsigned direction_offset = 0;
 
-  void request_input(Line role, unsigned offset) {
-    gpiod_line* l = gpiod_chip_get_line(chip, offset);
+  void request_input(const InputLine& in) {
+    gpiod_line* l = gpiod_chip_get_line(chip, in.offset);
     if (l == nullptr) {
-      throw DeviceError("gpio: " + chip_desc + " has no line " + std::to_string(offset));
+      throw DeviceError("gpio: " + chip_desc + " has no line " + std::to_string(in.offset));
     }
     if (gpiod_line_request_both_edges_events(l, kConsumer) != 0) {
-      throw DeviceError("gpio: cannot request line " + std::to_string(offset) + " of " + chip_desc +
-                        " for edge events: " + why(errno));
+      throw DeviceError("gpio: cannot request line " + std::to_string(in.offset) + " of " +
+                        chip_desc + " for edge events: " + why(errno));
     }
     const int fd = gpiod_line_event_get_fd(l);
-    // The library reads with a blocking read(2); non-blocking makes an empty FIFO EAGAIN.
-    const int flags = fcntl(fd, F_GETFL);
-    if (flags < 0 || fcntl(fd, F_SETFL, flags | O_NONBLOCK) != 0) {
-      const int e = errno;
+    if (const int e = gpiod_common::make_nonblocking(fd); e != 0) {
       gpiod_line_release(l);
-      throw DeviceError("gpio: cannot make line " + std::to_string(offset) +
+      throw DeviceError("gpio: cannot make line " + std::to_string(in.offset) +
                         "'s event descriptor non-blocking: " + why(e));
     }
-    inputs.push_back({l, role, offset, fd});
+    inputs.push_back(in);
+    lines.push_back(l);
+    fds.push_back(fd);
   }
 };
 
@@ -83,11 +73,7 @@ void GpiodLines::open(const std::string& chip, const LineOffsets& lines, bool di
   }
   m.chip_desc = std::string(gpiod_chip_name(m.chip)) + " [" + gpiod_chip_label(m.chip) + "]";
   try {
-    m.inputs.reserve(4);
-    m.request_input(Line::kA, lines.a);
-    m.request_input(Line::kB, lines.b);
-    if (lines.index) m.request_input(Line::kIndex, *lines.index);
-    if (lines.fault) m.request_input(Line::kFault, *lines.fault);
+    for (const InputLine& in : gpiod_common::input_lines(lines)) m.request_input(in);
     m.direction = gpiod_chip_get_line(m.chip, lines.direction);
     if (m.direction == nullptr ||
         gpiod_line_request_output(m.direction, kConsumer, direction_level ? 1 : 0) != 0) {
@@ -110,25 +96,18 @@ void GpiodLines::close() noexcept {
   gpiod_chip_close(m.chip);
   m.chip = nullptr;
   m.inputs.clear();
+  m.lines.clear();
+  m.fds.clear();
   m.direction = nullptr;
 }
 
 std::uint8_t GpiodLines::read_levels() {
-  std::uint8_t levels = 0;
-  for (const Impl::Input& in : impl_->inputs) {
-    const int v = gpiod_line_get_value(in.line);
-    if (v < 0) {
-      throw DeviceError("gpio: cannot read line " + std::to_string(in.offset) + ": " + why(errno));
-    }
-    if (v != 0) levels |= static_cast<std::uint8_t>(1u << static_cast<unsigned>(in.role));
-  }
-  return levels;
+  return gpiod_common::read_levels(
+      impl_->inputs, [&](std::size_t i) { return gpiod_line_get_value(impl_->lines[i]); });
 }
 
 std::string GpiodLines::describe() const {
-  std::string lines;
-  for (const Impl::Input& in : impl_->inputs) lines += std::to_string(in.offset) + ",";
-  return impl_->chip_desc + " lines " + lines + "dir " + std::to_string(impl_->direction_offset);
+  return gpiod_common::describe(impl_->chip_desc, impl_->inputs, impl_->direction_offset);
 }
 
 // RT-safe: called every tick.
@@ -136,11 +115,12 @@ int GpiodLines::read_events(std::span<Edge> out, std::size_t& count, std::uint64
   count = 0;
   lost = 0;  // uAPI v1 drops the newest events without a trace
   std::array<gpiod_line_event, kKernelFifo> ev;
-  for (const Impl::Input& in : impl_->inputs) {
+  const Impl& m = *impl_;
+  for (std::size_t line = 0; line < m.inputs.size(); ++line) {
     while (count < out.size()) {
       const unsigned room =
           static_cast<unsigned>(std::min<std::size_t>(kKernelFifo, out.size() - count));
-      const int n = gpiod_line_event_read_fd_multiple(in.fd, ev.data(), room);
+      const int n = gpiod_line_event_read_fd_multiple(m.fds[line], ev.data(), room);
       if (n < 0) {
         if (errno == EAGAIN) break;
         return errno;
@@ -149,20 +129,15 @@ int GpiodLines::read_events(std::span<Edge> out, std::size_t& count, std::uint64
         Edge& e = out[count++];
         e.time_ns = static_cast<std::int64_t>(ev[i].ts.tv_sec) * 1'000'000'000 + ev[i].ts.tv_nsec;
         e.seqno = 0;
-        e.line = in.role;
+        e.line = m.inputs[line].role;
         e.level = ev[i].event_type == GPIOD_LINE_EVENT_RISING_EDGE;
       }
       if (static_cast<unsigned>(n) < room) break;
     }
   }
-  // Each line's events are in time order; merge the lines by timestamp (insertion sort,
-  // stable: a handful of events per tick).
-  for (std::size_t i = 1; i < count; ++i) {
-    const Edge e = out[i];
-    std::size_t j = i;
-    for (; j > 0 && out[j - 1].time_ns > e.time_ns; --j) out[j] = out[j - 1];
-    out[j] = e;
-  }
+  // Each line's events are in time order; the lines merged by timestamp.
+  gpiod_common::order_edges(out.first(count),
+                            [](const Edge& a, const Edge& b) { return a.time_ns < b.time_ns; });
   return 0;
 }
 

@@ -5,7 +5,6 @@
 // buffer overflowed (it drops the oldest) or an edge was merged into the next on its line, and
 // tells how many edges were lost.
 #include <dirent.h>
-#include <fcntl.h>
 #include <gpiod.h>
 
 #include <algorithm>
@@ -17,21 +16,16 @@
 #include "drivers/gpio/gpio_transport.h"
 #include "drivers/gpio/gpio_wire.h"
 #include "drivers/gpio/gpiod_lines.h"
+#include "drivers/gpio/gpiod_lines_common.h"
 
 namespace hapticd::drivers::gpio {
 namespace {
 
-constexpr const char* kConsumer = "hapticd";
-constexpr std::size_t kEventBuffer = 256;  // the kernel's and ours: many ticks of edges
+using gpiod_common::InputLine;
+using gpiod_common::kConsumer;
+using gpiod_common::why;
 
-std::string why(int err) {
-  if (err == EBUSY) return "busy (another process or a kernel driver holds it: see gpioinfo)";
-  if (err == EACCES || err == EPERM) {
-    return std::string(std::strerror(err)) +
-           " (`hapticd udev-rules` writes the rules that give group hapticd access)";
-  }
-  return std::strerror(err);
-}
+constexpr std::size_t kEventBuffer = 256;  // the kernel's and ours: many ticks of edges
 
 // gpiochip paths to try for `chip`: a path as given, a name under /dev, else every chip
 // (matched by label once open).
@@ -80,16 +74,12 @@ struct GpiodLines::Impl {
   gpiod_line_request* request = nullptr;
   gpiod_edge_event_buffer* buffer = nullptr;
   std::string chip_desc;
-  struct Input {
-    Line role;
-    unsigned offset;
-  };
-  std::vector<Input> inputs;  // fixed after open
+  std::vector<InputLine> inputs;  // fixed after open
   unsigned direction = 0;
   SequenceCheck seq;
 
   Line role_of(unsigned offset) const noexcept {
-    for (const Input& in : inputs) {
+    for (const InputLine& in : inputs) {
       if (in.offset == offset) return in.role;
     }
     return Line::kFault;  // not requested: cannot happen
@@ -110,12 +100,10 @@ void GpiodLines::open(const std::string& chip, const LineOffsets& lines, bool di
   if (m.chip == nullptr) {
     throw DeviceError("gpio: cannot open GPIO chip '" + chip + "': " + why(errno));
   }
-  m.inputs = {{Line::kA, lines.a}, {Line::kB, lines.b}};
-  if (lines.index) m.inputs.push_back({Line::kIndex, *lines.index});
-  if (lines.fault) m.inputs.push_back({Line::kFault, *lines.fault});
+  m.inputs = gpiod_common::input_lines(lines);
   m.direction = lines.direction;
   std::vector<unsigned> offsets;
-  for (const Impl::Input& in : m.inputs) offsets.push_back(in.offset);
+  for (const InputLine& in : m.inputs) offsets.push_back(in.offset);
 
   gpiod_line_settings* in = gpiod_line_settings_new();
   gpiod_line_settings* out = gpiod_line_settings_new();
@@ -146,12 +134,11 @@ void GpiodLines::open(const std::string& chip, const LineOffsets& lines, bool di
     throw DeviceError("gpio: cannot request lines of " + chip + " (encoder, direction " +
                       std::to_string(lines.direction) + "): " + why(err));
   }
-  // The library reads with a blocking read(2); non-blocking makes an empty buffer EAGAIN.
-  const int fd = gpiod_line_request_get_fd(m.request);
-  const int flags = fcntl(fd, F_GETFL);
   m.buffer = gpiod_edge_event_buffer_new(kEventBuffer);
-  if (flags < 0 || fcntl(fd, F_SETFL, flags | O_NONBLOCK) != 0 || m.buffer == nullptr) {
-    const int e = errno;
+  const int e = m.buffer == nullptr
+                    ? errno
+                    : gpiod_common::make_nonblocking(gpiod_line_request_get_fd(m.request));
+  if (m.buffer == nullptr || e != 0) {
     close();
     throw DeviceError("gpio: cannot set up the edge-event descriptor: " + why(e));
   }
@@ -169,23 +156,20 @@ void GpiodLines::close() noexcept {
 }
 
 std::uint8_t GpiodLines::read_levels() {
-  std::uint8_t levels = 0;
-  for (const Impl::Input& in : impl_->inputs) {
-    const gpiod_line_value v = gpiod_line_request_get_value(impl_->request, in.offset);
-    if (v == GPIOD_LINE_VALUE_ERROR) {
-      throw DeviceError("gpio: cannot read line " + std::to_string(in.offset) + ": " + why(errno));
+  return gpiod_common::read_levels(impl_->inputs, [&](std::size_t i) {
+    switch (gpiod_line_request_get_value(impl_->request, impl_->inputs[i].offset)) {
+      case GPIOD_LINE_VALUE_ERROR:
+        return -1;
+      case GPIOD_LINE_VALUE_ACTIVE:
+        return 1;
+      default:
+        return 0;
     }
-    if (v == GPIOD_LINE_VALUE_ACTIVE) {
-      levels |= static_cast<std::uint8_t>(1u << static_cast<unsigned>(in.role));
-    }
-  }
-  return levels;
+  });
 }
 
 std::string GpiodLines::describe() const {
-  std::string lines;
-  for (const Impl::Input& in : impl_->inputs) lines += std::to_string(in.offset) + ",";
-  return impl_->chip_desc + " lines " + lines + "dir " + std::to_string(impl_->direction);
+  return gpiod_common::describe(impl_->chip_desc, impl_->inputs, impl_->direction);
 }
 
 // RT-safe: called every tick.
@@ -215,15 +199,10 @@ int GpiodLines::read_events(std::span<Edge> out, std::size_t& count, std::uint64
   // Each line's interrupt thread queues its own events, so two lines' edges close together
   // can come out of the order the kernel numbered them in: back in that order (as uAPI v1's
   // lines are merged by timestamp), or each such pair would count as edges lost and out of
-  // order. Insertion sort, wrap-aware: a handful of events per tick.
-  for (std::size_t i = 1; i < count; ++i) {
-    const Edge e = out[i];
-    std::size_t j = i;
-    for (; j > 0 && static_cast<std::int32_t>(out[j - 1].seqno - e.seqno) > 0; --j) {
-      out[j] = out[j - 1];
-    }
-    out[j] = e;
-  }
+  // order. Wrap-aware.
+  gpiod_common::order_edges(out.first(count), [](const Edge& a, const Edge& b) {
+    return static_cast<std::int32_t>(b.seqno - a.seqno) > 0;
+  });
   // The kernel numbers events 1, 2, 3... per request.
   for (std::size_t i = 0; i < count; ++i) lost += m.seq.next(out[i].seqno);
   return 0;

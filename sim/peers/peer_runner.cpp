@@ -3,13 +3,10 @@
 #include <poll.h>
 #include <pthread.h>
 #include <sched.h>
-#include <sys/eventfd.h>
 #include <sys/ioctl.h>
-#include <unistd.h>
 
 #include <cerrno>
 #include <cstdint>
-#include <system_error>
 
 namespace hapticd::sim {
 namespace {
@@ -23,19 +20,16 @@ bool has_unread(int fd) noexcept {
 
 PeerRunner::PeerRunner(LoopbackPeer& peer, int priority) : peer_(peer) {
   if (peer_.fd() < 0) return;  // lives inside its driver: nothing to run
-  stop_fd_ = eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
-  if (stop_fd_ < 0) throw std::system_error(errno, std::system_category(), "eventfd");
+  stop_.emplace();
   thread_ = std::thread([this, priority] { run(priority); });
   pthread_setname_np(thread_.native_handle(), "hapticd-peer");
 }
 
 void PeerRunner::stop() noexcept {
   if (!thread_.joinable()) return;
-  const std::uint64_t one = 1;
-  [[maybe_unused]] const ssize_t n = write(stop_fd_, &one, sizeof one);
+  stop_->signal();
   thread_.join();
-  close(stop_fd_);
-  stop_fd_ = -1;
+  stop_.reset();
 }
 
 void PeerRunner::run(int priority) {
@@ -44,7 +38,7 @@ void PeerRunner::run(int priority) {
     sp.sched_priority = priority;
     pthread_setschedparam(pthread_self(), SCHED_FIFO, &sp);  // refused without privileges: fine
   }
-  pollfd fds[2] = {{peer_.fd(), POLLIN, 0}, {stop_fd_, POLLIN, 0}};
+  pollfd fds[2] = {{peer_.fd(), POLLIN, 0}, {stop_->fd(), POLLIN, 0}};
   while (true) {
     if (poll(fds, 2, peer_.service_interval_ms()) < 0 && errno != EINTR) break;
     // Asked to stop: what the driver said last (its disable) is still handled first, so the

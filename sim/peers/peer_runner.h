@@ -10,9 +10,11 @@
 
 #include <atomic>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <thread>
 
+#include "drivers/io/stop_event.h"
 #include "sim/peers/loopback_peer.h"
 
 namespace hapticd::sim {
@@ -41,7 +43,7 @@ class PeerRunner {
   void run(int priority);
 
   LoopbackPeer& peer_;
-  int stop_fd_ = -1;  // eventfd: wakes the thread to stop
+  std::optional<io::StopEvent> stop_;  // wakes the thread to stop
   std::atomic<bool> busy_{false};
   std::atomic<bool> failed_{false};
   std::atomic<std::uint32_t> rounds_{0};  // services done: what wait_idle sleeps on

@@ -71,7 +71,7 @@ TEST(CanCia402, AnAbortedSdoCarriesCiA301sText) {
                    "transferred or stored in the present device state"),
             std::string::npos)
       << e;
-  EXPECT_EQ(rig.can().can_counters().sdo_aborts.load(), 1u);
+  EXPECT_EQ(counter(rig.device(), "sdo_aborts").value(), 1u);
 }
 
 TEST(CanCia402, ANodeIdWithoutADriveIsNamedByItsTimeOut) {
@@ -114,17 +114,18 @@ TEST(CanCia402, TruncatedEmcyWrongLengthUnknownIdsAndJunkAreCountedAndNamed) {
   rig.tick(0.0, s);  // SYNC: the drive answers with a 5-byte TPDO1 and an unknown id
   EXPECT_EQ(rig.tick(0.0, s), IoStatus::kNoNewData) << "a TPDO of the wrong length is no sample";
   EXPECT_EQ(rig.tick(0.0, s), IoStatus::kOk);
-  const CanCounters& c = rig.can().can_counters();
-  EXPECT_EQ(c.wrong_length.load(), 1u);
-  EXPECT_GE(c.unknown_ids.load(), 1u);
-  EXPECT_EQ(c.malformed_messages.load(), 1u);
-  EXPECT_NE(rig.can().counter_summary().find("1 frames of the wrong length"), std::string::npos)
-      << rig.can().counter_summary();
+  for (const char* name : {"wrong_length", "unknown_ids", "malformed_messages"}) {
+    EXPECT_EQ(counter(rig.device(), name).kind(), base::CounterKind::kAnomaly) << name;
+  }
+  EXPECT_EQ(counter(rig.device(), "wrong_length").value(), 1u);
+  EXPECT_GE(counter(rig.device(), "unknown_ids").value(), 1u);
+  EXPECT_EQ(counter(rig.device(), "malformed_messages").value(), 1u);
   ASSERT_TRUE(rig.peer().inject_can(sim::CanPeerFault::kTruncatedEmcy));
   EXPECT_EQ(rig.run_until_fault(0.0, 3), IoStatus::kDeviceFault);
-  EXPECT_NE(rig.device().describe_fault().find("EMCY frame truncated to 2 bytes"),
-            std::string::npos)
-      << rig.device().describe_fault();
+  const std::string why = rig.device().describe_fault();
+  EXPECT_NE(why.find("EMCY frame truncated to 2 bytes"), std::string::npos) << why;
+  EXPECT_NE(why.find("also seen on the bus: 1 malformed messages"), std::string::npos) << why;
+  EXPECT_NE(why.find("1 frames of the wrong length"), std::string::npos) << why;
 }
 
 TEST(CanCia402, LostHeartbeatAndStalePdosAndBusOff) {

@@ -141,8 +141,10 @@ TEST(CanReferenceCia402, TheDrivesInternalLimitIsCounted) {
   rig.device->configure();
   rig.device->enable();
   EXPECT_EQ(rig.run(8.0, 600), IoStatus::kOk) << rig.device->describe_fault();
-  EXPECT_GT(rig.can().can_counters().internal_limit.load(), 3u);
-  EXPECT_NE(rig.can().counter_summary().find("statusword bit 11"), std::string::npos);
+  const base::Counter& limited = counter(*rig.device, "internal_limit");
+  EXPECT_GT(limited.value(), 3u);
+  EXPECT_EQ(limited.kind(), base::CounterKind::kAnomaly);
+  EXPECT_NE(limited.meaning().find("statusword bit 11"), std::string::npos) << limited.meaning();
 }
 
 // Issue 23, 7: `none` leaves 0x6007 alone, so a drive without it runs; otherwise a missing

@@ -2,13 +2,15 @@
 // CAN tests use them: loaded from an example configuration with overrides, in freerun.
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "config/config_loader.h"
-#include "drivers/can/can_device_base.h"
 #include "drivers/can/can_driver.h"
 #include "sim/peers/can/can_peer_base.h"
 #include "sim/peers/can/can_peer_entry.h"
@@ -34,6 +36,17 @@ inline config::Config load_example(const std::string& name, std::vector<std::str
                                   wiring::driver_schemas());
 }
 
+// One of the driver's counters, by name, as the run summary and `hapticctl status` list it
+// (Device::counters); a counter the driver does not have fails the test.
+inline const base::Counter& counter(const Device& device, std::string_view name) {
+  for (const base::Counter& c : device.counters()) {
+    if (c.name() == name) return c;
+  }
+  ADD_FAILURE() << "the can driver has no counter " << name;
+  static const base::Counter none("none", base::CounterKind::kCount, "");
+  return none;
+}
+
 struct CanRig {
   explicit CanRig(const config::Config& c)
       : cfg(c), pair(wiring::find_driver("can").make_loopback(c)), runner(*pair.peer) {}
@@ -55,7 +68,6 @@ struct CanRig {
     runner.stop();
   }
   Device& device() { return *pair.device; }
-  CanDeviceBase& can() { return dynamic_cast<CanDeviceBase&>(*pair.device); }
   sim::CanPeerBase& peer() { return dynamic_cast<sim::CanPeerBase&>(*pair.peer); }
   void settle() { runner.wait_idle(); }
   // One tick as the loop does it: read, then write, then wait for the drive to answer.

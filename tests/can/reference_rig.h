@@ -46,7 +46,6 @@ struct ReferenceRig {
     device->close();
     runner->stop();
   }
-  CanDeviceBase& can() { return dynamic_cast<CanDeviceBase&>(*device); }
   // Ticks for `ms` at the configured period, as the loop would (read, then write `force`);
   // the first fault status, or kOk.
   IoStatus run(double force, int ms) {

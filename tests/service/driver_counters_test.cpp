@@ -32,6 +32,10 @@ std::vector<DriverCase> cases() {
 #if HAPTICD_TEST_WITH_GPIO
   c.push_back({"gpio.yaml", "gpio", "missed_edges", false});
 #endif
+#if HAPTICD_TEST_WITH_CAN
+  c.push_back({"can-cia402.yaml", "can", "frames_received", true});
+  c.push_back({"can-odrive.yaml", "can", "frames_received", true});
+#endif
   return c;
 }
 

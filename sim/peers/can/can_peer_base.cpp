@@ -1,11 +1,12 @@
 #include "sim/peers/can/can_peer_base.h"
 
 #include <sys/socket.h>
-#include <time.h>
 
 #include <cstring>
 #include <stdexcept>
 #include <string>
+
+#include "base/clock.h"
 
 namespace hapticd::sim {
 
@@ -13,53 +14,16 @@ using drivers::can::BusEvent;
 using drivers::can::CanFrame;
 using drivers::can::CanSocket;
 
-CanPeerBase::CanPeerBase(const config::Config& cfg, CanSocket socket, bool realtime)
+CanPeerBase::CanPeerBase(const config::Config& cfg, CanSocket socket, bool realtime,
+                         std::initializer_list<CanPeerFault> own_faults)
     : settings_(drivers::can::can_settings(cfg)),
       period_s_(cfg.loop.sample_period_s()),
       axis_(cfg.device, cfg.loop.sample_period_s()),
       socket_(std::move(socket)),
-      realtime_(realtime) {}
-
-std::int64_t CanPeerBase::now_ns() noexcept {
-  timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
-}
-
-bool CanPeerBase::inject(PeerFault fault) noexcept {
-  switch (fault) {
-    case PeerFault::kStopAnswering:
-      stop_answering_.store(true);
-      return true;
-    case PeerFault::kSkipSequence:
-      return false;  // neither a PDO nor Get_Encoder_Estimates carries a sequence number
-    case PeerFault::kDeviceFault:
-      device_fault_.store(true);
-      return true;
-    case PeerFault::kTransportFault:
-      transport_fault_.store(true);
-      return true;
-  }
-  return false;
-}
-
-bool CanPeerBase::inject_can(CanPeerFault fault) noexcept {
-  switch (fault) {
-    case CanPeerFault::kStopHeartbeat:
-      stop_heartbeat_.store(true);
-      return true;
-    case CanPeerFault::kWrongLengthPdo:
-      wrong_length_.store(true);
-      return true;
-    case CanPeerFault::kUnknownIds:
-      unknown_ids_.store(true);
-      return true;
-    case CanPeerFault::kMalformedMessage:
-      malformed_.store(true);
-      return true;
-    default:
-      return false;
-  }
+      realtime_(realtime),
+      can_faults_({CanPeerFault::kStopHeartbeat, CanPeerFault::kWrongLengthPdo,
+                   CanPeerFault::kUnknownIds, CanPeerFault::kMalformedMessage}) {
+  for (CanPeerFault f : own_faults) can_faults_.allow(f);
 }
 
 void CanPeerBase::send(const CanFrame& f) {
@@ -72,14 +36,9 @@ void CanPeerBase::send(const CanFrame& f) {
   }
 }
 
-void CanPeerBase::publish() noexcept {
-  applied_force_.store(axis_.held_force(), std::memory_order_release);
-  output_on_.store(axis_.output_on(), std::memory_order_release);
-}
-
 void CanPeerBase::service() {
-  if (take(device_fault_)) apply_device_fault();
-  if (take(transport_fault_) && !bus_failed_) {
+  if (faults_.take(PeerFault::kDeviceFault)) apply_device_fault();
+  if (faults_.take(PeerFault::kTransportFault) && !bus_failed_) {
     // The bus fails: the master's controller reports bus-off, and this device, off the bus
     // too, reacts as it does to losing its master; from now on nothing gets through.
     BusEvent off;
@@ -89,7 +48,7 @@ void CanPeerBase::service() {
     bus_failed_ = true;
     on_bus_lost();
   }
-  if (take(malformed_)) {
+  if (can_faults_.take(CanPeerFault::kMalformedMessage)) {
     const unsigned char junk[5] = {0xDE, 0xAD, 0xBE, 0xEF, 0x00};
     [[maybe_unused]] const ssize_t n = ::send(fd(), junk, sizeof junk, MSG_DONTWAIT | MSG_NOSIGNAL);
   }
@@ -102,7 +61,7 @@ void CanPeerBase::service() {
     received_.fetch_add(1, std::memory_order_relaxed);
     if (!bus_failed_) handle(rx.frame);
   }
-  if (realtime_ && !bus_failed_) on_clock(now_ns());
+  if (realtime_ && !bus_failed_) on_clock(base::monotonic_ns());
   publish();
 }
 

@@ -1,8 +1,8 @@
 // What the simulated CAN devices (a CiA 402 drive, an ODrive axis) share: their end of the
 // transport (a socketpair or a real interface, through the driver's own CanSocket), the
 // simulated axis behind them, what the person holding the device feels (published for any
-// thread), a bus that can be made to fail, and CAN-specific faults beyond PeerFault. Each
-// device decodes and answers with the driver's own pure codecs.
+// thread: peer_state.h), a bus that can be made to fail, and CAN-specific faults beyond
+// PeerFault. Each device decodes and answers with the driver's own pure codecs.
 //
 // Timing: in freerun (a paced loopback) the device's clock is its protocol trigger (SYNC,
 // the encoder request), so a run is reproducible; in realtime (and on a real interface) its
@@ -11,11 +11,13 @@
 
 #include <atomic>
 #include <cstdint>
+#include <initializer_list>
 
 #include "config/config.h"
 #include "drivers/can/can_settings.h"
 #include "drivers/can/can_socket.h"
 #include "sim/peers/loopback_peer.h"
+#include "sim/peers/peer_state.h"
 #include "sim/sim_axis.h"
 
 namespace hapticd::sim {
@@ -36,34 +38,35 @@ class CanPeerBase : public LoopbackPeer {
   void service() override;
   int fd() const noexcept override { return socket_.fd(); }
   int service_interval_ms() const noexcept override { return realtime_ ? 1 : -1; }
-  double applied_force() const noexcept override {
-    return applied_force_.load(std::memory_order_acquire);
-  }
-  bool output_on() const noexcept override { return output_on_.load(std::memory_order_acquire); }
+  double applied_force() const noexcept override { return felt_.force(); }
+  bool output_on() const noexcept override { return felt_.on(); }
   const Plant& plant() const noexcept override { return axis_.plant(); }
-  bool inject(PeerFault fault) noexcept override;
+  // kSkipSequence is refused: neither a PDO nor Get_Encoder_Estimates carries a sequence
+  // number.
+  bool inject(PeerFault fault) noexcept override { return faults_.inject(fault); }
   // Any thread. False when this device cannot produce it.
-  virtual bool inject_can(CanPeerFault fault) noexcept;
-  // Any thread: frames this device received and sent so far.
+  bool inject_can(CanPeerFault fault) noexcept { return can_faults_.inject(fault); }
+  // Any thread: frames this device received so far.
   std::uint64_t frames_received() const noexcept { return received_.load(); }
 
  protected:
-  CanPeerBase(const config::Config& cfg, drivers::can::CanSocket socket, bool realtime);
+  // `own_faults`: the CAN faults this device can produce beyond those every simulated CAN
+  // device can (heartbeats stopped, a wrong-length answer, unknown ids, a malformed message).
+  CanPeerBase(const config::Config& cfg, drivers::can::CanSocket socket, bool realtime,
+              std::initializer_list<CanPeerFault> own_faults = {});
 
   // One frame from the master.
   virtual void handle(const drivers::can::CanFrame& f) = 0;
   // Realtime only: the device's own timers, at least every millisecond.
   virtual void on_clock(std::int64_t now_ns) = 0;
-  // Faults injected since the last call (flags below are consumed by the device).
+  // An injected PeerFault::kDeviceFault: the device's own way of reporting one.
   virtual void apply_device_fault() = 0;
   // The bus failed: the device's reaction to losing its master.
   virtual void on_bus_lost() = 0;
 
   void send(const drivers::can::CanFrame& f);
   // After each change of the axis: what any thread may read.
-  void publish() noexcept;
-  static std::int64_t now_ns() noexcept;
-  bool take(std::atomic<bool>& flag) noexcept { return flag.exchange(false); }
+  void publish() noexcept { felt_.publish(axis_); }
 
   const drivers::can::CanSettings settings_;
   const double period_s_;
@@ -71,21 +74,12 @@ class CanPeerBase : public LoopbackPeer {
   drivers::can::CanSocket socket_;
   const bool realtime_;
   bool bus_failed_ = false;
-
-  std::atomic<bool> stop_answering_{false};
-  std::atomic<bool> stop_heartbeat_{false};
-  std::atomic<bool> stop_sdo_{false};
-  std::atomic<bool> abort_sdo_{false};
-  std::atomic<bool> wrong_length_{false};
-  std::atomic<bool> unknown_ids_{false};
-  std::atomic<bool> truncated_emcy_{false};
-  std::atomic<bool> malformed_{false};
+  FaultFlags<PeerFault> faults_{PeerFault::kStopAnswering, PeerFault::kDeviceFault,
+                                PeerFault::kTransportFault};
+  FaultFlags<CanPeerFault> can_faults_;
 
  private:
-  std::atomic<bool> device_fault_{false};
-  std::atomic<bool> transport_fault_{false};
-  std::atomic<double> applied_force_{0.0};
-  std::atomic<bool> output_on_{false};
+  FeltOutput felt_;
   std::atomic<std::uint64_t> received_{0};
 };
 

@@ -39,7 +39,9 @@ bool mappable(std::uint32_t entry) {
 }  // namespace
 
 Cia402Peer::Cia402Peer(const config::Config& cfg, drivers::can::CanSocket socket, bool realtime)
-    : CanPeerBase(cfg, std::move(socket), realtime), node_(settings_.node_id) {
+    : CanPeerBase(cfg, std::move(socket), realtime,
+                  {CanPeerFault::kStopSdo, CanPeerFault::kAbortSdo, CanPeerFault::kTruncatedEmcy}),
+      node_(settings_.node_id) {
   // Factory defaults: the predefined connection set, with a mapping that is not hapticd's
   // (RPDO1 controlword only, TPDO1 statusword only, event-driven): `pdo_mapping: verify`
   // against a factory-fresh drive must fail, as it would on a real one.
@@ -73,22 +75,6 @@ Cia402Peer::Cia402Peer(const config::Config& cfg, drivers::can::CanSocket socket
 std::uint32_t Cia402Peer::object(std::uint16_t index, std::uint8_t sub) const {
   const auto it = od_.find({index, sub});
   return it == od_.end() ? 0 : it->second;
-}
-
-bool Cia402Peer::inject_can(CanPeerFault fault) noexcept {
-  switch (fault) {
-    case CanPeerFault::kStopSdo:
-      stop_sdo_.store(true);
-      return true;
-    case CanPeerFault::kAbortSdo:
-      abort_sdo_.store(true);
-      return true;
-    case CanPeerFault::kTruncatedEmcy:
-      truncated_emcy_.store(true);
-      return true;
-    default:
-      return CanPeerBase::inject_can(fault);
-  }
 }
 
 std::int32_t Cia402Peer::position_units() noexcept {
@@ -233,9 +219,9 @@ bool Cia402Peer::read_object(SdoAddress at, std::uint32_t& value, std::uint8_t& 
 }
 
 void Cia402Peer::on_sdo(const CanFrame& f) {
-  if (stop_sdo_.load() || nmt_ == NmtState::kStopped) return;
+  if (can_faults_.active(CanPeerFault::kStopSdo) || nmt_ == NmtState::kStopped) return;
   const SdoRequest r = canopen::decode_sdo_request(f);
-  if (abort_sdo_.exchange(false)) {
+  if (can_faults_.take(CanPeerFault::kAbortSdo)) {
     send(canopen::sdo_abort_frame(node_, canopen::kSdoTxBase, r.at, kWrongState));
     return;
   }

@@ -24,7 +24,6 @@ class Cia402Peer final : public CanPeerBase {
   static constexpr std::uint16_t kFaultEmcyCode = 0x2310;
 
   Cia402Peer(const config::Config& cfg, drivers::can::CanSocket socket, bool realtime);
-  bool inject_can(CanPeerFault fault) noexcept override;
 
   // Any thread, for tests: the power state and NMT state right now.
   drivers::can::cia402::PowerState power_state() const noexcept { return power_.load(); }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "base/clock.h"
 #include "sim/peers/can/cia402_peer.h"
 
 namespace hapticd::sim {
@@ -54,12 +55,14 @@ void Cia402Peer::send_tpdo(std::uint16_t comm, std::uint16_t map) {
     at += bytes;
   }
   f.len = static_cast<std::uint8_t>(at);
-  if (map == 0x1A00 && wrong_length_.exchange(false)) f.len = static_cast<std::uint8_t>(at - 1);
+  if (map == 0x1A00 && can_faults_.take(CanPeerFault::kWrongLengthPdo))
+    f.len = static_cast<std::uint8_t>(at - 1);
   send(f);
 }
 
 void Cia402Peer::heartbeat() {
-  if (!stop_heartbeat_.load()) send(canopen::heartbeat_frame(node_, nmt_));
+  if (!can_faults_.active(CanPeerFault::kStopHeartbeat))
+    send(canopen::heartbeat_frame(node_, nmt_));
 }
 
 void Cia402Peer::on_sync() {
@@ -74,17 +77,17 @@ void Cia402Peer::on_sync() {
     target_torque_ = pending_torque_;
     set_controlword(pending_cw_);
   }
-  if (!stop_answering_.load()) {
+  if (!faults_.active(PeerFault::kStopAnswering)) {
     for (std::uint16_t i = 0; i < 4; ++i) {
       send_tpdo(static_cast<std::uint16_t>(0x1800 + i), static_cast<std::uint16_t>(0x1A00 + i));
     }
   }
-  if (truncated_emcy_.exchange(false)) {
+  if (can_faults_.take(CanPeerFault::kTruncatedEmcy)) {
     CanFrame e = canopen::emcy_frame(node_, 0x1000, 0x01);
     e.len = 2;
     send(e);
   }
-  if (unknown_ids_.load()) send(drivers::can::make_frame(0x7E5, 3));
+  if (can_faults_.active(CanPeerFault::kUnknownIds)) send(drivers::can::make_frame(0x7E5, 3));
   const std::uint32_t producer_ms = object(0x1017, 0);
   if (!realtime_ && producer_ms > 0) {
     const auto every =
@@ -99,7 +102,7 @@ void Cia402Peer::handle(const CanFrame& f) {
   if (const auto c = canopen::decode_nmt(f, node_)) {
     on_nmt(*c);
   } else if (f.id == canopen::kSyncId && f.len == 0) {
-    last_sync_ns_ = realtime_ ? now_ns() : 0;
+    last_sync_ns_ = realtime_ ? base::monotonic_ns() : 0;
     on_sync();
   } else if (f.id == canopen::kSdoRxBase + node_) {
     on_sdo(f);
@@ -107,7 +110,7 @@ void Cia402Peer::handle(const CanFrame& f) {
              (object(0x1400, 1) & cia402::kCobIdInvalid) == 0 && nmt_ == NmtState::kOperational) {
     on_rpdo(f);
   } else if (master != 0 && f.id == canopen::kHeartbeatBase + master) {
-    if (realtime_) last_master_heartbeat_ns_ = now_ns();
+    if (realtime_) last_master_heartbeat_ns_ = base::monotonic_ns();
   }
 }
 

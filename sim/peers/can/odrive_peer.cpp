@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstring>
 
+#include "base/clock.h"
+
 namespace hapticd::sim {
 namespace {
 
@@ -26,7 +28,7 @@ std::uint32_t OdrivePeer::fault_error() const noexcept {
 }
 
 void OdrivePeer::send_heartbeat() {
-  if (stop_heartbeat_.load()) return;
+  if (can_faults_.active(CanPeerFault::kStopHeartbeat)) return;
   send(odrive::heartbeat(node_, {axis_error_, state_.load(), 0}));
 }
 
@@ -61,15 +63,16 @@ void OdrivePeer::trigger() {
   const bool cyclic = settings_.odrive.position_source == drivers::can::PositionSource::kCyclic;
   const auto every = static_cast<std::uint64_t>(
       cyclic ? std::max(1.0, std::round(settings_.odrive.cyclic_period_ms * 1e-3 / period_s_)) : 1);
-  if (!stop_answering_.load() && triggers_ % every == 0) {
+  if (!faults_.active(PeerFault::kStopAnswering) && triggers_ % every == 0) {
     const double turns = axis_.encoder_position() / settings_.position_per_unit;
     const double speed = axis_.plant().velocity() / settings_.position_per_unit;
     CanFrame f =
         odrive::encoder_estimates(node_, {static_cast<float>(turns), static_cast<float>(speed)});
-    if (wrong_length_.exchange(false)) f.len = 6;
+    if (can_faults_.take(CanPeerFault::kWrongLengthPdo)) f.len = 6;
     send(f);
   }
-  if (unknown_ids_.load()) send(drivers::can::make_frame(odrive::frame_id(node_, 0x1E), 2));
+  if (can_faults_.active(CanPeerFault::kUnknownIds))
+    send(drivers::can::make_frame(odrive::frame_id(node_, 0x1E), 2));
   if (!realtime_) {
     const auto hb = static_cast<std::uint64_t>(
         std::max(1.0, std::round(settings_.odrive.heartbeat_period_ms * 1e-3 / period_s_)));
@@ -127,7 +130,7 @@ void OdrivePeer::on_command(std::uint8_t command, const CanFrame& f) {
 
 void OdrivePeer::handle(const CanFrame& f) {
   if (f.extended || odrive::node_of(f.id) != node_) return;
-  if (realtime_) last_frame_ns_ = now_ns();  // every frame feeds the watchdog
+  if (realtime_) last_frame_ns_ = base::monotonic_ns();  // every frame feeds the watchdog
   const std::uint8_t command = odrive::command_of(f.id);
   if (f.rtr) {
     if (command == odrive::kGetEncoderEstimates) {

@@ -21,6 +21,7 @@
 #include "drivers/io/unique_fd.h"
 #include "sim/peers/gpio/encoder_sim.h"
 #include "sim/peers/loopback_peer.h"
+#include "sim/peers/peer_state.h"
 
 namespace hapticd::sim::gpio {
 

@@ -33,8 +33,9 @@ class GpioKernelPeer final : public GpioPeer {
  public:
   GpioKernelPeer(const config::Config& cfg, const dg::GpioSettings& s, const std::string& chip_dir,
                  const std::string& pwm_file)
-      : enc_(cfg, s), s_(s) {
+      : enc_(cfg, s) {
     if (s.max_edge_rate_hz > 0.0) spacing_ns_ = std::llround(2e9 / s.max_edge_rate_hz);
+    if (s.line_fault) faults_.allow(PeerFault::kDeviceFault);
     const auto line_file = [&](unsigned line, const char* attr) {
       return chip_dir + "/sim_gpio" + std::to_string(line) + "/" + attr;
     };
@@ -65,38 +66,19 @@ class GpioKernelPeer final : public GpioPeer {
       enc_.step(next_step_);
       next_step_ += enc_.period_ns();
     }
-    if (stop_.load()) enc_.queue().clear();
+    if (faults_.active(PeerFault::kStopAnswering)) enc_.queue().clear();
     std::optional<std::int64_t> next_edge = put_due_edges();
-    force_.store(enc_.applied_force());
-    on_.store(enc_.output_on());
+    felt_.publish(enc_.applied_force(), enc_.output_on());
     enabled_.store(enc_.channel_enabled());
     arm(next_edge ? std::min(*next_edge, next_step_) : next_step_);
   }
   int fd() const noexcept override { return timer_.get(); }
-  double applied_force() const noexcept override { return force_.load(); }
-  bool output_on() const noexcept override { return on_.load(); }
+  double applied_force() const noexcept override { return felt_.force(); }
+  bool output_on() const noexcept override { return felt_.on(); }
   const Plant& plant() const noexcept override { return enc_.plant(); }
 
-  bool inject(PeerFault f) noexcept override {
-    switch (f) {
-      case PeerFault::kStopAnswering:
-        stop_.store(true);  // edges stop while the plant moves: a dead encoder (undetectable)
-        return true;
-      case PeerFault::kDeviceFault:
-        if (!s_.line_fault) return false;
-        fault_.store(true);
-        return true;
-      case PeerFault::kSkipSequence:
-      case PeerFault::kTransportFault:
-        return false;  // the kernel numbers events itself; the chip is the test's to remove
-    }
-    return false;
-  }
-  bool inject_wire(WireFault f) noexcept override {
-    if (f == WireFault::kLoseEdges) return false;  // the kernel numbers events itself
-    wire_faults_.fetch_or(1u << static_cast<unsigned>(f));
-    return true;
-  }
+  bool inject(PeerFault f) noexcept override { return faults_.inject(f); }
+  bool inject_wire(WireFault f) noexcept override { return wire_faults_.inject(f); }
   bool channel_enabled() const noexcept override { return enabled_.load(); }
 
  private:
@@ -135,10 +117,9 @@ class GpioKernelPeer final : public GpioPeer {
   }
 
   void apply_faults(std::int64_t now) {
-    if (fault_.exchange(false)) enc_.set_fault_line(true, now);
-    const unsigned wf = wire_faults_.exchange(0);
+    if (faults_.take(PeerFault::kDeviceFault)) enc_.set_fault_line(true, now);
     for (WireFault f : {WireFault::kEdgeBurst, WireFault::kIllegalPattern}) {
-      if ((wf & (1u << static_cast<unsigned>(f))) != 0) enc_.inject(f, now);
+      if (wire_faults_.take(f)) enc_.inject(f, now);
     }
   }
 
@@ -169,7 +150,6 @@ class GpioKernelPeer final : public GpioPeer {
   }
 
   EncoderSim enc_;
-  dg::GpioSettings s_;
   io::UniqueFd pull_[4];  // A, B, index, fault: indexed by dg::Line
   io::UniqueFd direction_;
   io::UniqueFd pwm_;
@@ -179,11 +159,12 @@ class GpioKernelPeer final : public GpioPeer {
   std::int64_t line_put_[4] = {};  // the last put on each line
   std::int64_t spacing_ns_ = 0;
   std::int64_t shift_ns_ = 0;  // how late the injected edges on the wires are
-  std::atomic<bool> stop_{false};
-  std::atomic<bool> fault_{false};
-  std::atomic<unsigned> wire_faults_{0};
-  std::atomic<double> force_{0.0};
-  std::atomic<bool> on_{false};
+  // Stopped answering, the edges stop while the plant moves: a dead encoder (undetectable).
+  // The kernel numbers events itself (no kSkipSequence, no kLoseEdges); the chip is the
+  // test's to remove (no kTransportFault).
+  FaultFlags<PeerFault> faults_{PeerFault::kStopAnswering};
+  FaultFlags<WireFault> wire_faults_{WireFault::kEdgeBurst, WireFault::kIllegalPattern};
+  FeltOutput felt_;
   std::atomic<bool> enabled_{false};
 };
 

@@ -23,6 +23,9 @@ class GpioLoopbackPeer final : public GpioPeer {
   GpioLoopbackPeer(const config::Config& cfg, const dg::GpioSettings& s, io::UniqueFd fd)
       : enc_(cfg, s), owned_(std::move(fd)), fd_(owned_.get()) {
     if (s.max_edge_rate_hz > 0.0) spacing_ns_ = std::llround(2e9 / s.max_edge_rate_hz);
+    // Without a fault line the motor driver cannot say it faulted. No sequence of its own
+    // (lost edges: WireFault::kLoseEdges).
+    if (s.line_fault) faults_.allow(PeerFault::kDeviceFault);
   }
 
   // The driver's output message is the period's clock: the plant steps once per message, with
@@ -41,38 +44,22 @@ class GpioLoopbackPeer final : public GpioPeer {
     }
   }
   int fd() const noexcept override { return fd_; }
-  double applied_force() const noexcept override { return force_.load(); }
-  bool output_on() const noexcept override { return on_.load(); }
+  double applied_force() const noexcept override { return felt_.force(); }
+  bool output_on() const noexcept override { return felt_.on(); }
   const Plant& plant() const noexcept override { return enc_.plant(); }
 
   bool inject(PeerFault f) noexcept override {
-    switch (f) {
-      case PeerFault::kStopAnswering:
-        stop_.store(true);
-        return true;
-      case PeerFault::kSkipSequence:
-        return false;  // a GPIO sample has no sequence of its own (lost edges: kLoseEdges)
-      case PeerFault::kDeviceFault:
-        if (!has_fault_line_) return false;  // no fault line: the motor driver cannot say
-        fault_.store(true);
-        return true;
-      case PeerFault::kTransportFault:
-        shut_ = true;
-        ::shutdown(fd_, SHUT_RDWR);  // the wires are cut: the driver's next recv sees it
-        // ... and the motor driver's inputs float to their pull-downs: no drive.
-        force_.store(0.0);
-        on_.store(false);
-        return true;
+    if (!faults_.inject(f)) return false;
+    if (f == PeerFault::kTransportFault) {
+      shut_ = true;
+      ::shutdown(fd_, SHUT_RDWR);  // the wires are cut: the driver's next recv sees it
+      // ... and the motor driver's inputs float to their pull-downs: no drive.
+      felt_.vanish();
     }
-    return false;
-  }
-  bool inject_wire(WireFault f) noexcept override {
-    wire_faults_.fetch_or(1u << static_cast<unsigned>(f));
     return true;
   }
+  bool inject_wire(WireFault f) noexcept override { return wire_faults_.inject(f); }
   bool channel_enabled() const noexcept override { return enabled_.load(); }
-
-  void set_has_fault_line(bool v) { has_fault_line_ = v; }
 
  private:
   // The plant's clock: simulated time, one period per step.
@@ -106,15 +93,14 @@ class GpioLoopbackPeer final : public GpioPeer {
 
   // One period from t0: the plant moves under the held output, the edges go back.
   void step(std::int64_t t0) {
-    if (fault_.exchange(false)) enc_.set_fault_line(true, t0);
-    const unsigned wf = wire_faults_.exchange(0);
+    if (faults_.take(PeerFault::kDeviceFault)) enc_.set_fault_line(true, t0);
     for (WireFault f : {WireFault::kEdgeBurst, WireFault::kIllegalPattern, WireFault::kLoseEdges}) {
-      if ((wf & (1u << static_cast<unsigned>(f))) == 0) continue;
+      if (!wire_faults_.take(f)) continue;
       if (f == WireFault::kLoseEdges) skip_ += 5;
       enc_.inject(f, t0);
     }
     enc_.step(t0);
-    if (stop_.load()) {
+    if (faults_.active(PeerFault::kStopAnswering)) {
       enc_.queue().clear();  // the device went quiet: nothing comes back, not even its clock
       return;
     }
@@ -148,15 +134,8 @@ class GpioLoopbackPeer final : public GpioPeer {
   }
 
   void publish() {
-    force_.store(enc_.applied_force());
-    on_.store(enc_.output_on());
+    felt_.publish(enc_.applied_force(), enc_.output_on());  // nothing once the wires are cut
     enabled_.store(enc_.channel_enabled());
-    // After the wires were cut nothing drives the motor, whatever this thread was handling
-    // when inject() cut them (inject stores zero after setting shut_; this re-checks after).
-    if (shut_.load()) {
-      force_.store(0.0);
-      on_.store(false);
-    }
   }
 
   EncoderSim enc_;
@@ -167,13 +146,11 @@ class GpioLoopbackPeer final : public GpioPeer {
   std::uint32_t seq_ = 0;
   std::uint32_t skip_ = 0;
   std::uint64_t malformed_ = 0;
-  bool has_fault_line_ = false;
   std::atomic<bool> shut_{false};
-  std::atomic<bool> stop_{false};
-  std::atomic<bool> fault_{false};
-  std::atomic<unsigned> wire_faults_{0};
-  std::atomic<double> force_{0.0};
-  std::atomic<bool> on_{false};
+  FaultFlags<PeerFault> faults_{PeerFault::kStopAnswering, PeerFault::kTransportFault};
+  FaultFlags<WireFault> wire_faults_{WireFault::kEdgeBurst, WireFault::kIllegalPattern,
+                                     WireFault::kLoseEdges};
+  FeltOutput felt_;
   std::atomic<bool> enabled_{false};
   std::array<std::uint8_t, wire::kMaxMessageSize> rx_{};
   std::vector<dg::Edge> batch_;
@@ -184,9 +161,7 @@ class GpioLoopbackPeer final : public GpioPeer {
 std::unique_ptr<GpioPeer> make_loopback_peer(const config::Config& cfg, io::UniqueFd fd) {
   const dg::GpioSettings& s = dg::gpio_settings(cfg);
   check_peer_config(cfg, s);
-  auto p = std::make_unique<GpioLoopbackPeer>(cfg, s, std::move(fd));
-  p->set_has_fault_line(s.line_fault.has_value());
-  return p;
+  return std::make_unique<GpioLoopbackPeer>(cfg, s, std::move(fd));
 }
 
 }  // namespace hapticd::sim::gpio

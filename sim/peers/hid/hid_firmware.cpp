@@ -29,15 +29,14 @@ HidFirmware::HidFirmware(const config::Config& cfg, int link_delay_samples)
 
 void HidFirmware::set_output(bool on) noexcept {
   axis_.set_output(on);
-  on_.store(on, std::memory_order_relaxed);
-  applied_.store(0.0, std::memory_order_relaxed);
+  felt_.publish(axis_);
 }
 
 void HidFirmware::lose_host() noexcept { set_output(false); }
 
 void HidFirmware::step(double force) noexcept {
   axis_.hold_force(force);
-  applied_.store(axis_.held_force(), std::memory_order_relaxed);
+  felt_.publish(axis_);
   axis_.step();
   fifo_[fifo_head_] = axis_.encoder_position();  // the newest replaces the oldest
   fifo_head_ = (fifo_head_ + 1) % fifo_.size();
@@ -45,7 +44,7 @@ void HidFirmware::step(double force) noexcept {
 
 void HidFirmware::hold(double force) noexcept {
   axis_.hold_force(force);
-  applied_.store(axis_.held_force(), std::memory_order_relaxed);
+  felt_.publish(axis_);
 }
 
 bool HidFirmware::check_watchdog(std::chrono::steady_clock::time_point now) noexcept {
@@ -60,26 +59,14 @@ bool HidFirmware::check_watchdog(std::chrono::steady_clock::time_point now) noex
 std::uint32_t HidFirmware::next_sequence() noexcept {
   // Fifty reports lost on the way: far beyond the one or two a late USB frame costs, so a test
   // on a jittery machine can set safety.sequence_gap_fault between the two.
-  if (skip_sequence_.exchange(false)) sequence_ += kSkippedReports;
+  if (faults_.take(PeerFault::kSkipSequence)) sequence_ += kSkippedReports;
   return sequence_++;
 }
 
 bool HidFirmware::inject(PeerFault fault) noexcept {
-  switch (fault) {
-    case PeerFault::kStopAnswering:
-      stop_answering_.store(true);
-      return true;
-    case PeerFault::kSkipSequence:
-      skip_sequence_.store(true);
-      return true;
-    case PeerFault::kDeviceFault:
-      device_fault_.store(true);
-      applied_.store(0.0);  // a faulted drive stops driving at once
-      return true;
-    case PeerFault::kTransportFault:
-      return false;
-  }
-  return false;
+  if (!faults_.inject(fault)) return false;                  // kTransportFault is the transport's
+  if (fault == PeerFault::kDeviceFault) felt_.drop_force();  // a faulted drive stops at once
+  return true;
 }
 
 }  // namespace hapticd::sim::hid

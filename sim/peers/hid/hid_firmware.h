@@ -23,6 +23,7 @@
 #include "config/config.h"
 #include "drivers/hid/hid_settings.h"
 #include "sim/peers/loopback_peer.h"
+#include "sim/peers/peer_state.h"
 #include "sim/sim_axis.h"
 
 namespace hapticd::sim::hid {
@@ -54,13 +55,10 @@ class HidFirmware {
   void lose_host() noexcept;
   // Any thread: what the person feels at once when the device vanishes (the peer thread
   // calls lose_host() when it next runs).
-  void vanish() noexcept {
-    on_.store(false);
-    applied_.store(0.0);
-  }
+  void vanish() noexcept { felt_.vanish(); }
   // Any thread.
-  double applied_force() const noexcept { return applied_.load(std::memory_order_relaxed); }
-  bool output_on() const noexcept { return on_.load(std::memory_order_relaxed); }
+  double applied_force() const noexcept { return felt_.force(); }
+  bool output_on() const noexcept { return felt_.on(); }
   const Plant& plant() const noexcept { return axis_.plant(); }
   // Any thread. kTransportFault is the transport's to produce (returns false here).
   virtual bool inject(PeerFault fault) noexcept;
@@ -87,17 +85,17 @@ class HidFirmware {
   double velocity() const noexcept { return axis_.plant().velocity(); }
   // Sequence number of the next answer (skips when injected).
   std::uint32_t next_sequence() noexcept;
-  bool answering() const noexcept { return !stop_answering_.load(std::memory_order_relaxed); }
-  bool device_fault() const noexcept { return device_fault_.load(std::memory_order_relaxed); }
+  bool answering() const noexcept { return !faults_.active(PeerFault::kStopAnswering); }
+  bool device_fault() const noexcept { return faults_.active(PeerFault::kDeviceFault); }
 
  private:
   SimAxis axis_;
   std::vector<double> fifo_;  // the last link_delay + 1 positions; fifo_head_ the oldest
   std::size_t fifo_head_ = 0;
   std::uint32_t sequence_ = 0;
-  std::atomic<double> applied_{0.0};
-  std::atomic<bool> on_{false};
-  std::atomic<bool> stop_answering_{false}, skip_sequence_{false}, device_fault_{false};
+  FeltOutput felt_;
+  FaultFlags<PeerFault> faults_{PeerFault::kStopAnswering, PeerFault::kSkipSequence,
+                                PeerFault::kDeviceFault};
   std::atomic<std::uint64_t> dropped_{0};
   std::chrono::steady_clock::time_point last_heard_ = std::chrono::steady_clock::now();
   std::atomic<std::uint64_t> trips_{0};

@@ -9,9 +9,9 @@
 // and read back. Estimates the axis sends by itself are noticed.
 // enable: input torque 0, CLOSED_LOOP_CONTROL requested and confirmed by a heartbeat within
 // state_timeout_ms; then the loop's own frames feed the watchdog.
-// Each tick: read drains encoder estimates, heartbeats and bus events; write sends
-// Set_Input_Torque (N m, through the transmission) and, in request mode, the remote request
-// for Get_Encoder_Estimates, whose answer (the first estimate after it: cyclic ones in
+// Each tick: the device drains encoder estimates, heartbeats and bus events; the tick's frames
+// are Set_Input_Torque (N m, through the transmission) and, in request mode, the remote
+// request for Get_Encoder_Estimates, whose answer (the first estimate after it: cyclic ones in
 // between are not samples of this tick) is the position the next tick acts on; the torque
 // acts from now until the next write: one sample of delay (cyclic mode: the message period in
 // samples, at least one).
@@ -19,44 +19,42 @@
 // clear_fault: Clear_Errors, confirmed by a heartbeat without error.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
-#include "drivers/can/can_device_base.h"
+#include "drivers/can/can_profile.h"
 #include "drivers/can/odrive_protocol.h"
 #include "drivers/can/periodic_sender.h"
 
 namespace hapticd::drivers::can {
 
-class OdriveDevice final : public CanDeviceBase {
+class OdriveProfile final : public CanProfile {
  public:
-  OdriveDevice(const CanSettings& settings, double sample_period_s, Opener open)
-      : CanDeviceBase(settings, sample_period_s, std::move(open)),
+  OdriveProfile(const CanSettings& settings, double sample_period_s, CanLink& link)
+      : settings_(settings),
+        period_s_(sample_period_s),
+        link_(link),
         firmware_(settings.odrive.firmware) {}
-  ~OdriveDevice() override { close(); }
 
-  // Valid from CONFIGURED on.
-  odrive::Firmware firmware() const noexcept { return firmware_; }
-
- protected:
-  DeviceInfo on_configure() override;
-  void on_enable() override;
-  void on_disable() noexcept override;
-  void on_clear_fault() override;
-  void on_close() noexcept override {
-    feeder_.stop();  // before the descriptor it writes to goes
-    close_transport();
-  }
-  // RT-safe: called every tick.
-  IoStatus on_read(PositionSample& out) noexcept override;
-  // RT-safe: called every tick.
-  IoStatus on_write(double force) noexcept override;
-  std::string describe(const DeviceFault& fault) const override;
+  DeviceInfo configure() override;
+  void enable() override;
+  void disable(const CanFault& latched) noexcept override;
+  void clear_fault() override;
+  void close() noexcept override { feeder_.stop(); }
+  std::vector<std::string> notices() const override { return notices_; }
+  // RT-safe: called every tick (the three below).
+  FrameMeaning on_frame(const CanSocket::Received& rx, bool active) noexcept override;
+  void sample(PositionSample& out) const noexcept override;
+  std::span<const CanFrame> tick_frames(double force) noexcept override;
+  std::string describe(const CanFault& fault, const std::string& bus) const override;
 
  private:
-  void on_frame(const CanSocket::Received& rx) noexcept override;
-  std::string describe_cause(const DeviceFault& fault) const;
+  // RT-safe: called every tick (on_frame's parts).
+  FrameMeaning on_estimates(const CanSocket::Received& rx) noexcept;
+  FrameMeaning on_heartbeat(const CanFrame& f, bool active) noexcept;
   std::string detect_firmware();
   // The next heartbeat within timeout_ms for which `accept` holds; throws naming `waiting_for`.
   odrive::Heartbeat await_heartbeat(int timeout_ms, const std::string& waiting_for,
@@ -66,19 +64,24 @@ class OdriveDevice final : public CanDeviceBase {
   odrive::Heartbeat clear_expired_watchdog(odrive::Heartbeat h);
   void feed_watchdog();
   void note_unsolicited(const CanFrame& f);
-  void read_controller_error() noexcept;
+  void read_controller_error(const CanFault& latched) noexcept;
   std::string overspeed_text(std::uint32_t axis_error) const;
-  std::string node_name() const;
+  std::string node_name(const std::string& bus) const;
+  std::string node_name() const { return node_name(link_.description()); }
 
+  const CanSettings settings_;
+  const double period_s_;
+  CanLink& link_;
+  std::vector<std::string> notices_;  // configure's
   odrive::Firmware firmware_;
   std::uint32_t id_base_ = 0;  // node << 5
   PeriodicSender feeder_;
   bool stopped_ = true;            // the disable frames went out since the last enable
   int unsolicited_estimates_ = 0;  // seen while configuring (request mode)
   std::optional<std::uint32_t> controller_error_;  // 0.5.6's answer after CONTROLLER_FAILED
+  std::array<CanFrame, 2> tx_{};                   // the tick's frames
 
   // RT state of the newest sample.
-  bool fresh_ = false;
   float position_turns_ = 0.0f;
   float velocity_turns_ = 0.0f;
   std::int64_t sample_time_ns_ = 0;

@@ -1,9 +1,11 @@
-#include "drivers/can/odrive_device.h"
+#include "drivers/can/odrive_profile.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+
+#include "base/clock.h"
 
 namespace hapticd::drivers::can {
 namespace {
@@ -25,15 +27,19 @@ std::uint32_t float_bits(float v) {
 
 }  // namespace
 
-std::string OdriveDevice::node_name() const {
-  return "can: odrive node " + std::to_string(settings_.node_id) + " on " +
-         (socket_ ? socket_->description() : settings_.interface);
+std::unique_ptr<CanProfile> make_odrive_profile(const CanSettings& s, double sample_period_s,
+                                                CanLink& link) {
+  return std::make_unique<OdriveProfile>(s, sample_period_s, link);
 }
 
-Heartbeat OdriveDevice::await_heartbeat(int timeout_ms, const std::string& waiting_for,
-                                        bool (*accept)(const Heartbeat&)) {
+std::string OdriveProfile::node_name(const std::string& bus) const {
+  return "can: odrive node " + std::to_string(settings_.node_id) + " on " + bus;
+}
+
+Heartbeat OdriveProfile::await_heartbeat(int timeout_ms, const std::string& waiting_for,
+                                         bool (*accept)(const Heartbeat&)) {
   Heartbeat got;
-  const bool seen = await(
+  const bool seen = link_.await(
       timeout_ms,
       [&](const CanFrame& f) {
         if (f.id != id_base_ + odrive::kHeartbeat || f.rtr) return false;
@@ -57,38 +63,38 @@ Heartbeat OdriveDevice::await_heartbeat(int timeout_ms, const std::string& waiti
   return got;
 }
 
-void OdriveDevice::note_unsolicited(const CanFrame& f) {
+void OdriveProfile::note_unsolicited(const CanFrame& f) {
   if (!f.rtr && f.id == id_base_ + odrive::kGetEncoderEstimates) ++unsolicited_estimates_;
 }
 
-void OdriveDevice::feed_watchdog() {
-  if (!socket_) return;
+void OdriveProfile::feed_watchdog() {
+  if (!link_.is_open()) return;
   // A remote request for the heartbeat: 0.5 does nothing with it but feed the watchdog
   // (can_simple.cpp, MSG_ODRIVE_HEARTBEAT), 0.6 answers it with a heartbeat.
   const double period_ms = std::clamp(settings_.odrive.watchdog_timeout_s * 1e3 / 4.0, 1.0, 50.0);
-  feeder_.start(socket_->fd(), {{odrive::request(settings_.node_id, odrive::kHeartbeat, 8),
-                                 static_cast<std::int64_t>(period_ms * 1e6), 0}});
+  feeder_.start(link_.fd(), {{odrive::request(settings_.node_id, odrive::kHeartbeat, 8),
+                              static_cast<std::int64_t>(period_ms * 1e6), 0}});
 }
 
-Heartbeat OdriveDevice::clear_expired_watchdog(Heartbeat h) {
+Heartbeat OdriveProfile::clear_expired_watchdog(Heartbeat h) {
   const std::uint32_t expired = odrive::watchdog_error_bit(firmware_);
   if (h.axis_error != expired) return h;
   // The state of every 0.5 axis with its watchdog on that nobody fed since power-on: nothing
   // went wrong. Clear_Errors feeds the watchdog before it clears (every CAN frame does), and
   // the feeder keeps it fed from now on. It clears every error of the ODrive, so only this one.
-  send_or_throw(odrive::clear_errors(settings_.node_id, firmware_), "Clear_Errors");
-  send_or_throw(odrive::request(settings_.node_id, odrive::kHeartbeat, 8), "a heartbeat request");
+  link_.send(odrive::clear_errors(settings_.node_id, firmware_), "Clear_Errors");
+  link_.send(odrive::request(settings_.node_id, odrive::kHeartbeat, 8), "a heartbeat request");
   return await_heartbeat(settings_.heartbeat_timeout_ms,
                          "without an error after clearing WATCHDOG_TIMER_EXPIRED (the watchdog "
                          "expired before configure could feed it)",
                          &no_error);
 }
 
-std::string OdriveDevice::detect_firmware() {
+std::string OdriveProfile::detect_firmware() {
   if (!settings_.odrive.detect_firmware) return "firmware " + std::string(to_string(firmware_));
-  send_or_throw(odrive::request(settings_.node_id, odrive::kGetVersion, 8), "Get_Version");
+  link_.send(odrive::request(settings_.node_id, odrive::kGetVersion, 8), "Get_Version");
   std::optional<odrive::Version> version;
-  await(
+  link_.await(
       settings_.sdo_timeout_ms,
       [&](const CanFrame& f) {
         if (f.id != id_base_ + odrive::kGetVersion || f.rtr) return false;
@@ -111,18 +117,18 @@ std::string OdriveDevice::detect_firmware() {
   return text;
 }
 
-void OdriveDevice::configure_watchdog() {
+void OdriveProfile::configure_watchdog() {
   const OdriveSettings& o = settings_.odrive;
   if (firmware_ != odrive::Firmware::k06 || o.watchdog_timeout_endpoint == 0) return;
   const std::uint8_t node = settings_.node_id;
   const std::uint32_t timeout = float_bits(static_cast<float>(o.watchdog_timeout_s));
-  send_or_throw(odrive::rx_sdo(node, true, o.watchdog_timeout_endpoint, timeout), "RxSdo");
+  link_.send(odrive::rx_sdo(node, true, o.watchdog_timeout_endpoint, timeout), "RxSdo");
   if (o.enable_watchdog_endpoint != 0) {
-    send_or_throw(odrive::rx_sdo(node, true, o.enable_watchdog_endpoint, 1), "RxSdo");
+    link_.send(odrive::rx_sdo(node, true, o.enable_watchdog_endpoint, 1), "RxSdo");
   }
-  send_or_throw(odrive::rx_sdo(node, false, o.watchdog_timeout_endpoint, 0), "RxSdo");
+  link_.send(odrive::rx_sdo(node, false, o.watchdog_timeout_endpoint, 0), "RxSdo");
   std::optional<odrive::TxSdo> answer;
-  await(
+  link_.await(
       settings_.sdo_timeout_ms,
       [&](const CanFrame& f) {
         if (f.id != id_base_ + odrive::kTxSdo) return false;
@@ -138,19 +144,18 @@ void OdriveDevice::configure_watchdog() {
   }
 }
 
-DeviceInfo OdriveDevice::on_configure() {
+DeviceInfo OdriveProfile::configure() {
   id_base_ = odrive::frame_id(settings_.node_id, 0);
   firmware_ = settings_.odrive.firmware;
   unsolicited_estimates_ = 0;
   controller_error_.reset();
   notices_.clear();
   stopped_ = true;
-  open_transport();
   feed_watchdog();
   const std::string fw = detect_firmware();
   // The heartbeat comes every heartbeat period anyway; asking for it answers sooner where the
   // firmware answers remote requests for cyclic messages (0.6).
-  send_or_throw(odrive::request(settings_.node_id, odrive::kHeartbeat, 8), "a heartbeat request");
+  link_.send(odrive::request(settings_.node_id, odrive::kHeartbeat, 8), "a heartbeat request");
   const Heartbeat h =
       clear_expired_watchdog(await_heartbeat(settings_.heartbeat_timeout_ms, "", &any_heartbeat));
   if (h.axis_error != 0) {
@@ -160,19 +165,19 @@ DeviceInfo OdriveDevice::on_configure() {
                       ": find the cause and clear it (Clear_Errors, odrivetool) first");
   }
   const std::uint8_t node = settings_.node_id;
-  send_or_throw(odrive::set_input_torque(node, 0.0f), "Set_Input_Torque");
-  send_or_throw(odrive::set_axis_state(node, odrive::kAxisIdle), "Set_Axis_State");
-  send_or_throw(
+  link_.send(odrive::set_input_torque(node, 0.0f), "Set_Input_Torque");
+  link_.send(odrive::set_axis_state(node, odrive::kAxisIdle), "Set_Axis_State");
+  link_.send(
       odrive::set_controller_mode(node, odrive::kControlModeTorque, odrive::kInputModePassthrough),
       "Set_Controller_Mode");
   configure_watchdog();
-  send_or_throw(odrive::request(node, odrive::kHeartbeat, 8), "a heartbeat request");
+  link_.send(odrive::request(node, odrive::kHeartbeat, 8), "a heartbeat request");
   await_heartbeat(settings_.state_timeout_ms, "showing IDLE", &idle);
-  set_emergency_frames(
+  link_.set_emergency_frames(
       {odrive::set_input_torque(node, 0.0f), odrive::set_axis_state(node, odrive::kAxisIdle)});
   DeviceInfo info;
   info.description =
-      "odrive node " + std::to_string(node) + " on " + socket_->description() + " (" + fw + ")";
+      "odrive node " + std::to_string(node) + " on " + link_.description() + " (" + fw + ")";
   info.transport_delay_samples = delay_samples(settings_, 1.0 / period_s_);
   if (settings_.odrive.position_source == PositionSource::kRequest && unsolicited_estimates_ > 0) {
     notices_.push_back(
@@ -187,16 +192,14 @@ DeviceInfo OdriveDevice::on_configure() {
   return info;
 }
 
-void OdriveDevice::on_enable() {
-  clear_pending();
-  fresh_ = false;
+void OdriveProfile::enable() {
   answered_ = true;
   controller_error_.reset();
   const std::uint8_t node = settings_.node_id;
   feed_watchdog();  // fed until the loop's own frames take over
   stopped_ = false;
-  send_or_throw(odrive::set_input_torque(node, 0.0f), "Set_Input_Torque");
-  send_or_throw(odrive::set_axis_state(node, odrive::kAxisClosedLoop), "Set_Axis_State");
+  link_.send(odrive::set_input_torque(node, 0.0f), "Set_Input_Torque");
+  link_.send(odrive::set_axis_state(node, odrive::kAxisClosedLoop), "Set_Axis_State");
   const Heartbeat h =
       await_heartbeat(settings_.state_timeout_ms, "showing CLOSED_LOOP_CONTROL", &closed_loop);
   if (h.axis_error != 0) {
@@ -205,15 +208,14 @@ void OdriveDevice::on_enable() {
   }
   // From here only the loop feeds the watchdog: if it stops, the axis stops.
   feeder_.stop();
-  heartbeat_seen();
 }
 
-void OdriveDevice::on_disable() noexcept {
+void OdriveProfile::disable(const CanFault& latched) noexcept {
   if (!stopped_) {  // once per enable: a fault's disable and the close after it are one stop
     stopped_ = true;
-    send_quietly(odrive::set_input_torque(settings_.node_id, 0.0f));
-    send_quietly(odrive::set_axis_state(settings_.node_id, odrive::kAxisIdle));
-    read_controller_error();
+    link_.send_quietly(odrive::set_input_torque(settings_.node_id, 0.0f));
+    link_.send_quietly(odrive::set_axis_state(settings_.node_id, odrive::kAxisIdle));
+    read_controller_error(latched);
   }
   try {
     feed_watchdog();  // idle, or holding a fault: the watchdog must not add its own error
@@ -222,17 +224,18 @@ void OdriveDevice::on_disable() noexcept {
   }
 }
 
-void OdriveDevice::read_controller_error() noexcept {
+void OdriveProfile::read_controller_error(const CanFault& latched) noexcept {
   // CONTROLLER_FAILED says only that controller.error is set; 0.5.6 answers
   // Get_Controller_Error (can_simple.cpp), earlier 0.5 releases stay silent.
-  if (!socket_ || firmware_ != odrive::Firmware::k05 || fault_kind() != CanFaultKind::kAxisError ||
-      (fault().code & odrive::overspeed_error_bits(firmware_)) == 0) {
+  if (!link_.is_open() || firmware_ != odrive::Firmware::k05 ||
+      latched.kind != CanFaultKind::kAxisError ||
+      (latched.code & odrive::overspeed_error_bits(firmware_)) == 0) {
     return;
   }
   try {
-    send_or_throw(odrive::request(settings_.node_id, odrive::kGetControllerError, 8),
-                  "Get_Controller_Error");
-    await(
+    link_.send(odrive::request(settings_.node_id, odrive::kGetControllerError, 8),
+               "Get_Controller_Error");
+    link_.await(
         settings_.sdo_timeout_ms,
         [&](const CanFrame& f) {
           if (f.id != id_base_ + odrive::kGetControllerError) return false;
@@ -245,112 +248,105 @@ void OdriveDevice::read_controller_error() noexcept {
   }
 }
 
-void OdriveDevice::on_clear_fault() {
-  if (!socket_) throw DeviceError(node_name() + ": the transport is closed");
-  clear_pending();
+void OdriveProfile::clear_fault() {
   controller_error_.reset();
-  send_or_throw(odrive::clear_errors(settings_.node_id, firmware_), "Clear_Errors");
-  send_or_throw(odrive::set_axis_state(settings_.node_id, odrive::kAxisIdle), "Set_Axis_State");
+  link_.send(odrive::clear_errors(settings_.node_id, firmware_), "Clear_Errors");
+  link_.send(odrive::set_axis_state(settings_.node_id, odrive::kAxisIdle), "Set_Axis_State");
   await_heartbeat(settings_.state_timeout_ms, "without an axis error", &no_error);
 }
 
-void OdriveDevice::on_frame(const CanSocket::Received& rx) noexcept {
-  const CanFrame& f = rx.frame;
-  if (f.extended || f.rtr || (f.id & ~0x1Fu) != id_base_) {
-    counters_.unknown_ids.fetch_add(1, std::memory_order_relaxed);
-    return;
+FrameMeaning OdriveProfile::on_estimates(const CanSocket::Received& rx) noexcept {
+  const auto e = odrive::decode_encoder_estimates(rx.frame);
+  if (!e) {
+    link_.count(CanCounter::kWrongLength);
+    return {};
   }
-  const std::uint8_t command = odrive::command_of(f.id);
-  if (command == odrive::kGetEncoderEstimates) {
-    const auto e = odrive::decode_encoder_estimates(f);
-    if (!e) {
-      counters_.wrong_length.fetch_add(1, std::memory_order_relaxed);
-      return;
-    }
-    if (settings_.odrive.position_source == PositionSource::kRequest &&
-        (answered_ || rx.time_ns < request_ns_)) {
-      // Not the answer to this tick's request: one the axis sent by itself (its encoder rate
-      // is not 0), sampled at another instant. Taken as well it would make the samples land
-      // unevenly, and the velocity the wall's damping sees jump.
-      counters_.unsolicited_estimates.fetch_add(1, std::memory_order_relaxed);
-      return;
-    }
-    answered_ = true;
-    fresh_ = true;
-    position_turns_ = e->position_turns;
-    velocity_turns_ = e->velocity_turns_per_s;
-    last_speed_turns_ = e->velocity_turns_per_s;
-    sample_time_ns_ = rx.time_ns;
-    const double limit = settings_.odrive.vel_limit;
-    if (limit > 0.0 && std::abs(static_cast<double>(e->velocity_turns_per_s)) > limit) {
-      counters_.over_vel_limit.fetch_add(1, std::memory_order_relaxed);
-    }
-  } else if (command == odrive::kHeartbeat) {
-    const auto h = odrive::decode_heartbeat(f);
-    if (!h) {
-      counters_.wrong_length.fetch_add(1, std::memory_order_relaxed);
-      return;
-    }
-    heartbeat_seen();
-    axis_state_ = h->axis_state;
-    if (h->axis_error != 0) {
-      raise(CanFaultKind::kAxisError, h->axis_error);
-    } else if (state() == DeviceState::kActive && h->axis_state != odrive::kAxisClosedLoop) {
-      raise(CanFaultKind::kAxisStateChanged, h->axis_state);
-    }
-  } else {
-    counters_.unknown_ids.fetch_add(1, std::memory_order_relaxed);
+  if (settings_.odrive.position_source == PositionSource::kRequest &&
+      (answered_ || rx.time_ns < request_ns_)) {
+    // Not the answer to this tick's request: one the axis sent by itself (its encoder rate
+    // is not 0), sampled at another instant. Taken as well it would make the samples land
+    // unevenly, and the velocity the wall's damping sees jump.
+    link_.count(CanCounter::kUnsolicitedEstimates);
+    return {};
   }
+  answered_ = true;
+  position_turns_ = e->position_turns;
+  velocity_turns_ = e->velocity_turns_per_s;
+  last_speed_turns_ = e->velocity_turns_per_s;
+  sample_time_ns_ = rx.time_ns;
+  const double limit = settings_.odrive.vel_limit;
+  if (limit > 0.0 && std::abs(static_cast<double>(e->velocity_turns_per_s)) > limit) {
+    link_.count(CanCounter::kOverVelLimit);
+  }
+  FrameMeaning m;
+  m.sample = true;
+  return m;
 }
 
-IoStatus OdriveDevice::on_read(PositionSample& out) noexcept {
-  fresh_ = false;
-  const IoStatus drained = drain();
-  if (drained != IoStatus::kOk) return drained;
-  if (state() == DeviceState::kActive && heartbeat_lost()) {
-    return raise(CanFaultKind::kHeartbeatLost, ticks_since_heartbeat());
+FrameMeaning OdriveProfile::on_heartbeat(const CanFrame& f, bool active) noexcept {
+  const auto h = odrive::decode_heartbeat(f);
+  if (!h) {
+    link_.count(CanCounter::kWrongLength);
+    return {};
   }
-  if (!fresh_) return IoStatus::kNoNewData;
+  FrameMeaning m;
+  m.heartbeat = true;
+  axis_state_ = h->axis_state;
+  if (h->axis_error != 0) {
+    m.fault = {CanFaultKind::kAxisError, h->axis_error};
+  } else if (active && h->axis_state != odrive::kAxisClosedLoop) {
+    m.fault = {CanFaultKind::kAxisStateChanged, h->axis_state};
+  }
+  return m;
+}
+
+FrameMeaning OdriveProfile::on_frame(const CanSocket::Received& rx, bool active) noexcept {
+  const CanFrame& f = rx.frame;
+  if (f.extended || f.rtr || (f.id & ~0x1Fu) != id_base_) {
+    link_.count(CanCounter::kUnknownIds);
+    return {};
+  }
+  const std::uint8_t command = odrive::command_of(f.id);
+  if (command == odrive::kGetEncoderEstimates) return on_estimates(rx);
+  if (command == odrive::kHeartbeat) return on_heartbeat(f, active);
+  link_.count(CanCounter::kUnknownIds);
+  return {};
+}
+
+void OdriveProfile::sample(PositionSample& out) const noexcept {
   out.position = static_cast<double>(position_turns_) * settings_.position_per_unit;
   out.velocity = static_cast<double>(velocity_turns_) * settings_.position_per_unit;
   out.time_ns = sample_time_ns_;
   out.status = axis_state_;
   out.flags = kSampleHasTime | kSampleHasVelocity;
-  return IoStatus::kOk;
 }
 
-IoStatus OdriveDevice::on_write(double force) noexcept {
+std::span<const CanFrame> OdriveProfile::tick_frames(double force) noexcept {
   const double torque =
       std::clamp(force * settings_.torque_per_force, -settings_.max_torque, settings_.max_torque);
   const std::uint8_t node = settings_.node_id;
-  bool ok = send_rt(odrive::set_input_torque(node, static_cast<float>(torque)));
-  if (ok && settings_.odrive.position_source == PositionSource::kRequest) {
-    request_ns_ = PeriodicSender::now_ns();  // before it goes out: no answer can precede it
-    answered_ = false;
-    ok = send_rt(odrive::request(node, odrive::kGetEncoderEstimates, 8));
-  }
-  if (ok) ok = end_tick_tx();
-  return ok ? IoStatus::kOk : pending_fault();
+  tx_[0] = odrive::set_input_torque(node, static_cast<float>(torque));
+  if (settings_.odrive.position_source != PositionSource::kRequest) return {tx_.data(), 1};
+  request_ns_ = base::monotonic_ns();  // before it goes out: no answer can precede it
+  answered_ = false;
+  tx_[1] = odrive::request(node, odrive::kGetEncoderEstimates, 8);
+  return {tx_.data(), 2};
 }
 
-std::string OdriveDevice::describe(const DeviceFault& f) const {
-  const std::string seen = counter_summary();
-  return describe_cause(f) + (seen.empty() ? "" : " (also seen on the bus: " + seen + ")");
-}
-
-std::string OdriveDevice::describe_cause(const DeviceFault& f) const {
-  switch (fault_kind()) {
+std::string OdriveProfile::describe(const CanFault& f, const std::string& bus) const {
+  switch (f.kind) {
     case CanFaultKind::kAxisError:
-      return node_name() + " reports axis error " + odrive::describe_axis_error(firmware_, f.code) +
-             " (firmware " + std::string(to_string(firmware_)) + ")" + overspeed_text(f.code);
+      return node_name(bus) + " reports axis error " +
+             odrive::describe_axis_error(firmware_, f.code) + " (firmware " +
+             std::string(to_string(firmware_)) + ")" + overspeed_text(f.code);
     case CanFaultKind::kAxisStateChanged:
-      return node_name() + " left CLOSED_LOOP_CONTROL by itself: its heartbeat says " +
+      return node_name(bus) + " left CLOSED_LOOP_CONTROL by itself: its heartbeat says " +
              std::string(odrive::axis_state_name(f.code));
     case CanFaultKind::kHeartbeatLost:
-      return node_name() + ": no heartbeat for " + std::to_string(f.code) +
+      return node_name(bus) + ": no heartbeat for " + std::to_string(f.code) +
              " ticks (heartbeat_timeout_ms " + std::to_string(settings_.heartbeat_timeout_ms) + ")";
     default:
-      return describe_transport(f);
+      return {};  // the bus's: the device names it
   }
 }
 
@@ -358,7 +354,7 @@ std::string OdriveDevice::describe_cause(const DeviceFault& f) const {
 // own velocity limit (controller.cpp: enable_torque_mode_vel_limit clamps the torque to
 // (+-vel_limit - vel) * vel_gain, enable_overspeed_error faults above vel_limit_tolerance
 // times vel_limit; defaults 2 turn/s and 1.2).
-std::string OdriveDevice::overspeed_text(std::uint32_t axis_error) const {
+std::string OdriveProfile::overspeed_text(std::uint32_t axis_error) const {
   if ((axis_error & odrive::overspeed_error_bits(firmware_)) == 0) return {};
   const OdriveSettings& o = settings_.odrive;
   const double speed = std::abs(static_cast<double>(last_speed_turns_));

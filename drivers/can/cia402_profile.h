@@ -11,10 +11,10 @@
 // enable: target torque 0, 0x1006 again, 0x1016 heartbeat consumer (the drive's own watchdogs
 // on hapticd), NMT start, then the power state machine walked to Operation enabled through the
 // controlword, each step confirmed from the statusword within state_timeout_ms.
-// Each tick: read drains the TPDOs, EMCY, heartbeat and bus events; write sends the RPDO
-// (controlword 0x0F, target torque in per mille of the rated torque) and then SYNC, at which
-// the drive samples its position and applies the torque: the force computed from the sample a
-// tick reads acts from the next SYNC on - one sample of delay, declared as such.
+// Each tick: the device drains the TPDOs, EMCY, heartbeat and bus events; the tick's frames are
+// the RPDO (controlword 0x0F, target torque in per mille of the rated torque) and then SYNC, at
+// which the drive samples its position and applies the torque: the force computed from the
+// sample a tick reads acts from the next SYNC on - one sample of delay, declared as such.
 // disable (once per enable, a fault's included): at the next SYNC slot one RPDO with zero
 // torque and controlword 0x06 (shutdown: power stage off); SYNC and hapticd's heartbeat kept
 // going, one per period, until the drive's watchdogs on them (0x1006, 0x1016) are switched
@@ -22,51 +22,46 @@
 // clear_fault: fault reset (0x80 edge), confirmed.
 #pragma once
 
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
 
-#include "drivers/can/can_device_base.h"
+#include "drivers/can/can_profile.h"
 #include "drivers/can/canopen.h"
+#include "drivers/can/cia402.h"
 #include "drivers/can/periodic_sender.h"
 
 namespace hapticd::drivers::can {
 
-class Cia402Device final : public CanDeviceBase {
+class Cia402Profile final : public CanProfile {
  public:
-  // keeper_priority: SCHED_FIFO priority of the thread that keeps SYNC going during a stop
-  // (the loop's; 0: none asked).
-  Cia402Device(const CanSettings& settings, double sample_period_s, Opener open,
-               int keeper_priority = 0)
-      : CanDeviceBase(settings, sample_period_s, std::move(open)),
-        keeper_priority_(keeper_priority) {}
-  ~Cia402Device() override { close(); }
+  Cia402Profile(const CanSettings& settings, double sample_period_s, int keeper_priority,
+                CanLink& link)
+      : settings_(settings),
+        period_s_(sample_period_s),
+        keeper_priority_(keeper_priority),
+        link_(link) {}
 
-  // Valid from CONFIGURED on: what configure read.
-  std::uint32_t rated_torque_mnm() const noexcept { return rated_torque_mnm_; }
-
- protected:
-  DeviceInfo on_configure() override;
-  void on_enable() override;
-  void on_disable() noexcept override;
-  void on_clear_fault() override;
-  void on_close() noexcept override {
-    keeper_.stop();
-    close_transport();
-  }
-  // RT-safe: called every tick.
-  IoStatus on_read(PositionSample& out) noexcept override;
-  // RT-safe: called every tick.
-  IoStatus on_write(double force) noexcept override;
-  std::string describe(const DeviceFault& fault) const override;
+  DeviceInfo configure() override;
+  void enable() override;
+  void disable(const CanFault& latched) noexcept override;
+  void clear_fault() override;
+  void close() noexcept override { keeper_.stop(); }
+  std::vector<std::string> notices() const override { return notices_; }
+  // RT-safe: called every tick (the three below).
+  FrameMeaning on_frame(const CanSocket::Received& rx, bool active) noexcept override;
+  void sample(PositionSample& out) const noexcept override;
+  std::span<const CanFrame> tick_frames(double force) noexcept override;
+  std::string describe(const CanFault& fault, const std::string& bus) const override;
 
  private:
-  void on_frame(const CanSocket::Received& rx) noexcept override;
-  std::string describe_cause(const DeviceFault& fault) const;
-  void on_tpdo1(const CanSocket::Received& rx) noexcept;
-  void on_emcy(const CanFrame& f) noexcept;
+  // RT-safe: called every tick (on_frame's parts).
+  FrameMeaning on_tpdo1(const CanSocket::Received& rx, bool active) noexcept;
+  FrameMeaning on_emcy(const CanFrame& f) noexcept;
+  FrameMeaning on_heartbeat(const CanFrame& f, bool active) noexcept;
 
   // SDO client (non-RT): expedited transfers, each answered within sdo_timeout_ms.
   std::uint32_t sdo_read(canopen::SdoAddress at, const char* name);
@@ -94,20 +89,24 @@ class Cia402Device final : public CanDeviceBase {
   cia402::PowerState read_state(std::uint16_t& statusword);
   std::string drive_error_text();
 
+  const CanSettings settings_;
+  const double period_s_;
+  const int keeper_priority_;
+  CanLink& link_;
+  std::vector<std::string> notices_;  // configure's
   std::uint32_t rated_torque_mnm_ = 0;
   double permille_per_force_ = 0.0;  // per mille of rated torque per N (or N m) of axis force
   int max_permille_ = 0;             // max_torque in per mille
   std::uint32_t master_heartbeat_ticks_ = 0;
   std::uint32_t tick_ = 0;
-  const int keeper_priority_;
   bool has_cycle_period_ = false;  // 0x1006 exists (optional: CiA 301 requires it of SYNC
                                    // producers only)
   bool stopped_ = true;            // the stop went out since the last enable
   PeriodicSender keeper_;
   std::atomic<std::int64_t> last_sync_ns_{0};  // the RT thread's last SYNC (CLOCK_MONOTONIC)
+  std::array<CanFrame, 3> tx_{};               // the tick's frames
 
   // RT state of the newest sample.
-  bool fresh_ = false;
   std::uint16_t statusword_ = 0;
   std::int32_t position_ = 0;
   std::int32_t velocity_ = 0;

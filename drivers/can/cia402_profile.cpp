@@ -1,12 +1,10 @@
 // The CiA 402 drive's lifecycle after configure (cia402_configure.cpp) and its tick.
-#include "drivers/can/cia402_device.h"
+#include "drivers/can/cia402_profile.h"
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <ctime>
 
-#include "drivers/can/cia402.h"
+#include "base/clock.h"
 
 namespace hapticd::drivers::can {
 namespace {
@@ -15,7 +13,12 @@ using cia402::PowerState;
 
 }  // namespace
 
-void Cia402Device::walk_to_enabled() {
+std::unique_ptr<CanProfile> make_cia402_profile(const CanSettings& s, double sample_period_s,
+                                                int keeper_priority, CanLink& link) {
+  return std::make_unique<Cia402Profile>(s, sample_period_s, keeper_priority, link);
+}
+
+void Cia402Profile::walk_to_enabled() {
   std::uint16_t sw = 0;
   PowerState state = read_state(sw);
   for (int step = 0; state != PowerState::kOperationEnabled; ++step) {
@@ -27,9 +30,9 @@ void Cia402Device::walk_to_enabled() {
     }
     sdo_write(cia402::kControlword, *cw, 2, "controlword");
     const PowerState from = state;
-    const std::int64_t deadline = now_ms() + settings_.state_timeout_ms;
-    while ((state = read_state(sw)) == from && now_ms() < deadline) {
-      socket_->wait_readable(2);  // the drive's own cycle moves it on; ask again shortly
+    const std::int64_t deadline = base::monotonic_ms() + settings_.state_timeout_ms;
+    while ((state = read_state(sw)) == from && base::monotonic_ms() < deadline) {
+      link_.wait_readable(2);  // the drive's own cycle moves it on; ask again shortly
     }
     if (state == from) {
       throw DeviceError("can: node " + std::to_string(settings_.node_id) + ": controlword " +
@@ -41,9 +44,7 @@ void Cia402Device::walk_to_enabled() {
   }
 }
 
-void Cia402Device::on_enable() {
-  clear_pending();
-  fresh_ = false;
+void Cia402Profile::enable() {
   tick_ = 0;
   last_sync_ns_.store(0, std::memory_order_relaxed);
   stopped_ = false;  // from here on a failed enable is undone by the stop
@@ -61,19 +62,18 @@ void Cia402Device::on_enable() {
                   static_cast<std::uint32_t>(c.drive_watchdog_ms),
               4, "consumer heartbeat time");
   }
-  send_or_throw(canopen::nmt_command(canopen::NmtCommand::kStart, node), "NMT start");
+  link_.send(canopen::nmt_command(canopen::NmtCommand::kStart, node), "NMT start");
   walk_to_enabled();
-  heartbeat_seen();
 }
 
-void Cia402Device::on_disable() noexcept {
+void Cia402Profile::disable(const CanFault&) noexcept {
   if (stopped_) return;  // once per enable: a fault's disable and the close after it are one stop
   stopped_ = true;
-  if (!socket_) return;
+  if (!link_.is_open()) return;
   const std::uint8_t node = settings_.node_id;
   // Zero torque and the power stage off together, applied at the next SYNC slot: one SYNC per
   // cycle, never two within microseconds (a drive's SYNC-locked clock would see a jump).
-  send_quietly(canopen::rpdo1_frame(node, cia402::kCwShutdown, 0));
+  link_.send_quietly(canopen::rpdo1_frame(node, cia402::kCwShutdown, 0));
   const auto period_ns = static_cast<std::int64_t>(std::llround(period_s_ * 1e9));
   const std::int64_t last = last_sync_ns_.load(std::memory_order_relaxed);
   std::vector<PeriodicSender::Entry> keep = {
@@ -84,20 +84,20 @@ void Cia402Device::on_disable() noexcept {
          static_cast<std::int64_t>(settings_.cia402.master_heartbeat_ms) * 1'000'000, 0});
   }
   try {
-    keeper_.start(socket_->fd(), std::move(keep), keeper_priority_);
+    keeper_.start(link_.fd(), std::move(keep), keeper_priority_);
     keeper_.wait_written(1);
   } catch (...) {
-    send_quietly(canopen::sync_frame());  // no thread to be had: the stop at least
+    link_.send_quietly(canopen::sync_frame());  // no thread to be had: the stop at least
   }
   stop_keeping_alive();
   keeper_.stop();
-  send_quietly(canopen::nmt_command(canopen::NmtCommand::kEnterPreOperational, node));
+  link_.send_quietly(canopen::nmt_command(canopen::NmtCommand::kEnterPreOperational, node));
 }
 
 // While SYNC and hapticd's heartbeat still come: the drive stops watching them, so their end
 // is no lost master (CANopenNode: EMCY 0x8100 at 1.5 cycles without SYNC, 0x8130 when the
 // heartbeat consumer times out, both in pre-operational too).
-void Cia402Device::stop_keeping_alive() noexcept {
+void Cia402Profile::stop_keeping_alive() noexcept {
   try {
     if (has_cycle_period_) {
       sdo_write(cia402::kCommunicationCyclePeriod, 0, 4,
@@ -111,18 +111,16 @@ void Cia402Device::stop_keeping_alive() noexcept {
   }
 }
 
-void Cia402Device::on_clear_fault() {
-  if (!socket_) throw DeviceError("can: the transport is closed");
-  clear_pending();
+void Cia402Profile::clear_fault() {
   const std::uint8_t node = settings_.node_id;
-  send_or_throw(canopen::nmt_command(canopen::NmtCommand::kEnterPreOperational, node), "NMT");
+  link_.send(canopen::nmt_command(canopen::NmtCommand::kEnterPreOperational, node), "NMT");
   sdo_write(cia402::kControlword, cia402::kCwDisableVoltage, 2, "controlword");
   sdo_write(cia402::kControlword, cia402::kCwFaultReset, 2, "controlword (fault reset)");
   std::uint16_t sw = 0;
   PowerState state = read_state(sw);
-  const std::int64_t deadline = now_ms() + settings_.state_timeout_ms;
-  while (state == PowerState::kFault && now_ms() < deadline) {
-    socket_->wait_readable(2);
+  const std::int64_t deadline = base::monotonic_ms() + settings_.state_timeout_ms;
+  while (state == PowerState::kFault && base::monotonic_ms() < deadline) {
+    link_.wait_readable(2);
     state = read_state(sw);
   }
   sdo_write(cia402::kControlword, cia402::kCwDisableVoltage, 2, "controlword");
@@ -135,76 +133,81 @@ void Cia402Device::on_clear_fault() {
 
 // --- the tick ---
 
-void Cia402Device::on_tpdo1(const CanSocket::Received& rx) noexcept {
+FrameMeaning Cia402Profile::on_tpdo1(const CanSocket::Received& rx, bool active) noexcept {
   const auto pdo = canopen::decode_tpdo1(rx.frame);
   if (!pdo) {
-    counters_.wrong_length.fetch_add(1, std::memory_order_relaxed);
-    return;
+    link_.count(CanCounter::kWrongLength);
+    return {};
   }
-  fresh_ = true;
+  FrameMeaning m;
+  m.sample = true;
   statusword_ = pdo->statusword;
   position_ = pdo->position;
   sample_time_ns_ = rx.time_ns;
-  if (state() == DeviceState::kActive && (statusword_ & cia402::kSwInternalLimitActive) != 0) {
-    counters_.internal_limit.fetch_add(1, std::memory_order_relaxed);
+  if (active && (statusword_ & cia402::kSwInternalLimitActive) != 0) {
+    link_.count(CanCounter::kInternalLimit);
   }
   const PowerState s = cia402::decode_statusword(statusword_);
   if (s == PowerState::kFault || s == PowerState::kFaultReactionActive) {
-    raise(CanFaultKind::kStatuswordFault, statusword_);
-  } else if (state() == DeviceState::kActive && s != PowerState::kOperationEnabled) {
-    raise(CanFaultKind::kLeftOperation, statusword_);
+    m.fault = {CanFaultKind::kStatuswordFault, statusword_};
+  } else if (active && s != PowerState::kOperationEnabled) {
+    m.fault = {CanFaultKind::kLeftOperation, statusword_};
   }
+  return m;
 }
 
-void Cia402Device::on_emcy(const CanFrame& f) noexcept {
+FrameMeaning Cia402Profile::on_emcy(const CanFrame& f) noexcept {
   const auto e = canopen::decode_emcy(f);
+  FrameMeaning m;
   if (!e) {
-    raise(CanFaultKind::kEmcyTruncated, f.len);
+    m.fault = {CanFaultKind::kEmcyTruncated, f.len};
   } else if (e->code == 0) {
-    counters_.emcy_resets.fetch_add(1, std::memory_order_relaxed);
+    link_.count(CanCounter::kEmcyResets);
   } else {
-    raise(CanFaultKind::kEmcy, (static_cast<std::uint32_t>(e->error_register) << 16) | e->code);
+    m.fault = {CanFaultKind::kEmcy,
+               (static_cast<std::uint32_t>(e->error_register) << 16) | e->code};
   }
+  return m;
 }
 
-void Cia402Device::on_frame(const CanSocket::Received& rx) noexcept {
+FrameMeaning Cia402Profile::on_heartbeat(const CanFrame& f, bool active) noexcept {
+  const auto s = canopen::decode_heartbeat(f);
+  if (!s) {
+    link_.count(CanCounter::kWrongLength);
+    return {};
+  }
+  FrameMeaning m;
+  m.heartbeat = true;
+  if (active && *s != canopen::NmtState::kOperational) {
+    m.fault = {CanFaultKind::kNmtStateChanged, static_cast<std::uint32_t>(*s)};
+  }
+  return m;
+}
+
+FrameMeaning Cia402Profile::on_frame(const CanSocket::Received& rx, bool active) noexcept {
   const CanFrame& f = rx.frame;
   const std::uint8_t node = settings_.node_id;
   if (f.extended || f.rtr) {
-    counters_.unknown_ids.fetch_add(1, std::memory_order_relaxed);
+    link_.count(CanCounter::kUnknownIds);
   } else if (f.id == canopen::kTpdo1Base + node) {
-    on_tpdo1(rx);
+    return on_tpdo1(rx, active);
   } else if (f.id == canopen::kTpdo2Base + node && settings_.cia402.map_velocity) {
     if (const auto v = canopen::decode_tpdo2(f)) {
       velocity_ = *v;
     } else {
-      counters_.wrong_length.fetch_add(1, std::memory_order_relaxed);
+      link_.count(CanCounter::kWrongLength);
     }
   } else if (f.id == canopen::kEmcyBase + node) {
-    on_emcy(f);
+    return on_emcy(f);
   } else if (f.id == canopen::kHeartbeatBase + node) {
-    const auto s = canopen::decode_heartbeat(f);
-    if (!s) {
-      counters_.wrong_length.fetch_add(1, std::memory_order_relaxed);
-      return;
-    }
-    heartbeat_seen();
-    if (state() == DeviceState::kActive && *s != canopen::NmtState::kOperational) {
-      raise(CanFaultKind::kNmtStateChanged, static_cast<std::uint32_t>(*s));
-    }
+    return on_heartbeat(f, active);
   } else {
-    counters_.unknown_ids.fetch_add(1, std::memory_order_relaxed);  // late SDO answers too
+    link_.count(CanCounter::kUnknownIds);  // late SDO answers too
   }
+  return {};
 }
 
-IoStatus Cia402Device::on_read(PositionSample& out) noexcept {
-  fresh_ = false;
-  const IoStatus drained = drain();
-  if (drained != IoStatus::kOk) return drained;
-  if (state() == DeviceState::kActive && heartbeat_lost()) {
-    return raise(CanFaultKind::kHeartbeatLost, ticks_since_heartbeat());
-  }
-  if (!fresh_) return IoStatus::kNoNewData;
+void Cia402Profile::sample(PositionSample& out) const noexcept {
   out.position = position_ * settings_.position_per_unit;
   out.time_ns = sample_time_ns_;
   out.status = statusword_;
@@ -213,34 +216,27 @@ IoStatus Cia402Device::on_read(PositionSample& out) noexcept {
     out.velocity = velocity_ * settings_.position_per_unit;
     out.flags |= kSampleHasVelocity;
   }
-  return IoStatus::kOk;
 }
 
-IoStatus Cia402Device::on_write(double force) noexcept {
+std::span<const CanFrame> Cia402Profile::tick_frames(double force) noexcept {
   const double permille =
       std::clamp(force * permille_per_force_, -1.0 * max_permille_, 1.0 * max_permille_);
   const auto torque = static_cast<std::int16_t>(std::lround(permille));
-  const std::uint8_t node = settings_.node_id;
   // RPDO first, then SYNC: the drive applies the torque at this SYNC and samples its position.
-  bool ok = send_rt(canopen::rpdo1_frame(node, cia402::kCwEnableOperation, torque)) &&
-            send_rt(canopen::sync_frame());
-  last_sync_ns_.store(PeriodicSender::now_ns(), std::memory_order_relaxed);
-  if (ok && master_heartbeat_ticks_ != 0 && tick_++ % master_heartbeat_ticks_ == 0) {
-    ok = send_rt(
-        canopen::heartbeat_frame(settings_.cia402.master_node_id, canopen::NmtState::kOperational));
+  tx_[0] = canopen::rpdo1_frame(settings_.node_id, cia402::kCwEnableOperation, torque);
+  tx_[1] = canopen::sync_frame();
+  std::size_t n = 2;
+  if (master_heartbeat_ticks_ != 0 && tick_++ % master_heartbeat_ticks_ == 0) {
+    tx_[n++] =
+        canopen::heartbeat_frame(settings_.cia402.master_node_id, canopen::NmtState::kOperational);
   }
-  if (ok) ok = end_tick_tx();
-  return ok ? IoStatus::kOk : pending_fault();
+  last_sync_ns_.store(base::monotonic_ns(), std::memory_order_relaxed);
+  return {tx_.data(), n};
 }
 
-std::string Cia402Device::describe(const DeviceFault& f) const {
-  const std::string seen = counter_summary();
-  return describe_cause(f) + (seen.empty() ? "" : " (also seen on the bus: " + seen + ")");
-}
-
-std::string Cia402Device::describe_cause(const DeviceFault& f) const {
+std::string Cia402Profile::describe(const CanFault& f, const std::string&) const {
   const std::string node = "can: cia402 node " + std::to_string(settings_.node_id);
-  switch (fault_kind()) {
+  switch (f.kind) {
     case CanFaultKind::kEmcy:
       return node + " sent EMCY " + canopen::describe_emcy_code(f.code & 0xFFFF) +
              " (error register " + hex((f.code >> 16) & 0xFF, 2) + ")";
@@ -261,7 +257,7 @@ std::string Cia402Device::describe_cause(const DeviceFault& f) const {
              ") for " + std::to_string(f.code) + " ticks (heartbeat_timeout_ms " +
              std::to_string(settings_.heartbeat_timeout_ms) + ")";
     default:
-      return describe_transport(f);
+      return {};  // the bus's: the device names it
   }
 }
 
