@@ -5,7 +5,6 @@
 #include <cerrno>
 
 #include "base/errno_text.h"
-#include "drivers/hid/hid_config.h"
 #include "drivers/hid/hid_device.h"
 #include "drivers/hid/hidapi_transport.h"
 #include "drivers/hid/socket_transport.h"

@@ -1,12 +1,14 @@
-// The HID driver's settings, the section device.hid (read and validated by hid_config.cpp;
+// The HID driver's settings, the section device.hid (read and validated by hid_section.cpp;
 // every key is documented in config/hid-report.yaml and config/hid-pid.yaml). Plain values.
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 
 #include "config/config.h"
+#include "config/schema_reader.h"
 #include "drivers/hid/pid_protocol.h"
 #include "drivers/hid/report_layout.h"
 
@@ -66,5 +68,13 @@ struct HidSettings final : config::DriverSettings {
 // answer to the command of tick k is read at tick k + ceil(2 P / T), one tick later than an
 // in-process device would give it. 1 at 1 kHz with bInterval 1 ms (docs/drivers/hid.md).
 int declared_delay_samples(double poll_interval_ms, double sample_period_s) noexcept;
+
+// Not RT-safe. Reads device.hid with the config library's schema reader, so every problem is
+// reported as "FILE:LINE: device.hid.key: what" and an unknown key is never silently ignored;
+// validation that spans keys (overlapping fields, fields past the report, a force scale that
+// cannot reach device.max_force) is reported at the key that must change. The HidSettings, or
+// null after reporting every problem through `section`.
+std::shared_ptr<const config::DriverSettings> read_hid_section(config::schema::MapReader& section,
+                                                               const config::Config& cfg);
 
 }  // namespace hapticd::drivers::hid

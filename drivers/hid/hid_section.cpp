@@ -1,4 +1,4 @@
-#include "drivers/hid/hid_config.h"
+#include "drivers/hid/hid_settings.h"
 
 #include <algorithm>
 #include <charconv>
@@ -7,7 +7,6 @@
 #include <string>
 
 #include "base/hex.h"
-#include "drivers/hid/hid_settings.h"
 
 namespace hapticd::drivers::hid {
 namespace {
