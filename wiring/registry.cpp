@@ -22,8 +22,9 @@
 namespace hapticd::wiring {
 namespace {
 
-// A driver's device and its simulated device, joined by the driver's name.
-DriverEntry join(const drivers::DeviceEntry& device, const sim::PeerEntry& peer) {
+// A driver's device and its simulated device, joined by the driver's name (unused in a
+// build with only the sim driver, such as the ThreadSanitizer stage's).
+[[maybe_unused]] DriverEntry join(const drivers::DeviceEntry& device, const sim::PeerEntry& peer) {
   if (device.name != peer.driver) {
     throw std::logic_error("wiring: the device of driver '" + std::string(device.name) +
                            "' is registered with the peer of '" + std::string(peer.driver) + "'");

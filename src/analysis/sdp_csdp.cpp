@@ -53,6 +53,66 @@ struct Problem {
   constraintmatrix* constraints = nullptr;
 };
 
+// One variable's entries in one LMI block as CSDP's sparse block, prepended to that
+// variable's constraint list (so each list ends up in block order).
+void add_entries(Problem& q, int b, int size, bool diagonal, int v,
+                 const std::vector<const LmiEntry*>& list) {
+  auto* sb = zeroed<sparseblock>(1);
+  sb->blocknum = b;
+  sb->blocksize = size;
+  sb->constraintnum = v + 1;
+  sb->numentries = static_cast<int>(list.size());
+  sb->entries = zeroed<double>(list.size() + 1);
+  sb->iindices = zeroed<int>(list.size() + 1);
+  sb->jindices = zeroed<int>(list.size() + 1);
+  for (std::size_t e = 0; e < list.size(); ++e) {
+    sb->entries[e + 1] = list[e]->value;
+    sb->iindices[e + 1] = list[e]->col + 1;  // upper triangle: i <= j
+    sb->jindices[e + 1] = list[e]->row + 1;
+  }
+  // Dense storage when the block is well filled (CSDP's own rule of thumb for its Schur
+  // complement products).
+  const double kk = q.k, nnz = static_cast<double>(list.size()), sz = size;
+  sb->issparse =
+      (!diagonal && kk * kk * nnz * nnz > 0.125 * kk * sz * sz * sz && list.size() > 5) ? 0 : 1;
+  sb->next = q.constraints[v + 1].blocks;
+  q.constraints[v + 1].blocks = sb;
+}
+
+// LMI block b (1-based): its constant part into C, its variables' parts into the constraints.
+void convert_block(const SdpProblem& p, int b, Problem& q) {
+  const LmiBlock& blk = p.blocks[static_cast<std::size_t>(b - 1)];
+  const int size = blk.size;
+  q.n += size;
+  blockrec& rec = q.c.blocks[b];
+  rec.blocksize = size;
+  // A block of scalar inequalities (only diagonal entries) is CSDP's DIAG: linear in its
+  // size, where a dense MATRIX block costs its cube per iteration.
+  const bool diagonal = std::all_of(blk.entries.begin(), blk.entries.end(),
+                                    [](const LmiEntry& e) { return e.row == e.col; });
+  rec.blockcategory = diagonal ? DIAG : MATRIX;
+  const std::size_t stored = diagonal
+                                 ? static_cast<std::size_t>(size) + 1
+                                 : static_cast<std::size_t>(size) * static_cast<std::size_t>(size);
+  double* data = zeroed<double>(stored);
+  (diagonal ? rec.data.vec : rec.data.mat) = data;
+  const auto at = [&](int i, int j) -> double& { return data[diagonal ? i : ijtok(i, j, size)]; };
+  for (int i = 1; i <= size; ++i) at(i, i) = p.margin;
+  std::vector<std::vector<const LmiEntry*>> per_var(static_cast<std::size_t>(q.k));
+  for (const LmiEntry& e : blk.entries) {
+    if (e.var >= 0) {
+      per_var[static_cast<std::size_t>(e.var)].push_back(&e);
+      continue;
+    }
+    at(e.row + 1, e.col + 1) -= e.value;
+    if (e.row != e.col) at(e.col + 1, e.row + 1) -= e.value;
+  }
+  for (int v = 0; v < q.k; ++v) {
+    const auto& list = per_var[static_cast<std::size_t>(v)];
+    if (!list.empty()) add_entries(q, b, size, diagonal, v, list);
+  }
+}
+
 Problem convert(const SdpProblem& p) {
   Problem q;
   q.k = p.variables;
@@ -62,58 +122,7 @@ Problem convert(const SdpProblem& p) {
   q.a = zeroed<double>(static_cast<std::size_t>(q.k) + 1);
   for (int i = 1; i <= q.k; ++i) q.a[i] = p.objective(i - 1);
   q.constraints = zeroed<constraintmatrix>(static_cast<std::size_t>(q.k) + 1);
-  for (int b = nb; b >= 1; --b) {  // prepended, so each list ends up in block order
-    const LmiBlock& blk = p.blocks[static_cast<std::size_t>(b - 1)];
-    const int size = blk.size;
-    q.n += size;
-    blockrec& rec = q.c.blocks[b];
-    rec.blocksize = size;
-    // A block of scalar inequalities (only diagonal entries) is CSDP's DIAG: linear in its
-    // size, where a dense MATRIX block costs its cube per iteration.
-    const bool diagonal = std::all_of(blk.entries.begin(), blk.entries.end(),
-                                      [](const LmiEntry& e) { return e.row == e.col; });
-    rec.blockcategory = diagonal ? DIAG : MATRIX;
-    const std::size_t stored =
-        diagonal ? static_cast<std::size_t>(size) + 1
-                 : static_cast<std::size_t>(size) * static_cast<std::size_t>(size);
-    double* data = zeroed<double>(stored);
-    (diagonal ? rec.data.vec : rec.data.mat) = data;
-    const auto at = [&](int i, int j) -> double& { return data[diagonal ? i : ijtok(i, j, size)]; };
-    for (int i = 1; i <= size; ++i) at(i, i) = p.margin;
-    std::vector<std::vector<const LmiEntry*>> per_var(static_cast<std::size_t>(q.k));
-    for (const LmiEntry& e : blk.entries) {
-      if (e.var >= 0) {
-        per_var[static_cast<std::size_t>(e.var)].push_back(&e);
-        continue;
-      }
-      at(e.row + 1, e.col + 1) -= e.value;
-      if (e.row != e.col) at(e.col + 1, e.row + 1) -= e.value;
-    }
-    for (int v = 0; v < q.k; ++v) {
-      const auto& list = per_var[static_cast<std::size_t>(v)];
-      if (list.empty()) continue;
-      auto* sb = zeroed<sparseblock>(1);
-      sb->blocknum = b;
-      sb->blocksize = size;
-      sb->constraintnum = v + 1;
-      sb->numentries = static_cast<int>(list.size());
-      sb->entries = zeroed<double>(list.size() + 1);
-      sb->iindices = zeroed<int>(list.size() + 1);
-      sb->jindices = zeroed<int>(list.size() + 1);
-      for (std::size_t e = 0; e < list.size(); ++e) {
-        sb->entries[e + 1] = list[e]->value;
-        sb->iindices[e + 1] = list[e]->col + 1;  // upper triangle: i <= j
-        sb->jindices[e + 1] = list[e]->row + 1;
-      }
-      // Dense storage when the block is well filled (CSDP's own rule of thumb for its
-      // Schur complement products).
-      const double kk = q.k, nnz = static_cast<double>(list.size()), sz = size;
-      sb->issparse =
-          (!diagonal && kk * kk * nnz * nnz > 0.125 * kk * sz * sz * sz && list.size() > 5) ? 0 : 1;
-      sb->next = q.constraints[v + 1].blocks;
-      q.constraints[v + 1].blocks = sb;
-    }
-  }
+  for (int b = nb; b >= 1; --b) convert_block(p, b, q);  // prepended: lists end in block order
   return q;
 }
 

@@ -69,27 +69,23 @@ json gate_to_json(const GateReport& r) {
   return j;
 }
 
-std::string gate_to_text(const GateReport& r, const config::Config& cfg) {
+namespace {
+
+// "  key<padding>value": the table's row.
+void row(std::ostream& os, const std::string& k, const std::string& v) {
+  os << "  " << k << std::string(k.size() < 26 ? 26 - k.size() : 1, ' ') << v << "\n";
+}
+
+void passivity_rows(const GateReport& r, const config::Config& cfg, std::ostream& os) {
   const PassivityReport& p = r.passivity;
-  std::ostringstream os;
-  const auto row = [&os](const std::string& k, const std::string& v) {
-    os << "  " << k << std::string(k.size() < 26 ? 26 - k.size() : 1, ' ') << v << "\n";
-  };
-  os << "hapticd check: " << cfg.source_name << "\n";
-  row("sample period T", format_number(r.sample_period_s * 1e3) + " ms (" +
-                             format_number(1.0 / r.sample_period_s) + " Hz)");
-  row("delay", std::to_string(r.delay_samples) + " samples (wall " +
-                   std::to_string(r.wall_delay_samples) + " + driver " +
-                   std::to_string(r.device_delay_samples) + ")");
-  row("device damping b", format_number(r.device_damping) + " N s/m");
   os << "passivity (Roberts, Moore & Colgate)\n";
-  row("required damping b_req",
+  row(os, "required damping b_req",
       format_number(p.required_damping) + " N s/m" +
           (std::isfinite(p.required_damping) ? " at " + format_number(p.worst_frequency_hz) + " Hz"
                                              : " (" + p.note + ")"));
-  row("allowed (margin " + format_number(cfg.safety.passivity_margin * 100) + " %)",
+  row(os, "allowed (margin " + format_number(cfg.safety.passivity_margin * 100) + " %)",
       "b_req <= " + format_number(p.available_damping) + " N s/m");
-  row("achieved margin",
+  row(os, "achieved margin",
       std::isfinite(p.margin) ? format_number(p.margin * 100, 3) + " % of b" : "none");
   const std::string note =
       p.max_stiffness.kind == analysis::StiffnessLimit::Kind::kBounded
@@ -97,34 +93,57 @@ std::string gate_to_text(const GateReport& r, const config::Config& cfg) {
       : p.max_stiffness.kind == analysis::StiffnessLimit::Kind::kUnbounded
           ? "unbounded (tried up to " + format_number(p.max_stiffness.value) + " N/m)"
           : "none, not even 0";
-  row("largest passing K", note + " (configured " + format_number(cfg.wall.stiffness) + ")");
-  row("static stiffness H(1)",
+  row(os, "largest passing K", note + " (configured " + format_number(cfg.wall.stiffness) + ")");
+  row(os, "static stiffness H(1)",
       format_number(r.static_stiffness) + " N/m (what a steady push feels)");
+}
+
+void oscillation_and_coupling_rows(const GateReport& r, const config::Config& cfg,
+                                   std::ostream& os) {
   const OscillationReport& o = r.oscillation;
   os << "oscillation (Tsai & Colgate; operator k_h " +
             format_number(cfg.analysis.operator_stiffness) + " N/m, b_h " +
             format_number(cfg.analysis.operator_damping) + " N s/m)\n";
   if (o.applicable) {
-    row("Tsai-Colgate", std::string(o.tsai_colgate ? "holds" : "fails") + " (margin " +
-                            format_number(o.tsai_colgate_margin, 3) + ", worst at " +
-                            format_number(o.worst_frequency_hz) + " Hz)");
-    row("Tsypkin", std::string(o.tsypkin ? "holds" : "fails") + " (margin " +
-                       format_number(o.tsypkin_margin, 3) + ")");
+    row(os, "Tsai-Colgate",
+        std::string(o.tsai_colgate ? "holds" : "fails") + " (margin " +
+            format_number(o.tsai_colgate_margin, 3) + ", worst at " +
+            format_number(o.worst_frequency_hz) + " Hz)");
+    row(os, "Tsypkin",
+        std::string(o.tsypkin ? "holds" : "fails") + " (margin " +
+            format_number(o.tsypkin_margin, 3) + ")");
   } else {
-    row("criteria", o.note);
+    row(os, "criteria", o.note);
   }
   const CouplingReport& c = r.coupling;
   if (!c.present) {
     os << "coupling                    none\n";
-  } else {
-    os << "coupling (Naghshtabrizi & Hespanha)\n";
-    row("DSPR (Theorem 1)",
-        std::string(c.dspr ? "holds" : "fails") +
-            (c.admissible ? " (min Re " + format_number(c.dspr_min_real) + ")" : "") +
-            (c.note.empty() ? "" : "; " + c.note));
-    row("transparency gamma", format_number(c.transparency_gamma) + " at " +
-                                  format_number(c.transparency_frequency_hz) + " Hz");
+    return;
   }
+  os << "coupling (Naghshtabrizi & Hespanha)\n";
+  row(os, "DSPR (Theorem 1)",
+      std::string(c.dspr ? "holds" : "fails") +
+          (c.admissible ? " (min Re " + format_number(c.dspr_min_real) + ")" : "") +
+          (c.note.empty() ? "" : "; " + c.note));
+  row(os, "transparency gamma",
+      format_number(c.transparency_gamma) + " at " + format_number(c.transparency_frequency_hz) +
+          " Hz");
+}
+
+}  // namespace
+
+std::string gate_to_text(const GateReport& r, const config::Config& cfg) {
+  std::ostringstream os;
+  os << "hapticd check: " << cfg.source_name << "\n";
+  row(os, "sample period T",
+      format_number(r.sample_period_s * 1e3) + " ms (" + format_number(1.0 / r.sample_period_s) +
+          " Hz)");
+  row(os, "delay",
+      std::to_string(r.delay_samples) + " samples (wall " + std::to_string(r.wall_delay_samples) +
+          " + driver " + std::to_string(r.device_delay_samples) + ")");
+  row(os, "device damping b", format_number(r.device_damping) + " N s/m");
+  passivity_rows(r, cfg, os);
+  oscillation_and_coupling_rows(r, cfg, os);
   os << "verdict                     " << (r.pass ? "PASS" : "FAIL") << "\n";
   for (const std::string& s : r.reasons) os << "  fail: " << s << "\n";
   for (const std::string& s : r.warnings) os << "  note: " << s << "\n";

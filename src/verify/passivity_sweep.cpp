@@ -157,6 +157,39 @@ class Sweep {
   std::vector<SweepPoint> sweep_;
 };
 
+// The largest measured damping zero over the frequencies up to Nyquist: a coarse grid
+// theta = pi j / J (Tustin's pole at -1 resonates exactly at Nyquist, left out), low
+// frequencies where delayed walls peak as theta -> 0, then a ternary search around the coarse
+// maximum on the finer grid theta = 2 pi p / Q.
+double worst_damping(Sweep& sweep, bool tustin) {
+  constexpr std::int64_t kJ = 64;
+  double best = -std::numeric_limits<double>::infinity();
+  std::int64_t best_j = 1;
+  for (std::int64_t j = 1; j <= (tustin ? kJ - 1 : kJ); ++j) {
+    const double v = sweep.damping_zero(j, 2 * kJ);
+    if (v > best) {
+      best = v;
+      best_j = j;
+    }
+  }
+  for (std::int64_t q : {4096, 1024, 512}) best = std::max(best, sweep.damping_zero(1, q));
+  constexpr std::int64_t kQ = 4096;
+  constexpr std::int64_t kScale = kQ / (2 * kJ);
+  std::int64_t lo = std::max<std::int64_t>(1, (best_j - 1) * kScale);
+  std::int64_t hi = std::min<std::int64_t>(tustin ? kQ / 2 - 1 : kQ / 2, (best_j + 1) * kScale);
+  while (hi - lo > 2) {  // ternary search on a unimodal bracket
+    const std::int64_t m1 = lo + (hi - lo) / 3;
+    const std::int64_t m2 = hi - (hi - lo) / 3;
+    if (sweep.damping_zero(m1, kQ) < sweep.damping_zero(m2, kQ)) {
+      lo = m1 + 1;
+    } else {
+      hi = m2 - 1;
+    }
+  }
+  for (std::int64_t p = lo; p <= hi; ++p) best = std::max(best, sweep.damping_zero(p, kQ));
+  return best;
+}
+
 }  // namespace
 
 VerifyResult verify_passivity(const config::Config& cfg, int device_delay_samples) {
@@ -180,35 +213,7 @@ VerifyResult verify_passivity(const config::Config& cfg, int device_delay_sample
   const bool tustin = cfg.wall.discretization == config::Discretization::kTustin;
   Sweep sweep(cfg, r.delay_samples, r.amplitude, tustin,
               analysis::spectral_radius(analysis::contact_map(e, c)));
-
-  // Coarse grid theta = pi j / J up to Nyquist (Tustin's pole at -1 resonates exactly there),
-  // plus low frequencies where delayed walls peak as theta -> 0.
-  constexpr std::int64_t kJ = 64;
-  double best = -std::numeric_limits<double>::infinity();
-  std::int64_t best_j = 1;
-  for (std::int64_t j = 1; j <= (tustin ? kJ - 1 : kJ); ++j) {
-    const double v = sweep.damping_zero(j, 2 * kJ);
-    if (v > best) {
-      best = v;
-      best_j = j;
-    }
-  }
-  for (std::int64_t q : {4096, 1024, 512}) best = std::max(best, sweep.damping_zero(1, q));
-  // Refine around the coarse maximum on the finer grid theta = 2 pi p / Q.
-  constexpr std::int64_t kQ = 4096;
-  constexpr std::int64_t kScale = kQ / (2 * kJ);
-  std::int64_t lo = std::max<std::int64_t>(1, (best_j - 1) * kScale);
-  std::int64_t hi = std::min<std::int64_t>(tustin ? kQ / 2 - 1 : kQ / 2, (best_j + 1) * kScale);
-  while (hi - lo > 2) {  // ternary search on a unimodal bracket
-    const std::int64_t m1 = lo + (hi - lo) / 3;
-    const std::int64_t m2 = hi - (hi - lo) / 3;
-    if (sweep.damping_zero(m1, kQ) < sweep.damping_zero(m2, kQ)) {
-      lo = m1 + 1;
-    } else {
-      hi = m2 - 1;
-    }
-  }
-  for (std::int64_t p = lo; p <= hi; ++p) best = std::max(best, sweep.damping_zero(p, kQ));
+  const double best = worst_damping(sweep, tustin);
 
   r.sweep = sweep.points();
   std::sort(r.sweep.begin(), r.sweep.end(), [](const SweepPoint& a, const SweepPoint& b) {
