@@ -38,28 +38,36 @@ std::optional<std::uint32_t> read_hex(Diagnostics& d, const Field& f, std::uint3
   return static_cast<std::uint32_t>(v);
 }
 
+// A key given without a value (`--set device.evdev.poll_interval_ms=`) is absent: that is how
+// a key of an example file is removed from the command line.
+Field take(MapReader& m, const char* key) {
+  Field f = m.take(key);
+  if (f.present && f.node.IsNull()) f.present = false;
+  return f;
+}
+
 void number(MapReader& m, const Field& f, const Range& r, double& out) {
   if (const auto v = config::schema::read_number(m.diag(), f, r)) out = *v;
 }
 
 void text(MapReader& m, const char* key, std::string& out) {
-  if (const auto v = config::schema::read_string(m.diag(), m.take(key))) out = *v;
+  if (const auto v = config::schema::read_string(m.diag(), take(m, key))) out = *v;
 }
 
 void read_select(MapReader& ev, Selector& sel) {
-  const Field field = ev.take("select");
+  const Field field = take(ev, "select");
   if (!field.present) ev.missing("select", "which device: name, vendor_id/product_id, path...");
   MapReader m(ev.diag(), field);
   text(m, "name", sel.name);
-  if (const auto v = read_hex(m.diag(), m.take("vendor_id"), 0xFFFF)) {
+  if (const auto v = read_hex(m.diag(), take(m, "vendor_id"), 0xFFFF)) {
     sel.vendor_id = static_cast<std::uint16_t>(*v);
   }
-  if (const auto v = read_hex(m.diag(), m.take("product_id"), 0xFFFF)) {
+  if (const auto v = read_hex(m.diag(), take(m, "product_id"), 0xFFFF)) {
     sel.product_id = static_cast<std::uint16_t>(*v);
   }
   text(m, "phys", sel.phys);
   text(m, "uniq", sel.uniq);
-  const Field path = m.take("path");
+  const Field path = take(m, "path");
   if (const auto v = config::schema::read_string(m.diag(), path)) {
     if (v->rfind("/dev/input/", 0) != 0) {
       m.diag().error(path.key_mark, path.path,
@@ -79,10 +87,10 @@ void read_select(MapReader& ev, Selector& sel) {
 
 // code (a name such as ABS_X, or the number), scale and its positions.
 void read_axis(MapReader& ev, AxisSettings& a) {
-  const Field field = ev.take("axis");
+  const Field field = take(ev, "axis");
   if (!field.present) ev.missing("axis", "the absolute axis read as the position");
   MapReader m(ev.diag(), field);
-  const Field code = m.take("code");
+  const Field code = take(m, "code");
   if (!code.present) m.missing("code", "the axis: ABS_X, ABS_WHEEL, ... or its number");
   if (code.present) {
     const std::string name = code.node.IsScalar() ? code.node.Scalar() : std::string();
@@ -92,11 +100,11 @@ void read_axis(MapReader& ev, AxisSettings& a) {
       a.code = static_cast<int>(*v);
     }
   }
-  if (const auto s = config::schema::read_choice(m.diag(), m.take("scale"), {"range", "resolution"})) {
+  if (const auto s = config::schema::read_choice(m.diag(), take(m, "scale"), {"range", "resolution"})) {
     a.scale = *s == 0 ? Scale::kRange : Scale::kResolution;
   }
-  const Field min = m.take("min"), max = m.take("max");
-  const Field rotary = m.take("rotary"), offset = m.take("offset");
+  const Field min = take(m, "min"), max = take(m, "max");
+  const Field rotary = take(m, "rotary"), offset = take(m, "offset");
   if (a.scale == Scale::kRange) {
     if (!min.present) m.missing("min", "the position (m or rad) at the axis' minimum");
     if (!max.present) m.missing("max", "the position (m or rad) at the axis' maximum");
@@ -120,14 +128,14 @@ void read_axis(MapReader& ev, AxisSettings& a) {
 
 // ff_driver, the USB polling interval and the kernel's HZ, and what they allow of loop.rate_hz.
 void read_ff_driver(MapReader& ev, const config::Config& cfg, EvdevSettings& s) {
-  const Field drv = ev.take("ff_driver");
+  const Field drv = take(ev, "ff_driver");
   if (!drv.present) ev.missing("ff_driver", "uinput, pidff or memless: the kernel's FF driver");
   if (const auto v = config::schema::read_choice(ev.diag(), drv, {"uinput", "pidff", "memless"})) {
     s.ff_driver = static_cast<FfDriver>(*v);
   }
-  const Field poll = ev.take("poll_interval_ms");
+  const Field poll = take(ev, "poll_interval_ms");
   number(ev, poll, Range::interval(0.0, false, 1000.0, true), s.poll_interval_ms);
-  const Field hz = ev.take("kernel_hz");
+  const Field hz = take(ev, "kernel_hz");
   if (const auto v = config::schema::read_integer(ev.diag(), hz, IntRange::between(100, 1000))) {
     s.kernel_hz = static_cast<int>(*v);
   }
@@ -151,7 +159,7 @@ void read_ff_driver(MapReader& ev, const config::Config& cfg, EvdevSettings& s) 
 }
 
 void read_force(MapReader& ev, const config::Config& cfg, EvdevSettings& s) {
-  const Field fs = ev.take("force_full_scale");
+  const Field fs = take(ev, "force_full_scale");
   if (!fs.present) ev.missing("force_full_scale", "the force (N or N m) at level 0x7fff");
   number(ev, fs, Range::greater_than(0.0), s.force_full_scale);
   if (fs.present && s.force_full_scale > 0.0 && s.force_full_scale < cfg.device.max_force) {
@@ -160,13 +168,13 @@ void read_force(MapReader& ev, const config::Config& cfg, EvdevSettings& s) {
                         " N: the level saturates at " + format_number(s.force_full_scale) +
                         " N");
   }
-  number(ev, ev.take("direction_deg"), Range::interval(0.0, true, 360.0, false), s.direction_deg);
-  number(ev, ev.take("gain"), Range::interval(0.0, false, 1.0, true), s.gain);
-  number(ev, ev.take("autocenter"), Range::interval(0.0, true, 1.0, true), s.autocenter);
+  number(ev, take(ev, "direction_deg"), Range::interval(0.0, true, 360.0, false), s.direction_deg);
+  number(ev, take(ev, "gain"), Range::interval(0.0, false, 1.0, true), s.gain);
+  number(ev, take(ev, "autocenter"), Range::interval(0.0, true, 1.0, true), s.autocenter);
 }
 
 void read_liveness(MapReader& ev, const config::Config& cfg, EvdevSettings& s) {
-  const Field live = ev.take("liveness_ms");
+  const Field live = take(ev, "liveness_ms");
   number(ev, live, Range::interval(0.0, true, 60000.0, true), s.liveness_ms);
   const double min_ms = 2e3 * cfg.loop.sample_period_s();
   if (live.present && s.liveness_ms > 0.0 && s.liveness_ms < min_ms) {

@@ -1,5 +1,6 @@
-// `hapticd run` as a user runs it, in its own process, for the reference-device tests: its exit
-// status, its --summary-json and its log. Only the binary is used, never a header of it.
+// `hapticd run` as a user runs it, in its own process, for the reference-device tests of every
+// transport: its exit status, its --summary-json and its log. Only the binary is used, never a
+// header of it.
 #pragma once
 
 #include <signal.h>
