@@ -49,6 +49,21 @@ void EvdevDevice::check_device(const wire::Facts& f) const {
   }
 }
 
+// The kernel smooths an axis with fuzz (hid-input gives a joystick's 1/256 of its range): a
+// change within fuzz/2 is dropped and up to twice fuzz averaged with the last value, a dead
+// band and a lag in the position the wall is rendered from. hapticd turns it off while it has
+// the device and gives it back at close.
+void EvdevDevice::unfuzz(int fuzz) {
+  kernel_fuzz_ = 0;
+  if (fuzz == 0) return;
+  transport_->set_fuzz(settings_->axis.code, 0);
+  kernel_fuzz_ = fuzz;
+  notices_.push_back("the kernel filtered " + abs_name(settings_->axis.code) + " with fuzz " +
+                     std::to_string(fuzz) + " (changes within " + std::to_string(fuzz / 2) +
+                     " counts dropped): hapticd sets it to 0 while it runs and gives it back at "
+                     "close");
+}
+
 void EvdevDevice::upload() {
   effect_ = {};
   effect_.direction = direction_of(settings_->direction_deg);
@@ -67,6 +82,7 @@ DeviceInfo EvdevDevice::on_configure() {
   const wire::Facts f = transport_->facts(settings_->axis.code);
   check_device(f);
   range_ = f.range;
+  unfuzz(f.fuzz);
   has_gain_ = f.ff_gain;
   has_autocenter_ = f.ff_autocenter;
   if (has_gain_) ff_or_throw(kFfGain, fraction16(settings_->gain), "FF_GAIN");
@@ -155,6 +171,14 @@ void EvdevDevice::on_close() noexcept {
   emergency_.store(nullptr);
   if (transport_ && effect_.id >= 0) transport_->erase(effect_.id);
   effect_.id = -1;
+  if (transport_ && kernel_fuzz_ != 0) {
+    try {
+      transport_->set_fuzz(settings_->axis.code, kernel_fuzz_);
+    } catch (const DeviceError&) {
+      // A device that is gone takes its fuzz with it.
+    }
+    kernel_fuzz_ = 0;
+  }
   transport_.reset();  // closing the node also erases whatever effect this process left
 }
 

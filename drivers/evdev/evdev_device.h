@@ -78,6 +78,7 @@ class EvdevDevice final : public Device {
   int set_level(std::int16_t level) noexcept;
   void ff_or_throw(int code, int value, const char* what);
   void note_kernel_driver(const InputListing& l);
+  void unfuzz(int fuzz);
 
   std::shared_ptr<const EvdevSettings> settings_;
   std::function<Opened()> open_;
@@ -93,6 +94,7 @@ class EvdevDevice final : public Device {
   bool active_ = false;
   bool have_position_ = false;
   bool has_gain_ = false, has_autocenter_ = false;
+  int kernel_fuzz_ = 0;  // the fuzz the kernel had on the axis, given back at close
   std::atomic<EvdevTransport*> emergency_{nullptr};
   std::int64_t quiet_since_ns_ = 0;  // the last axis event, or the last zero force after it
   using K = base::CounterKind;

@@ -28,6 +28,8 @@ class EvdevTransport {
   // Not RT-safe; each throws DeviceError naming what failed. The device's facts, with the
   // range and current value of axis `code`.
   virtual wire::Facts facts(int code) = 0;
+  // EVIOCSABS: the kernel's fuzz on axis `code` (the rest of its absinfo kept).
+  virtual void set_fuzz(int code, int fuzz) = 0;
   // EVIOCGRAB: `on` takes the device for this process alone (EBUSY when another holds it:
   // said so), off gives it back.
   virtual void grab(bool on) = 0;

@@ -103,7 +103,7 @@ void encode_facts(const Facts& f, std::vector<std::uint8_t>& out) {
   }
   w.u8((f.has_axis ? 1u : 0u) | (f.ff_constant ? 2u : 0u) | (f.ff_gain ? 4u : 0u) |
        (f.ff_autocenter ? 8u : 0u));
-  for (std::int32_t v : {f.range.minimum, f.range.maximum, f.range.resolution, f.value,
+  for (std::int32_t v : {f.range.minimum, f.range.maximum, f.range.resolution, f.value, f.fuzz,
                          f.ff_effects}) {
     w.u32(static_cast<std::uint32_t>(v));
   }
@@ -128,6 +128,7 @@ Facts decode_facts(Reader& r) {
   f.range.maximum = static_cast<std::int32_t>(r.u32());
   f.range.resolution = static_cast<std::int32_t>(r.u32());
   f.value = static_cast<std::int32_t>(r.u32());
+  f.fuzz = static_cast<std::int32_t>(r.u32());
   f.ff_effects = static_cast<std::int32_t>(r.u32());
   f.name = r.text();
   f.phys = r.text();

@@ -51,6 +51,7 @@ struct Facts {
   bool has_axis = false;  // the queried axis exists
   AxisRange range;
   std::int32_t value = 0;  // the axis' current value
+  std::int32_t fuzz = 0;   // the kernel's filter on it: changes within this are smoothed
   bool ff_constant = false, ff_gain = false, ff_autocenter = false;
   std::int32_t ff_effects = 0;  // effects the device holds at once
 };

@@ -43,12 +43,17 @@ void count_message(const libevdev*, enum libevdev_log_priority, void*, const cha
   g_library_messages.fetch_add(1, std::memory_order_relaxed);
 }
 
+// The driver bound to the device behind the input device: its nearest ancestor in sysfs that
+// has one (a HID device's is two levels up, past the input class directory).
 std::string sysfs_driver(const std::string& event) {
   std::error_code ec;
-  const fs::path input = fs::canonical("/sys/class/input/" + event + "/device", ec);
-  if (ec) return {};
-  const fs::path driver = fs::read_symlink(input.parent_path() / "driver", ec);
-  return ec ? std::string() : driver.filename().string();
+  fs::path dir = fs::canonical("/sys/class/input/" + event + "/device", ec);
+  for (int up = 0; !ec && up < 4 && dir.has_parent_path(); ++up, dir = dir.parent_path()) {
+    const fs::path driver = fs::read_symlink(dir / "driver", ec);
+    if (!ec) return driver.filename().string();
+    ec.clear();
+  }
+  return {};
 }
 
 bool sysfs_virtual(const std::string& event) {
@@ -119,6 +124,7 @@ class LibevdevTransport final : public EvdevTransport {
       if (ioctl(fd_.get(), EVIOCGABS(code), &abs) != 0) throw failed("EVIOCGABS");
       f.range = {abs.minimum, abs.maximum, abs.resolution};
       f.value = abs.value;
+      f.fuzz = abs.fuzz;
     }
     f.ff_constant = libevdev_has_event_code(d, EV_FF, FF_CONSTANT);
     f.ff_gain = libevdev_has_event_code(d, EV_FF, FF_GAIN);
@@ -129,6 +135,17 @@ class LibevdevTransport final : public EvdevTransport {
     }
     f.ff_effects = effects;
     return f;
+  }
+
+  void set_fuzz(int code, int fuzz) override {
+    input_absinfo abs{};
+    if (ioctl(fd_.get(), EVIOCGABS(code), &abs) != 0) throw failed("EVIOCGABS");
+    abs.fuzz = fuzz;
+    if (const int rc = libevdev_kernel_set_abs_info(dev_.get(), static_cast<unsigned>(code), &abs);
+        rc != 0) {
+      errno = -rc;
+      throw failed("EVIOCSABS");
+    }
   }
 
   void grab(bool on) override {

@@ -54,6 +54,11 @@ wire::Facts SocketTransport::facts(int code) {
   return request(m, Type::kFacts).facts;
 }
 
+void SocketTransport::set_fuzz(int code, int fuzz) {
+  throw DeviceError("evdev loopback: the simulated device filters nothing: no fuzz to set to " +
+                    std::to_string(fuzz) + " on axis " + std::to_string(code));
+}
+
 void SocketTransport::grab(bool on) {
   wire::Message m;
   m.type = Type::kGrab;

@@ -20,6 +20,8 @@ class SocketTransport final : public EvdevTransport {
 
   std::string describe() const override { return "the simulated device over a socketpair"; }
   wire::Facts facts(int code) override;
+  // The simulated device reports no fuzz, so the driver never sets one there.
+  void set_fuzz(int code, int fuzz) override;
   void grab(bool on) override;
   int upload(const wire::Effect& effect) override;
   int erase(int id) noexcept override;
