@@ -18,6 +18,7 @@
 #include <regex>
 
 #include "hapticd_process.h"
+#include "rt_syscalls.h"
 #include "uinput_ff_device.h"
 
 namespace hapticd::reference {
@@ -92,10 +93,19 @@ TEST(EvdevUinput, TheWallHoldsTheHandAtForceOverStiffness) {
 }
 
 // What reaches the device per tick: every update is an EVIOCSFF that returns only once this
-// process took it, so each tick's level arrives within the tick, one upload per tick.
-TEST(EvdevUinput, EveryTickUploadsTheLevelOnce) {
+// process took it, so each tick's level arrives within the tick, one upload per tick. And what
+// the loop's thread asks of the kernel each tick, under strace: the events read (libevdev: one
+// read(2), one more that finds the buffer empty when an event came, and now and then a third
+// when an event lands between the two) and that EVIOCSFF.
+// The guest's clock has no vDSO path under the emulator (its clocksource is the HPET, not the
+// TSC), so its clock_gettime calls show as system calls here; on a TSC host they do not.
+TEST(EvdevUinput, EveryTickUploadsTheLevelOnceAndTheLoopThreadDoesLittleElse) {
   Rig rig;
-  const HapticdRun h = run(sets(), 3.0, [&](pid_t) { ASSERT_TRUE(rig.pushed()); });
+  const std::string trace = "/tmp/hapticd-uinput-strace";
+  std::vector<std::string> args = {"run", "--config", shipped("evdev.yaml"), "--duration", "3"};
+  for (const std::string& s : sets()) args.insert(args.end(), {"--set", s});
+  const HapticdRun h = run_hapticd(
+      args, [&](pid_t) { ASSERT_TRUE(rig.pushed()); }, strace_to(trace));
   ASSERT_EQ(h.status, 0) << h.log;
   const std::vector<Upload> ups = rig.device.uploads();
   ASSERT_GT(ups.size(), 100u);
@@ -111,6 +121,15 @@ TEST(EvdevUinput, EveryTickUploadsTheLevelOnce) {
   EXPECT_NEAR(p50, 10.0, 1.0) << "one upload a 10 ms tick";
   std::cout << "uinput: " << ups.size() << " uploads over " << ticks
             << " ticks; interval p50 " << p50 << " ms, max " << gaps.back() << " ms\n";
+  TickCalls t = tick_calls(trace);
+  std::cout << "uinput, the loop's thread: " << describe(t) << "\n";
+  ASSERT_GT(t.ticks, 100);
+  EXPECT_NEAR(t.per_tick["ioctl EVIOCSFF"], 1.0, 0.02);
+  EXPECT_LE(t.per_tick["read"], 2.5) << "two, a third when an event lands between them";
+  for (const auto& [name, n] : t.per_tick) {
+    EXPECT_TRUE(name == "read" || name == "ioctl EVIOCSFF" || name == "clock_gettime")
+        << name << " " << n << " a tick";
+  }
 }
 
 TEST(EvdevUinput, AnUnpluggedDeviceIsATransportFaultNamed) {

@@ -54,11 +54,11 @@ TEST(OpenFfboardEvdev, BehindHidPidffTheWallHoldsTheHandAtForceOverStiffness) {
   std::uint64_t constants = 0, outputs = 0;
   const double window_s = 2.0;
   const HapticdRun r = run_hapticd(
-      shipped("evdev.yaml"), evdev_sets(o.serial), {"--duration", "9"}, [&](pid_t) {
+      shipped("evdev.yaml"), evdev_sets(o.serial), {"--duration", "7"}, [&](pid_t) {
         // Uploaded at configure, played at enable: the hand pushes once the wall is on.
         ASSERT_TRUE(wait_until([&] { return board->playing(); })) << "output never enabled";
         board->axis().hand(kPush, 1.0);
-        std::this_thread::sleep_for(std::chrono::seconds(3));
+        std::this_thread::sleep_for(std::chrono::milliseconds(2500));
         // At rest: the level no longer changes.
         const std::uint64_t c0 = board->constant_reports(), o0 = board->output_reports();
         std::this_thread::sleep_for(std::chrono::duration<double>(window_s));
@@ -69,6 +69,7 @@ TEST(OpenFfboardEvdev, BehindHidPidffTheWallHoldsTheHandAtForceOverStiffness) {
       });
   ASSERT_EQ(r.status, 0) << r.faults() << "\n" << r.log;
   EXPECT_EQ(r.faults(), "[]");
+
   EXPECT_NEAR(x_rest, kPush / kStiffness, 0.02 * kPush / kStiffness)
       << "resting penetration; " << r.summary.dump() << "\n" << r.log;
   EXPECT_NEAR(torque_rest, -kPush, 0.02 * kPush) << "the wall's torque at rest";
