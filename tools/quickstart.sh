@@ -49,6 +49,7 @@ test_packages=(
   rt-tests util-linux                                   # cyclictest, jitter_bench.py; prlimit; runuser
   qemu-system-x86 busybox-static cpio kmod xz-utils zstd  # tools/kernel-vm, the kernel test machine
   udev iproute2                                         # udevd applying an instance's rules there; ip
+  strace                                                # the evdev kernel tests: the loop's system calls
   clang llvm                                            # the asan stage; llvm-symbolizer
 )
 

@@ -54,8 +54,8 @@ std::optional<FfDriver> guess_ff_driver(const InputListing& d) {
   // hid-universal-pidff for the same protocol); the others play through ff-memless.
   static constexpr std::array<std::string_view, 2> kPid{"hid-generic", "hid-universal-pidff"};
   static constexpr std::array<std::string_view, 12> kMemless{
-      "logitech", "thrustmaster", "xpad",    "sony",   "dragonrise", "greenasia",
-      "zeroplus", "pantherlord",  "gaff",    "betop",  "microsoft",  "hid-steam"};
+      "logitech", "thrustmaster", "xpad", "sony",  "dragonrise", "greenasia",
+      "zeroplus", "pantherlord",  "gaff", "betop", "microsoft",  "hid-steam"};
   const auto known = [&](const auto& names) {
     return std::find(names.begin(), names.end(), d.kernel_driver) != names.end();
   };
@@ -68,10 +68,10 @@ std::vector<InputListing> matching(const Selector& s, const std::string& resolve
                                    const std::vector<InputListing>& all) {
   std::vector<InputListing> out;
   for (const InputListing& d : all) {
-    const bool hit =
-        s.path.empty() ? matches(s, d)
-                       : d.path == resolved_path || d.path == s.path ||
-                             std::find(d.links.begin(), d.links.end(), s.path) != d.links.end();
+    const bool hit = s.path.empty()
+                         ? matches(s, d)
+                         : d.path == resolved_path || d.path == s.path ||
+                               std::find(d.links.begin(), d.links.end(), s.path) != d.links.end();
     if (hit) out.push_back(d);
   }
   return out;
@@ -100,12 +100,13 @@ Selection select_one(const Selector& s, const std::string& resolved_path,
              (d.uniq.empty() ? "" : " uniq " + d.uniq);
   }
   if (found.empty()) {
-    return {std::nullopt, "no input device matches device.evdev.select (" + describe(s) + ")" +
-                              (all.empty() ? ": none is readable here"
-                                           : "; attached and readable:" + there)};
+    return {std::nullopt,
+            "no input device matches device.evdev.select (" + describe(s) + ")" +
+                (all.empty() ? ": none is readable here" : "; attached and readable:" + there)};
   }
-  return {std::nullopt, std::to_string(found.size()) + " input devices match device.evdev.select (" +
-                            describe(s) + "): add phys, uniq or path to tell them apart:" + there};
+  return {std::nullopt, std::to_string(found.size()) +
+                            " input devices match device.evdev.select (" + describe(s) +
+                            "): add phys, uniq or path to tell them apart:" + there};
 }
 
 std::string format_listing(const std::vector<InputListing>& all, int unreadable) {
@@ -117,10 +118,11 @@ std::string format_listing(const std::vector<InputListing>& all, int unreadable)
       continue;
     }
     const std::optional<FfDriver> ff = guess_ff_driver(d);
-    out += "  " + d.path + "  \"" + d.name + "\"  " + hex4(d.vendor_id) + ":" +
-           hex4(d.product_id) + (d.phys.empty() ? "" : "  phys " + d.phys) +
-           (d.uniq.empty() ? "" : "  uniq " + d.uniq) + "\n";
-    out += "    kernel driver " + (d.kernel_driver.empty() ? std::string("(none)") : d.kernel_driver) +
+    out += "  " + d.path + "  \"" + d.name + "\"  " + hex4(d.vendor_id) + ":" + hex4(d.product_id) +
+           (d.phys.empty() ? "" : "  phys " + d.phys) + (d.uniq.empty() ? "" : "  uniq " + d.uniq) +
+           "\n";
+    out += "    kernel driver " +
+           (d.kernel_driver.empty() ? std::string("(none)") : d.kernel_driver) +
            (ff ? std::string(" (ff_driver: ") + to_string(*ff) + ")" : std::string()) +
            ", effects " + std::to_string(d.ff_effects) + (d.ff_gain ? ", FF_GAIN" : "") +
            (d.ff_autocenter ? ", FF_AUTOCENTER" : "") + "; axes " + axes_text(d) + "\n";
@@ -128,7 +130,8 @@ std::string format_listing(const std::vector<InputListing>& all, int unreadable)
     out += "    select: " + select_keys(d, all) + "\n";
   }
   if (out.find("select:") == std::string::npos) out += "  none\n";
-  if (others > 0) out += "  (" + std::to_string(others) + " other input devices have no FF_CONSTANT)\n";
+  if (others > 0)
+    out += "  (" + std::to_string(others) + " other input devices have no FF_CONSTANT)\n";
   if (unreadable > 0) {
     out += "  (" + std::to_string(unreadable) +
            " input devices could not be opened: permissions? `hapticd udev-rules` writes the "

@@ -20,8 +20,8 @@ struct InputListing {
   std::uint16_t bus = 0, vendor_id = 0, product_id = 0;
   bool ff_constant = false, ff_gain = false, ff_autocenter = false;
   int ff_effects = 0;
-  std::vector<int> abs_axes;  // the single absolute axes it has
-  std::string kernel_driver;  // what sysfs names as the driver bound to it ("" if none)
+  std::vector<int> abs_axes;    // the single absolute axes it has
+  std::string kernel_driver;    // what sysfs names as the driver bound to it ("" if none)
   bool virtual_device = false;  // made in user space (uinput): no bus of its own
 };
 

@@ -12,10 +12,10 @@ namespace {
 
 using config::schema::Diagnostics;
 using config::schema::Field;
+using config::schema::format_number;
 using config::schema::IntRange;
 using config::schema::MapReader;
 using config::schema::Range;
-using config::schema::format_number;
 
 // An unsigned integer written in decimal or 0x hexadecimal, at most `max`.
 std::optional<std::uint32_t> read_hex(Diagnostics& d, const Field& f, std::uint32_t max) {
@@ -72,7 +72,8 @@ void read_select(MapReader& ev, Selector& sel) {
     if (v->rfind("/dev/input/", 0) != 0) {
       m.diag().error(path.key_mark, path.path,
                      "must be an input device node under /dev/input/ (eventN, or a by-id/ or "
-                     "by-path/ link to one), got '" + *v + "'");
+                     "by-path/ link to one), got '" +
+                         *v + "'");
     } else {
       sel.path = *v;
     }
@@ -96,11 +97,18 @@ void read_axis(MapReader& ev, AxisSettings& a) {
     const std::string name = code.node.IsScalar() ? code.node.Scalar() : std::string();
     if (const auto c = abs_code(name)) {
       a.code = *c;
+    } else if (name.rfind("ABS_", 0) == 0 || name.empty()) {
+      m.diag().error(code.key_mark, code.path,
+                     "must be an absolute axis (ABS_X, ABS_Y, ABS_Z, ABS_RX, ABS_RY, ABS_RZ, "
+                     "ABS_THROTTLE, ABS_RUDDER, ABS_WHEEL, ABS_GAS, ABS_BRAKE, ...) or its number, "
+                     "got " +
+                         config::schema::describe_value(code.node));
     } else if (const auto v = read_hex(m.diag(), code, kAbsMax)) {
       a.code = static_cast<int>(*v);
     }
   }
-  if (const auto s = config::schema::read_choice(m.diag(), take(m, "scale"), {"range", "resolution"})) {
+  if (const auto s =
+          config::schema::read_choice(m.diag(), take(m, "scale"), {"range", "resolution"})) {
     a.scale = *s == 0 ? Scale::kRange : Scale::kResolution;
   }
   const Field min = take(m, "min"), max = take(m, "max");
@@ -165,8 +173,7 @@ void read_force(MapReader& ev, const config::Config& cfg, EvdevSettings& s) {
   if (fs.present && s.force_full_scale > 0.0 && s.force_full_scale < cfg.device.max_force) {
     ev.diag().error(fs.key_mark, fs.path,
                     "cannot represent device.max_force " + format_number(cfg.device.max_force) +
-                        " N: the level saturates at " + format_number(s.force_full_scale) +
-                        " N");
+                        " N: the level saturates at " + format_number(s.force_full_scale) + " N");
   }
   number(ev, take(ev, "direction_deg"), Range::interval(0.0, true, 360.0, false), s.direction_deg);
   number(ev, take(ev, "gain"), Range::interval(0.0, false, 1.0, true), s.gain);
@@ -178,9 +185,9 @@ void read_liveness(MapReader& ev, const config::Config& cfg, EvdevSettings& s) {
   number(ev, live, Range::interval(0.0, true, 60000.0, true), s.liveness_ms);
   const double min_ms = 2e3 * cfg.loop.sample_period_s();
   if (live.present && s.liveness_ms > 0.0 && s.liveness_ms < min_ms) {
-    ev.diag().error(live.key_mark, live.path,
-                    "must be 0 (no bound) or at least two sample periods (" +
-                        format_number(min_ms) + " ms)");
+    ev.diag().error(
+        live.key_mark, live.path,
+        "must be 0 (no bound) or at least two sample periods (" + format_number(min_ms) + " ms)");
   }
 }
 

@@ -12,7 +12,7 @@
 namespace hapticd::drivers::evdev {
 
 // Not RT-safe. The EvdevSettings, or null after reporting every problem through `section`.
-std::shared_ptr<const config::DriverSettings> read_evdev_section(
-    config::schema::MapReader& section, const config::Config& cfg);
+std::shared_ptr<const config::DriverSettings> read_evdev_section(config::schema::MapReader& section,
+                                                                 const config::Config& cfg);
 
 }  // namespace hapticd::drivers::evdev

@@ -28,8 +28,9 @@ void EvdevDevice::check_device(const wire::Facts& f) const {
   const std::string who = "evdev: \"" + f.name + "\"";
   if (!f.has_axis) throw DeviceError(who + " has no " + abs_name(a.code) + " axis");
   if (!f.ff_constant) {
-    throw DeviceError(who + " offers no FF_CONSTANT force feedback (`hapticd devices` lists "
-                            "the devices that do)");
+    throw DeviceError(who +
+                      " offers no FF_CONSTANT force feedback (`hapticd devices` lists "
+                      "the devices that do)");
   }
   if (f.ff_effects < 1) throw DeviceError(who + " holds no force-feedback effect");
   if (a.scale == Scale::kRange && f.range.maximum <= f.range.minimum) {
@@ -86,7 +87,8 @@ DeviceInfo EvdevDevice::on_configure() {
   has_gain_ = f.ff_gain;
   has_autocenter_ = f.ff_autocenter;
   if (has_gain_) ff_or_throw(kFfGain, fraction16(settings_->gain), "FF_GAIN");
-  if (has_autocenter_) ff_or_throw(kFfAutocenter, fraction16(settings_->autocenter), "FF_AUTOCENTER");
+  if (has_autocenter_)
+    ff_or_throw(kFfAutocenter, fraction16(settings_->autocenter), "FF_AUTOCENTER");
   upload();
   emergency_.store(transport_.get());
   if (o.listing) note_kernel_driver(*o.listing);
@@ -107,14 +109,15 @@ void EvdevDevice::note_kernel_driver(const InputListing& l) {
   if (!guess) {
     notices_.push_back("kernel driver '" + l.kernel_driver +
                        "' is not one hapticd knows: check that its force feedback is what "
-                       "device.evdev.ff_driver " + configured +
+                       "device.evdev.ff_driver " +
+                       configured +
                        " says, or the declared delay is wrong (docs/drivers/evdev.md)");
   } else if (*guess != settings_->ff_driver) {
-    notices_.push_back(
-        std::string("the device is bound to kernel driver '") +
-        (l.virtual_device ? std::string("uinput") : l.kernel_driver) + "', whose force feedback is " +
-        to_string(*guess) + ", but device.evdev.ff_driver says " + configured +
-        ": the gate analyses " + configured + "'s delay (docs/drivers/evdev.md)");
+    notices_.push_back(std::string("the device is bound to kernel driver '") +
+                       (l.virtual_device ? std::string("uinput") : l.kernel_driver) +
+                       "', whose force feedback is " + to_string(*guess) +
+                       ", but device.evdev.ff_driver says " + configured + ": the gate analyses " +
+                       configured + "'s delay (docs/drivers/evdev.md)");
   }
 }
 
@@ -128,7 +131,8 @@ void EvdevDevice::on_enable() {
   for (int i = 0; i < kMaxDrain; ++i) {
     const ReadStatus r = transport_->read(ev, error);
     if (r == ReadStatus::kEmpty) break;
-    if (r == ReadStatus::kError) throw DeviceError("evdev: reading at enable: " + base::errno_text(error));
+    if (r == ReadStatus::kError)
+      throw DeviceError("evdev: reading at enable: " + base::errno_text(error));
   }
   const wire::Facts f = transport_->facts(settings_->axis.code);
   value_ = f.value;
@@ -246,7 +250,7 @@ IoStatus EvdevDevice::on_read(PositionSample& out) noexcept {
 IoStatus EvdevDevice::hold(PositionSample& out) noexcept {
   if (!have_position_) return IoStatus::kNoNewData;
   const std::int64_t now = base::monotonic_ns();
-  if (liveness_ns_ > 0 && now - quiet_since_ns_ > liveness_ns_) {
+  if (liveness_ns_ > 0 && effect_.level != 0 && now - quiet_since_ns_ > liveness_ns_) {
     c_[kSilent].add();
     return IoStatus::kNoNewData;
   }

@@ -87,9 +87,9 @@ class EvdevDevice final : public Device {
   std::unique_ptr<EvdevTransport> transport_;
   std::vector<std::string> notices_;
   AxisRange range_;
-  wire::Effect effect_;      // the uploaded effect (id -1: none)
-  int pending_value_ = 0;    // the axis value of the frame being read
-  int value_ = 0;            // the last complete frame's
+  wire::Effect effect_;    // the uploaded effect (id -1: none)
+  int pending_value_ = 0;  // the axis value of the frame being read
+  int value_ = 0;          // the last complete frame's
   bool frame_moved_ = false;
   bool active_ = false;
   bool have_position_ = false;

@@ -103,8 +103,8 @@ void encode_facts(const Facts& f, std::vector<std::uint8_t>& out) {
   }
   w.u8((f.has_axis ? 1u : 0u) | (f.ff_constant ? 2u : 0u) | (f.ff_gain ? 4u : 0u) |
        (f.ff_autocenter ? 8u : 0u));
-  for (std::int32_t v : {f.range.minimum, f.range.maximum, f.range.resolution, f.value, f.fuzz,
-                         f.ff_effects}) {
+  for (std::int32_t v :
+       {f.range.minimum, f.range.maximum, f.range.resolution, f.value, f.fuzz, f.ff_effects}) {
     w.u32(static_cast<std::uint32_t>(v));
   }
   out.insert(out.end(), fixed, w.p);

@@ -18,14 +18,14 @@
 namespace hapticd::drivers::evdev::wire {
 
 enum class Type : std::uint8_t {
-  kEvent = 1,   // device -> driver: one input event (type, code, value, time)
-  kQuery,       // driver -> device: the facts, with the range of axis `code`
-  kFacts,       // device -> driver: the answer to kQuery
-  kGrab,        // driver -> device: EVIOCGRAB (value 1) or its release (0); answered kStatus
-  kUpload,      // driver -> device: EVIOCSFF; answered kStatus with the effect's id
-  kErase,       // driver -> device: EVIOCRMFF; answered kStatus
-  kWriteFf,     // driver -> device: an EV_FF event written (play/stop an id, gain, autocenter)
-  kStatus,      // device -> driver: an ioctl's answer: 0 or an errno, and a value
+  kEvent = 1,  // device -> driver: one input event (type, code, value, time)
+  kQuery,      // driver -> device: the facts, with the range of axis `code`
+  kFacts,      // device -> driver: the answer to kQuery
+  kGrab,       // driver -> device: EVIOCGRAB (value 1) or its release (0); answered kStatus
+  kUpload,     // driver -> device: EVIOCSFF; answered kStatus with the effect's id
+  kErase,      // driver -> device: EVIOCRMFF; answered kStatus
+  kWriteFf,    // driver -> device: an EV_FF event written (play/stop an id, gain, autocenter)
+  kStatus,     // device -> driver: an ioctl's answer: 0 or an errno, and a value
 };
 
 // One input event as read(2) gives it, its time in CLOCK_MONOTONIC ns.
@@ -58,9 +58,9 @@ struct Facts {
 
 struct Message {
   Type type = Type::kEvent;
-  Event event;         // kEvent
-  std::int32_t a = 0;  // kQuery: axis code; kGrab: on; kErase: id; kWriteFf: code
-  std::int32_t b = 0;  // kWriteFf: value; kStatus: the value (an uploaded effect's id)
+  Event event;             // kEvent
+  std::int32_t a = 0;      // kQuery: axis code; kGrab: on; kErase: id; kWriteFf: code
+  std::int32_t b = 0;      // kWriteFf: value; kStatus: the value (an uploaded effect's id)
   std::int32_t error = 0;  // kStatus: 0 or an errno
   Effect effect;           // kUpload
   Facts facts;             // kFacts

@@ -20,7 +20,8 @@
 namespace hapticd::drivers::evdev {
 
 // The codec restates the kernel's numbers (it includes no OS header): they must be these.
-static_assert(kEvSyn == EV_SYN && kEvAbs == EV_ABS && kEvFf == EV_FF && kEvFfStatus == EV_FF_STATUS);
+static_assert(kEvSyn == EV_SYN && kEvAbs == EV_ABS && kEvFf == EV_FF &&
+              kEvFfStatus == EV_FF_STATUS);
 static_assert(kSynReport == SYN_REPORT && kSynDropped == SYN_DROPPED);
 static_assert(kFfConstant == FF_CONSTANT && kFfGain == FF_GAIN && kFfAutocenter == FF_AUTOCENTER);
 static_assert(kFfStatusStopped == FF_STATUS_STOPPED && kFfStatusPlaying == FF_STATUS_PLAYING);
@@ -164,9 +165,7 @@ class LibevdevTransport final : public EvdevTransport {
     return effect_.id;
   }
 
-  int erase(int id) noexcept override {
-    return ioctl(fd_.get(), EVIOCRMFF, id) == 0 ? 0 : errno;
-  }
+  int erase(int id) noexcept override { return ioctl(fd_.get(), EVIOCRMFF, id) == 0 ? 0 : errno; }
 
   int update(const wire::Effect& effect) noexcept override {
     fill(effect);

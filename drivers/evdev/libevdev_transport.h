@@ -26,7 +26,6 @@ Enumeration enumerate_input_devices();
 // Not RT-safe. Opens the one device `settings.select` names (read and write: the force is
 // written to it), with its event times on CLOCK_MONOTONIC. Throws DeviceError naming what
 // failed (no or several matching devices, permissions). `listing` receives what was opened.
-std::unique_ptr<EvdevTransport> open_libevdev(const EvdevSettings& settings,
-                                              InputListing& listing);
+std::unique_ptr<EvdevTransport> open_libevdev(const EvdevSettings& settings, InputListing& listing);
 
 }  // namespace hapticd::drivers::evdev

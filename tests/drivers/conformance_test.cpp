@@ -26,7 +26,7 @@ namespace {
 
 struct Case {
   const char* driver;
-  const char* config;         // relative to the source tree
+  const char* config;  // relative to the source tree
   // --set on top of it, where the example lacks what is tested
   std::array<const char*, 2> sets{};
 };

@@ -1,7 +1,8 @@
 // What the loop's thread asks of the kernel each tick, read from `strace -ff -T` of a hapticd
 // run (one file per thread): the thread that sleeps in clock_nanosleep most is the loop's
-// (hapticd-rt), and its system calls between two of those sleeps are one tick's. For the BENCHMARKS.md table of each
-// driver class, and the tests that hold the evdev driver to one read-and-update a tick.
+// (hapticd-rt), and its system calls between two of those sleeps are one tick's. For the
+// BENCHMARKS.md table of each driver class, and the tests that hold the evdev driver to one
+// read-and-update a tick.
 #pragma once
 
 #include <algorithm>
@@ -22,9 +23,9 @@ inline std::vector<std::string> strace_to(const std::string& prefix) {
 }
 
 struct TickCalls {
-  long ticks = 0;                        // sleeps of the loop's thread, steady state
+  long ticks = 0;                          // sleeps of the loop's thread, steady state
   std::map<std::string, double> per_tick;  // "read", "ioctl EVIOCSFF", ...: calls a tick
-  double evioc_sff_us_median = 0.0;      // time in one EVIOCSFF (strace -T)
+  double evioc_sff_us_median = 0.0;        // time in one EVIOCSFF (strace -T)
 };
 
 // Reads PREFIX.*; `skip` ticks at each end are left out (start-up and shut-down).

@@ -16,8 +16,7 @@ namespace ev = drivers::evdev;
 using ev::wire::Message;
 using ev::wire::Type;
 
-SocketEvdevPeer::SocketEvdevPeer(const config::Config& cfg, io::UniqueFd fd,
-                                 int link_delay_samples)
+SocketEvdevPeer::SocketEvdevPeer(const config::Config& cfg, io::UniqueFd fd, int link_delay_samples)
     : settings_(ev::evdev_settings(cfg)),
       fd_(std::move(fd)),
       axis_(cfg.device, cfg.loop.sample_period_s()),

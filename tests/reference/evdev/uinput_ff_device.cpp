@@ -23,7 +23,8 @@ std::int64_t now_ns() {
 }
 
 void must(int rc, const char* what) {
-  if (rc < 0) throw std::runtime_error(std::string("uinput: ") + what + ": " + std::strerror(errno));
+  if (rc < 0)
+    throw std::runtime_error(std::string("uinput: ") + what + ": " + std::strerror(errno));
 }
 
 }  // namespace
@@ -36,7 +37,8 @@ UinputFfDevice::UinputFfDevice(const UinputFfOptions& o)
   must(ioctl(fd, UI_SET_EVBIT, EV_ABS), "UI_SET_EVBIT EV_ABS");
   must(ioctl(fd, UI_SET_ABSBIT, ABS_X), "UI_SET_ABSBIT");
   must(ioctl(fd, UI_SET_EVBIT, EV_FF), "UI_SET_EVBIT EV_FF");
-  for (int bit : {FF_CONSTANT, FF_GAIN, FF_AUTOCENTER}) must(ioctl(fd, UI_SET_FFBIT, bit), "UI_SET_FFBIT");
+  for (int bit : {FF_CONSTANT, FF_GAIN, FF_AUTOCENTER})
+    must(ioctl(fd, UI_SET_FFBIT, bit), "UI_SET_FFBIT");
   uinput_abs_setup abs{};
   abs.code = ABS_X;
   abs.absinfo.minimum = o.axis_min;
@@ -55,7 +57,8 @@ UinputFfDevice::UinputFfDevice(const UinputFfOptions& o)
     const std::string n = e.path().filename().string();
     if (n.rfind("event", 0) == 0) event_path_ = "/dev/input/" + n;
   }
-  if (event_path_.empty()) throw std::runtime_error("uinput: no event node for " + std::string(sysname));
+  if (event_path_.empty())
+    throw std::runtime_error("uinput: no event node for " + std::string(sysname));
   for (int i = 0; i < 200 && !fs::exists(event_path_); ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));  // devtmpfs makes the node
   }
@@ -91,8 +94,8 @@ void UinputFfDevice::emit(int type, int code, int value) {
       const std::lock_guard lock(m_);
       x = x_;
     }
-    value = static_cast<int>(std::lround(o_.axis_min + (x - o_.position_min) / span *
-                                                           (o_.axis_max - o_.axis_min)));
+    value = static_cast<int>(
+        std::lround(o_.axis_min + (x - o_.position_min) / span * (o_.axis_max - o_.axis_min)));
     if (value == reported_) return;  // the kernel would drop it: nothing changed
     reported_ = value;
   }

@@ -27,8 +27,8 @@ namespace hapticd::reference {
 
 struct UinputFfOptions {
   std::string name = "hapticd reference uinput FF device";
-  std::uint16_t vendor = 0x1d6b, product = 0x0104;  // what any uinput device may claim
-  int axis_min = -32767, axis_max = 32767;          // ABS_X's range
+  std::uint16_t vendor = 0x1d6b, product = 0x0104;   // what any uinput device may claim
+  int axis_min = -32767, axis_max = 32767;           // ABS_X's range
   double position_min = -0.05, position_max = 0.05;  // m at the range's ends
   double full_scale = 10.0;                          // N at level 0x7fff
   double mass = 0.1, damping = 2.0, start = -0.01;   // kg, N s/m, m

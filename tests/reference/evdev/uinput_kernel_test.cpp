@@ -3,9 +3,10 @@
 // the force between it and `hapticd run` with config/evdev.yaml. The machine is emulated
 // (TCG), so the loop runs at 100 Hz with a wall the gate allows there, as the other kernel
 // tests do, and a sample may wait in the kernel's buffer while the emulator stalls: 50 ticks
-// of stale data fault, not 3 (tests/hid/kernel_rig.h says the same of the HID tests). A hand pushes the axis into the wall: it must come to rest where the wall's
-// spring balances the push, F/K, within 2 %. Each fault must end with zero force and its cause
-// named; a SIGKILL too, by the kernel itself (it erases a closed node's effects).
+// of stale data fault, not 3 (tests/hid/kernel_rig.h says the same of the HID tests). A hand pushes
+// the axis into the wall: it must come to rest where the wall's spring balances the push, F/K,
+// within 2 %. Each fault must end with zero force and its cause named; a SIGKILL too, by the kernel
+// itself (it erases a closed node's effects).
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <linux/input.h>
@@ -119,8 +120,8 @@ TEST(EvdevUinput, EveryTickUploadsTheLevelOnceAndTheLoopThreadDoesLittleElse) {
   std::sort(gaps.begin(), gaps.end());
   const double p50 = gaps[gaps.size() / 2];
   EXPECT_NEAR(p50, 10.0, 1.0) << "one upload a 10 ms tick";
-  std::cout << "uinput: " << ups.size() << " uploads over " << ticks
-            << " ticks; interval p50 " << p50 << " ms, max " << gaps.back() << " ms\n";
+  std::cout << "uinput: " << ups.size() << " uploads over " << ticks << " ticks; interval p50 "
+            << p50 << " ms, max " << gaps.back() << " ms\n";
   TickCalls t = tick_calls(trace);
   std::cout << "uinput, the loop's thread: " << describe(t) << "\n";
   ASSERT_GT(t.ticks, 100);

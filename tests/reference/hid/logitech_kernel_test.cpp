@@ -17,9 +17,9 @@
 #include <memory>
 
 #include "hapticd_process.h"
-#include "rt_syscalls.h"
 #include "hid_support.h"
 #include "logitech_wheel.h"
+#include "rt_syscalls.h"
 
 namespace hapticd::reference {
 namespace {
@@ -42,7 +42,8 @@ int open_wheel(const std::string& uniq) {
     char text[64] = {};
     unsigned long ff[4] = {};
     if (ioctl(fd, EVIOCGUNIQ(sizeof text - 1), text) >= 0 && uniq == text &&
-        ioctl(fd, EVIOCGBIT(EV_FF, sizeof ff), ff) >= 0 && ((ff[FF_CONSTANT / 64] >> FF_CONSTANT % 64) & 1)) {
+        ioctl(fd, EVIOCGBIT(EV_FF, sizeof ff), ff) >= 0 &&
+        ((ff[FF_CONSTANT / 64] >> FF_CONSTANT % 64) & 1)) {
       found = fd;
       break;
     }
@@ -53,7 +54,8 @@ int open_wheel(const std::string& uniq) {
 }
 
 struct Wheel {
-  explicit Wheel(LogitechWheelOptions o = {}) : serial(o.serial), wheel(std::make_unique<LogitechWheel>(o)) {
+  explicit Wheel(LogitechWheelOptions o = {})
+      : serial(o.serial), wheel(std::make_unique<LogitechWheel>(o)) {
     EXPECT_TRUE(wait_until([&] { return (fd = open_wheel(serial)) >= 0; }))
         << "no /dev/input/eventN with FF_CONSTANT: hid-lg did not bind (see dmesg)";
   }
@@ -115,8 +117,8 @@ TEST(LogitechWheel, WhatAConstantForceBecomesOnTheWire) {
   }
   std::cout << "\n";
   std::sort(delays_ms.begin(), delays_ms.end());
-  std::cout << "logitech: EVIOCSFF to the wheel's report: median " << delays_ms[delays_ms.size() / 2]
-            << " ms, max " << delays_ms.back() << " ms\n";
+  std::cout << "logitech: EVIOCSFF to the wheel's report: median "
+            << delays_ms[delays_ms.size() / 2] << " ms, max " << delays_ms.back() << " ms\n";
   // A hundred updates of one level at 100 Hz: ff-memless plays the effect again at each
   // upload, changed or not (hid-pidff sends nothing for an unchanged level).
   const std::size_t before_same = w.wheel->commands().size();
@@ -141,8 +143,8 @@ TEST(LogitechWheel, WhatAConstantForceBecomesOnTheWire) {
   }
   std::this_thread::sleep_for(std::chrono::milliseconds(50));
   const std::size_t reports = w.wheel->commands().size() - before;
-  std::cout << "logitech: 1000 updates in " << (now_ns() - start) * 1e-9 << " s reached the wheel as "
-            << reports << " reports\n";
+  std::cout << "logitech: 1000 updates in " << (now_ns() - start) * 1e-9
+            << " s reached the wheel as " << reports << " reports\n";
   EXPECT_LT(reports, 400u) << "ff-memless plays at most one update per jiffy";
   play.value = 0;
   ASSERT_EQ(::write(w.fd, &play, sizeof play), static_cast<ssize_t>(sizeof play));
@@ -181,7 +183,8 @@ TEST(LogitechWheel, ThroughTheKernelsLogitechDriverTheWallHoldsTheHand) {
   std::size_t reports = 0;
   int x_byte = -1000;
   const HapticdRun r = run_hapticd(
-      shipped("evdev.yaml"), wheel_sets(w.serial), {"--duration", "7"}, [&](pid_t) {
+      shipped("evdev.yaml"), wheel_sets(w.serial), {"--duration", "7"},
+      [&](pid_t) {
         // The effect plays: the wheel has had its first constant-force report.
         ASSERT_TRUE(wait_until([&] { return w.last_x().second > 0; })) << "output never enabled";
         w.wheel->axis().hand(kPush, 1.0);

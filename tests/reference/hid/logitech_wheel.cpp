@@ -125,8 +125,13 @@ void LogitechWheel::loop() {
     if ((count == sent && now - last_sent < 100'000'000) || !usb_.configured()) continue;
     // X in the low 14 bits, no button, the hat's null state (8), pedals released (0xFF).
     const std::uint8_t report[8] = {static_cast<std::uint8_t>(count & 0xFF),
-                                    static_cast<std::uint8_t>((count >> 8) & 0x3F), 0,
-                                    0x80, 0, 0xFF, 0xFF, 0};
+                                    static_cast<std::uint8_t>((count >> 8) & 0x3F),
+                                    0,
+                                    0x80,
+                                    0,
+                                    0xFF,
+                                    0xFF,
+                                    0};
     if (usb_.send_input(report)) {
       sent = count;
       last_sent = now;

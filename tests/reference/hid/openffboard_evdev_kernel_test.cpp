@@ -53,8 +53,8 @@ TEST(OpenFfboardEvdev, BehindHidPidffTheWallHoldsTheHandAtForceOverStiffness) {
   double x_rest = 0.0, torque_rest = 0.0;
   std::uint64_t constants = 0, outputs = 0;
   const double window_s = 2.0;
-  const HapticdRun r = run_hapticd(
-      shipped("evdev.yaml"), evdev_sets(o.serial), {"--duration", "7"}, [&](pid_t) {
+  const HapticdRun r =
+      run_hapticd(shipped("evdev.yaml"), evdev_sets(o.serial), {"--duration", "7"}, [&](pid_t) {
         // Uploaded at configure, played at enable: the hand pushes once the wall is on.
         ASSERT_TRUE(wait_until([&] { return board->playing(); })) << "output never enabled";
         board->axis().hand(kPush, 1.0);
@@ -71,7 +71,8 @@ TEST(OpenFfboardEvdev, BehindHidPidffTheWallHoldsTheHandAtForceOverStiffness) {
   EXPECT_EQ(r.faults(), "[]");
 
   EXPECT_NEAR(x_rest, kPush / kStiffness, 0.02 * kPush / kStiffness)
-      << "resting penetration; " << r.summary.dump() << "\n" << r.log;
+      << "resting penetration; " << r.summary.dump() << "\n"
+      << r.log;
   EXPECT_NEAR(torque_rest, -kPush, 0.02 * kPush) << "the wall's torque at rest";
   const double ticks = window_s * 100.0;
   std::cout << "pidff: resting penetration " << x_rest << " rad (F/K " << kPush / kStiffness
