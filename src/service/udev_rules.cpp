@@ -168,11 +168,12 @@ void hid_rules(const config::Config& cfg, std::ostream& out) {
 #endif
 
 #if HAPTICD_WITH_EVDEV
-// The input device's event node, by its path, its ids (with its serial) or its name: never
-// every event node (a keyboard's would let its reader log keystrokes).
+// The input device's nodes (its eventN, and a joystick's jsN beside it), by its path, its ids
+// (with its serial) or its name: never every input node (a keyboard's would let its reader
+// log keystrokes).
 void evdev_rules(const config::Config& cfg, std::ostream& out) {
   const auto& sel = drivers::evdev::evdev_settings(cfg).select;
-  const std::string head = "SUBSYSTEM==\"input\", KERNEL==\"event*\", ";
+  const std::string head = "SUBSYSTEM==\"input\", ";
   if (!sel.path.empty()) {
     const std::string name = sel.path.substr(std::string("/dev/").size());
     require_literal(cfg, "device.evdev.select.path", name.substr(name.rfind('/') + 1));
@@ -186,7 +187,7 @@ void evdev_rules(const config::Config& cfg, std::ostream& out) {
   if (sel.vendor_id && sel.product_id) {
     if (!sel.uniq.empty()) require_literal(cfg, "device.evdev.select.uniq", sel.uniq);
     const std::string vid = hex4(*sel.vendor_id), pid = hex4(*sel.product_id);
-    comment(out, "device.evdev.select: the input node of device " + vid + ":" + pid +
+    comment(out, "device.evdev.select: the input nodes of device " + vid + ":" + pid +
                      (sel.uniq.empty() ? "" : ", uniq " + sel.uniq) + ", and of no other device.");
     out << head << "ATTRS{id/vendor}==\"" << vid << "\", ATTRS{id/product}==\"" << pid << "\"";
     if (!sel.uniq.empty()) out << ", ATTRS{uniq}==\"" << sel.uniq << "\"";
@@ -200,7 +201,7 @@ void evdev_rules(const config::Config& cfg, std::ostream& out) {
          "and product id, its name or its path: set one of them"});
   }
   require_literal(cfg, "device.evdev.select.name", sel.name);
-  comment(out, "device.evdev.select.name: the input node of the device named " + sel.name + ".");
+  comment(out, "device.evdev.select.name: the input nodes of the device named " + sel.name + ".");
   out << head << "ATTRS{name}==\"" << sel.name << "\"" << group_mode() << "\n";
 }
 #endif
