@@ -32,6 +32,9 @@ std::vector<DriverCase> cases() {
 #if HAPTICD_TEST_WITH_GPIO
   c.push_back({"gpio.yaml", "gpio", "missed_edges", false});
 #endif
+#if HAPTICD_TEST_WITH_EVDEV
+  c.push_back({"evdev.yaml", "evdev", "axis_events", true});
+#endif
   return c;
 }
 
