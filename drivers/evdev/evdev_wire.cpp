@@ -35,6 +35,7 @@ class Reader {
     const std::uint64_t lo = u32();
     return lo | (std::uint64_t{u32()} << 32);
   }
+  void fail() { ok_ = false; }
   std::string text() {
     const std::size_t n = u8();
     if (!take(n)) return {};
@@ -120,6 +121,7 @@ Facts decode_facts(Reader& r) {
   f.product = static_cast<std::uint16_t>(r.u16());
   f.version = static_cast<std::uint16_t>(r.u16());
   const std::uint32_t flags = r.u8();
+  if ((flags & ~0xFu) != 0) r.fail();  // one encoding per message: no bit that means nothing
   f.has_axis = flags & 1u;
   f.ff_constant = flags & 2u;
   f.ff_gain = flags & 4u;

@@ -177,8 +177,8 @@ void evdev_rules(const config::Config& cfg, std::ostream& out) {
   if (!sel.path.empty()) {
     const std::string name = sel.path.substr(std::string("/dev/").size());
     require_literal(cfg, "device.evdev.select.path", name.substr(name.rfind('/') + 1));
-    comment(out, "device.evdev.select.path: the input node " + sel.path +
-                     ", whatever device it is.");
+    comment(out,
+            "device.evdev.select.path: the input node " + sel.path + ", whatever device it is.");
     const bool link = name.rfind("input/event", 0) != 0;
     out << head << (link ? "SYMLINK==\"" : "KERNEL==\"")
         << (link ? name : name.substr(name.rfind('/') + 1)) << "\"" << group_mode() << "\n";

@@ -65,23 +65,24 @@ TEST(EvdevConfig, AMistakeInTheFileIsNamedAtItsLine) {
 }
 
 TEST(EvdevConfig, MistakesAreNamedWithTheKey) {
-  EXPECT_NE(errors({"device.evdev.axis.code=ABS_WHEELS"}).find(
-                "--set device.evdev.axis.code=ABS_WHEELS: device.evdev.axis.code: must be an "
-                "absolute axis (ABS_X"),
+  EXPECT_NE(errors({"device.evdev.axis.code=ABS_WHEELS"})
+                .find("--set device.evdev.axis.code=ABS_WHEELS: device.evdev.axis.code: must be an "
+                      "absolute axis (ABS_X"),
             std::string::npos)
       << errors({"device.evdev.axis.code=ABS_WHEELS"});
   EXPECT_NE(errors({"device.evdev.force_full_scale=5"}).find("cannot represent device.max_force"),
             std::string::npos);
-  EXPECT_NE(errors({"device.evdev.ff_driver=memless"}).find(
-                "memless passes at most 250 updates a second to the device (one per kernel timer "
+  EXPECT_NE(
+      errors({"device.evdev.ff_driver=memless"})
+          .find("memless passes at most 250 updates a second to the device (one per kernel timer "
                 "tick, kernel_hz): loop.rate_hz 1000 is above it"),
-            std::string::npos)
+      std::string::npos)
       << errors({"device.evdev.ff_driver=memless"});
-  EXPECT_NE(errors({"device.evdev.ff_driver=uinput"}).find(
-                "device.evdev.poll_interval_ms: not used by ff_driver uinput"),
+  EXPECT_NE(errors({"device.evdev.ff_driver=uinput"})
+                .find("device.evdev.poll_interval_ms: not used by ff_driver uinput"),
             std::string::npos);
-  EXPECT_EQ(errors({"device.evdev.ff_driver=uinput", "device.evdev.poll_interval_ms="}),
-            "(loaded)") << "an example's key removed from the command line";
+  EXPECT_EQ(errors({"device.evdev.ff_driver=uinput", "device.evdev.poll_interval_ms="}), "(loaded)")
+      << "an example's key removed from the command line";
   EXPECT_NE(errors({"device.evdev.kernel_hz=300"}).find("only with ff_driver: memless"),
             std::string::npos);
   EXPECT_NE(errors({"device.evdev.liveness_ms=1"}).find("at least two sample periods"),
@@ -90,12 +91,14 @@ TEST(EvdevConfig, MistakesAreNamedWithTheKey) {
             std::string::npos);
   EXPECT_NE(errors({"device.evdev.select={}"}).find("selects every input device"),
             std::string::npos);
-  EXPECT_NE(errors({"device.evdev.axis={code: ABS_X, min: 1, max: 1}"}).find("min and max must differ"),
+  EXPECT_NE(
+      errors({"device.evdev.axis={code: ABS_X, min: 1, max: 1}"}).find("min and max must differ"),
+      std::string::npos);
+  EXPECT_NE(errors({"device.evdev.axis={code: ABS_X, min: 0, max: 1, rotary: true}"})
+                .find("device.evdev.axis.rotary: only with scale: resolution"),
             std::string::npos);
-  EXPECT_NE(errors({"device.evdev.axis={code: ABS_X, min: 0, max: 1, rotary: true}"}).find(
-                "device.evdev.axis.rotary: only with scale: resolution"),
-            std::string::npos);
-  EXPECT_NE(errors({"device.evdev.gian=0.5"}).find("device.evdev.gian: unknown key (did you mean 'gain'?)"),
+  EXPECT_NE(errors({"device.evdev.gian=0.5"})
+                .find("device.evdev.gian: unknown key (did you mean 'gain'?)"),
             std::string::npos)
       << errors({"device.evdev.gian=0.5"});
 }

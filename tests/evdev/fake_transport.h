@@ -17,12 +17,12 @@ namespace hapticd::drivers::evdev::testing {
 struct Script {
   wire::Facts facts;
   std::deque<std::pair<ReadStatus, wire::Event>> events;
-  int read_error = 0;      // > 0: the next read fails with it (ENODEV: unplugged)
-  int update_error = 0;    // > 0: every update fails with it
+  int read_error = 0;    // > 0: the next read fails with it (ENODEV: unplugged)
+  int update_error = 0;  // > 0: every update fails with it
   bool grabbed_elsewhere = false;
   bool grabbed = false;
-  int fuzz_set = -1;       // the last fuzz the driver set
-  std::vector<int> levels;                    // every update's level
+  int fuzz_set = -1;                           // the last fuzz the driver set
+  std::vector<int> levels;                     // every update's level
   std::vector<std::pair<int, int>> ff_writes;  // (code, value) written
   int uploads = 0, erases = 0;
   int next_id = 3;

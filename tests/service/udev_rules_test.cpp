@@ -165,7 +165,8 @@ TEST(UdevRules, EvdevGrantsTheConfiguredInputNodeAndNoOther) {
       "a"));
   ASSERT_EQ(rules.size(), 1u);
   EXPECT_EQ(rules[0],
-            "SUBSYSTEM==\"input\", SYMLINK==\"input/by-id/usb-X-event-joystick\", GROUP=\"hapticd\", MODE=\"0660\"");
+            "SUBSYSTEM==\"input\", SYMLINK==\"input/by-id/usb-X-event-joystick\", "
+            "GROUP=\"hapticd\", MODE=\"0660\"");
   const std::string bad =
       refusal(example("evdev.yaml", {"device.evdev.select={name: \"Open FFBoard\"}"}));
   EXPECT_TRUE(has(bad, "device.evdev.select.name: 'Open FFBoard' cannot go into a udev rule"))

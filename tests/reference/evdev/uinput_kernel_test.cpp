@@ -15,9 +15,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <iostream>
 #include <cstdlib>
 #include <fstream>
+#include <iostream>
 #include <regex>
 
 #include "hapticd_process.h"
@@ -191,9 +191,19 @@ TEST(EvdevUinput, ASecondProcessGrabbingIsRefusedEitherWay) {
 // once: 0.091 kg and 1.95 N s/m.
 TEST(EvdevUinput, IdentifyFindsTheDevicesMassAndDamping) {
   Rig rig;
-  std::vector<std::string> args = {"identify", "--json", "--config", shipped("evdev.yaml"),
-                                   "--yes-the-device-is-free", "--duration", "4",
-                                   "--amplitude", "1", "--f-low", "0.5", "--f-high", "10"};
+  std::vector<std::string> args = {"identify",
+                                   "--json",
+                                   "--config",
+                                   shipped("evdev.yaml"),
+                                   "--yes-the-device-is-free",
+                                   "--duration",
+                                   "4",
+                                   "--amplitude",
+                                   "1",
+                                   "--f-low",
+                                   "0.5",
+                                   "--f-high",
+                                   "10"};
   for (const std::string& s : sets()) args.insert(args.end(), {"--set", s});
   args.insert(args.begin(), HAPTICD_BINARY);
   const std::string out = "/tmp/hapticd-identify.json";
