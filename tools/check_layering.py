@@ -57,6 +57,7 @@ PURE_CODECS = (
     "drivers/hid/report_descriptor.h", "drivers/hid/pid_protocol.h",
     "drivers/hid/descriptor_builder.h", "drivers/hid/hid_framing.h", "drivers/hid/hid_settings.h",
     "drivers/gpio/quadrature_decoder.h", "drivers/gpio/gpio_wire.h", "drivers/gpio/gpio_settings.h",
+    "drivers/evdev/evdev_settings.h", "drivers/evdev/evdev_wire.h",
 )
 SEAM = ("drivers/device.h",)
 # The transports a driver and its simulated device both speak on: the fd helpers (an owning
@@ -80,7 +81,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 NO_OS = {"src/analysis", "src/config", "src/control", "src/gate"}
 OS_HEADER = re.compile(
     r"^(unistd|fcntl|signal|poll|sched|pthread|dlfcn|termios|time|malloc|errno)\.h$|"
-    r"^(sys|linux|net|netinet|arpa|systemd|hidapi|libusb-1\.0)/|^(hidapi|gpiod|libusb)|"
+    r"^(sys|linux|net|netinet|arpa|systemd|hidapi|libusb-1\.0|libevdev)/|^(hidapi|gpiod|libusb)|"
     r"^spdlog/|^(fstream|iostream)$")  # snprintf (<cstdio>) formats, it does no I/O
 INCLUDE = re.compile(r'^\s*#\s*include\s*([<"])([^">]+)[">]')
 

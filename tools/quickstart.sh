@@ -35,6 +35,8 @@ packages=(
   libyaml-cpp-dev libspdlog-dev libeigen3-dev nlohmann-json3-dev libcli11-dev zlib1g-dev
   libsystemd-dev                                        # sd_notify
   libhidapi-dev libusb-1.0-0-dev libgpiod-dev           # the hardware transports
+  libevdev-dev                                          # evdev: force feedback through the
+                                                        # kernel's input devices
   libgtest-dev libgmock-dev libbenchmark-dev            # tests and benchmarks
   libsdp-dev                                            # CSDP: design-coupling's SDP solver
 )
@@ -47,6 +49,7 @@ test_packages=(
   rt-tests util-linux                                   # cyclictest, jitter_bench.py; prlimit; runuser
   qemu-system-x86 busybox-static cpio kmod xz-utils zstd  # tools/kernel-vm, the kernel test machine
   udev iproute2                                         # udevd applying an instance's rules there; ip
+  strace                                                # the evdev kernel tests: the loop's system calls
   clang llvm                                            # the asan stage; llvm-symbolizer
 )
 
@@ -188,14 +191,14 @@ stage_asan() {
   # `verify` runs): the analysis tests run the design's code, one whole design included.
   cd build-asan-clang && ctest --output-on-failure -j "$(nproc)" -LE "^(layering|plot|design|slow)$"
 }
-# Without the CAN, GPIO and HID drivers: the loop, telemetry and service tests run the sim
+# Without the CAN, GPIO, HID and evdev drivers: the loop, telemetry and service tests run the sim
 # device, so those drivers' threads are not exercised here (their own tests run in main and
 # asan), and leaving them out takes a fifth of this stage's build (141 steps to 111).
 stage_tsan() {
   configure_and_build build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -g1 -DNDEBUG" -DHAPTICD_SANITIZE=thread \
     -DHAPTICD_BUILD_BENCHMARKS=OFF -DHAPTICD_WITH_CAN=OFF -DHAPTICD_WITH_GPIO=OFF \
-    -DHAPTICD_WITH_HID=OFF \
+    -DHAPTICD_WITH_HID=OFF -DHAPTICD_WITH_EVDEV=OFF \
     -- hapticd hapticd_loop_tests hapticd_telemetry_tests hapticd_service_tests \
     hapticd_service_unit_tests || return
   # Not the random-signal trial: TSan intercepts signals and defers them to its own safe

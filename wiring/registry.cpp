@@ -18,6 +18,10 @@
 #include "drivers/gpio/gpio_driver.h"
 #include "sim/peers/gpio/gpio_peer_entry.h"
 #endif
+#if HAPTICD_WITH_EVDEV
+#include "drivers/evdev/evdev_driver.h"
+#include "sim/peers/evdev/evdev_peer_entry.h"
+#endif
 
 namespace hapticd::wiring {
 namespace {
@@ -47,6 +51,9 @@ const std::vector<DriverEntry>& entries() {
 #endif
 #if HAPTICD_WITH_GPIO
         join(drivers::gpio::device_entry(), sim::gpio::peer_entry()),
+#endif
+#if HAPTICD_WITH_EVDEV
+        join(drivers::evdev::device_entry(), sim::evdev::peer_entry()),
 #endif
   };
   return kDrivers;

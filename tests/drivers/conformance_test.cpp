@@ -5,6 +5,7 @@
 // one fails EveryRegisteredDriverIsCovered.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -25,8 +26,9 @@ namespace {
 
 struct Case {
   const char* driver;
-  const char* config;         // relative to the source tree
-  const char* set = nullptr;  // one --set on top of it, where the example lacks what is tested
+  const char* config;  // relative to the source tree
+  // --set on top of it, where the example lacks what is tested
+  std::array<const char*, 2> sets{};
 };
 
 // Each driver's example configurations, run against its peer.
@@ -44,6 +46,13 @@ const Case kCases[] = {
 #if HAPTICD_WITH_GPIO
     {"gpio", "config/gpio.yaml"},
 #endif
+#if HAPTICD_WITH_EVDEV
+    // A bound on silence, so a device that stops answering is stale data (evdev's default has
+    // none: a device held still is silent too); a full scale whose levels are exact binary
+    // fractions (2^-11 N), so the forces the suite writes reach the device unrounded.
+    {"evdev", "config/evdev.yaml", "device.evdev.liveness_ms=100",
+     "device.evdev.force_full_scale=15.99951171875"},
+#endif
 };
 
 config::Config load(const Case& c, const std::vector<std::string>& sets = {}) {
@@ -56,7 +65,9 @@ config::Config load(const Case& c, const std::vector<std::string>& sets = {}) {
   if (std::string_view(c.driver) == "can") {
     overrides.push_back(config::parse_override("device.can.sdo_timeout_ms=2000"));
   }
-  if (c.set != nullptr) overrides.push_back(config::parse_override(c.set));
+  for (const char* set : c.sets) {
+    if (set != nullptr) overrides.push_back(config::parse_override(set));
+  }
   for (const std::string& s : sets) overrides.push_back(config::parse_override(s));
   overrides.push_back(config::parse_override("loop.clock=freerun"));
   return config::load_config_text(text.str(), path, overrides, HAPTICD_SOURCE_DIR "/config",

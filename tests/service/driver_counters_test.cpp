@@ -36,6 +36,9 @@ std::vector<DriverCase> cases() {
   c.push_back({"can-cia402.yaml", "can", "frames_received", true});
   c.push_back({"can-odrive.yaml", "can", "frames_received", true});
 #endif
+#if HAPTICD_TEST_WITH_EVDEV
+  c.push_back({"evdev.yaml", "evdev", "axis_events", true});
+#endif
   return c;
 }
 

@@ -69,6 +69,11 @@ TEST(CliIdentify, RecoversThroughTheGpioPeer) {
   expect_recovers({"--loopback", "--config", example("gpio.yaml")}, 0.1, 2.0);
 }
 #endif
+#if HAPTICD_TEST_WITH_EVDEV
+TEST(CliIdentify, RecoversThroughTheEvdevPeer) {
+  expect_recovers({"--loopback", "--config", example("evdev.yaml")}, 0.1, 2.0);
+}
+#endif
 
 #if HAPTICD_TEST_WITH_HID || HAPTICD_TEST_WITH_CAN || HAPTICD_TEST_WITH_GPIO
 TEST(CliIdentify, RefusesARealDriverWithoutBeingToldTheDeviceIsFree) {

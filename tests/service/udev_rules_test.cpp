@@ -153,5 +153,26 @@ TEST(UdevRules, HidGrantsTheConfiguredDeviceByVendorProductAndSerial) {
 }
 #endif
 
+#if HAPTICD_WITH_EVDEV
+TEST(UdevRules, EvdevGrantsTheConfiguredInputNodeAndNoOther) {
+  std::vector<std::string> rules = rule_lines(instance_udev_rules(example("evdev.yaml"), "a"));
+  ASSERT_EQ(rules.size(), 1u);
+  EXPECT_EQ(rules[0],
+            "SUBSYSTEM==\"input\", ATTRS{id/vendor}==\"1209\", "
+            "ATTRS{id/product}==\"ffb0\", GROUP=\"hapticd\", MODE=\"0660\"");
+  rules = rule_lines(instance_udev_rules(
+      example("evdev.yaml", {"device.evdev.select={path: /dev/input/by-id/usb-X-event-joystick}"}),
+      "a"));
+  ASSERT_EQ(rules.size(), 1u);
+  EXPECT_EQ(rules[0],
+            "SUBSYSTEM==\"input\", SYMLINK==\"input/by-id/usb-X-event-joystick\", "
+            "GROUP=\"hapticd\", MODE=\"0660\"");
+  const std::string bad =
+      refusal(example("evdev.yaml", {"device.evdev.select={name: \"Open FFBoard\"}"}));
+  EXPECT_TRUE(has(bad, "device.evdev.select.name: 'Open FFBoard' cannot go into a udev rule"))
+      << bad;
+}
+#endif
+
 }  // namespace
 }  // namespace hapticd::service

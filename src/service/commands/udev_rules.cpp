@@ -16,6 +16,9 @@
 #if HAPTICD_WITH_HID
 #include "drivers/hid/hid_settings.h"
 #endif
+#if HAPTICD_WITH_EVDEV
+#include "drivers/evdev/evdev_settings.h"
+#endif
 
 namespace hapticd::service {
 namespace {
@@ -164,6 +167,45 @@ void hid_rules(const config::Config& cfg, std::ostream& out) {
 }
 #endif
 
+#if HAPTICD_WITH_EVDEV
+// The input device's nodes (its eventN, and a joystick's jsN beside it), by its path, its ids
+// (with its serial) or its name: never every input node (a keyboard's would let its reader
+// log keystrokes).
+void evdev_rules(const config::Config& cfg, std::ostream& out) {
+  const auto& sel = drivers::evdev::evdev_settings(cfg).select;
+  const std::string head = "SUBSYSTEM==\"input\", ";
+  if (!sel.path.empty()) {
+    const std::string name = sel.path.substr(std::string("/dev/").size());
+    require_literal(cfg, "device.evdev.select.path", name.substr(name.rfind('/') + 1));
+    comment(out,
+            "device.evdev.select.path: the input node " + sel.path + ", whatever device it is.");
+    const bool link = name.rfind("input/event", 0) != 0;
+    out << head << (link ? "SYMLINK==\"" : "KERNEL==\"")
+        << (link ? name : name.substr(name.rfind('/') + 1)) << "\"" << group_mode() << "\n";
+    return;
+  }
+  if (sel.vendor_id && sel.product_id) {
+    if (!sel.uniq.empty()) require_literal(cfg, "device.evdev.select.uniq", sel.uniq);
+    const std::string vid = hex4(*sel.vendor_id), pid = hex4(*sel.product_id);
+    comment(out, "device.evdev.select: the input nodes of device " + vid + ":" + pid +
+                     (sel.uniq.empty() ? "" : ", uniq " + sel.uniq) + ", and of no other device.");
+    out << head << "ATTRS{id/vendor}==\"" << vid << "\", ATTRS{id/product}==\"" << pid << "\"";
+    if (!sel.uniq.empty()) out << ", ATTRS{uniq}==\"" << sel.uniq << "\"";
+    out << group_mode() << "\n";
+    return;
+  }
+  if (sel.name.empty()) {
+    throw config::ConfigError(
+        {cfg.locate("device.evdev.select") +
+         ": device.evdev.select: udev can give the group exactly this device only by its vendor "
+         "and product id, its name or its path: set one of them"});
+  }
+  require_literal(cfg, "device.evdev.select.name", sel.name);
+  comment(out, "device.evdev.select.name: the input nodes of the device named " + sel.name + ".");
+  out << head << "ATTRS{name}==\"" << sel.name << "\"" << group_mode() << "\n";
+}
+#endif
+
 }  // namespace
 
 std::string instance_udev_rules(const config::Config& cfg, const std::string& instance) {
@@ -183,6 +225,9 @@ std::string instance_udev_rules(const config::Config& cfg, const std::string& in
 #endif
 #if HAPTICD_WITH_HID
   if (d == "hid") hid_rules(cfg, out);
+#endif
+#if HAPTICD_WITH_EVDEV
+  if (d == "evdev") evdev_rules(cfg, out);
 #endif
   if (d == "sim") comment(out, "device.driver sim: no device, nothing for udev to do.");
   return out.str();

@@ -45,6 +45,11 @@ std::size_t OpenFfboard::allocated() const {
       std::count_if(effects_.begin(), effects_.end(), [](const Effect& e) { return e.type != 0; }));
 }
 
+bool OpenFfboard::playing() const {
+  const std::lock_guard lock(m_);
+  return std::any_of(effects_.begin(), effects_.end(), [](const Effect& e) { return e.playing; });
+}
+
 // The FFB timer's 1 kHz cycle (FFBHIDMain::update): the axis, then a report every
 // usb_report_rate cycles, then the torque. A late cycle catches up by the cycles it missed.
 void OpenFfboard::main_loop() {
@@ -115,6 +120,8 @@ double OpenFfboard::torque(std::int64_t now) {
 void OpenFfboard::output(std::span<const std::uint8_t> r) {
   if (r.size() < 2) return;
   const std::lock_guard lock(m_);
+  outputs_.fetch_add(1);
+  if (r[0] == 0x05) constant_reports_.fetch_add(1);
   const std::uint8_t block = r[1];
   Effect* e = block >= 1 && std::size_t{block} <= effects_.size() ? &effects_[block - 1u] : nullptr;
   switch (r[0]) {

@@ -60,7 +60,13 @@ class OpenFfboard {
   // Effect blocks allocated now (created and not freed).
   std::size_t allocated() const;
   bool ffb_active() const { return ffb_active_.load(); }
+  // An effect plays (started by Effect Operation, not stopped or expired).
+  bool playing() const;
   std::uint64_t gamepad_reports() const { return reports_.load(); }
+  // Output reports the host sent, and of them Set Constant Force (report 5): what reached the
+  // board.
+  std::uint64_t output_reports() const { return outputs_.load(); }
+  std::uint64_t constant_reports() const { return constant_reports_.load(); }
   // The FFB main loop stops for good (a hung firmware): no more reports, the last torque
   // stays, and what the host sends is taken by the USB stack and never acted on.
   void hang() { hung_.store(true); }
@@ -97,7 +103,7 @@ class OpenFfboard {
   std::uint8_t device_gain_ = 255;
   std::uint8_t load_index_ = 1, load_status_ = 1;  // blockLoad_report
   std::atomic<bool> ffb_active_{false}, hung_{false}, stop_{false};
-  std::atomic<std::uint64_t> reports_{0};
+  std::atomic<std::uint64_t> reports_{0}, outputs_{0}, constant_reports_{0};
   std::vector<std::uint8_t> last_sent_;
   int send_counter_ = 0;  // reportSendCounter
   RawUsbHid usb_;

@@ -1,5 +1,6 @@
-// `hapticd run` as a user runs it, in its own process, for the reference-device tests: its exit
-// status, its --summary-json and its log. Only the binary is used, never a header of it.
+// `hapticd run` as a user runs it, in its own process, for the reference-device tests of every
+// transport: its exit status, its --summary-json and its log. Only the binary is used, never a
+// header of it.
 #pragma once
 
 #include <signal.h>
@@ -34,13 +35,16 @@ inline std::string shipped(const std::string& name) {
 }
 
 // Runs `hapticd ARGS... --summary-json FILE` (HAPTICD_BINARY); `during(pid)` runs while it
-// does, then the process is waited for. The HID driver's kernel tests use it too.
+// does, then the process is waited for. The HID driver's kernel tests use it too. `under`, when
+// given, is a program (with its arguments) that runs hapticd, such as strace.
 inline HapticdRun run_hapticd(std::vector<std::string> args,
-                              const std::function<void(pid_t)>& during = {}) {
+                              const std::function<void(pid_t)>& during = {},
+                              std::vector<std::string> under = {}) {
   static int n = 0;
   const std::string stem =
       "/tmp/hapticd-kt-" + std::to_string(::getpid()) + "-" + std::to_string(n++);
   args.insert(args.begin(), HAPTICD_BINARY);
+  args.insert(args.begin(), under.begin(), under.end());
   args.insert(args.end(), {"--summary-json", stem + ".json"});
   const pid_t pid = ::fork();
   if (pid == 0) {
@@ -50,7 +54,7 @@ inline HapticdRun run_hapticd(std::vector<std::string> args,
     std::vector<char*> argv;
     for (std::string& a : args) argv.push_back(a.data());
     argv.push_back(nullptr);
-    ::execv(HAPTICD_BINARY, argv.data());
+    ::execv(argv[0], argv.data());
     _exit(127);
   }
   if (during) during(pid);
@@ -65,14 +69,15 @@ inline HapticdRun run_hapticd(std::vector<std::string> args,
   return r;
 }
 
-// `hapticd run --config CONFIG --set S... ARGS...`.
+// `hapticd run --config CONFIG --set S... ARGS...` (under `under`, when given).
 inline HapticdRun run_hapticd(const std::string& config, const std::vector<std::string>& sets,
                               std::vector<std::string> args,
-                              const std::function<void(pid_t)>& during = {}) {
+                              const std::function<void(pid_t)>& during = {},
+                              std::vector<std::string> under = {}) {
   std::vector<std::string> all = {"run", "--config", config};
   for (const std::string& s : sets) all.insert(all.end(), {"--set", s});
   all.insert(all.end(), args.begin(), args.end());
-  return run_hapticd(std::move(all), during);
+  return run_hapticd(std::move(all), during, std::move(under));
 }
 
 // Waits up to `timeout` for `done`; false if it never held.

@@ -1,0 +1,209 @@
+#include "drivers/evdev/evdev_config.h"
+
+#include <charconv>
+#include <cmath>
+#include <string>
+
+#include "base/hex.h"
+#include "drivers/evdev/evdev_settings.h"
+
+namespace hapticd::drivers::evdev {
+namespace {
+
+using config::schema::Diagnostics;
+using config::schema::Field;
+using config::schema::format_number;
+using config::schema::IntRange;
+using config::schema::MapReader;
+using config::schema::Range;
+
+// An unsigned integer written in decimal or 0x hexadecimal, at most `max`.
+std::optional<std::uint32_t> read_hex(Diagnostics& d, const Field& f, std::uint32_t max) {
+  if (!f.present) return std::nullopt;
+  const std::string text = f.node.IsScalar() ? f.node.Scalar() : std::string();
+  std::string_view s(text);
+  int base = 10;
+  if (s.size() > 2 && s[0] == '0' && (s[1] == 'x' || s[1] == 'X')) {
+    s.remove_prefix(2);
+    base = 16;
+  }
+  std::uint64_t v = 0;
+  const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v, base);
+  if (s.empty() || ec != std::errc() || ptr != s.data() + s.size() || v > max) {
+    d.error(f.key_mark, f.path,
+            "must be an integer in 0.." + std::to_string(max) + " (" + base::hex(max) +
+                "), decimal or 0x hexadecimal, got " + config::schema::describe_value(f.node));
+    return std::nullopt;
+  }
+  return static_cast<std::uint32_t>(v);
+}
+
+// A key given without a value (`--set device.evdev.poll_interval_ms=`) is absent: that is how
+// a key of an example file is removed from the command line.
+Field take(MapReader& m, const char* key) {
+  Field f = m.take(key);
+  if (f.present && f.node.IsNull()) f.present = false;
+  return f;
+}
+
+void number(MapReader& m, const Field& f, const Range& r, double& out) {
+  if (const auto v = config::schema::read_number(m.diag(), f, r)) out = *v;
+}
+
+void text(MapReader& m, const char* key, std::string& out) {
+  if (const auto v = config::schema::read_string(m.diag(), take(m, key))) out = *v;
+}
+
+void read_select(MapReader& ev, Selector& sel) {
+  const Field field = take(ev, "select");
+  if (!field.present) ev.missing("select", "which device: name, vendor_id/product_id, path...");
+  MapReader m(ev.diag(), field);
+  text(m, "name", sel.name);
+  if (const auto v = read_hex(m.diag(), take(m, "vendor_id"), 0xFFFF)) {
+    sel.vendor_id = static_cast<std::uint16_t>(*v);
+  }
+  if (const auto v = read_hex(m.diag(), take(m, "product_id"), 0xFFFF)) {
+    sel.product_id = static_cast<std::uint16_t>(*v);
+  }
+  text(m, "phys", sel.phys);
+  text(m, "uniq", sel.uniq);
+  const Field path = take(m, "path");
+  if (const auto v = config::schema::read_string(m.diag(), path)) {
+    if (v->rfind("/dev/input/", 0) != 0) {
+      m.diag().error(path.key_mark, path.path,
+                     "must be an input device node under /dev/input/ (eventN, or a by-id/ or "
+                     "by-path/ link to one), got '" +
+                         *v + "'");
+    } else {
+      sel.path = *v;
+    }
+  }
+  m.finish();
+  if (field.present && sel.empty() && m.ok()) {
+    m.diag().error(field.key_mark, field.path,
+                   "selects every input device: give a name, vendor_id and product_id, phys, "
+                   "uniq or a path (`hapticd devices` lists the devices with force feedback)");
+  }
+}
+
+// code (a name such as ABS_X, or the number), scale and its positions.
+void read_axis(MapReader& ev, AxisSettings& a) {
+  const Field field = take(ev, "axis");
+  if (!field.present) ev.missing("axis", "the absolute axis read as the position");
+  MapReader m(ev.diag(), field);
+  const Field code = take(m, "code");
+  if (!code.present) m.missing("code", "the axis: ABS_X, ABS_WHEEL, ... or its number");
+  if (code.present) {
+    const std::string name = code.node.IsScalar() ? code.node.Scalar() : std::string();
+    if (const auto c = abs_code(name)) {
+      a.code = *c;
+    } else if (name.rfind("ABS_", 0) == 0 || name.empty()) {
+      m.diag().error(code.key_mark, code.path,
+                     "must be an absolute axis (ABS_X, ABS_Y, ABS_Z, ABS_RX, ABS_RY, ABS_RZ, "
+                     "ABS_THROTTLE, ABS_RUDDER, ABS_WHEEL, ABS_GAS, ABS_BRAKE, ...) or its number, "
+                     "got " +
+                         config::schema::describe_value(code.node));
+    } else if (const auto v = read_hex(m.diag(), code, kAbsMax)) {
+      a.code = static_cast<int>(*v);
+    }
+  }
+  if (const auto s =
+          config::schema::read_choice(m.diag(), take(m, "scale"), {"range", "resolution"})) {
+    a.scale = *s == 0 ? Scale::kRange : Scale::kResolution;
+  }
+  const Field min = take(m, "min"), max = take(m, "max");
+  const Field rotary = take(m, "rotary"), offset = take(m, "offset");
+  if (a.scale == Scale::kRange) {
+    if (!min.present) m.missing("min", "the position (m or rad) at the axis' minimum");
+    if (!max.present) m.missing("max", "the position (m or rad) at the axis' maximum");
+    number(m, min, Range::any(), a.min);
+    number(m, max, Range::any(), a.max);
+    if (min.present && max.present && a.min == a.max && m.ok()) {
+      m.diag().error(max.key_mark, max.path, "min and max must differ");
+    }
+    for (const Field* f : {&rotary, &offset}) {
+      if (f->present) m.diag().error(f->key_mark, f->path, "only with scale: resolution");
+    }
+  } else {
+    if (const auto v = config::schema::read_bool(m.diag(), rotary)) a.rotary = *v;
+    number(m, offset, Range::any(), a.offset);
+    for (const Field* f : {&min, &max}) {
+      if (f->present) m.diag().error(f->key_mark, f->path, "only with scale: range");
+    }
+  }
+  m.finish();
+}
+
+// ff_driver, the USB polling interval and the kernel's HZ, and what they allow of loop.rate_hz.
+void read_ff_driver(MapReader& ev, const config::Config& cfg, EvdevSettings& s) {
+  const Field drv = take(ev, "ff_driver");
+  if (!drv.present) ev.missing("ff_driver", "uinput, pidff or memless: the kernel's FF driver");
+  if (const auto v = config::schema::read_choice(ev.diag(), drv, {"uinput", "pidff", "memless"})) {
+    s.ff_driver = static_cast<FfDriver>(*v);
+  }
+  const Field poll = take(ev, "poll_interval_ms");
+  number(ev, poll, Range::interval(0.0, false, 1000.0, true), s.poll_interval_ms);
+  const Field hz = take(ev, "kernel_hz");
+  if (const auto v = config::schema::read_integer(ev.diag(), hz, IntRange::between(100, 1000))) {
+    s.kernel_hz = static_cast<int>(*v);
+  }
+  if (s.ff_driver == FfDriver::kUinput && poll.present) {
+    ev.diag().error(poll.key_mark, poll.path, "not used by ff_driver uinput (no USB link)");
+  }
+  if (s.ff_driver != FfDriver::kMemless && hz.present) {
+    ev.diag().error(hz.key_mark, hz.path, "only with ff_driver: memless (its timer)");
+  }
+  const double highest = highest_rate_hz(s);
+  if (drv.present && highest > 0.0 && cfg.loop.rate_hz > highest * (1.0 + 1e-9)) {
+    ev.diag().error(drv.key_mark, drv.path,
+                    std::string(to_string(s.ff_driver)) + " passes at most " +
+                        format_number(highest) + " updates a second to the device (" +
+                        (s.ff_driver == FfDriver::kMemless && highest == s.kernel_hz
+                             ? "one per kernel timer tick, kernel_hz"
+                             : "one per USB polling interval, poll_interval_ms") +
+                        "): loop.rate_hz " + format_number(cfg.loop.rate_hz) +
+                        " is above it (docs/drivers/evdev.md)");
+  }
+}
+
+void read_force(MapReader& ev, const config::Config& cfg, EvdevSettings& s) {
+  const Field fs = take(ev, "force_full_scale");
+  if (!fs.present) ev.missing("force_full_scale", "the force (N or N m) at level 0x7fff");
+  number(ev, fs, Range::greater_than(0.0), s.force_full_scale);
+  if (fs.present && s.force_full_scale > 0.0 && s.force_full_scale < cfg.device.max_force) {
+    ev.diag().error(fs.key_mark, fs.path,
+                    "cannot represent device.max_force " + format_number(cfg.device.max_force) +
+                        " N: the level saturates at " + format_number(s.force_full_scale) + " N");
+  }
+  number(ev, take(ev, "direction_deg"), Range::interval(0.0, true, 360.0, false), s.direction_deg);
+  number(ev, take(ev, "gain"), Range::interval(0.0, false, 1.0, true), s.gain);
+  number(ev, take(ev, "autocenter"), Range::interval(0.0, true, 1.0, true), s.autocenter);
+}
+
+void read_liveness(MapReader& ev, const config::Config& cfg, EvdevSettings& s) {
+  const Field live = take(ev, "liveness_ms");
+  number(ev, live, Range::interval(0.0, true, 60000.0, true), s.liveness_ms);
+  const double min_ms = 2e3 * cfg.loop.sample_period_s();
+  if (live.present && s.liveness_ms > 0.0 && s.liveness_ms < min_ms) {
+    ev.diag().error(
+        live.key_mark, live.path,
+        "must be 0 (no bound) or at least two sample periods (" + format_number(min_ms) + " ms)");
+  }
+}
+
+}  // namespace
+
+std::shared_ptr<const config::DriverSettings> read_evdev_section(MapReader& ev,
+                                                                 const config::Config& cfg) {
+  const std::size_t errors_before = ev.diag().messages().size();
+  auto s = std::make_shared<EvdevSettings>();
+  read_select(ev, s->select);
+  read_axis(ev, s->axis);
+  read_force(ev, cfg, *s);
+  read_ff_driver(ev, cfg, *s);
+  read_liveness(ev, cfg, *s);
+  if (ev.diag().messages().size() != errors_before) return nullptr;
+  return s;
+}
+
+}  // namespace hapticd::drivers::evdev

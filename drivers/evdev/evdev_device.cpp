@@ -1,0 +1,297 @@
+#include "drivers/evdev/evdev_device.h"
+
+#include <cerrno>
+#include <cmath>
+
+#include "base/clock.h"
+#include "base/errno_text.h"
+
+namespace hapticd::drivers::evdev {
+namespace {
+
+// FF_GAIN and FF_AUTOCENTER take 0..0xffff.
+int fraction16(double f) { return static_cast<int>(std::lround(f * 0xFFFF)); }
+
+}  // namespace
+
+EvdevDevice::EvdevDevice(std::shared_ptr<const EvdevSettings> settings,
+                         std::function<Opened()> open, double sample_period_s)
+    : settings_(std::move(settings)),
+      open_(std::move(open)),
+      period_s_(sample_period_s),
+      liveness_ns_(static_cast<std::int64_t>(settings_->liveness_ms * 1e6)) {}
+
+EvdevDevice::~EvdevDevice() { close(); }
+
+void EvdevDevice::check_device(const wire::Facts& f) const {
+  const AxisSettings& a = settings_->axis;
+  const std::string who = "evdev: \"" + f.name + "\"";
+  if (!f.has_axis) throw DeviceError(who + " has no " + abs_name(a.code) + " axis");
+  if (!f.ff_constant) {
+    throw DeviceError(who +
+                      " offers no FF_CONSTANT force feedback (`hapticd devices` lists "
+                      "the devices that do)");
+  }
+  if (f.ff_effects < 1) throw DeviceError(who + " holds no force-feedback effect");
+  if (a.scale == Scale::kRange && f.range.maximum <= f.range.minimum) {
+    throw DeviceError(who + ": the kernel gives " + abs_name(a.code) + " the range [" +
+                      std::to_string(f.range.minimum) + ", " + std::to_string(f.range.maximum) +
+                      "], which cannot be mapped onto device.evdev.axis.min..max");
+  }
+  if (a.scale == Scale::kResolution && f.range.resolution <= 0) {
+    throw DeviceError(who + ": the kernel gives " + abs_name(a.code) +
+                      " no resolution: use device.evdev.axis.scale range with min and max");
+  }
+  if (settings_->gain < 1.0 && !f.ff_gain) {
+    throw DeviceError(who + " has no FF_GAIN: device.evdev.gain must be 1");
+  }
+  if (settings_->autocenter > 0.0 && !f.ff_autocenter) {
+    throw DeviceError(who + " has no FF_AUTOCENTER: device.evdev.autocenter must be 0");
+  }
+}
+
+// The kernel smooths an axis with fuzz (hid-input gives a joystick's 1/256 of its range): a
+// change within fuzz/2 is dropped and up to twice fuzz averaged with the last value, a dead
+// band and a lag in the position the wall is rendered from. hapticd turns it off while it has
+// the device and gives it back at close.
+void EvdevDevice::unfuzz(int fuzz) {
+  kernel_fuzz_ = 0;
+  if (fuzz == 0) return;
+  transport_->set_fuzz(settings_->axis.code, 0);
+  kernel_fuzz_ = fuzz;
+  notices_.push_back("the kernel filtered " + abs_name(settings_->axis.code) + " with fuzz " +
+                     std::to_string(fuzz) + " (changes within " + std::to_string(fuzz / 2) +
+                     " counts dropped): hapticd sets it to 0 while it runs and gives it back at "
+                     "close");
+}
+
+void EvdevDevice::upload() {
+  effect_ = {};
+  effect_.direction = direction_of(settings_->direction_deg);
+  effect_.id = static_cast<std::int16_t>(transport_->upload(effect_));
+  transport_->set_emergency_effect(effect_.id);
+}
+
+DeviceInfo EvdevDevice::on_configure() {
+  for (base::Counter& c : c_) c.set(0);
+  notices_.clear();
+  active_ = false;
+  have_position_ = false;
+  effect_ = {};
+  Opened o = open_();
+  transport_ = std::move(o.transport);
+  const wire::Facts f = transport_->facts(settings_->axis.code);
+  check_device(f);
+  range_ = f.range;
+  unfuzz(f.fuzz);
+  has_gain_ = f.ff_gain;
+  has_autocenter_ = f.ff_autocenter;
+  if (has_gain_) ff_or_throw(kFfGain, fraction16(settings_->gain), "FF_GAIN");
+  if (has_autocenter_)
+    ff_or_throw(kFfAutocenter, fraction16(settings_->autocenter), "FF_AUTOCENTER");
+  upload();
+  emergency_.store(transport_.get());
+  if (o.listing) note_kernel_driver(*o.listing);
+  return {transport_->describe() + ", " + abs_name(settings_->axis.code) + ", ff_driver " +
+              to_string(settings_->ff_driver),
+          declared_delay_samples(*settings_, period_s_), 0};
+}
+
+void EvdevDevice::ff_or_throw(int code, int value, const char* what) {
+  if (const int e = transport_->write_ff(code, value); e != 0) {
+    throw DeviceError(std::string("evdev: setting ") + what + ": " + base::errno_text(e));
+  }
+}
+
+void EvdevDevice::note_kernel_driver(const InputListing& l) {
+  const std::optional<FfDriver> guess = guess_ff_driver(l);
+  const std::string configured = to_string(settings_->ff_driver);
+  if (!guess) {
+    notices_.push_back("kernel driver '" + l.kernel_driver +
+                       "' is not one hapticd knows: check that its force feedback is what "
+                       "device.evdev.ff_driver " +
+                       configured +
+                       " says, or the declared delay is wrong (docs/drivers/evdev.md)");
+  } else if (*guess != settings_->ff_driver) {
+    notices_.push_back(std::string("the device is bound to kernel driver '") +
+                       (l.virtual_device ? std::string("uinput") : l.kernel_driver) +
+                       "', whose force feedback is " + to_string(*guess) +
+                       ", but device.evdev.ff_driver says " + configured + ": the gate analyses " +
+                       configured + "'s delay (docs/drivers/evdev.md)");
+  }
+}
+
+void EvdevDevice::on_enable() {
+  transport_->grab(true);
+  if (effect_.id < 0) upload();  // a disable erased it
+  // Whatever the device said before output was enabled is not this run's: the kernel's
+  // current value is.
+  wire::Event ev;
+  int error = 0;
+  for (int i = 0; i < kMaxDrain; ++i) {
+    const ReadStatus r = transport_->read(ev, error);
+    if (r == ReadStatus::kEmpty) break;
+    if (r == ReadStatus::kError)
+      throw DeviceError("evdev: reading at enable: " + base::errno_text(error));
+  }
+  const wire::Facts f = transport_->facts(settings_->axis.code);
+  value_ = f.value;
+  frame_moved_ = false;
+  have_position_ = true;
+  if (has_autocenter_) ff_or_throw(kFfAutocenter, 0, "FF_AUTOCENTER");  // hapticd renders alone
+  if (const int e = set_level(0); e != 0) {
+    throw DeviceError("evdev: EVIOCSFF at enable: " + base::errno_text(e));
+  }
+  ff_or_throw(effect_.id, 1, "the effect playing");
+  quiet_since_ns_ = base::monotonic_ns();
+  active_ = true;
+}
+
+void EvdevDevice::stop_effect() noexcept {
+  if (effect_.id < 0) return;
+  set_level(0);
+  transport_->write_ff(effect_.id, 0);
+}
+
+void EvdevDevice::on_disable() noexcept {
+  active_ = false;
+  if (!transport_) return;
+  stop_effect();
+  if (effect_.id >= 0) {
+    transport_->set_emergency_effect(-1);
+    transport_->erase(effect_.id);
+    effect_.id = -1;
+  }
+  if (has_autocenter_) transport_->write_ff(kFfAutocenter, fraction16(settings_->autocenter));
+  try {
+    transport_->grab(false);
+  } catch (const DeviceError&) {
+    // A device that is gone has no grab left to release.
+  }
+}
+
+void EvdevDevice::on_close() noexcept {
+  active_ = false;
+  emergency_.store(nullptr);
+  if (transport_ && effect_.id >= 0) transport_->erase(effect_.id);
+  effect_.id = -1;
+  if (transport_ && kernel_fuzz_ != 0) {
+    try {
+      transport_->set_fuzz(settings_->axis.code, kernel_fuzz_);
+    } catch (const DeviceError&) {
+      // A device that is gone takes its fuzz with it.
+    }
+    kernel_fuzz_ = 0;
+  }
+  transport_.reset();  // closing the node also erases whatever effect this process left
+}
+
+void EvdevDevice::emergency_stop() noexcept {
+  if (EvdevTransport* t = emergency_.load()) t->emergency();
+}
+
+EvdevDevice::Drained EvdevDevice::drain() noexcept {
+  Drained d;
+  wire::Event ev;
+  int i = 0;
+  for (; i < kMaxDrain; ++i) {
+    const ReadStatus r = transport_->read(ev, d.error);
+    if (r == ReadStatus::kEmpty) break;
+    if (r == ReadStatus::kError) return d;
+    if (r == ReadStatus::kDropped) {  // the frame in progress is incomplete: what follows is whole
+      c_[kDropped].add();
+      frame_moved_ = false;
+      continue;
+    }
+    if (ev.type == kEvAbs && ev.code == settings_->axis.code) {
+      pending_value_ = ev.value;
+      frame_moved_ = true;
+    } else if (ev.type == kEvSyn && ev.code == kSynReport) {
+      if (!frame_moved_) continue;
+      value_ = pending_value_;
+      frame_moved_ = false;
+      if (d.samples > 0) c_[kSuperseded].add();
+      ++d.samples;
+      c_[kAxisEvents].add();
+      d.time_ns = ev.time_ns;
+    } else if (ev.type == kEvFfStatus && ev.code == effect_.id && ev.value == kFfStatusStopped) {
+      d.effect_stopped = true;
+    } else if (ev.type != kEvSyn) {
+      c_[kOtherEvents].add();
+    }
+  }
+  if (i == kMaxDrain) c_[kDrainLimit].add();
+  return d;
+}
+
+IoStatus EvdevDevice::on_read(PositionSample& out) noexcept {
+  const Drained d = drain();
+  if (d.error != 0) {
+    set_fault_code(static_cast<std::uint32_t>(d.error));
+    return IoStatus::kTransportFault;
+  }
+  if (active_ && d.effect_stopped) {
+    set_fault_code(kEffectStopped);
+    return IoStatus::kDeviceFault;
+  }
+  if (d.samples == 0) return hold(out);
+  have_position_ = true;
+  quiet_since_ns_ = base::monotonic_ns();
+  out.position = axis_position(value_, settings_->axis, range_);
+  out.time_ns = d.time_ns;
+  out.flags = kSampleHasTime;
+  out.samples = d.samples;
+  return IoStatus::kOk;
+}
+
+// A tick without an axis event: the input core passes a value only when it changes, so the
+// position is the last one, still current - unless a force has been commanded for longer than
+// the liveness bound without the axis saying anything: then it is stale (the loop counts it).
+IoStatus EvdevDevice::hold(PositionSample& out) noexcept {
+  if (!have_position_) return IoStatus::kNoNewData;
+  const std::int64_t now = base::monotonic_ns();
+  if (liveness_ns_ > 0 && effect_.level != 0 && now - quiet_since_ns_ > liveness_ns_) {
+    c_[kSilent].add();
+    return IoStatus::kNoNewData;
+  }
+  c_[kHeld].add();
+  out.position = axis_position(value_, settings_->axis, range_);
+  out.time_ns = now;  // nothing changed up to now: the position is current as of now
+  out.flags = kSampleHasTime | kSampleHeld;
+  return IoStatus::kOk;
+}
+
+int EvdevDevice::set_level(std::int16_t level) noexcept {
+  effect_.level = level;
+  c_[kEffectUpdates].add();
+  return transport_->update(effect_);
+}
+
+IoStatus EvdevDevice::on_write(double force) noexcept {
+  if (state() == DeviceState::kFaulted) {  // nothing but zero, and the effect stopped
+    stop_effect();
+    return IoStatus::kOk;
+  }
+  const std::int16_t level = force_level(force, settings_->force_full_scale);
+  if (level == 0) quiet_since_ns_ = base::monotonic_ns();  // nothing is pushed: silence is fine
+  if (const int e = set_level(level); e != 0) {
+    set_fault_code(static_cast<std::uint32_t>(e));
+    return IoStatus::kTransportFault;
+  }
+  return IoStatus::kOk;
+}
+
+std::string EvdevDevice::describe(const DeviceFault& fault) const {
+  if (fault.fault_class == FaultClass::kDevice) {
+    return "evdev: the device stopped hapticd's force-feedback effect itself (EV_FF_STATUS "
+           "stopped)";
+  }
+  const int e = static_cast<int>(fault.code);
+  if (e == ENODEV || e == EIO || e == ESHUTDOWN) {
+    return std::string("evdev: the device is gone (") + base::errno_text(e) +
+           "): unplugged or reset?";
+  }
+  return std::string("evdev: the device failed: ") + base::errno_text(e);
+}
+
+}  // namespace hapticd::drivers::evdev

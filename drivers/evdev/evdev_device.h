@@ -1,0 +1,114 @@
+// The evdev driver's Device: the lifecycle over an EvdevTransport (libevdev on
+// /dev/input/eventN, or the loopback socketpair). configure uploads one FF_CONSTANT effect at
+// level 0 and sets FF_GAIN and FF_AUTOCENTER as configured; enable grabs the device
+// (EVIOCGRAB), turns autocenter off and plays the effect; every tick drains the events and
+// updates the effect's level (EVIOCSFF); disable and every fault set level 0, stop and erase
+// the effect, give autocenter back and release the grab. The input core passes an axis value
+// only when it changes, so a tick without one holds the last position; no event for
+// device.evdev.liveness_ms while a force is commanded is stale data. An unplugged device is a
+// transport fault; the device stopping the effect itself (EV_FF_STATUS) a device fault.
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <functional>
+#include <memory>
+#include <optional>
+
+#include "drivers/device.h"
+#include "drivers/evdev/device_select.h"
+#include "drivers/evdev/evdev_settings.h"
+#include "drivers/evdev/evdev_transport.h"
+
+namespace hapticd::drivers::evdev {
+
+class EvdevDevice final : public Device {
+ public:
+  // What `open` found: the transport, and the listing of the device where it has one (the
+  // loopback has none), for the notices about its kernel driver.
+  struct Opened {
+    std::unique_ptr<EvdevTransport> transport;
+    std::optional<InputListing> listing;
+  };
+  // Not RT-safe. `open` opens the transport (called by configure, again after a close).
+  EvdevDevice(std::shared_ptr<const EvdevSettings> settings, std::function<Opened()> open,
+              double sample_period_s);
+  ~EvdevDevice() override;
+
+  std::string_view driver_name() const noexcept override { return "evdev"; }
+  void emergency_stop() noexcept override;
+  std::vector<std::string> notices() const override { return notices_; }
+  std::span<const base::Counter> counters() const noexcept override { return c_; }
+
+ protected:
+  DeviceInfo on_configure() override;
+  void on_enable() override;
+  void on_disable() noexcept override;
+  void on_close() noexcept override;
+  IoStatus on_read(PositionSample& out) noexcept override;
+  IoStatus on_write(double force) noexcept override;
+  std::string describe(const DeviceFault& fault) const override;
+
+ private:
+  static constexpr int kMaxDrain = 512;  // events per tick: a flooding device cannot stall it
+  // Fault codes beyond errno: the device stopped the effect itself (EV_FF_STATUS).
+  static constexpr std::uint32_t kEffectStopped = 0x10000;
+  enum CounterIndex : std::size_t {
+    kAxisEvents,
+    kSuperseded,
+    kHeld,
+    kEffectUpdates,
+    kDropped,
+    kSilent,
+    kOtherEvents,
+    kDrainLimit,
+    kCounterCount
+  };
+  struct Drained {
+    std::uint32_t samples = 0;  // frames (SYN_REPORT) that moved the axis
+    std::int64_t time_ns = 0;   // the newest one's kernel time
+    int error = 0;              // the transport failed (errno)
+    bool effect_stopped = false;
+  };
+  Drained drain() noexcept;
+  void check_device(const wire::Facts& f) const;
+  void upload();
+  void stop_effect() noexcept;
+  IoStatus hold(PositionSample& out) noexcept;
+  int set_level(std::int16_t level) noexcept;
+  void ff_or_throw(int code, int value, const char* what);
+  void note_kernel_driver(const InputListing& l);
+  void unfuzz(int fuzz);
+
+  std::shared_ptr<const EvdevSettings> settings_;
+  std::function<Opened()> open_;
+  double period_s_;
+  std::int64_t liveness_ns_;
+  std::unique_ptr<EvdevTransport> transport_;
+  std::vector<std::string> notices_;
+  AxisRange range_;
+  wire::Effect effect_;    // the uploaded effect (id -1: none)
+  int pending_value_ = 0;  // the axis value of the frame being read
+  int value_ = 0;          // the last complete frame's
+  bool frame_moved_ = false;
+  bool active_ = false;
+  bool have_position_ = false;
+  bool has_gain_ = false, has_autocenter_ = false;
+  int kernel_fuzz_ = 0;  // the fuzz the kernel had on the axis, given back at close
+  std::atomic<EvdevTransport*> emergency_{nullptr};
+  std::int64_t quiet_since_ns_ = 0;  // the last axis event, or the last zero force after it
+  using K = base::CounterKind;
+  std::array<base::Counter, kCounterCount> c_{{
+      {"axis_events", K::kCount, "frames (SYN_REPORT) that moved the configured axis"},
+      {"superseded", K::kCount, "axis frames replaced by a newer one in the same tick"},
+      {"held_ticks", K::kCount, "ticks without an axis event: the position held"},
+      {"effect_updates", K::kCount, "EVIOCSFF updates of the effect's level"},
+      {"syn_dropped", K::kAnomaly, "times the kernel's event buffer overflowed (SYN_DROPPED)"},
+      {"silent_ticks", K::kAnomaly,
+       "ticks past device.evdev.liveness_ms without an axis event while a force was commanded"},
+      {"other_events", K::kCount, "events of other axes, keys and buttons (ignored)"},
+      {"drain_limit", K::kAnomaly, "ticks that stopped draining at the per-tick bound"},
+  }};
+};
+
+}  // namespace hapticd::drivers::evdev

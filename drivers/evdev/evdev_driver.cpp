@@ -1,0 +1,89 @@
+#include "drivers/evdev/evdev_driver.h"
+
+#include <fcntl.h>
+
+#include <cerrno>
+
+#include "base/errno_text.h"
+#include "config/schema_reader.h"
+#include "drivers/evdev/evdev_config.h"
+#include "drivers/evdev/evdev_device.h"
+#include "drivers/evdev/libevdev_transport.h"
+#include "drivers/evdev/socket_transport.h"
+
+namespace hapticd::drivers::evdev {
+namespace {
+
+std::shared_ptr<const EvdevSettings> settings_of(const config::Config& cfg) {
+  auto s = std::dynamic_pointer_cast<const EvdevSettings>(cfg.device.settings);
+  if (!s) throw DeviceError("evdev: the configuration has no device.evdev section");
+  return s;
+}
+
+int declared_delay(const config::Config& cfg) {
+  return declared_delay_samples(*settings_of(cfg), cfg.loop.sample_period_s());
+}
+
+std::unique_ptr<Device> make_device(const config::Config& cfg) {
+  auto s = settings_of(cfg);
+  auto open = [s] {
+    EvdevDevice::Opened o;
+    InputListing listing;
+    o.transport = open_libevdev(*s, listing);
+    o.listing = listing;
+    return o;
+  };
+  return std::make_unique<EvdevDevice>(s, std::move(open), cfg.loop.sample_period_s());
+}
+
+std::unique_ptr<Device> make_loopback_device(const config::Config& cfg, io::UniqueFd end) {
+  auto s = settings_of(cfg);
+  // The device opens a duplicate at each configure, so it can be closed and configured again.
+  auto kept = std::make_shared<io::UniqueFd>(std::move(end));
+  auto open = [kept] {
+    io::UniqueFd fd(fcntl(kept->get(), F_DUPFD_CLOEXEC, 0));
+    if (!fd) throw DeviceError("evdev loopback: dup: " + base::errno_text(errno));
+    EvdevDevice::Opened o;
+    o.transport = std::make_unique<SocketTransport>(std::move(fd), std::chrono::seconds(2));
+    return o;
+  };
+  return std::make_unique<EvdevDevice>(s, std::move(open), cfg.loop.sample_period_s());
+}
+
+std::vector<std::string> notes(const config::Config& cfg) {
+  const EvdevSettings& s = *settings_of(cfg);
+  std::string line = "evdev: ff_driver " + std::string(to_string(s.ff_driver)) + ": " +
+                     std::to_string(declared_delay(cfg)) + " samples of delay declared";
+  const double highest = highest_rate_hz(s);
+  if (highest > 0.0) {
+    line += ", at most " + config::schema::format_number(highest) +
+            " updates a second reach the device";
+  }
+  return {line + " (docs/drivers/evdev.md)"};
+}
+
+std::string list_devices() {
+  try {
+    const Enumeration e = enumerate_input_devices();
+    return format_listing(e.devices, e.unreadable);
+  } catch (const std::exception& e) {
+    return std::string("evdev:\n  cannot enumerate /dev/input: ") + e.what() + "\n";
+  }
+}
+
+}  // namespace
+
+DeviceEntry device_entry() {
+  DeviceEntry e;
+  e.name = "evdev";
+  e.summary = "an input device with force feedback through the kernel's evdev interface";
+  e.read_section = read_evdev_section;
+  e.declared_delay = &declared_delay;
+  e.make_device = &make_device;
+  e.make_loopback_device = &make_loopback_device;
+  e.notes = &notes;
+  e.list_devices = &list_devices;
+  return e;
+}
+
+}  // namespace hapticd::drivers::evdev

@@ -1,0 +1,136 @@
+#include "drivers/evdev/socket_transport.h"
+
+#include <poll.h>
+#include <sys/socket.h>
+
+#include <cerrno>
+
+#include "base/errno_text.h"
+#include "drivers/device.h"
+
+namespace hapticd::drivers::evdev {
+
+using wire::Type;
+
+SocketTransport::SocketTransport(io::UniqueFd fd, std::chrono::milliseconds timeout)
+    : fd_(std::move(fd)), timeout_(timeout) {}
+
+int SocketTransport::send_bytes(const std::uint8_t* data, std::size_t size) noexcept {
+  if (::send(fd_.get(), data, size, MSG_DONTWAIT | MSG_NOSIGNAL) >= 0) return 0;
+  // The device's end is gone: as an unplugged device, ENODEV.
+  return errno == EPIPE || errno == ECONNRESET ? ENODEV : errno;
+}
+
+wire::Message SocketTransport::request(const wire::Message& m, Type answer) {
+  std::vector<std::uint8_t> bytes;
+  wire::encode(m, bytes);
+  if (const int e = send_bytes(bytes.data(), bytes.size()); e != 0) {
+    throw DeviceError("evdev loopback: the simulated device is gone: " + base::errno_text(e));
+  }
+  const auto end = std::chrono::steady_clock::now() + timeout_;
+  while (true) {
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+        end - std::chrono::steady_clock::now());
+    pollfd p{fd_.get(), POLLIN, 0};
+    if (left.count() <= 0 || ::poll(&p, 1, static_cast<int>(left.count())) == 0) {
+      throw DeviceError("evdev loopback: the simulated device did not answer within " +
+                        std::to_string(timeout_.count()) + " ms");
+    }
+    const ssize_t n = ::recv(fd_.get(), rx_.data(), rx_.size(), MSG_DONTWAIT);
+    if (n == 0) throw DeviceError("evdev loopback: the simulated device is gone");
+    if (n < 0) {
+      if (errno == EAGAIN || errno == EINTR) continue;
+      throw DeviceError("evdev loopback: " + base::errno_text(errno));
+    }
+    const auto reply = wire::decode({rx_.data(), static_cast<std::size_t>(n)});
+    if (reply && reply->type == answer) return *reply;
+  }
+}
+
+wire::Facts SocketTransport::facts(int code) {
+  wire::Message m;
+  m.type = Type::kQuery;
+  m.a = code;
+  return request(m, Type::kFacts).facts;
+}
+
+void SocketTransport::set_fuzz(int code, int fuzz) {
+  throw DeviceError("evdev loopback: the simulated device filters nothing: no fuzz to set to " +
+                    std::to_string(fuzz) + " on axis " + std::to_string(code));
+}
+
+void SocketTransport::grab(bool on) {
+  wire::Message m;
+  m.type = Type::kGrab;
+  m.a = on ? 1 : 0;
+  const wire::Message r = request(m, Type::kStatus);
+  if (r.error == EBUSY) {
+    throw DeviceError("evdev: another process has grabbed the device (EVIOCGRAB: " +
+                      base::errno_text(EBUSY) + ")");
+  }
+  if (r.error != 0) throw DeviceError("evdev: EVIOCGRAB: " + base::errno_text(r.error));
+}
+
+int SocketTransport::upload(const wire::Effect& effect) {
+  wire::Message m;
+  m.type = Type::kUpload;
+  m.effect = effect;
+  const wire::Message r = request(m, Type::kStatus);
+  if (r.error != 0) throw DeviceError("evdev: EVIOCSFF: " + base::errno_text(r.error));
+  return r.b;
+}
+
+int SocketTransport::erase(int id) noexcept {
+  try {
+    wire::Message m;
+    m.type = Type::kErase;
+    m.a = id;
+    return request(m, Type::kStatus).error;
+  } catch (const std::exception&) {
+    return ENODEV;
+  }
+}
+
+int SocketTransport::update(const wire::Effect& effect) noexcept {
+  const std::size_t n = wire::encode_upload(effect, tx_);
+  return send_bytes(tx_.data(), n);
+}
+
+int SocketTransport::write_ff(int code, int value) noexcept {
+  const std::size_t n = wire::encode_write_ff(code, value, tx_);
+  return send_bytes(tx_.data(), n);
+}
+
+ReadStatus SocketTransport::read(wire::Event& ev, int& error) noexcept {
+  while (true) {
+    const ssize_t n = ::recv(fd_.get(), rx_.data(), rx_.size(), MSG_DONTWAIT);
+    if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) return ReadStatus::kEmpty;
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      error = n == 0 || errno == ECONNRESET ? ENODEV : errno;
+      return ReadStatus::kError;
+    }
+    const auto m = wire::decode({rx_.data(), static_cast<std::size_t>(n)});
+    if (!m) continue;  // not a message: the simulated device never sends one
+    if (m->type == Type::kStatus && m->error != 0) {
+      error = m->error;  // an update the device refused
+      return ReadStatus::kError;
+    }
+    if (m->type != Type::kEvent) continue;
+    ev = m->event;
+    return ev.type == kEvSyn && ev.code == kSynDropped ? ReadStatus::kDropped : ReadStatus::kEvent;
+  }
+}
+
+void SocketTransport::set_emergency_effect(int id) noexcept {
+  stop_size_ = id < 0 ? 0 : wire::encode_write_ff(id, 0, stop_);
+}
+
+void SocketTransport::emergency() noexcept {
+  if (stop_size_ > 0) {
+    [[maybe_unused]] const ssize_t n =
+        ::send(fd_.get(), stop_.data(), stop_size_, MSG_DONTWAIT | MSG_NOSIGNAL);
+  }
+}
+
+}  // namespace hapticd::drivers::evdev

@@ -1,0 +1,191 @@
+#include "sim/peers/evdev/evdev_peer.h"
+
+#include <sys/socket.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <numbers>
+#include <system_error>
+
+#include "base/clock.h"
+
+namespace hapticd::sim::evdev {
+
+namespace ev = drivers::evdev;
+using ev::wire::Message;
+using ev::wire::Type;
+
+SocketEvdevPeer::SocketEvdevPeer(const config::Config& cfg, io::UniqueFd fd, int link_delay_samples)
+    : settings_(ev::evdev_settings(cfg)),
+      fd_(std::move(fd)),
+      axis_(cfg.device, cfg.loop.sample_period_s()),
+      counts_per_unit_(axis_.counts_per_unit() > 0.0 ? axis_.counts_per_unit() : 1e6),
+      fifo_(static_cast<std::size_t>(link_delay_samples) + 1, cfg.device.sim.initial_position) {
+  tx_.reserve(ev::wire::kMaxMessage);
+  const ev::AxisSettings& a = settings_.axis;
+  if (a.scale == ev::Scale::kRange) {
+    // The encoder's counts over the configured travel, from 0 at min.
+    range_ = {0, static_cast<int>(std::lround((a.max - a.min) * counts_per_unit_)), 0};
+    if (range_.maximum < 0) range_ = {range_.maximum, 0, 0};
+  } else {
+    const double per_unit = a.rotary ? counts_per_unit_ : counts_per_unit_ * 1e-3;
+    range_ = {-(1 << 30), 1 << 30, std::max(1, static_cast<int>(std::lround(per_unit)))};
+  }
+}
+
+std::int32_t SocketEvdevPeer::raw_value(double x) const noexcept {
+  const ev::AxisSettings& a = settings_.axis;
+  double raw = 0.0;
+  if (a.scale == ev::Scale::kRange) {
+    const double span = static_cast<double>(range_.maximum) - range_.minimum;
+    raw = range_.minimum + (x - a.min) / (a.max - a.min) * span;
+  } else {
+    raw = (x - a.offset) * (a.rotary ? range_.resolution : range_.resolution * 1e3);
+  }
+  raw = std::clamp(std::floor(raw), static_cast<double>(range_.minimum),
+                   static_cast<double>(range_.maximum));
+  return static_cast<std::int32_t>(raw);
+}
+
+void SocketEvdevPeer::send(const Message& m) {
+  ev::wire::encode(m, tx_);
+  if (::send(fd_.get(), tx_.data(), tx_.size(), MSG_DONTWAIT | MSG_NOSIGNAL) < 0 &&
+      errno != EPIPE && errno != ECONNRESET && errno != EAGAIN) {
+    throw std::system_error(errno, std::system_category(), "evdev peer: send");
+  }
+}
+
+void SocketEvdevPeer::answer(std::int32_t error, std::int32_t value) {
+  Message m;
+  m.type = Type::kStatus;
+  m.error = error;
+  m.b = value;
+  send(m);
+}
+
+void SocketEvdevPeer::send_event(int type, int code, int value) {
+  Message m;
+  m.type = Type::kEvent;
+  m.event = {static_cast<std::uint16_t>(type), static_cast<std::uint16_t>(code), value,
+             base::monotonic_ns()};
+  send(m);
+}
+
+// The force the effect asks for, along the axis: the level's share of full scale, times the
+// gain and the sine of the direction (90 degrees pushes toward +x), while it plays.
+void SocketEvdevPeer::apply() noexcept {
+  double force = 0.0;
+  if (playing_.load() && uploaded_) {
+    const double along = std::sin(effect_.direction / 65536.0 * 2.0 * std::numbers::pi);
+    force = ev::level_force(effect_.level, settings_.force_full_scale) * gain_ * along;
+    if (std::abs(force) < 1e-12) force = 0.0;
+  }
+  axis_.set_output(playing_.load());
+  axis_.hold_force(force);
+  applied_.store(force);
+}
+
+void SocketEvdevPeer::on_update(const ev::wire::Effect& e) {
+  if (fault_.load() == kFaultPending) {  // the device stops the effect itself, and says so
+    fault_.store(kFaultSaid);
+    playing_.store(false);
+    send_event(ev::kEvFfStatus, effect_.id, ev::kFfStatusStopped);
+  }
+  effect_.level = e.level;
+  effect_.direction = e.direction;
+  apply();
+  axis_.step();
+  fifo_[fifo_head_] = axis_.encoder_position();
+  fifo_head_ = (fifo_head_ + 1) % fifo_.size();
+  answer(0, e.id);
+  if (silent_.load()) return;
+  send_event(ev::kEvAbs, settings_.axis.code, raw_value(fifo_[fifo_head_]));
+  send_event(ev::kEvSyn, ev::kSynReport, 0);
+}
+
+void SocketEvdevPeer::handle(const Message& m) {
+  switch (m.type) {
+    case Type::kQuery: {
+      Message f;
+      f.type = Type::kFacts;
+      f.facts.name = "hapticd simulated force-feedback device";
+      f.facts.bus = 0x06;  // BUS_VIRTUAL
+      f.facts.has_axis = m.a == settings_.axis.code;
+      f.facts.range = range_;
+      f.facts.value = raw_value(fifo_[fifo_head_]);
+      f.facts.ff_constant = f.facts.ff_gain = f.facts.ff_autocenter = true;
+      f.facts.ff_effects = 1;
+      send(f);
+      return;
+    }
+    case Type::kGrab:
+      answer(0);
+      return;
+    case Type::kUpload:
+      if (m.effect.id < 0) {
+        if (uploaded_) return answer(ENOSPC);  // it holds one effect
+        uploaded_ = true;
+        effect_ = m.effect;
+        effect_.id = 0;
+        return answer(0, 0);
+      }
+      if (!uploaded_ || m.effect.id != effect_.id) return answer(EINVAL);
+      return on_update(m.effect);
+    case Type::kErase:
+      if (!uploaded_ || m.a != effect_.id) return answer(EINVAL);
+      uploaded_ = false;
+      playing_.store(false);
+      apply();
+      return answer(0);
+    case Type::kWriteFf:
+      if (m.a == ev::kFfGain) gain_ = m.b / 65535.0;
+      if (uploaded_ && m.a == effect_.id) playing_.store(m.b > 0 && fault_.load() == kNoFault);
+      apply();
+      return;
+    default:
+      return;  // a device never receives its own message types
+  }
+}
+
+void SocketEvdevPeer::lose_host() noexcept {
+  playing_.store(false);
+  uploaded_ = false;  // closing the node erases the effects of the process that made them
+  apply();
+}
+
+void SocketEvdevPeer::service() {
+  while (true) {
+    const ssize_t n = ::recv(fd_.get(), rx_.data(), rx_.size(), MSG_DONTWAIT);
+    if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) return;
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0 || vanished_.load()) {  // the driver closed its end, or the device is gone
+      lose_host();
+      if (n > 0) continue;  // what was sent to a vanished device is taken off and lost
+      return;
+    }
+    if (const auto m = ev::wire::decode({rx_.data(), static_cast<std::size_t>(n)})) handle(*m);
+  }
+}
+
+bool SocketEvdevPeer::inject(PeerFault fault) noexcept {
+  switch (fault) {
+    case PeerFault::kStopAnswering:
+      silent_.store(true);
+      return true;
+    case PeerFault::kSkipSequence:
+      return false;
+    case PeerFault::kDeviceFault:
+      fault_.store(kFaultPending);  // said with the answer to the next update
+      return true;
+    case PeerFault::kTransportFault:
+      vanished_.store(true);
+      playing_.store(false);
+      applied_.store(0.0);
+      ::shutdown(fd_.get(), SHUT_RDWR);
+      return true;
+  }
+  return false;
+}
+
+}  // namespace hapticd::sim::evdev

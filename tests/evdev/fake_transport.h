@@ -1,0 +1,80 @@
+// A scripted evdev transport for the driver's unit tests: the test queues the events the
+// kernel would hand over and reads what the driver asked of the device (its grabs, uploads,
+// updates, EV_FF writes, the fuzz it set), without a kernel or a simulated plant.
+#pragma once
+
+#include <cerrno>
+#include <deque>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "drivers/device.h"
+#include "drivers/evdev/evdev_transport.h"
+
+namespace hapticd::drivers::evdev::testing {
+
+struct Script {
+  wire::Facts facts;
+  std::deque<std::pair<ReadStatus, wire::Event>> events;
+  int read_error = 0;    // > 0: the next read fails with it (ENODEV: unplugged)
+  int update_error = 0;  // > 0: every update fails with it
+  bool grabbed_elsewhere = false;
+  bool grabbed = false;
+  int fuzz_set = -1;                           // the last fuzz the driver set
+  std::vector<int> levels;                     // every update's level
+  std::vector<std::pair<int, int>> ff_writes;  // (code, value) written
+  int uploads = 0, erases = 0;
+  int next_id = 3;
+};
+
+class FakeTransport final : public EvdevTransport {
+ public:
+  explicit FakeTransport(std::shared_ptr<Script> s) : s_(std::move(s)) {}
+  std::string describe() const override { return "fake"; }
+  wire::Facts facts(int) override { return s_->facts; }
+  void set_fuzz(int, int fuzz) override {
+    s_->fuzz_set = fuzz;
+    s_->facts.fuzz = fuzz;
+  }
+  void grab(bool on) override {
+    if (on && s_->grabbed_elsewhere) {
+      throw DeviceError("evdev: another process has grabbed the device (EVIOCGRAB)");
+    }
+    s_->grabbed = on;
+  }
+  int upload(const wire::Effect&) override {
+    ++s_->uploads;
+    return s_->next_id;
+  }
+  int erase(int) noexcept override {
+    ++s_->erases;
+    return 0;
+  }
+  int update(const wire::Effect& e) noexcept override {
+    s_->levels.push_back(e.level);
+    return s_->update_error;
+  }
+  int write_ff(int code, int value) noexcept override {
+    s_->ff_writes.emplace_back(code, value);
+    return 0;
+  }
+  ReadStatus read(wire::Event& ev, int& error) noexcept override {
+    if (s_->read_error != 0) {
+      error = s_->read_error;
+      return ReadStatus::kError;
+    }
+    if (s_->events.empty()) return ReadStatus::kEmpty;
+    const auto [status, e] = s_->events.front();
+    s_->events.pop_front();
+    ev = e;
+    return status;
+  }
+  void set_emergency_effect(int) noexcept override {}
+  void emergency() noexcept override {}
+
+ private:
+  std::shared_ptr<Script> s_;
+};
+
+}  // namespace hapticd::drivers::evdev::testing

@@ -1,0 +1,202 @@
+#include "uinput_ff_device.h"
+
+#include <fcntl.h>
+#include <linux/uinput.h>
+#include <poll.h>
+#include <sys/ioctl.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <numbers>
+#include <stdexcept>
+
+namespace hapticd::reference {
+namespace {
+
+std::int64_t now_ns() {
+  timespec ts{};
+  ::clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+}
+
+void must(int rc, const char* what) {
+  if (rc < 0)
+    throw std::runtime_error(std::string("uinput: ") + what + ": " + std::strerror(errno));
+}
+
+}  // namespace
+
+UinputFfDevice::UinputFfDevice(const UinputFfOptions& o)
+    : o_(o), x_(o.start), effects_(static_cast<std::size_t>(o.effects)) {
+  fd_.reset(::open("/dev/uinput", O_RDWR | O_NONBLOCK | O_CLOEXEC));
+  must(fd_.get(), "open /dev/uinput");
+  const int fd = fd_.get();
+  must(ioctl(fd, UI_SET_EVBIT, EV_ABS), "UI_SET_EVBIT EV_ABS");
+  must(ioctl(fd, UI_SET_ABSBIT, ABS_X), "UI_SET_ABSBIT");
+  must(ioctl(fd, UI_SET_EVBIT, EV_FF), "UI_SET_EVBIT EV_FF");
+  for (int bit : {FF_CONSTANT, FF_GAIN, FF_AUTOCENTER})
+    must(ioctl(fd, UI_SET_FFBIT, bit), "UI_SET_FFBIT");
+  uinput_abs_setup abs{};
+  abs.code = ABS_X;
+  abs.absinfo.minimum = o.axis_min;
+  abs.absinfo.maximum = o.axis_max;
+  must(ioctl(fd, UI_ABS_SETUP, &abs), "UI_ABS_SETUP");
+  uinput_setup setup{};
+  setup.id = {BUS_VIRTUAL, o.vendor, o.product, 1};
+  std::strncpy(setup.name, o.name.c_str(), UINPUT_MAX_NAME_SIZE - 1);
+  setup.ff_effects_max = static_cast<__u32>(o.effects);
+  must(ioctl(fd, UI_DEV_SETUP, &setup), "UI_DEV_SETUP");
+  must(ioctl(fd, UI_DEV_CREATE), "UI_DEV_CREATE");
+  char sysname[64] = {};
+  must(ioctl(fd, UI_GET_SYSNAME(sizeof sysname - 1), sysname), "UI_GET_SYSNAME");
+  namespace fs = std::filesystem;
+  for (const auto& e : fs::directory_iterator(fs::path("/sys/class/input") / sysname)) {
+    const std::string n = e.path().filename().string();
+    if (n.rfind("event", 0) == 0) event_path_ = "/dev/input/" + n;
+  }
+  if (event_path_.empty())
+    throw std::runtime_error("uinput: no event node for " + std::string(sysname));
+  for (int i = 0; i < 200 && !fs::exists(event_path_); ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));  // devtmpfs makes the node
+  }
+  emit(EV_ABS, ABS_X, 0);  // the first report, so the kernel's value is the axis'
+  thread_ = std::thread([this] { run(); });
+}
+
+UinputFfDevice::~UinputFfDevice() { unplug(); }
+
+void UinputFfDevice::unplug() {
+  stop_.store(true);
+  if (thread_.joinable()) thread_.join();
+  if (!gone_.exchange(true)) ioctl(fd_.get(), UI_DEV_DESTROY);
+  force_.store(0.0);
+  playing_.store(false);
+}
+
+double UinputFfDevice::position() const {
+  const std::lock_guard lock(m_);
+  return x_;
+}
+
+std::vector<Upload> UinputFfDevice::uploads() const {
+  const std::lock_guard lock(m_);
+  return uploads_;
+}
+
+void UinputFfDevice::emit(int type, int code, int value) {
+  if (type == EV_ABS) {
+    const double span = o_.position_max - o_.position_min;
+    double x = 0.0;
+    {
+      const std::lock_guard lock(m_);
+      x = x_;
+    }
+    value = static_cast<int>(
+        std::lround(o_.axis_min + (x - o_.position_min) / span * (o_.axis_max - o_.axis_min)));
+    if (value == reported_) return;  // the kernel would drop it: nothing changed
+    reported_ = value;
+  }
+  input_event ev[2]{};
+  ev[0].type = static_cast<__u16>(type);
+  ev[0].code = static_cast<__u16>(code);
+  ev[0].value = value;
+  ev[1].type = EV_SYN;
+  ev[1].code = SYN_REPORT;
+  [[maybe_unused]] const ssize_t n = ::write(fd_.get(), ev, sizeof ev);
+}
+
+void UinputFfDevice::upload_request(int request) {
+  uinput_ff_upload up{};
+  up.request_id = static_cast<__u32>(request);
+  if (ioctl(fd_.get(), UI_BEGIN_FF_UPLOAD, &up) < 0) return;
+  const int id = up.effect.id;
+  if (up.effect.type != FF_CONSTANT || id < 0 || id >= o_.effects) {
+    up.retval = -EINVAL;
+  } else {
+    const std::lock_guard lock(m_);
+    Effect& e = effects_[static_cast<std::size_t>(id)];
+    e.used = true;
+    e.level = up.effect.u.constant.level;
+    e.direction = up.effect.direction;
+    uploads_.push_back({now_ns(), id, e.level});
+  }
+  ioctl(fd_.get(), UI_END_FF_UPLOAD, &up);
+}
+
+void UinputFfDevice::erase_request(int request) {
+  uinput_ff_erase er{};
+  er.request_id = static_cast<__u32>(request);
+  if (ioctl(fd_.get(), UI_BEGIN_FF_ERASE, &er) < 0) return;
+  if (er.effect_id < effects_.size()) {
+    const std::lock_guard lock(m_);
+    effects_[er.effect_id] = {};
+  }
+  erases_.fetch_add(1);
+  ioctl(fd_.get(), UI_END_FF_ERASE, &er);
+}
+
+// Everything the kernel passed to the device: upload and erase requests, and the EV_FF
+// events written to its node (play or stop an effect, the gain, autocenter).
+void UinputFfDevice::service() {
+  input_event ev{};
+  while (::read(fd_.get(), &ev, sizeof ev) == static_cast<ssize_t>(sizeof ev)) {
+    if (ev.type == EV_UINPUT && ev.code == UI_FF_UPLOAD) upload_request(ev.value);
+    if (ev.type == EV_UINPUT && ev.code == UI_FF_ERASE) erase_request(ev.value);
+    if (ev.type != EV_FF) continue;
+    if (ev.code == FF_GAIN) {
+      gain_.store(ev.value);
+    } else if (ev.code == FF_AUTOCENTER) {
+      autocenter_.store(ev.value);
+    } else if (ev.code < effects_.size()) {
+      const std::lock_guard lock(m_);
+      effects_[ev.code].playing = ev.value > 0 && effects_[ev.code].used;
+    }
+  }
+}
+
+void UinputFfDevice::step(double dt) {
+  double force = 0.0;
+  bool playing = false;
+  int held = 0;
+  const std::lock_guard lock(m_);
+  for (const Effect& e : effects_) {
+    held += e.used ? 1 : 0;
+    if (!e.used || !e.playing) continue;
+    playing = true;
+    const double along = std::sin(e.direction / 65536.0 * 2.0 * std::numbers::pi);
+    force += e.level / 32767.0 * o_.full_scale * along * gain_.load() / 65535.0;
+  }
+  const double push = push_.load(), b = o_.damping + hand_damping_.load();
+  v_ += dt / o_.mass * (force + push - b * v_);  // semi-implicit Euler
+  x_ += dt * v_;
+  force_.store(force);
+  playing_.store(playing);
+  held_.store(held);
+}
+
+void UinputFfDevice::run() {
+  const auto period = std::chrono::nanoseconds(static_cast<std::int64_t>(1e9 / o_.rate_hz));
+  auto next = std::chrono::steady_clock::now();
+  auto last = next;
+  while (!stop_.load()) {
+    const auto wait = std::chrono::duration_cast<std::chrono::milliseconds>(
+        next - std::chrono::steady_clock::now());
+    pollfd p{fd_.get(), POLLIN, 0};
+    ::poll(&p, 1, static_cast<int>(std::max<std::int64_t>(0, wait.count())));
+    service();
+    const auto now = std::chrono::steady_clock::now();
+    if (now < next) continue;
+    // Integrated over the time that really passed: the axis moves whether or not this
+    // thread was scheduled on time.
+    step(std::min(0.01, std::chrono::duration<double>(now - last).count()));
+    last = now;
+    next += period;
+    if (next < now) next = now + period;
+    if (!silent_.load()) emit(EV_ABS, ABS_X, 0);
+  }
+}
+
+}  // namespace hapticd::reference

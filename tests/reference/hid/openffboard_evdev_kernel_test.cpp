@@ -1,0 +1,89 @@
+// hapticd's evdev driver against the reference OpenFFBoard (openffboard.h) behind the kernel's
+// own PID host: on the raw gadget the board is a USB device with a complete PID descriptor, so
+// usbhid binds hid-pidff to it, and hapticd meets it as /dev/input/eventN with FF_CONSTANT
+// (device.evdev.ff_driver pidff). The wall must hold the hand's push at F/K within 2 %, as it
+// does through the HID driver; and what the board receives each tick is counted: hid-pidff
+// sends a Set Constant Force report for an update only when the level changed.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <iostream>
+#include <memory>
+
+#include "hapticd_process.h"
+#include "hid_support.h"
+#include "openffboard.h"
+
+namespace hapticd::reference {
+namespace {
+
+constexpr double kStiffness = 5.0;  // N m/rad: at 100 Hz the gate allows up to 9 with b 0.05
+constexpr double kPush = 0.5;       // N m: the hand's steady push into the wall
+
+std::vector<std::string> evdev_sets(const std::string& serial) {
+  return {"loop.rate_hz=100",
+          "loop.overrun_fault_streak=1000",
+          "safety.stale_fault_ticks=50",
+          "device.mass=0.05",
+          "device.damping=0.05",
+          "wall.stiffness=" + std::to_string(kStiffness),
+          "wall.damping=0",
+          "device.evdev.select={vendor_id: 0x1209, product_id: 0xffb0, uniq: \"" + serial + "\"}",
+          "device.evdev.axis={code: ABS_X, min: -7.853982, max: 7.853982}",
+          "device.evdev.force_full_scale=10",
+          "device.evdev.ff_driver=pidff"};
+}
+
+bool listed(const std::string& serial) {
+  try {
+    return kernel_test::find_hidraw(3, OpenFfboard::kVendor, OpenFfboard::kProduct, serial)
+        .has_value();
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
+TEST(OpenFfboardEvdev, BehindHidPidffTheWallHoldsTheHandAtForceOverStiffness) {
+  OpenFfboardOptions o;
+  o.usb_report_rate = 4;  // as the HID tests: what the emulated controller carries
+  o.serial = "openffboard-evdev";
+  auto board = std::make_unique<OpenFfboard>(o);
+  ASSERT_TRUE(wait_until([&] { return listed(o.serial); }));
+  std::this_thread::sleep_for(std::chrono::seconds(1));  // hid-pidff's own probe at bind
+  double x_rest = 0.0, torque_rest = 0.0;
+  std::uint64_t constants = 0, outputs = 0;
+  const double window_s = 2.0;
+  const HapticdRun r =
+      run_hapticd(shipped("evdev.yaml"), evdev_sets(o.serial), {"--duration", "7"}, [&](pid_t) {
+        // Uploaded at configure, played at enable: the hand pushes once the wall is on.
+        ASSERT_TRUE(wait_until([&] { return board->playing(); })) << "output never enabled";
+        board->axis().hand(kPush, 1.0);
+        std::this_thread::sleep_for(std::chrono::milliseconds(2500));
+        // At rest: the level no longer changes.
+        const std::uint64_t c0 = board->constant_reports(), o0 = board->output_reports();
+        std::this_thread::sleep_for(std::chrono::duration<double>(window_s));
+        constants = board->constant_reports() - c0;
+        outputs = board->output_reports() - o0;
+        x_rest = board->axis().position();
+        torque_rest = board->axis().motor();
+      });
+  ASSERT_EQ(r.status, 0) << r.faults() << "\n" << r.log;
+  EXPECT_EQ(r.faults(), "[]");
+
+  EXPECT_NEAR(x_rest, kPush / kStiffness, 0.02 * kPush / kStiffness)
+      << "resting penetration; " << r.summary.dump() << "\n"
+      << r.log;
+  EXPECT_NEAR(torque_rest, -kPush, 0.02 * kPush) << "the wall's torque at rest";
+  const double ticks = window_s * 100.0;
+  std::cout << "pidff: resting penetration " << x_rest << " rad (F/K " << kPush / kStiffness
+            << "); at rest " << constants << " Set Constant Force and " << outputs
+            << " output reports in " << ticks << " ticks\n";
+  EXPECT_LT(static_cast<double>(outputs), ticks) << "an unchanged level sends nothing";
+  EXPECT_EQ(board->allocated(), 0u) << "hid-pidff frees the effect hapticd erased";
+  EXPECT_EQ(board->axis().motor(), 0.0);
+  board.reset();
+  EXPECT_TRUE(wait_until([&] { return !listed(o.serial); }));
+}
+
+}  // namespace
+}  // namespace hapticd::reference
