@@ -12,18 +12,11 @@ namespace hapticd::drivers::can {
 namespace {
 
 using config::schema::Field;
+using config::schema::integer;
 using config::schema::IntRange;
 using config::schema::MapReader;
+using config::schema::number;
 using config::schema::Range;
-
-void number(MapReader& m, std::string_view key, const Range& range, double& out) {
-  if (const auto v = read_number(m.diag(), m.take(key), range)) out = *v;
-}
-
-template <typename T>
-void integer(MapReader& m, std::string_view key, IntRange range, T& out) {
-  if (const auto v = read_integer(m.diag(), m.take(key), range)) out = static_cast<T>(*v);
-}
 
 void required_number(MapReader& m, std::string_view key, const Range& range, double& out,
                      const std::string& why) {

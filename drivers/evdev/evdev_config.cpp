@@ -1,10 +1,8 @@
 #include "drivers/evdev/evdev_config.h"
 
-#include <charconv>
 #include <cmath>
 #include <string>
 
-#include "base/hex.h"
 #include "drivers/evdev/evdev_settings.h"
 
 namespace hapticd::drivers::evdev {
@@ -15,28 +13,9 @@ using config::schema::Field;
 using config::schema::format_number;
 using config::schema::IntRange;
 using config::schema::MapReader;
+using config::schema::number;
 using config::schema::Range;
-
-// An unsigned integer written in decimal or 0x hexadecimal, at most `max`.
-std::optional<std::uint32_t> read_hex(Diagnostics& d, const Field& f, std::uint32_t max) {
-  if (!f.present) return std::nullopt;
-  const std::string text = f.node.IsScalar() ? f.node.Scalar() : std::string();
-  std::string_view s(text);
-  int base = 10;
-  if (s.size() > 2 && s[0] == '0' && (s[1] == 'x' || s[1] == 'X')) {
-    s.remove_prefix(2);
-    base = 16;
-  }
-  std::uint64_t v = 0;
-  const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v, base);
-  if (s.empty() || ec != std::errc() || ptr != s.data() + s.size() || v > max) {
-    d.error(f.key_mark, f.path,
-            "must be an integer in 0.." + std::to_string(max) + " (" + base::hex(max) +
-                "), decimal or 0x hexadecimal, got " + config::schema::describe_value(f.node));
-    return std::nullopt;
-  }
-  return static_cast<std::uint32_t>(v);
-}
+using config::schema::read_hex;
 
 // A key given without a value (`--set device.evdev.poll_interval_ms=`) is absent: that is how
 // a key of an example file is removed from the command line.
@@ -44,10 +23,6 @@ Field take(MapReader& m, const char* key) {
   Field f = m.take(key);
   if (f.present && f.node.IsNull()) f.present = false;
   return f;
-}
-
-void number(MapReader& m, const Field& f, const Range& r, double& out) {
-  if (const auto v = config::schema::read_number(m.diag(), f, r)) out = *v;
 }
 
 void text(MapReader& m, const char* key, std::string& out) {

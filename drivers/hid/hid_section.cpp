@@ -1,21 +1,21 @@
 #include "drivers/hid/hid_settings.h"
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <map>
 #include <string>
-
-#include "base/hex.h"
 
 namespace hapticd::drivers::hid {
 namespace {
 
 using config::schema::Diagnostics;
 using config::schema::Field;
+using config::schema::integer;
 using config::schema::IntRange;
 using config::schema::MapReader;
+using config::schema::number;
 using config::schema::Range;
+using config::schema::read_hex;
 
 const std::vector<std::string> kTypes{"u8", "i8", "u16", "i16", "u32", "i32", "f32"};
 
@@ -44,41 +44,11 @@ struct Ctx {
   }
 };
 
-// An unsigned integer written in decimal or 0x hexadecimal (ids, usages, masks).
-std::optional<std::uint32_t> read_hex(Diagnostics& d, const Field& f, std::uint32_t max) {
-  if (!f.present) return std::nullopt;
-  const std::string text = f.node.IsScalar() ? f.node.Scalar() : std::string();
-  std::string_view s(text);
-  int base = 10;
-  if (s.size() > 2 && s[0] == '0' && (s[1] == 'x' || s[1] == 'X')) {
-    s.remove_prefix(2);
-    base = 16;
-  }
-  std::uint64_t v = 0;
-  const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v, base);
-  if (s.empty() || ec != std::errc() || ptr != s.data() + s.size() || v > max) {
-    d.error(f.key_mark, f.path,
-            "must be an integer in 0.." + std::to_string(max) + " (" + base::hex(max) +
-                "), decimal or 0x hexadecimal, got " + config::schema::describe_value(f.node));
-    return std::nullopt;
-  }
-  return static_cast<std::uint32_t>(v);
-}
-
 // Takes `key`; reports it missing (with `why`) when `why` is given and it is absent.
 Field take(MapReader& m, const char* key, const char* why = nullptr) {
   const Field f = m.take(key);
   if (!f.present && why != nullptr) m.missing(key, why);
   return f;
-}
-
-template <typename T>
-void integer(MapReader& m, const Field& f, IntRange r, T& out) {
-  if (const auto v = config::schema::read_integer(m.diag(), f, r)) out = static_cast<T>(*v);
-}
-
-void number(MapReader& m, const Field& f, const Range& r, double& out) {
-  if (const auto v = config::schema::read_number(m.diag(), f, r)) out = *v;
 }
 
 // A raw value written into a field (an enable's on/off, a feature's value): a number, or an
@@ -124,14 +94,19 @@ std::optional<FieldSpec> optional_field(MapReader& parent, Ctx& c, const std::st
   return f;
 }
 
+// The keys every report starts with: its id and its data length.
+void read_report_head(MapReader& m, Ctx& c, std::uint8_t& report_id, std::size_t& length) {
+  if (const auto v = read_hex(c.d, m.take("report_id"), 255))
+    report_id = static_cast<std::uint8_t>(*v);
+  integer(m, take(m, "length", "data bytes after the report id"),
+          IntRange::between(1, kMaxReportData), length);
+}
+
 void read_input(MapReader& report, Ctx& c, InputLayout& in) {
   const Field field = take(report, "input", "the input report with the position");
   c.mark(field, "input");
   MapReader m(c.d, field);
-  if (const auto v = read_hex(c.d, m.take("report_id"), 255))
-    in.report_id = static_cast<std::uint8_t>(*v);
-  integer(m, take(m, "length", "data bytes after the report id"),
-          IntRange::between(1, kMaxReportData), in.length);
+  read_report_head(m, c, in.report_id, in.length);
   const Field pos = take(m, "position", "where the position is");
   c.mark(pos, "input.position");
   MapReader p(c.d, pos);
@@ -154,10 +129,7 @@ void read_output(MapReader& report, Ctx& c, OutputLayout& out) {
   const Field field = take(report, "output", "the output report with the force");
   c.mark(field, "output");
   MapReader m(c.d, field);
-  if (const auto v = read_hex(c.d, m.take("report_id"), 255))
-    out.report_id = static_cast<std::uint8_t>(*v);
-  integer(m, take(m, "length", "data bytes after the report id"),
-          IntRange::between(1, kMaxReportData), out.length);
+  read_report_head(m, c, out.report_id, out.length);
   const Field force = take(m, "force", "where the force command goes");
   c.mark(force, "output.force");
   MapReader f(c.d, force);

@@ -29,14 +29,6 @@ const std::string& name_of(const Options<E>& options, E value) {
       ->first;
 }
 
-void number(MapReader& m, std::string_view key, const Range& range, double& out) {
-  if (const auto v = read_number(m.diag(), m.take(key), range)) out = *v;
-}
-
-void integer(MapReader& m, std::string_view key, const IntRange& range, int& out) {
-  if (const auto v = read_integer(m.diag(), m.take(key), range)) out = static_cast<int>(*v);
-}
-
 const Options<ClockMode> kClocks{{"realtime", ClockMode::kRealtime},
                                  {"freerun", ClockMode::kFreerun}};
 const Options<Discretization> kDiscretizations{{"backward", Discretization::kBackward},

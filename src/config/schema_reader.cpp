@@ -1,5 +1,6 @@
 #include "config/schema_reader.h"
 
+#include "base/hex.h"
 #include "config/config_loader.h"  // kMaxMessages
 
 #include <algorithm>
@@ -428,6 +429,30 @@ std::optional<std::vector<double>> read_number_list(Diagnostics& diag, const Fie
   }
   if (!ok) return std::nullopt;
   return out;
+}
+
+std::optional<std::uint32_t> read_hex(Diagnostics& diag, const Field& field, std::uint32_t max) {
+  if (!field.present) return std::nullopt;
+  const std::string text = field.node.IsScalar() ? field.node.Scalar() : std::string();
+  std::string_view s(text);
+  int radix = 10;
+  if (s.size() > 2 && s[0] == '0' && (s[1] == 'x' || s[1] == 'X')) {
+    s.remove_prefix(2);
+    radix = 16;
+  }
+  std::uint64_t v = 0;
+  const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v, radix);
+  if (s.empty() || ec != std::errc() || ptr != s.data() + s.size() || v > max) {
+    diag.error(field.key_mark, field.path,
+               "must be an integer in 0.." + std::to_string(max) + " (" + base::hex(max) +
+                   "), decimal or 0x hexadecimal, got " + describe_value(field.node));
+    return std::nullopt;
+  }
+  return static_cast<std::uint32_t>(v);
+}
+
+void number(MapReader& map, const Field& field, const Range& range, double& out) {
+  if (const auto v = read_number(map.diag(), field, range)) out = *v;
 }
 
 }  // namespace hapticd::config::schema

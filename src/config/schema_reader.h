@@ -13,6 +13,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <cstddef>
+#include <cstdint>
 #include <limits>
 #include <map>
 #include <optional>
@@ -182,5 +183,23 @@ std::optional<std::size_t> read_choice(Diagnostics& diag, const Field& field,
                                        const std::vector<std::string>& choices);
 // A non-empty list of finite numbers; a bad element is reported as "path[i]: ...".
 std::optional<std::vector<double>> read_number_list(Diagnostics& diag, const Field& field);
+// An unsigned integer written in decimal or 0x hexadecimal, at most `max` (ids, usages, masks:
+// the numbers datasheets and descriptors print in hexadecimal).
+std::optional<std::uint32_t> read_hex(Diagnostics& diag, const Field& field, std::uint32_t max);
+
+// The readers above into a setting: `out` takes the value when the key is present and valid and
+// keeps its default otherwise (a wrong value has its message in the map's Diagnostics).
+void number(MapReader& map, const Field& field, const Range& range, double& out);
+inline void number(MapReader& map, std::string_view key, const Range& range, double& out) {
+  number(map, map.take(key), range, out);
+}
+template <typename T>
+void integer(MapReader& map, const Field& field, const IntRange& range, T& out) {
+  if (const auto v = read_integer(map.diag(), field, range)) out = static_cast<T>(*v);
+}
+template <typename T>
+void integer(MapReader& map, std::string_view key, const IntRange& range, T& out) {
+  integer(map, map.take(key), range, out);
+}
 
 }  // namespace hapticd::config::schema
