@@ -47,4 +47,13 @@ std::optional<std::string> find_hidraw(std::uint16_t bus, std::uint16_t vendor_i
   return std::nullopt;
 }
 
+bool hidraw_listed(std::uint16_t bus, std::uint16_t vendor_id, std::uint16_t product_id,
+                   const std::string& serial) {
+  try {
+    return find_hidraw(bus, vendor_id, product_id, serial).has_value();
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
 }  // namespace hapticd::kernel_test

@@ -23,5 +23,8 @@ std::vector<std::uint8_t> vendor_report_descriptor(const VendorReports& reports)
 // product and serial (HID_UNIQ: the USB iSerialNumber or uhid's uniq), if the kernel made one.
 std::optional<std::string> find_hidraw(std::uint16_t bus, std::uint16_t vendor_id,
                                        std::uint16_t product_id, const std::string& serial);
+// Whether the kernel lists that node now (one that vanishes while it is being looked at is not).
+bool hidraw_listed(std::uint16_t bus, std::uint16_t vendor_id, std::uint16_t product_id,
+                   const std::string& serial);
 
 }  // namespace hapticd::kernel_test

@@ -1,4 +1,5 @@
 #include "uinput_ff_device.h"
+#include "reference_clock.h"
 
 #include <fcntl.h>
 #include <linux/uinput.h>
@@ -15,12 +16,6 @@
 
 namespace hapticd::reference {
 namespace {
-
-std::int64_t now_ns() {
-  timespec ts{};
-  ::clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
-}
 
 void must(int rc, const char* what) {
   if (rc < 0)

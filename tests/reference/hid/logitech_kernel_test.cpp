@@ -19,16 +19,11 @@
 #include "hapticd_process.h"
 #include "hid_support.h"
 #include "logitech_wheel.h"
+#include "reference_clock.h"
 #include "rt_syscalls.h"
 
 namespace hapticd::reference {
 namespace {
-
-std::int64_t now_ns() {
-  timespec t;
-  clock_gettime(CLOCK_MONOTONIC, &t);
-  return static_cast<std::int64_t>(t.tv_sec) * 1'000'000'000 + t.tv_nsec;
-}
 
 // The /dev/input/eventN with this uniq (the USB serial) that offers FF_CONSTANT.
 int open_wheel(const std::string& uniq) {

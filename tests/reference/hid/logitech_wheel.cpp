@@ -1,4 +1,5 @@
 #include "logitech_wheel.h"
+#include "reference_clock.h"
 
 #include <time.h>
 
@@ -7,12 +8,6 @@
 
 namespace hapticd::reference {
 namespace {
-
-std::int64_t now_ns() {
-  timespec t;
-  clock_gettime(CLOCK_MONOTONIC, &t);
-  return static_cast<std::int64_t>(t.tv_sec) * 1'000'000'000 + t.tv_nsec;
-}
 
 constexpr int kXMax = 16383;  // 14 bits
 

@@ -34,21 +34,14 @@ std::vector<std::string> evdev_sets(const std::string& serial) {
           "device.evdev.ff_driver=pidff"};
 }
 
-bool listed(const std::string& serial) {
-  try {
-    return kernel_test::find_hidraw(3, OpenFfboard::kVendor, OpenFfboard::kProduct, serial)
-        .has_value();
-  } catch (const std::exception&) {
-    return false;
-  }
-}
-
 TEST(OpenFfboardEvdev, BehindHidPidffTheWallHoldsTheHandAtForceOverStiffness) {
   OpenFfboardOptions o;
   o.usb_report_rate = 4;  // as the HID tests: what the emulated controller carries
   o.serial = "openffboard-evdev";
   auto board = std::make_unique<OpenFfboard>(o);
-  ASSERT_TRUE(wait_until([&] { return listed(o.serial); }));
+  ASSERT_TRUE(wait_until([&] {
+    return kernel_test::hidraw_listed(3, OpenFfboard::kVendor, OpenFfboard::kProduct, o.serial);
+  }));
   std::this_thread::sleep_for(std::chrono::seconds(1));  // hid-pidff's own probe at bind
   double x_rest = 0.0, torque_rest = 0.0;
   std::uint64_t constants = 0, outputs = 0;
@@ -82,7 +75,9 @@ TEST(OpenFfboardEvdev, BehindHidPidffTheWallHoldsTheHandAtForceOverStiffness) {
   EXPECT_EQ(board->allocated(), 0u) << "hid-pidff frees the effect hapticd erased";
   EXPECT_EQ(board->axis().motor(), 0.0);
   board.reset();
-  EXPECT_TRUE(wait_until([&] { return !listed(o.serial); }));
+  EXPECT_TRUE(wait_until([&] {
+    return !kernel_test::hidraw_listed(3, OpenFfboard::kVendor, OpenFfboard::kProduct, o.serial);
+  }));
 }
 
 }  // namespace

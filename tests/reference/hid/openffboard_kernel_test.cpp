@@ -33,17 +33,6 @@ std::vector<std::string> sets(const char* backend, const std::string& serial) {
           "device.hid.select.serial=" + serial};
 }
 
-// Whether the kernel lists a hidraw node of a board with this serial (a node that vanishes
-// while it is being looked at is no board).
-bool listed(const std::string& serial) {
-  try {
-    return kernel_test::find_hidraw(3, OpenFfboard::kVendor, OpenFfboard::kProduct, serial)
-        .has_value();
-  } catch (const std::exception&) {
-    return false;
-  }
-}
-
 // The board as the test machine can carry it: its report rate setting (usb_report_rate, the
 // firmware's own divider) at 4, 250 reports a second while the wheel moves; the emulated
 // USB controller cannot move 1 kHz of input reports and the host's commands at once.
@@ -58,8 +47,9 @@ OpenFfboardOptions guest_board() {
 struct Board {
   explicit Board(OpenFfboardOptions o = guest_board())
       : serial(o.serial), owned(std::make_unique<OpenFfboard>(o)), board(*owned) {
-    EXPECT_TRUE(wait_until([&] { return listed(serial); }))
-        << "the reference OpenFFBoard never appeared";
+    EXPECT_TRUE(wait_until([&] {
+      return kernel_test::hidraw_listed(3, OpenFfboard::kVendor, OpenFfboard::kProduct, serial);
+    })) << "the reference OpenFFBoard never appeared";
     // The kernel's own PID host (hid-pidff) binds to it too, resets it and tries one effect
     // (its autocenter probe): let that pass before hapticd meets the board.
     std::this_thread::sleep_for(std::chrono::seconds(1));
@@ -68,7 +58,9 @@ struct Board {
   ~Board() {
     EXPECT_EQ(board.error(), "") << "the reference device's USB side failed";
     owned.reset();
-    EXPECT_TRUE(wait_until([&] { return !listed(serial); })) << "the board did not go";
+    EXPECT_TRUE(wait_until([&] {
+      return !kernel_test::hidraw_listed(3, OpenFfboard::kVendor, OpenFfboard::kProduct, serial);
+    })) << "the board did not go";
   }
   // hapticd has enabled output and runs: its effect plays, FFB is on, and a second passed.
   bool enabled() {
