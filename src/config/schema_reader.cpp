@@ -1,12 +1,8 @@
 #include "config/schema_reader.h"
 
-#include "base/hex.h"
 #include "config/config_loader.h"  // kMaxMessages
 
 #include <algorithm>
-#include <charconv>
-#include <cmath>
-#include <cstdlib>
 #include <utility>
 
 namespace hapticd::config::schema {
