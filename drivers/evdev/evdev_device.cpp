@@ -198,22 +198,18 @@ EvdevDevice::Drained EvdevDevice::drain() noexcept {
     const ReadStatus r = transport_->read(ev, d.error);
     if (r == ReadStatus::kEmpty) break;
     if (r == ReadStatus::kError) return d;
-    if (r == ReadStatus::kDropped) {  // the frame in progress is incomplete: what follows is whole
+    if (r == ReadStatus::kDropped) {
       c_[kDropped].add();
-      frame_moved_ = false;
+      // libevdev took the cut-off frame's axis value into its state, and its resync repeats
+      // only what differs from that state: the value stands, or the axis would never get it.
+      if (frame_moved_) take_frame(d, ev.time_ns);
       continue;
     }
     if (ev.type == kEvAbs && ev.code == settings_->axis.code) {
       pending_value_ = ev.value;
       frame_moved_ = true;
     } else if (ev.type == kEvSyn && ev.code == kSynReport) {
-      if (!frame_moved_) continue;
-      value_ = pending_value_;
-      frame_moved_ = false;
-      if (d.samples > 0) c_[kSuperseded].add();
-      ++d.samples;
-      c_[kAxisEvents].add();
-      d.time_ns = ev.time_ns;
+      if (frame_moved_) take_frame(d, ev.time_ns);
     } else if (ev.type == kEvFfStatus && ev.code == effect_.id && ev.value == kFfStatusStopped) {
       d.effect_stopped = true;
     } else if (ev.type != kEvSyn) {
@@ -222,6 +218,15 @@ EvdevDevice::Drained EvdevDevice::drain() noexcept {
   }
   if (i == kMaxDrain) c_[kDrainLimit].add();
   return d;
+}
+
+void EvdevDevice::take_frame(Drained& d, std::int64_t time_ns) noexcept {
+  value_ = pending_value_;
+  frame_moved_ = false;
+  if (d.samples > 0) c_[kSuperseded].add();
+  ++d.samples;
+  c_[kAxisEvents].add();
+  d.time_ns = time_ns;
 }
 
 IoStatus EvdevDevice::on_read(PositionSample& out) noexcept {

@@ -71,6 +71,7 @@ class EvdevDevice final : public Device {
     bool effect_stopped = false;
   };
   Drained drain() noexcept;
+  void take_frame(Drained& d, std::int64_t time_ns) noexcept;  // the axis' pending value is new
   void check_device(const wire::Facts& f) const;
   void upload();
   void stop_effect() noexcept;

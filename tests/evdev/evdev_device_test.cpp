@@ -123,6 +123,25 @@ TEST(EvdevDevice, EventsLostAreCountedAndTheResyncedStateIsUsed) {
   EXPECT_EQ(dropped, 1u);
 }
 
+// libevdev hands an event over only after taking it into its own state, and its resync after
+// SYN_DROPPED repeats only what differs from that state: an axis value cut off by the drop,
+// and still the kernel's, is never sent again. A device then held still must read there.
+TEST(EvdevDevice, AnAxisValueCutOffBySynDroppedIsThePositionAfterTheResync) {
+  Rig r;
+  r.device->configure();
+  r.device->enable();
+  r.script->events.push_back({ReadStatus::kEvent, {kEvAbs, 0, 100, 1}});  // no SYN: cut off
+  r.script->events.push_back({ReadStatus::kDropped, {kEvSyn, kSynDropped, 0, 2}});
+  // The resync finds the kernel's value equal to libevdev's (100): it says nothing.
+  PositionSample s;
+  ASSERT_EQ(r.device->read(s), IoStatus::kOk);
+  EXPECT_NEAR(s.position, 0.005, 1e-12) << "the kernel's value, not the one before the drop";
+  EXPECT_FALSE(s.flags & kSampleHeld) << "a new position: the loop takes only a new one";
+  EXPECT_EQ(s.time_ns, 2);
+  ASSERT_EQ(r.device->read(s), IoStatus::kOk);
+  EXPECT_NEAR(s.position, 0.005, 1e-12) << "and it holds there";
+}
+
 TEST(EvdevDevice, TheDeviceStoppingTheEffectIsADeviceFaultWithZeroForce) {
   Rig r;
   r.device->configure();
