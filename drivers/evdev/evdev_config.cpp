@@ -95,6 +95,11 @@ void read_axis(MapReader& ev, AxisSettings& a) {
     number(m, max, Range::any(), a.max);
     if (min.present && max.present && a.min == a.max && m.ok()) {
       m.diag().error(max.key_mark, max.path, "min and max must differ");
+    } else if (min.present && max.present && !std::isfinite(a.max - a.min) && m.ok()) {
+      // Past it every position would be NaN or infinite (axis_position scales by the span).
+      m.diag().error(max.key_mark, max.path,
+                     "max - min must be a finite number, got " + format_number(a.max) + " - " +
+                         format_number(a.min));
     }
     for (const Field* f : {&rotary, &offset}) {
       if (f->present) m.diag().error(f->key_mark, f->path, "only with scale: resolution");

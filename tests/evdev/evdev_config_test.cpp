@@ -94,6 +94,11 @@ TEST(EvdevConfig, MistakesAreNamedWithTheKey) {
   EXPECT_NE(
       errors({"device.evdev.axis={code: ABS_X, min: 1, max: 1}"}).find("min and max must differ"),
       std::string::npos);
+  // Each finite, their span not: every position would be NaN (0 * inf at the axis' minimum).
+  EXPECT_NE(errors({"device.evdev.axis={code: ABS_X, min: -1e308, max: 1e308}"})
+                .find("device.evdev.axis.max: max - min must be a finite number"),
+            std::string::npos)
+      << errors({"device.evdev.axis={code: ABS_X, min: -1e308, max: 1e308}"});
   EXPECT_NE(errors({"device.evdev.axis={code: ABS_X, min: 0, max: 1, rotary: true}"})
                 .find("device.evdev.axis.rotary: only with scale: resolution"),
             std::string::npos);
