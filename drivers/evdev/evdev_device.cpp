@@ -198,6 +198,10 @@ EvdevDevice::Drained EvdevDevice::drain() noexcept {
     const ReadStatus r = transport_->read(ev, d.error);
     if (r == ReadStatus::kEmpty) break;
     if (r == ReadStatus::kError) return d;
+    if (r == ReadStatus::kMalformed) {
+      c_[kMalformed].add();
+      continue;
+    }
     if (r == ReadStatus::kDropped) {
       c_[kDropped].add();
       // libevdev took the cut-off frame's axis value into its state, and its resync repeats

@@ -62,6 +62,7 @@ class EvdevDevice final : public Device {
     kSilent,
     kOtherEvents,
     kDrainLimit,
+    kMalformed,
     kCounterCount
   };
   struct Drained {
@@ -109,6 +110,8 @@ class EvdevDevice final : public Device {
        "ticks past device.evdev.liveness_ms without an axis event while a force was commanded"},
       {"other_events", K::kCount, "events of other axes, keys and buttons (ignored)"},
       {"drain_limit", K::kAnomaly, "ticks that stopped draining at the per-tick bound"},
+      {"malformed_messages", K::kAnomaly,
+       "loopback messages that were no event, skipped (a broken simulated device)"},
   }};
 };
 

@@ -12,12 +12,13 @@
 namespace hapticd::drivers::evdev {
 
 enum class ReadStatus : std::uint8_t {
-  kEvent,    // one event in `ev`
-  kEmpty,    // nothing pending
-  kDropped,  // events were lost (SYN_DROPPED): the events that follow are what differs
-             // between the events handed over so far and the kernel's state now (nothing, or
-             // ending with a SYN_REPORT)
-  kError,    // the device failed (errno in `error`; ENODEV when it is gone)
+  kEvent,      // one event in `ev`
+  kEmpty,      // nothing pending
+  kDropped,    // events were lost (SYN_DROPPED): the events that follow are what differs
+               // between the events handed over so far and the kernel's state now (nothing, or
+               // ending with a SYN_REPORT)
+  kError,      // the device failed (errno in `error`; ENODEV when it is gone)
+  kMalformed,  // the loopback only: a message that is no event, skipped (the driver counts it)
 };
 
 class EvdevTransport {

@@ -110,8 +110,12 @@ ReadStatus SocketTransport::read(wire::Event& ev, int& error) noexcept {
       error = n == 0 || errno == ECONNRESET ? ENODEV : errno;
       return ReadStatus::kError;
     }
-    const auto m = wire::decode({rx_.data(), static_cast<std::size_t>(n)});
-    if (!m) continue;  // not a message: the simulated device never sends one
+    // Only an event or an update's answer is decoded here: a kFacts would allocate its strings.
+    const auto type = static_cast<Type>(rx_[0]);
+    const auto m = type == Type::kEvent || type == Type::kStatus
+                       ? wire::decode({rx_.data(), static_cast<std::size_t>(n)})
+                       : std::nullopt;
+    if (!m) return ReadStatus::kMalformed;
     if (m->type == Type::kStatus && m->error != 0) {
       error = m->error;  // an update the device refused
       return ReadStatus::kError;
