@@ -221,6 +221,7 @@ EvdevDevice::Drained EvdevDevice::drain() noexcept {
     }
   }
   if (i == kMaxDrain) c_[kDrainLimit].add();
+  c_[kLibrary].set(transport_->library_messages());
   return d;
 }
 

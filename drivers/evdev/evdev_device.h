@@ -63,6 +63,7 @@ class EvdevDevice final : public Device {
     kOtherEvents,
     kDrainLimit,
     kMalformed,
+    kLibrary,
     kCounterCount
   };
   struct Drained {
@@ -112,6 +113,8 @@ class EvdevDevice final : public Device {
       {"drain_limit", K::kAnomaly, "ticks that stopped draining at the per-tick bound"},
       {"malformed_messages", K::kAnomaly,
        "loopback messages that were no event, skipped (a broken simulated device)"},
+      {"library_messages", K::kAnomaly,
+       "messages libevdev logged (counted, not printed): a device bug, a reader falling behind"},
   }};
 };
 

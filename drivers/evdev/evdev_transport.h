@@ -49,6 +49,10 @@ class EvdevTransport {
   // RT-safe: called every tick. The next event, without blocking.
   virtual ReadStatus read(wire::Event& ev, int& error) noexcept = 0;
 
+  // RT-safe. Messages the library behind the transport reported (libevdev's log), counted
+  // because nothing on the RT thread may print them.
+  virtual std::uint64_t library_messages() const noexcept { return 0; }
+
   // Not RT-safe. The effect emergency() stops (-1: none).
   virtual void set_emergency_effect(int id) noexcept = 0;
   // Async-signal-safe: only write(2) of the stop of that effect on the open descriptor.

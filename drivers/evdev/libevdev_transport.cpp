@@ -37,11 +37,11 @@ struct EvdevFree {
 using EvdevPtr = std::unique_ptr<libevdev, EvdevFree>;
 
 // libevdev reports what it finds wrong through a log function; on the RT thread nothing may
-// print, so its messages are only counted (a bug in the device or in libevdev's use).
-std::atomic<std::uint64_t> g_library_messages{0};
-void count_message(const libevdev*, enum libevdev_log_priority, void*, const char*, int,
+// print, so its messages are only counted (a bug in the device, a reader not keeping up) and
+// the count published as the driver's library_messages.
+void count_message(const libevdev*, enum libevdev_log_priority, void* data, const char*, int,
                    const char*, const char*, va_list) {
-  g_library_messages.fetch_add(1, std::memory_order_relaxed);
+  static_cast<std::atomic<std::uint64_t>*>(data)->fetch_add(1, std::memory_order_relaxed);
 }
 
 // The driver bound to the device behind the input device: its nearest ancestor in sysfs that
@@ -102,6 +102,7 @@ class LibevdevTransport final : public EvdevTransport {
   LibevdevTransport(io::UniqueFd fd, EvdevPtr dev, std::string path)
       : fd_(std::move(fd)), dev_(std::move(dev)), path_(std::move(path)) {
     effect_.type = FF_CONSTANT;
+    libevdev_set_device_log_function(dev_.get(), count_message, LIBEVDEV_LOG_INFO, &messages_);
   }
   ~LibevdevTransport() override { emergency_id_.store(-1); }
 
@@ -205,6 +206,10 @@ class LibevdevTransport final : public EvdevTransport {
     }
   }
 
+  std::uint64_t library_messages() const noexcept override {
+    return messages_.load(std::memory_order_relaxed);
+  }
+
   void set_emergency_effect(int id) noexcept override { emergency_id_.store(id); }
 
   void emergency() noexcept override {
@@ -235,6 +240,7 @@ class LibevdevTransport final : public EvdevTransport {
   ff_effect effect_{};
   bool syncing_ = false;
   std::atomic<int> emergency_id_{-1};
+  std::atomic<std::uint64_t> messages_{0};
 };
 
 std::string open_error(const std::string& path, int e) {
@@ -292,7 +298,6 @@ std::unique_ptr<EvdevTransport> open_libevdev(const EvdevSettings& s, InputListi
     throw DeviceError("evdev: libevdev on " + listing.path + ": " + base::errno_text(-rc));
   }
   EvdevPtr dev(raw);
-  libevdev_set_device_log_function(dev.get(), count_message, LIBEVDEV_LOG_ERROR, nullptr);
   if (const int rc = libevdev_set_clock_id(dev.get(), CLOCK_MONOTONIC); rc != 0) {
     throw DeviceError("evdev: EVIOCSCLOCKID on " + listing.path + ": " + base::errno_text(-rc));
   }

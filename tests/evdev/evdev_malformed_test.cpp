@@ -141,5 +141,17 @@ TEST(EvdevMalformed, AFloodIsDrainedAtTheBoundAndTheRestReadNextTick) {
   EXPECT_EQ(counter(*h.device, "superseded"), 398u);
 }
 
+// libevdev's complaints (an invalid slot, a double tracking id, a reader not keeping up after
+// SYN_DROPPED) cannot be printed on the RT thread: they show as the driver's counter.
+TEST(EvdevMalformed, WhatLibevdevLoggedIsTheDriversCounter) {
+  Hostile h;
+  h.device->configure();
+  h.device->enable();
+  h.script->library_messages = 2;
+  PositionSample s;
+  ASSERT_EQ(h.device->read(s), IoStatus::kOk);
+  EXPECT_EQ(counter(*h.device, "library_messages"), 2u);
+}
+
 }  // namespace
 }  // namespace hapticd::drivers::evdev

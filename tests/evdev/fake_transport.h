@@ -26,6 +26,7 @@ struct Script {
   std::vector<std::pair<int, int>> ff_writes;  // (code, value) written
   int uploads = 0, erases = 0;
   int next_id = 3;
+  std::uint64_t library_messages = 0;  // what libevdev would have logged
 };
 
 class FakeTransport final : public EvdevTransport {
@@ -70,6 +71,7 @@ class FakeTransport final : public EvdevTransport {
     ev = e;
     return status;
   }
+  std::uint64_t library_messages() const noexcept override { return s_->library_messages; }
   void set_emergency_effect(int) noexcept override {}
   void emergency() noexcept override {}
 
