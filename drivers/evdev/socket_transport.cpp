@@ -43,6 +43,12 @@ wire::Message SocketTransport::request(const wire::Message& m, Type answer) {
       throw DeviceError("evdev loopback: " + base::errno_text(errno));
     }
     const auto reply = wire::decode({rx_.data(), static_cast<std::size_t>(n)});
+    if (reply && reply->type == Type::kStatus && unanswered_ > 0) {
+      // The device answers in order: this is an earlier update's, not this request's.
+      --unanswered_;
+      if (reply->error != 0 && refused_ == 0) refused_ = reply->error;  // for the next read
+      continue;
+    }
     if (reply && reply->type == answer) return *reply;
   }
 }
@@ -93,7 +99,9 @@ int SocketTransport::erase(int id) noexcept {
 
 int SocketTransport::update(const wire::Effect& effect) noexcept {
   const std::size_t n = wire::encode_upload(effect, tx_);
-  return send_bytes(tx_.data(), n);
+  const int e = send_bytes(tx_.data(), n);
+  if (e == 0) ++unanswered_;
+  return e;
 }
 
 int SocketTransport::write_ff(int code, int value) noexcept {
@@ -102,6 +110,11 @@ int SocketTransport::write_ff(int code, int value) noexcept {
 }
 
 ReadStatus SocketTransport::read(wire::Event& ev, int& error) noexcept {
+  if (refused_ != 0) {  // an update refused while a request waited for its own answer
+    error = refused_;
+    refused_ = 0;
+    return ReadStatus::kError;
+  }
   while (true) {
     const ssize_t n = ::recv(fd_.get(), rx_.data(), rx_.size(), MSG_DONTWAIT);
     if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) return ReadStatus::kEmpty;
@@ -116,6 +129,7 @@ ReadStatus SocketTransport::read(wire::Event& ev, int& error) noexcept {
                        ? wire::decode({rx_.data(), static_cast<std::size_t>(n)})
                        : std::nullopt;
     if (!m) return ReadStatus::kMalformed;
+    if (m->type == Type::kStatus && unanswered_ > 0) --unanswered_;
     if (m->type == Type::kStatus && m->error != 0) {
       error = m->error;  // an update the device refused
       return ReadStatus::kError;

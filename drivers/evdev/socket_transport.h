@@ -33,7 +33,8 @@ class SocketTransport final : public EvdevTransport {
 
  private:
   // Sends `m` and waits for the answer of type `answer` (events before it are dropped: they
-  // precede what the request changes). Throws DeviceError on a time-out or a broken pair.
+  // precede what the request changes; so are the answers of updates still unanswered, which
+  // come first). Throws DeviceError on a time-out or a broken pair.
   wire::Message request(const wire::Message& m, wire::Type answer);
   int send_bytes(const std::uint8_t* data, std::size_t size) noexcept;
 
@@ -43,6 +44,8 @@ class SocketTransport final : public EvdevTransport {
   std::array<std::uint8_t, 32> tx_{};
   std::array<std::uint8_t, 32> stop_{};  // the emergency stop, prebuilt
   std::size_t stop_size_ = 0;
+  int unanswered_ = 0;  // updates sent whose kStatus has not been read yet
+  int refused_ = 0;     // an update's refusal a request passed over: the next read's error
 };
 
 }  // namespace hapticd::drivers::evdev

@@ -62,6 +62,34 @@ TEST(EvdevMalformed, LoopbackMessagesThatAreNoEventAreSkippedWithoutAllocating) 
   EXPECT_EQ(t.read(ev, error), ReadStatus::kEmpty);
 }
 
+// The device answers every update (EVIOCSFF) and every request in order; the driver waits
+// only for a request's. A request must take its own answer, not an earlier update's.
+TEST(EvdevMalformed, ARequestTakesItsOwnAnswerNotAnEarlierUpdates) {
+  int fds[2];
+  ASSERT_EQ(::socketpair(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC, 0, fds), 0);
+  SocketTransport t{io::UniqueFd(fds[0]), std::chrono::milliseconds(100)};
+  const io::UniqueFd peer{fds[1]};
+  ASSERT_EQ(t.update({0, 0x4000, 100, 0}), 0);
+  wire::Message status;
+  status.type = wire::Type::kStatus;
+  Bytes bytes;
+  wire::encode(status, bytes);
+  send(peer.get(), bytes);  // the update's answer: done
+  status.error = EBUSY;
+  wire::encode(status, bytes);
+  send(peer.get(), bytes);  // the grab's: held elsewhere
+  try {
+    t.grab(true);
+    ADD_FAILURE() << "the grab took the update's answer for its own";
+  } catch (const DeviceError& e) {
+    EXPECT_NE(std::string(e.what()).find("another process has grabbed"), std::string::npos)
+        << e.what();
+  }
+  wire::Event ev;
+  int error = 0;
+  EXPECT_EQ(t.read(ev, error), ReadStatus::kEmpty) << "no answer left over for a later tick";
+}
+
 struct Hostile {
   Hostile() {
     auto s = std::make_shared<EvdevSettings>();
