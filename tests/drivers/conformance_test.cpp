@@ -37,7 +37,7 @@ const Case kCases[] = {
 #if HAPTICD_WITH_HID
     {"hid", "config/hid-report.yaml"},
     // The simulated PID device's sample counter, so a sequence gap can be injected.
-    {"hid", "config/hid-pid.yaml", "device.hid.pid.sequence={usage_page: 0xff00, usage: 0x20}"},
+    {"hid", "config/hid-pid.yaml", {"device.hid.pid.sequence={usage_page: 0xff00, usage: 0x20}"}},
 #endif
 #if HAPTICD_WITH_CAN
     {"can", "config/can-cia402.yaml"},
@@ -50,8 +50,9 @@ const Case kCases[] = {
     // A bound on silence, so a device that stops answering is stale data (evdev's default has
     // none: a device held still is silent too); a full scale whose levels are exact binary
     // fractions (2^-11 N), so the forces the suite writes reach the device unrounded.
-    {"evdev", "config/evdev.yaml", "device.evdev.liveness_ms=100",
-     "device.evdev.force_full_scale=15.99951171875"},
+    {"evdev",
+     "config/evdev.yaml",
+     {"device.evdev.liveness_ms=100", "device.evdev.force_full_scale=15.99951171875"}},
 #endif
 };
 

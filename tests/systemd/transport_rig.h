@@ -57,7 +57,7 @@ struct SimulatedDevice {
 };
 
 // Waits (up to `timeout`) until `hapticctl -i NAME status` counts `ticks` ticks in contact;
-// the count reached.
+// returns the count read then (at least `ticks`, or less at the time-out).
 long wait_for_contact(const Instance& instance, long ticks,
                       std::chrono::milliseconds timeout = std::chrono::seconds(30));
 
