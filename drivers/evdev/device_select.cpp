@@ -4,10 +4,15 @@
 #include <array>
 #include <string_view>
 
+#include <yaml-cpp/yaml.h>
+
 #include "base/hex.h"
+#include "config/schema_reader.h"
 
 namespace hapticd::drivers::evdev {
 namespace {
+
+using config::schema::printable;
 
 std::string hex4(unsigned v) { return base::hex(v & 0xFFFFu, 4, base::HexCase::kLower); }
 
@@ -17,27 +22,32 @@ bool matches(const Selector& s, const InputListing& d) {
          (s.uniq.empty() || s.uniq == d.uniq);
 }
 
-// The select: mapping that picks `d` out of `all`: name and ids, then phys or uniq if needed.
+// The select: mapping that picks `d` out of `all`: name and ids, then uniq or phys if needed,
+// else the node's path. Written by yaml-cpp: a device names itself, and a name with a quote, a
+// backslash or a control character must still paste as the YAML that selects it.
 std::string select_keys(const InputListing& d, const std::vector<InputListing>& all) {
   Selector s;
   s.name = d.name;
   s.vendor_id = d.vendor_id;
   s.product_id = d.product_id;
-  std::string text = "{name: \"" + d.name + "\", vendor_id: " + hex4(d.vendor_id) +
-                     ", product_id: " + hex4(d.product_id);
-  if (matching(s, "", all).size() > 1 && !d.uniq.empty()) {
-    s.uniq = d.uniq;
-    text += ", uniq: \"" + d.uniq + "\"";
-  }
-  if (matching(s, "", all).size() > 1 && !d.phys.empty()) {
-    s.phys = d.phys;
-    text += ", phys: \"" + d.phys + "\"";
-  }
+  if (matching(s, "", all).size() > 1 && !d.uniq.empty()) s.uniq = d.uniq;
+  if (matching(s, "", all).size() > 1 && !d.phys.empty()) s.phys = d.phys;
+  YAML::Emitter out;
+  out << YAML::Flow << YAML::BeginMap;
+  const auto text = [&out](const char* key, const std::string& value) {
+    out << YAML::Key << key << YAML::Value << YAML::DoubleQuoted << value;
+  };
   if (matching(s, "", all).size() > 1) {
-    const std::string& path = d.links.empty() ? d.path : d.links.front();
-    return "{path: " + path + "}";
+    text("path", d.links.empty() ? d.path : d.links.front());
+  } else {
+    text("name", d.name);
+    out << YAML::Key << "vendor_id" << YAML::Value << hex4(d.vendor_id);
+    out << YAML::Key << "product_id" << YAML::Value << hex4(d.product_id);
+    if (!s.uniq.empty()) text("uniq", s.uniq);
+    if (!s.phys.empty()) text("phys", s.phys);
   }
-  return text + "}";
+  out << YAML::EndMap;
+  return out.c_str();
 }
 
 std::string axes_text(const InputListing& d) {
@@ -95,9 +105,9 @@ Selection select_one(const Selector& s, const std::string& resolved_path,
   if (found.size() == 1) return {found.front(), ""};
   std::string there;
   for (const InputListing& d : found.empty() ? all : found) {
-    there += "\n  " + d.path + " \"" + d.name + "\" " + hex4(d.vendor_id) + ":" +
-             hex4(d.product_id) + (d.phys.empty() ? "" : " phys " + d.phys) +
-             (d.uniq.empty() ? "" : " uniq " + d.uniq);
+    there += "\n  " + d.path + " \"" + printable(d.name) + "\" " + hex4(d.vendor_id) + ":" +
+             hex4(d.product_id) + (d.phys.empty() ? "" : " phys " + printable(d.phys)) +
+             (d.uniq.empty() ? "" : " uniq " + printable(d.uniq));
   }
   if (found.empty()) {
     return {std::nullopt,
@@ -118,9 +128,9 @@ std::string format_listing(const std::vector<InputListing>& all, int unreadable)
       continue;
     }
     const std::optional<FfDriver> ff = guess_ff_driver(d);
-    out += "  " + d.path + "  \"" + d.name + "\"  " + hex4(d.vendor_id) + ":" + hex4(d.product_id) +
-           (d.phys.empty() ? "" : "  phys " + d.phys) + (d.uniq.empty() ? "" : "  uniq " + d.uniq) +
-           "\n";
+    out += "  " + d.path + "  \"" + printable(d.name) + "\"  " + hex4(d.vendor_id) + ":" +
+           hex4(d.product_id) + (d.phys.empty() ? "" : "  phys " + printable(d.phys)) +
+           (d.uniq.empty() ? "" : "  uniq " + printable(d.uniq)) + "\n";
     out += "    kernel driver " +
            (d.kernel_driver.empty() ? std::string("(none)") : d.kernel_driver) +
            (ff ? std::string(" (ff_driver: ") + to_string(*ff) + ")" : std::string()) +
