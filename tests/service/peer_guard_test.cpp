@@ -10,11 +10,11 @@
 
 #include "config/config_loader.h"
 #include "drivers/device.h"
+#include "process.h"
 #include "service/config_source.h"
 #include "service/commands/peer_endpoint.h"
 #include "service/commands/peer_guard.h"
 #if HAPTICD_WITH_CAN
-#include "process.h"
 #include "service/commands/peer_can_listen.h"
 #endif
 
