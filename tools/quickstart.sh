@@ -201,11 +201,13 @@ stage_tsan() {
     -DHAPTICD_WITH_HID=OFF -DHAPTICD_WITH_EVDEV=OFF \
     -- hapticd hapticd_loop_tests hapticd_telemetry_tests hapticd_service_tests \
     hapticd_service_unit_tests || return
-  # Not the random-signal trial: TSan intercepts signals and defers them to its own safe
-  # points, and one trial in three loaded runs lost a start-up signal that way (never in the
-  # main or asan stage, which run it too). This stage is for data races.
+  # Not the two tests of a signal at start-up: TSan intercepts signals and defers them to its
+  # own safe points, and one random-signal trial in three loaded runs lost a start-up signal
+  # that way, and one stop during start-up in a Debian 12 check ended the daemon by the
+  # deferred SIGTERM itself (exit by signal, not 0): never in the main or asan stage, which
+  # run both. This stage is for data races.
   cd build-tsan && ctest --output-on-failure -j "$(nproc)" -L "^(loop|telemetry|service)$" \
-    -E "^FaultInjection.RandomSignalsAtRandomMomentsAlwaysEndSafely$"
+    -E "^(FaultInjection.RandomSignalsAtRandomMomentsAlwaysEndSafely|CliSignals.AStopDuringStartUpNeverEnablesOutput)$"
 }
 
 run_stage main stage_main
