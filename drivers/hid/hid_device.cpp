@@ -221,8 +221,8 @@ IoStatus HidDevice::on_write(double force) noexcept {
 }
 
 HidCounters HidDevice::hid_counts() const noexcept {
-  return {c_[kInputReports].value(),  c_[kSuperseded].value(), c_[kStateReports].value(),
-          c_[kUnknownId].value(),     c_[kTooShort].value(),   c_[kTooLong].value(),
+  return {c_[kInputReports].value(),  c_[kSuperseded].value(),   c_[kStateReports].value(),
+          c_[kUnknownId].value(),     c_[kTooShort].value(),     c_[kTooLong].value(),
           c_[kOutputReports].value(), c_[kOutQueueFull].value(), c_[kDrainLimit].value(),
           c_[kHeld].value()};
 }

@@ -1,6 +1,6 @@
-// `hapticd verify`: confirms the gate's passivity bound by measurement (Roberts, Moore & Colgate). The whole
-// loop — sim device, controller, servo loop in freerun — is driven by an imposed motion in
-// contact, x_k = offset + A cos(theta k) with constant velocity inside each period; the
+// `hapticd verify`: confirms the gate's passivity bound by measurement (Roberts, Moore & Colgate).
+// The whole loop — sim device, controller, servo loop in freerun — is driven by an imposed motion
+// in contact, x_k = offset + A cos(theta k) with constant velocity inside each period; the
 // cycle-averaged power the operator delivers is affine in the device damping b, and its zero
 // is the damping below which the device can hand net energy to the operator at that
 // frequency. The maximum over frequencies up to Nyquist is the measured b_req.
@@ -18,7 +18,8 @@ struct SweepPoint {
 };
 
 struct VerifyResult {
-  double analytic_required_damping = 0.0;  // Roberts-Moore-Colgate eq. 45 (eta is not measurable here)
+  double analytic_required_damping =
+      0.0;  // Roberts-Moore-Colgate eq. 45 (eta is not measurable here)
   double analytic_worst_frequency_hz = 0.0;
   double measured_required_damping = 0.0;
   double worst_frequency_hz = 0.0;  // where the measured maximum was found

@@ -11,9 +11,9 @@
 #include "config/config_loader.h"
 #include "drivers/device.h"
 #include "process.h"
-#include "service/config_source.h"
 #include "service/commands/peer_endpoint.h"
 #include "service/commands/peer_guard.h"
+#include "service/config_source.h"
 #if HAPTICD_WITH_CAN
 #include "service/commands/peer_can_listen.h"
 #endif

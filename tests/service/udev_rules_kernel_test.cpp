@@ -14,8 +14,8 @@
 #include "gpio_sim_chip.h"
 #include "process.h"
 #include "pwm_sim.h"
-#include "service/config_source.h"
 #include "service/commands/udev_rules.h"
+#include "service/config_source.h"
 #include "slcan_tty.h"
 
 namespace hapticd::service {

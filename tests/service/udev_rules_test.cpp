@@ -10,8 +10,8 @@
 
 #include "config/config_loader.h"
 #include "process.h"
-#include "service/config_source.h"
 #include "service/commands/udev_rules.h"
+#include "service/config_source.h"
 
 namespace hapticd::service {
 namespace {

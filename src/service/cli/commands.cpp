@@ -44,7 +44,6 @@ std::string check_duration(const std::string& text) {
   return "";
 }
 
-
 // A command's options live as long as the app: each registration owns its own.
 template <typename T>
 std::shared_ptr<T> options() {
@@ -78,7 +77,8 @@ Command run(CLI::App& app) {
   add_config_options(c, o->run.config);
   c->add_option("--duration", o->duration, "Stop after this many seconds (default: until a signal)")
       ->check(seconds());
-  c->add_option("--log", o->run.log_path, "Write the binary tick log here (overrides telemetry.log)");
+  c->add_option("--log", o->run.log_path,
+                "Write the binary tick log here (overrides telemetry.log)");
   c->add_option("--summary-json", o->run.summary_json_path,
                 "Also write the run summary as one JSON object to this file");
   c->add_option("--socket", o->run.socket_path,
@@ -136,9 +136,10 @@ Command replay(CLI::App& app) {
       "when its gate fails). Reads every segment of a rotated log.");
   c->add_option("LOG", o->log_path, "Tick log (its first segment's name)")->required();
   add_config_options(c, o->other);
-  c->get_option("--config")->description(
-      "Another configuration to replay the log through (what-if); --set alone changes the "
-      "log's own");
+  c->get_option("--config")
+      ->description(
+          "Another configuration to replay the log through (what-if); --set alone changes the "
+          "log's own");
   c->add_option("--out", o->out_path,
                 "Write the force series as CSV: tick, position, force_logged, force_replayed "
                 "(and force_other)");

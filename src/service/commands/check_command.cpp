@@ -4,8 +4,8 @@
 #include "gate/gate_report_format.h"
 #include "gate/number_format.h"
 #include "service/exit_codes.h"
-#include "service/run/gate_derate.h"
 #include "service/result_output.h"
+#include "service/run/gate_derate.h"
 #include "wiring/registry.h"
 
 namespace hapticd::service {

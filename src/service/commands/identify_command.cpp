@@ -15,10 +15,10 @@
 #include "config/config_loader.h"
 #include "gate/number_format.h"
 #include "loop/rt_setup.h"
-#include "service/run/device_session.h"
-#include "service/exit_codes.h"
 #include "service/commands/identify_run.h"
+#include "service/exit_codes.h"
 #include "service/result_output.h"
+#include "service/run/device_session.h"
 #include "service/run/run_support.h"
 #include "wiring/registry.h"
 

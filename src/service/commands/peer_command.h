@@ -10,8 +10,8 @@
 #include <optional>
 #include <string>
 
-#include "service/config_source.h"
 #include "service/commands/peer_endpoint.h"
+#include "service/config_source.h"
 #include "service/stop_signals.h"
 
 namespace hapticd::service {

@@ -16,9 +16,9 @@
 #include <thread>
 
 #include "config/config_loader.h"
+#include "service/exit_codes.h"
 #include "service/run/counters_report.h"
 #include "service/run/crash_guard.h"
-#include "service/exit_codes.h"
 
 namespace hapticd::service {
 namespace {

@@ -11,10 +11,10 @@
 #include "config/config_loader.h"
 #include "gate/gate_report_format.h"
 #include "gate/number_format.h"
-#include "service/run/counters_report.h"
 #include "service/exit_codes.h"
-#include "service/run/gate_derate.h"
 #include "service/result_output.h"
+#include "service/run/counters_report.h"
+#include "service/run/gate_derate.h"
 #include "telemetry/log_path.h"
 
 namespace hapticd::service {
