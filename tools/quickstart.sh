@@ -210,9 +210,34 @@ stage_tsan() {
     -E "^(FaultInjection.RandomSignalsAtRandomMomentsAlwaysEndSafely|CliSignals.AStopDuringStartUpNeverEnablesOutput)$"
 }
 
+# What failed, again at the very end: a log read from its tail (CI keeps only the last part)
+# still names each failed test and its failure, not only the stage. From ctest's own record of
+# its last run: the failed tests' names, and for each the lines of its output that say why
+# (GoogleTest's failures, a command's error), at most 12 a test.
+failure_report() {  # STAGE DIR
+  local failed_list=$2/Testing/Temporary/LastTestsFailed.log
+  [[ -s $failed_list ]] || return 0
+  echo "quickstart: stage $1: failed tests (whole output above, and in $2/Testing/Temporary/LastTest.log):"
+  awk -F: 'NR == FNR { sub(/^[0-9]+:/, ""); sub(/ .*/, ""); want[$0] = 1; next }
+    /^[0-9]+\/[0-9]+ Test: / { name = $0; sub(/^[^:]*: /, "", name); sub(/ .*/, "", name)
+                               on = (name in want); n = 0; if (on) print "  " name; next }
+    on && /<end of output>/ { on = 0 }
+    on && n < 12 && /(Failure|FAILED|[Ee]rror|Expected|Which is|Value of|Actual|timed? ?out|refused)/ {
+      print "    " substr($0, 1, 200); n++ }' "$failed_list" "$2/Testing/Temporary/LastTest.log"
+}
+
 run_stage main stage_main
 run_stage asan stage_asan
 run_stage tsan stage_tsan
+if ((${#failed[@]})); then
+  for s in "${failed[@]}"; do
+    case $s in
+      main) failure_report main build ;;
+      asan) failure_report asan build-asan-clang ;;
+      tsan) failure_report tsan build-tsan ;;
+    esac
+  done
+fi
 echo "quickstart: stage  time    result"
 printf 'quickstart: %s\n' "${report[@]}"
 if ((${#failed[@]})); then
