@@ -213,7 +213,8 @@ stage_tsan() {
 # What failed, again at the very end: a log read from its tail (CI keeps only the last part)
 # still names each failed test and its failure, not only the stage. From ctest's own record of
 # its last run: the failed tests' names, and for each the lines of its output that say why
-# (GoogleTest's failures, a command's error), at most 12 a test.
+# (from the first that names a failure: GoogleTest's file:line, a command's error), at most
+# 12 a test.
 failure_report() {  # STAGE DIR
   local failed_list=$2/Testing/Temporary/LastTestsFailed.log
   [[ -s $failed_list ]] || return 0
@@ -222,8 +223,8 @@ failure_report() {  # STAGE DIR
     /^[0-9]+\/[0-9]+ Test: / { name = $0; sub(/^[^:]*: /, "", name); sub(/ .*/, "", name)
                                on = (name in want); n = 0; if (on) print "  " name; next }
     on && /<end of output>/ { on = 0 }
-    on && n < 12 && /(Failure|FAILED|[Ee]rror|Expected|Which is|Value of|Actual|timed? ?out|refused)/ {
-      print "    " substr($0, 1, 200); n++ }' "$failed_list" "$2/Testing/Temporary/LastTest.log"
+    on && !n && /(^\/.*:[0-9]+$|Failure|FAILED|[Ee]rror|Expected|timed? ?out|refused)/ { n = 1 }
+    on && n && n <= 12 && !/^$/ { print "    " substr($0, 1, 200); n++ }' "$failed_list" "$2/Testing/Temporary/LastTest.log"
 }
 
 run_stage main stage_main
