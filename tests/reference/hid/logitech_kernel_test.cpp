@@ -112,10 +112,11 @@ TEST(LogitechWheel, WhatAConstantForceBecomesOnTheWire) {
   for (int level : {0x7fff, 0x4000, 0x2000, 0x0100, 0x0080, 0, -0x0100, -0x4000, -0x7fff}) {
     const std::int64_t sent = now_ns();
     update(w.fd, e, level);
-    // The wheel's thread stamps a report when it takes it: one the kernel sent for the level
-    // before can be taken after this upload when the emulator stalls that thread (seen once in
-    // a Debian 12 run: 0x2000 met 0x4000's X first). This level's report is the first after
-    // the upload that carries its X; a level that never becomes its X fails here.
+    // A report with the level before's X can still come after this upload: seen once in a
+    // Debian 12 run (0x2000 met 0x4000's X first, all reports within 4 ms), whether the
+    // wheel's thread, stalled by the emulator, took it late or the kernel sent it twice. This
+    // level's report is the first after the upload that carries its X; a level that never
+    // becomes its X fails here, and nothing may follow it but its own X.
     const int want = level >> 8;  // the memless core keeps the level's top 8 bits
     std::vector<std::pair<int, std::int64_t>> seen;
     const auto has_want = [&] {
