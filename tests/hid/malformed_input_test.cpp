@@ -144,47 +144,6 @@ TEST(HidMalformed, RandomReportsNeverCrashTheSimulatedFirmware) {
   }
 }
 
-TEST(HidMalformed, AFiniteEffectThatIsNotRestartedRunsOut) {
-  const config::Config cfg = testing::load_example("hid-pid.yaml");  // 100 ms at 1 kHz
-  auto fw = sim::hid::make_firmware(cfg, 0);
-  const PidLayout l =
-      *find_pid_layout(*parse_report_descriptor(fw->descriptor()).descriptor, kGenericDesktopX)
-           .layout;
-  const sim::hid::HidFirmware::Send ignore = [](std::span<const std::uint8_t>) {};
-  const auto out = [&](const ReportRef& ref, auto fill) {
-    Bytes r = make_report(ref, true);
-    fill(std::span<std::uint8_t>(r).subspan(1));
-    fw->on_output(r, ignore);
-  };
-  Bytes create = make_report(l.create_effect, true);
-  choose(std::span<std::uint8_t>(create).subspan(1), l.ce_constant);
-  ASSERT_EQ(fw->on_set_feature(create, ignore), 0);
-  out(l.set_effect, [&](auto d) {
-    set_slot(d, l.se_block, 1);
-    choose(d, l.se_constant);
-    set_slot(d, l.se_duration, 100);
-    set_slot(d, l.se_gain, 255);
-    set_slot(d, l.se_direction, 9000);
-  });
-  out(l.effect_operation, [&](auto d) {
-    set_slot(d, l.eo_block, 1);
-    choose(d, l.eo_start);
-  });
-  out(l.device_control, [&](auto d) { choose(d, l.dc_enable); });
-  const auto force = [&](std::int64_t m) {
-    out(l.set_constant, [&](auto d) {
-      set_slot(d, l.sc_block, 1);
-      set_slot(d, l.sc_magnitude, m);
-    });
-  };
-  force(5000);
-  EXPECT_DOUBLE_EQ(fw->applied_force(), 5.0);
-  for (int i = 0; i < 99; ++i) force(5000);
-  EXPECT_DOUBLE_EQ(fw->applied_force(), 5.0) << "it plays for its whole 100 ms";
-  force(5000);
-  EXPECT_DOUBLE_EQ(fw->applied_force(), 0.0) << "then it has run out";
-}
-
 // The paths the conformance suite's loop never meets, on the tick: malformed reports of every
 // kind counted, samples superseded, then a device that takes no more output reports until the
 // full queue faults it. Not one allocation on the way.

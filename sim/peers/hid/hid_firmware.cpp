@@ -50,7 +50,7 @@ void HidFirmware::hold(double force) noexcept {
 bool HidFirmware::check_watchdog(std::chrono::steady_clock::time_point now) noexcept {
   const double silent_ms = std::chrono::duration<double, std::milli>(now - last_heard_).count();
   const double limit = watchdog_ms();
-  if (!output_on() || limit <= 0.0 || silent_ms <= limit) return false;
+  if (!amplifier_on() || limit <= 0.0 || silent_ms <= limit) return false;
   lose_host();
   trips_.fetch_add(1);
   return true;

@@ -56,7 +56,7 @@ class HidFirmware {
   // Any thread: what the person feels at once when the device vanishes (the peer thread
   // calls lose_host() when it next runs).
   void vanish() noexcept { felt_.vanish(); }
-  // Any thread.
+  // Any thread: what the person feels (zero and off at once after vanish()).
   double applied_force() const noexcept { return felt_.force(); }
   bool output_on() const noexcept { return felt_.on(); }
   const Plant& plant() const noexcept { return axis_.plant(); }
@@ -76,6 +76,11 @@ class HidFirmware {
   HidFirmware(const config::Config& cfg, int link_delay_samples);
   // The amplifier; switching drops the held force to zero.
   void set_output(bool on) noexcept;
+  // Peer thread: whether the firmware has its amplifier on, what its reports say. Not
+  // output_on(): a vanish() from another thread zeroes what is felt at once, and a state report
+  // built before this thread sees the link gone must not say the amplifier went off by itself
+  // (the host would read a device fault where the wire was cut).
+  bool amplifier_on() const noexcept { return axis_.output_on(); }
   // Holds `force` (zero while off) and advances the plant one period.
   void step(double force) noexcept;
   // Holds `force` from now on without a step: what plays changed between two commands.

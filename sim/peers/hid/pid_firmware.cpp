@@ -64,7 +64,7 @@ class PidFirmware final : public HidFirmware {
     if (is_report(r, l_.set_constant, l_.numbered)) {
       const auto d = data_of(r, l_.set_constant, l_.numbered);
       if (Effect* e = effect(get_slot(d, l_.sc_block))) e->magnitude = get_slot(d, l_.sc_magnitude);
-      if (output_on()) {
+      if (amplifier_on()) {
         step(force());
         answer(send);
       }
@@ -88,7 +88,7 @@ class PidFirmware final : public HidFirmware {
     }
     // The amplifier follows every change of what plays at once, not only at the next Set
     // Constant Force: a PID host (hid-pidff) sets the magnitude before it starts the effect.
-    if (output_on() && !is_report(r, l_.set_constant, l_.numbered)) hold(force());
+    if (amplifier_on() && !is_report(r, l_.set_constant, l_.numbered)) hold(force());
     send_state(send);
   }
 
@@ -173,7 +173,7 @@ class PidFirmware final : public HidFirmware {
     }
     if (chosen(d, l_.dc_reset)) effects_.fill({});
     if (chosen(d, l_.dc_disable) || chosen(d, l_.dc_reset)) set_output(false);
-    if (chosen(d, l_.dc_enable) && !output_on() && !device_fault()) {
+    if (chosen(d, l_.dc_enable) && !amplifier_on() && !device_fault()) {
       set_output(true);
       send_state(send);
       answer(send);  // enabled: report the state at rest
@@ -218,7 +218,7 @@ class PidFirmware final : public HidFirmware {
         std::any_of(effects_.begin(), effects_.end(), [](const Effect& e) { return e.playing; });
     const auto d = data_of(std::span<std::uint8_t>(state_), l_.state, l_.numbered);
     // A faulted device turns its actuators off, and says why where it can: its safety switch.
-    set_slot(d, l_.st_actuators_enabled, output_on() && !device_fault() ? 1 : 0);
+    set_slot(d, l_.st_actuators_enabled, amplifier_on() && !device_fault() ? 1 : 0);
     set_slot(d, l_.st_safety_switch, device_fault() ? 0 : 1);
     set_slot(d, l_.st_power, 1);
     set_slot(d, l_.st_playing, playing ? 1 : 0);

@@ -32,7 +32,7 @@ class ReportFirmware final : public HidFirmware {
     OutputValues v;
     if (!decode_output(report, l_.output, v)) return;  // not ours: firmware ignores it
     field_on_ = v.enable;
-    const bool was_on = output_on();
+    const bool was_on = amplifier_on();
     // A keep-alive that stopped moving is a host that is stuck: no force this period.
     const bool stuck = l_.output.keepalive && have_keepalive_ && v.keepalive == keepalive_;
     keepalive_ = v.keepalive;
@@ -55,7 +55,7 @@ class ReportFirmware final : public HidFirmware {
     if (l_.enable_feature && report[0] == l_.enable_feature->report_id) {
       const auto v = decode_feature(report, *l_.enable_feature);
       if (!v) return EPIPE;
-      const bool was_on = output_on();
+      const bool was_on = amplifier_on();
       feature_on_ = *v == l_.enable_feature->on;
       if (update_output() && !was_on) answer(send);
       return 0;
@@ -84,7 +84,7 @@ class ReportFirmware final : public HidFirmware {
   // The amplifier follows the enable field and the enable feature; true while it is on.
   bool update_output() {
     const bool on = field_on_ && feature_on_;
-    if (on != output_on()) set_output(on);
+    if (on != amplifier_on()) set_output(on);
     return on;
   }
 
