@@ -154,20 +154,23 @@ failed=()
 report=()
 # A stage runs in a subshell whose status is tested, where bash ignores `set -e`: each step
 # that must stop its stage says `|| return` (a failed build must not go on to run old tests).
+# run_stage NAME DIR FUNCTION: FUNCTION DIR builds in DIR and runs its tests there. ctest keeps
+# an earlier run's list of failed tests when a later run passes, so it goes first: what
+# failure_report reads is this run's.
 run_stage() {
-  local name=$1 start=$SECONDS status=0
-  shift
+  local name=$1 dir=$2 start=$SECONDS status=0
   [[ " $stages " == *" $name "* ]] || return 0
   echo "quickstart: === stage $name ==="
-  ("$@") || status=$?
+  rm -f "$dir/Testing/Temporary/LastTestsFailed.log"
+  ("$3" "$dir") || status=$?
   report+=("$(printf '%-5s %4d s  %s' "$name" $((SECONDS - start)) \
     "$([[ $status -eq 0 ]] && echo ok || echo "FAILED ($status)")")")
-  [[ $status -eq 0 ]] || failed+=("$name")
+  [[ $status -eq 0 ]] || failed+=("$name $dir")
 }
 
 stage_main() {
-  configure_and_build build -DCMAKE_BUILD_TYPE=Release || return
-  cd build && ctest --output-on-failure -j "$(nproc)"
+  configure_and_build "$1" -DCMAKE_BUILD_TYPE=Release || return
+  cd "$1" && ctest --output-on-failure -j "$(nproc)"
 }
 # clang, because libFuzzer ships with it: one instrumented build serves both the suite under
 # the sanitizers and the fuzz targets (fuzz/README.md), where two builds of the same code
@@ -179,7 +182,7 @@ stage_asan() {
     echo "quickstart: HAPTICD_FUZZ=0: fuzz targets skipped on purpose"
     fuzz=OFF
   fi
-  CC=clang CXX=clang++ configure_and_build build-asan-clang -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  CC=clang CXX=clang++ configure_and_build "$1" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -gline-tables-only -DNDEBUG" \
     -DHAPTICD_SANITIZE=address -DHAPTICD_FUZZ=$fuzz -DHAPTICD_BUILD_BENCHMARKS=OFF \
     -DHAPTICD_BUILD_KERNEL_TESTS=OFF || return
@@ -189,13 +192,13 @@ stage_asan() {
   # runs both, and a sanitizer finds nothing in them. Nor the coupling designs end to end
   # (labels design and slow: 20 s and 50 s of CPU in Release, SDP solves and long simulated
   # `verify` runs): the analysis tests run the design's code, one whole design included.
-  cd build-asan-clang && ctest --output-on-failure -j "$(nproc)" -LE "^(layering|plot|design|slow)$"
+  cd "$1" && ctest --output-on-failure -j "$(nproc)" -LE "^(layering|plot|design|slow)$"
 }
 # Without the CAN, GPIO, HID and evdev drivers: the loop, telemetry and service tests run the sim
 # device, so those drivers' threads are not exercised here (their own tests run in main and
 # asan), and leaving them out takes a fifth of this stage's build (141 steps to 111).
 stage_tsan() {
-  configure_and_build build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  configure_and_build "$1" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -g1 -DNDEBUG" -DHAPTICD_SANITIZE=thread \
     -DHAPTICD_BUILD_BENCHMARKS=OFF -DHAPTICD_WITH_CAN=OFF -DHAPTICD_WITH_GPIO=OFF \
     -DHAPTICD_WITH_HID=OFF -DHAPTICD_WITH_EVDEV=OFF \
@@ -206,7 +209,7 @@ stage_tsan() {
   # that way, and one stop during start-up in a Debian 12 check ended the daemon by the
   # deferred SIGTERM itself (exit by signal, not 0): never in the main or asan stage, which
   # run both. This stage is for data races.
-  cd build-tsan && ctest --output-on-failure -j "$(nproc)" -L "^(loop|telemetry|service)$" \
+  cd "$1" && ctest --output-on-failure -j "$(nproc)" -L "^(loop|telemetry|service)$" \
     -E "^(FaultInjection.RandomSignalsAtRandomMomentsAlwaysEndSafely|CliSignals.AStopDuringStartUpNeverEnablesOutput)$"
 }
 
@@ -227,22 +230,16 @@ failure_report() {  # STAGE DIR
     on && n && n <= 12 && !/^$/ { print "    " substr($0, 1, 200); n++ }' "$failed_list" "$2/Testing/Temporary/LastTest.log"
 }
 
-run_stage main stage_main
-run_stage asan stage_asan
-run_stage tsan stage_tsan
-if ((${#failed[@]})); then
-  for s in "${failed[@]}"; do
-    case $s in
-      main) failure_report main build ;;
-      asan) failure_report asan build-asan-clang ;;
-      tsan) failure_report tsan build-tsan ;;
-    esac
-  done
-fi
+run_stage main build stage_main
+run_stage asan build-asan-clang stage_asan
+run_stage tsan build-tsan stage_tsan
+for s in ${failed[@]+"${failed[@]}"}; do
+  failure_report $s  # "NAME DIR": no stage name or directory has a space
+done
 echo "quickstart: stage  time    result"
 printf 'quickstart: %s\n' "${report[@]}"
 if ((${#failed[@]})); then
-  echo "quickstart: FAILED: ${failed[*]}" >&2
+  echo "quickstart: FAILED: ${failed[*]%% *}" >&2
   exit 1
 fi
 echo "quickstart: every stage passed"

@@ -118,10 +118,11 @@ TEST(LogitechWheel, WhatAConstantForceBecomesOnTheWire) {
     // level's report is the first after the upload that carries its X; a level that never
     // becomes its X fails here, and nothing may follow it but its own X.
     const int want = level >> 8;  // the memless core keeps the level's top 8 bits
+    const auto is_want = [&](const std::pair<int, std::int64_t>& r) { return r.first == want; };
     std::vector<std::pair<int, std::int64_t>> seen;
     const auto has_want = [&] {
       seen = w.xs_after(sent);
-      return std::any_of(seen.begin(), seen.end(), [&](const auto& r) { return r.first == want; });
+      return std::any_of(seen.begin(), seen.end(), is_want);
     };
     if (!wait_until(has_want, std::chrono::seconds(2))) {
       std::string xs;
@@ -130,9 +131,7 @@ TEST(LogitechWheel, WhatAConstantForceBecomesOnTheWire) {
                     << "; the reports after its upload:" << (xs.empty() ? " none" : xs);
       continue;
     }
-    const auto at = std::find_if(seen.begin(), seen.end(), [&](const auto& r) {
-                      return r.first == want;
-                    })->second;
+    const auto at = std::find_if(seen.begin(), seen.end(), is_want)->second;
     delays_ms.push_back((at - sent) * 1e-6);
     std::cout << " " << level << "->" << want;
     EXPECT_EQ(w.last_x().first, want) << "nothing after it but its own X";
