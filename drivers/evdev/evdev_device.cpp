@@ -271,10 +271,13 @@ IoStatus EvdevDevice::hold(PositionSample& out) noexcept {
   return IoStatus::kOk;
 }
 
+// Counts only what the kernel took: a refused update is the run's transport fault, not a level
+// the device plays.
 int EvdevDevice::set_level(std::int16_t level) noexcept {
   effect_.level = level;
-  c_[kEffectUpdates].add();
-  return transport_->update(effect_);
+  const int e = transport_->update(effect_);
+  if (e == 0) c_[kEffectUpdates].add();
+  return e;
 }
 
 IoStatus EvdevDevice::on_write(double force) noexcept {

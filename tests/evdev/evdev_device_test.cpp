@@ -7,11 +7,14 @@
 #include <algorithm>
 #include <thread>
 
+#include "device_counter.h"
 #include "drivers/evdev/evdev_device.h"
 #include "fake_transport.h"
 
 namespace hapticd::drivers::evdev {
 namespace {
+
+using hapticd::testing::counter_value;
 
 using testing::FakeTransport;
 using testing::Script;
@@ -116,11 +119,7 @@ TEST(EvdevDevice, EventsLostAreCountedAndTheResyncedStateIsUsed) {
   PositionSample s;
   ASSERT_EQ(r.device->read(s), IoStatus::kOk);
   EXPECT_DOUBLE_EQ(s.position, 0.035);
-  std::uint64_t dropped = 0;
-  for (const base::Counter& c : r.device->counters()) {
-    if (c.name() == "syn_dropped") dropped = c.value();
-  }
-  EXPECT_EQ(dropped, 1u);
+  EXPECT_EQ(counter_value(*r.device, "syn_dropped"), 1u);
 }
 
 // libevdev hands an event over only after taking it into its own state, and its resync after
@@ -164,6 +163,20 @@ TEST(EvdevDevice, AnUnpluggedDeviceIsATransportFaultSaidSo) {
   EXPECT_EQ(r.device->read(s), IoStatus::kTransportFault);
   EXPECT_NE(r.device->describe_fault().find("the device is gone"), std::string::npos)
       << r.device->describe_fault();
+}
+
+// effect_updates is what the device was told: a level the kernel refused is not one of them.
+TEST(EvdevDevice, AnUpdateTheKernelRefusesIsATransportFaultAndNoUpdate) {
+  Rig r;
+  r.device->configure();
+  r.device->enable();
+  ASSERT_EQ(r.device->write(1.0), IoStatus::kOk);
+  const std::uint64_t taken = counter_value(*r.device, "effect_updates");
+  EXPECT_GT(taken, 0u);
+  r.script->update_error = EIO;
+  EXPECT_EQ(r.device->write(2.0), IoStatus::kTransportFault);
+  EXPECT_EQ(counter_value(*r.device, "effect_updates"), taken) << "the refused level counted";
+  EXPECT_FALSE(r.device->describe_fault().empty());
 }
 
 TEST(EvdevDevice, AGrabHeldElsewhereRefusesTheEnableAndLeavesNothingPlaying) {

@@ -9,6 +9,7 @@
 #include <string_view>
 
 #include "alloc_counter.h"
+#include "device_counter.h"
 #include "drivers/evdev/evdev_device.h"
 #include "drivers/evdev/socket_transport.h"
 #include "fake_transport.h"
@@ -16,15 +17,9 @@
 namespace hapticd::drivers::evdev {
 namespace {
 
-using Bytes = std::vector<std::uint8_t>;
+using hapticd::testing::counter_value;
 
-std::uint64_t counter(const Device& d, std::string_view name) {
-  for (const base::Counter& c : d.counters()) {
-    if (c.name() == name) return c.value();
-  }
-  ADD_FAILURE() << "no counter " << name;
-  return 0;
-}
+using Bytes = std::vector<std::uint8_t>;
 
 void send(int fd, const Bytes& b) {
   ASSERT_EQ(::send(fd, b.data(), b.size(), 0), static_cast<ssize_t>(b.size()));
@@ -142,10 +137,10 @@ TEST(EvdevMalformed, AHostileEventStreamIsCountedAndReadWithoutAllocating) {
   EXPECT_DOUBLE_EQ(s.position, 0.05) << "INT_MAX is the range's maximum";
   EXPECT_EQ(written, IoStatus::kOk);
   EXPECT_EQ(h.script->levels.back(), kLevelMax);
-  EXPECT_EQ(counter(*h.device, "syn_dropped"), 100u);
-  EXPECT_EQ(counter(*h.device, "other_events"), 3u);
-  EXPECT_EQ(counter(*h.device, "malformed_messages"), 1u);
-  EXPECT_EQ(counter(*h.device, "axis_events"), 1u);
+  EXPECT_EQ(counter_value(*h.device, "syn_dropped"), 100u);
+  EXPECT_EQ(counter_value(*h.device, "other_events"), 3u);
+  EXPECT_EQ(counter_value(*h.device, "malformed_messages"), 1u);
+  EXPECT_EQ(counter_value(*h.device, "axis_events"), 1u);
 }
 
 TEST(EvdevMalformed, AFloodIsDrainedAtTheBoundAndTheRestReadNextTick) {
@@ -165,8 +160,8 @@ TEST(EvdevMalformed, AFloodIsDrainedAtTheBoundAndTheRestReadNextTick) {
   EXPECT_EQ(s.samples, 144u);
   EXPECT_EQ(s.time_ns, 400);
   EXPECT_EQ(scope.count(), 0u);
-  EXPECT_EQ(counter(*h.device, "drain_limit"), 1u);
-  EXPECT_EQ(counter(*h.device, "superseded"), 398u);
+  EXPECT_EQ(counter_value(*h.device, "drain_limit"), 1u);
+  EXPECT_EQ(counter_value(*h.device, "superseded"), 398u);
 }
 
 // libevdev's complaints (an invalid slot, a double tracking id, a reader not keeping up after
@@ -178,7 +173,7 @@ TEST(EvdevMalformed, WhatLibevdevLoggedIsTheDriversCounter) {
   h.script->library_messages = 2;
   PositionSample s;
   ASSERT_EQ(h.device->read(s), IoStatus::kOk);
-  EXPECT_EQ(counter(*h.device, "library_messages"), 2u);
+  EXPECT_EQ(counter_value(*h.device, "library_messages"), 2u);
 }
 
 }  // namespace
