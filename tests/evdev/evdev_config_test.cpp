@@ -108,5 +108,25 @@ TEST(EvdevConfig, MistakesAreNamedWithTheKey) {
       << errors({"device.evdev.gian=0.5"});
 }
 
+// The simulated device is an input device: its axis holds 32-bit values, so an encoder too fine
+// for its travel is refused, naming the key, where it would have wrapped to a wrong position.
+TEST(EvdevConfig, ASimulatedEncoderTooFineForAnInputAxisIsRefusedNamingTheKey) {
+  const config::Config fine = load({"device.sim.counts_per_unit=1e11"});  // 1e10 counts
+  try {
+    wiring::find_driver("evdev").make_loopback(fine);
+    ADD_FAILURE() << "a simulated axis of 1e10 counts was made";
+  } catch (const config::ConfigError& e) {
+    ASSERT_EQ(e.messages().size(), 1u);
+    EXPECT_EQ(e.messages()[0].find("--set device.sim.counts_per_unit=1e11: "
+                                   "device.sim.counts_per_unit: the simulated input device would "
+                                   "have 1e+10 counts over its travel"),
+              0u)
+        << e.messages()[0];
+  }
+  EXPECT_NO_THROW(
+      wiring::find_driver("evdev").make_loopback(load({"device.sim.counts_per_unit=2e10"})))
+      << "2e9 counts fit";
+}
+
 }  // namespace
 }  // namespace hapticd::drivers::evdev

@@ -5,12 +5,34 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
+#include <limits>
 #include <numbers>
+#include <string>
 #include <system_error>
 
 #include "base/clock.h"
+#include "config/config_loader.h"
 
 namespace hapticd::sim::evdev {
+namespace {
+
+// The kernel's axis values are 32-bit (struct input_absinfo): an encoder whose counts over the
+// travel (or per unit) do not fit cannot be an input device, and would wrap, not saturate.
+int checked_counts(const config::Config& cfg, double counts, const char* what) {
+  if (std::abs(counts) <= std::numeric_limits<std::int32_t>::max()) {
+    return static_cast<int>(std::lround(counts));
+  }
+  char text[32];
+  std::snprintf(text, sizeof text, "%.4g", counts);
+  throw config::ConfigError({cfg.locate("device.sim.counts_per_unit") +
+                             ": device.sim.counts_per_unit: the simulated input device would "
+                             "have " +
+                             std::string(text) + " counts " + what +
+                             ", more than an axis' 32-bit value holds (2147483647)"});
+}
+
+}  // namespace
 
 namespace ev = drivers::evdev;
 using ev::wire::Message;
@@ -26,11 +48,11 @@ SocketEvdevPeer::SocketEvdevPeer(const config::Config& cfg, io::UniqueFd fd, int
   const ev::AxisSettings& a = settings_.axis;
   if (a.scale == ev::Scale::kRange) {
     // The encoder's counts over the configured travel, from 0 at min.
-    range_ = {0, static_cast<int>(std::lround((a.max - a.min) * counts_per_unit_)), 0};
+    range_ = {0, checked_counts(cfg, (a.max - a.min) * counts_per_unit_, "over its travel"), 0};
     if (range_.maximum < 0) range_ = {range_.maximum, 0, 0};
   } else {
     const double per_unit = a.rotary ? counts_per_unit_ : counts_per_unit_ * 1e-3;
-    range_ = {-(1 << 30), 1 << 30, std::max(1, static_cast<int>(std::lround(per_unit)))};
+    range_ = {-(1 << 30), 1 << 30, std::max(1, checked_counts(cfg, per_unit, "per unit"))};
   }
 }
 
