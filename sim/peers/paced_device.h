@@ -1,10 +1,10 @@
-// A driver paced by its in-process loopback peer: after every write it waits until the peer
-// has handled it and answered, so the next read sees the answer whatever the two threads'
-// timing (freerun, and real-time `--loopback` runs: peer_runner.h says why). The simulated
-// device's clock is its protocol trigger, not the wall clock, so its samples are handed on
-// without the wall-clock receive time (a host stall between the answer and the next tick is
-// the loop's overrun, not an old sample). Everything else is the driver's own: its lifecycle,
-// faults and descriptions.
+// A driver paced by its in-process loopback peer: after configure, enable and every write it waits
+// until the peer has handled what the driver sent and answered, so the next read (the first tick's
+// too) sees the answer whatever the two threads' timing (freerun, and real-time `--loopback` runs:
+// peer_runner.h says why). The simulated device's clock is its protocol trigger, not the wall
+// clock, so its samples are handed on without the wall-clock receive time (a host stall between the
+// answer and the next tick is the loop's overrun, not an old sample). Everything else is the
+// driver's own: its lifecycle, faults and descriptions.
 #pragma once
 
 #include <memory>
@@ -26,9 +26,13 @@ class PacedDevice final : public Device {
  protected:
   DeviceInfo on_configure() override {
     inner_->configure();
+    runner_.wait_idle();
     return inner_->info();
   }
-  void on_enable() override { inner_->enable(); }
+  void on_enable() override {
+    inner_->enable();
+    runner_.wait_idle();
+  }
   void on_disable() noexcept override { inner_->disable(); }
   void on_clear_fault() override { inner_->clear_fault(); }
   void on_close() noexcept override { inner_->close(); }

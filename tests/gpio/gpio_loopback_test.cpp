@@ -131,6 +131,41 @@ TEST(GpioRealTimeLoopback, TheSimulatedDeviceMovesOnlyWithTheDriversTicks) {
   EXPECT_GT(r.contact_ticks, 500u);
 }
 
+// The peer's thread held up by its host for 50 ms at every turn (the loaded host of a Debian 12
+// check gave the loop above one stale tick): what configure wrote is answered before the first
+// read, because the paced device waits for it, as it does after every write.
+class HeldUpPeer final : public sim::LoopbackPeer {
+ public:
+  explicit HeldUpPeer(sim::LoopbackPeer& inner) : inner_(inner) {}
+  void service() override {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    inner_.service();
+  }
+  int fd() const noexcept override { return inner_.fd(); }
+  int service_interval_ms() const noexcept override { return inner_.service_interval_ms(); }
+  double applied_force() const noexcept override { return inner_.applied_force(); }
+  bool output_on() const noexcept override { return inner_.output_on(); }
+  const sim::Plant& plant() const noexcept override { return inner_.plant(); }
+  bool inject(sim::PeerFault f) noexcept override { return inner_.inject(f); }
+
+ private:
+  sim::LoopbackPeer& inner_;
+};
+
+TEST(GpioRealTimeLoopback, APeerHeldUpByItsHostAnswersBeforeTheFirstRead) {
+  const config::Config cfg = load("gpio.yaml", {}, "realtime");
+  wiring::Loopback pair = wiring::find_driver("gpio").make_loopback(cfg);
+  HeldUpPeer held_up(*pair.peer);
+  sim::PeerRunner runner(held_up);
+  sim::PacedDevice device(std::move(pair.device), runner);
+  device.configure();
+  device.enable();
+  PositionSample s;
+  EXPECT_EQ(device.read(s), IoStatus::kOk) << "the first tick had no answer";
+  EXPECT_DOUBLE_EQ(s.position, cfg.device.sim.initial_position);
+  device.close();
+}
+
 // A fault injected on the wires while the wall pushes: the loop faults with the device's
 // description naming it, and the motor driver is left with zero duty.
 // A cut transport is met by whichever direction touches it first (the injection races the
