@@ -48,6 +48,7 @@ test_packages=(
                                                         # systemd-sysv, dbus or procps needed)
   rt-tests util-linux                                   # cyclictest, jitter_bench.py; prlimit; runuser
   qemu-system-x86 busybox-static cpio kmod xz-utils zstd  # tools/kernel-vm, the kernel test machine
+  python3-apt                                           # its choice of Debian's packages (and its tests)
   udev iproute2                                         # udevd applying an instance's rules there; ip
   strace                                                # the evdev kernel tests: the loop's system calls
   clang llvm                                            # the asan stage; llvm-symbolizer
@@ -74,10 +75,11 @@ apt_update() {  # WHY [PACKAGES]
 #   libclang-rt-N-dev  the runtime (libFuzzer, the sanitizers) of the clang-N the `clang`
 #                      package depends on: clang-14 on Debian 12, clang-19 on Debian 13
 #   the kernel's compiler  what the headers of the guest kernel (the one
-#                      linux-image-<flavour> depends on, as tools/kernel-vm/setup picks it)
-#                      depend on to build modules: linux-compiler-gcc-12-x86 (gcc-12) on
-#                      Debian 12, gcc-14 on Debian 13; setup builds gpio-sim, raw_gadget and
-#                      the PWM simulator with it
+#                      linux-image-<flavour> depends on) depend on to build modules:
+#                      linux-compiler-gcc-12-x86 (gcc-12) on Debian 12, gcc-14 on Debian 13;
+#                      setup builds gpio-sim, raw_gadget and the PWM simulator with it. The
+#                      rule is tools/kernel-vm/resolve's (its COMPILER); tests/tools checks
+#                      that both pick the same package
 # apt-cache takes seconds a call where apt keeps no package cache, so the answer is kept
 # (outside the repository) until apt's lists change.
 release_packages() {
