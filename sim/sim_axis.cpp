@@ -26,7 +26,8 @@ SimAxis::SimAxis(const config::DeviceConfig& config, double sample_period_s,
       counts_per_unit_(config.sim.counts_per_unit),
       noise_counts_(config.sim.noise_counts),
       seed_(config.sim.seed),
-      rng_(config.sim.seed) {}
+      rng_(config.sim.seed),
+      motor_sign_(config.sim.force_reversed ? -1.0 : 1.0) {}
 
 void SimAxis::reset() noexcept {
   plant_.reset();

@@ -24,8 +24,9 @@ class SimAxis {
   // Not RT-safe. Back to t = 0: initial state, noise re-seeded, amplifier off, force zero.
   void reset() noexcept;
 
-  // RT-safe: advances exactly one sample period with the held force (zero while off).
-  void step() noexcept { plant_.step(output_on_ ? force_ : 0.0); }
+  // RT-safe: advances exactly one sample period with the held force (zero while off), reversed
+  // by a motor wired the other way round (device.sim.force_reversed).
+  void step() noexcept { plant_.step(held_force()); }
   // RT-safe. The force held from the next step on, unclamped (saturation is the controller's).
   void hold_force(double force) noexcept { force_ = force; }
   // RT-safe. The amplifier; switching it either way drops the held force to zero.
@@ -40,7 +41,8 @@ class SimAxis {
   double encoder_position() noexcept;
   double counts_per_unit() const noexcept { return counts_per_unit_; }
 
-  double held_force() const noexcept { return output_on_ ? force_ : 0.0; }
+  // The force the plant feels: the one held, reversed with device.sim.force_reversed.
+  double held_force() const noexcept { return output_on_ ? motor_sign_ * force_ : 0.0; }
   bool output_on() const noexcept { return output_on_; }
   const Plant& plant() const noexcept { return plant_; }
   double sample_period_s() const noexcept { return plant_.sample_period_s(); }
@@ -56,6 +58,7 @@ class SimAxis {
   std::normal_distribution<double> noise_{0.0, 1.0};
   double force_ = 0.0;
   bool output_on_ = false;
+  double motor_sign_ = 1.0;  // -1: device.sim.force_reversed
 };
 
 }  // namespace hapticd::sim

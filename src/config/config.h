@@ -91,6 +91,9 @@ struct SimDeviceConfig {
   std::uint64_t seed = 1;          // seed of the encoder noise
   double initial_position = 0.0;   // m
   double initial_velocity = 0.0;   // m/s
+  // The simulated motor pushes against the force commanded (a motor wired the other way
+  // round): what the direction check and the runaway guard are for (docs/devices.md).
+  bool force_reversed = false;
   OperatorSpec op;
   friend bool operator==(const SimDeviceConfig&, const SimDeviceConfig&) = default;
 };
@@ -128,6 +131,24 @@ struct WallConfig {
   CouplingConfig coupling;
 };
 
+// safety.direction_check: before the wall is armed, a small force pulse and the sign of the
+// motion it causes (docs/devices.md, the direction check; docs/math.md, its fit).
+enum class DirectionCheckMode { kEnforce, kOff };
+// What a device that does not move under the pulse (held firmly, too heavy for it, or never
+// at rest long enough to try) gets: refused, or its wall armed unchecked, loudly.
+enum class NoMotionAction { kRefuse, kRun };
+struct DirectionCheckConfig {
+  DirectionCheckMode mode = DirectionCheckMode::kEnforce;
+  double level = 0.05;        // the pulse's force as a fraction of device.max_force, (0, 0.5]
+  double duration_ms = 25.0;  // each half of the pulse (push, then brake), at least 3 ticks
+  // The least motion, as a fraction of what the configured mass and damping would move free
+  // under the pulse, that counts as motion; in (0, 1].
+  double min_motion = 0.2;
+  NoMotionAction on_no_motion = NoMotionAction::kRefuse;
+  double rest_timeout_ms = 1000.0;  // how long the check waits for the device to be at rest
+  friend bool operator==(const DirectionCheckConfig&, const DirectionCheckConfig&) = default;
+};
+
 struct SafetyConfig {
   GateMode gate = GateMode::kEnforce;
   double operator_passivity_shortage = 0.0;  // eta (N s/m), >= 0
@@ -140,7 +161,15 @@ struct SafetyConfig {
   PassivityControl passivity_controller = PassivityControl::kObserve;
   // The most damping (N s/m) the passivity controller adds; > 0.
   double passivity_max_damping = 20.0;
+  DirectionCheckConfig direction_check;
+  // The runaway guard: a penetration beyond this while the wall pushes at device.max_force
+  // faults (the wall is not holding). 0: kRunawayMargin * max_force / wall.stiffness.
+  double max_penetration = 0.0;
 };
+
+// The runaway guard's default bound, as a multiple of the penetration at which the wall's
+// force reaches device.max_force (max_force / K): the saturated wall no longer holds beyond it.
+inline constexpr double kRunawayMargin = 1.5;
 
 struct AnalysisConfig {
   double operator_stiffness = 500.0;  // k_h of the operator model for the oscillation check

@@ -11,33 +11,10 @@
 namespace hapticd::config::schema {
 namespace {
 
-template <typename E>
-using Options = std::vector<std::pair<std::string, E>>;
-
-template <typename E>
-std::optional<E> choice(Diagnostics& diag, const Field& field, const Options<E>& options) {
-  std::vector<std::string> names;
-  for (const auto& o : options) names.push_back(o.first);
-  if (const auto i = read_choice(diag, field, names)) return options[*i].second;
-  return std::nullopt;
-}
-
-template <typename E>
-const std::string& name_of(const Options<E>& options, E value) {
-  return std::find_if(options.begin(), options.end(),
-                      [&](const auto& o) { return o.second == value; })
-      ->first;
-}
-
 const Options<ClockMode> kClocks{{"realtime", ClockMode::kRealtime},
                                  {"freerun", ClockMode::kFreerun}};
 const Options<Discretization> kDiscretizations{{"backward", Discretization::kBackward},
                                                {"tustin", Discretization::kTustin}};
-const Options<GateMode> kGates{
-    {"enforce", GateMode::kEnforce}, {"warn", GateMode::kWarn}, {"derate", GateMode::kDerate}};
-const Options<PassivityControl> kPassivityControls{{"off", PassivityControl::kOff},
-                                                   {"observe", PassivityControl::kObserve},
-                                                   {"damp", PassivityControl::kDamp}};
 using Kind = OperatorSpec::Kind;
 const Options<Kind> kKinds{{"hand", Kind::kHand},
                            {"force", Kind::kForce},
@@ -192,6 +169,7 @@ void read_plant(MapReader& device, std::optional<double> rate_hz, const std::str
   }
   number(sim, "initial_position", Range::any(), sim_cfg.initial_position);
   number(sim, "initial_velocity", Range::any(), sim_cfg.initial_velocity);
+  if (const auto v = read_bool(d, sim.take("force_reversed"))) sim_cfg.force_reversed = *v;
   read_operator(sim, rate_hz, base_dir, sim_cfg.op);
   sim.finish();
 }
@@ -310,25 +288,6 @@ void read_wall(MapReader& top, WallConfig& wall) {
   if (auto c = read_rational(m, "coupling", "C(z)", true)) {
     wall.coupling = {true, std::move(c->first), std::move(c->second)};
   }
-  m.finish();
-}
-
-void read_safety(MapReader& top, SafetyConfig& safety) {
-  MapReader m(top.diag(), top.take("safety"));
-  if (const auto v = choice(m.diag(), m.take("gate"), kGates)) safety.gate = *v;
-  number(m, "operator_passivity_shortage", Range::at_least(0.0),
-         safety.operator_passivity_shortage);
-  number(m, "passivity_margin", Range::interval(0.0, true, 1.0, false), safety.passivity_margin);
-  number(m, "max_speed", Range::greater_than(0.0), safety.max_speed);
-  integer(m, "stale_fault_ticks", IntRange::at_least(1, INT_MAX), safety.stale_fault_ticks);
-  if (const auto v =
-          read_integer(m.diag(), m.take("sequence_gap_fault"), IntRange::between(0, 65535))) {
-    safety.sequence_gap_fault = static_cast<std::uint32_t>(*v);
-  }
-  if (const auto v = choice(m.diag(), m.take("passivity_controller"), kPassivityControls)) {
-    safety.passivity_controller = *v;
-  }
-  number(m, "passivity_max_damping", Range::greater_than(0.0), safety.passivity_max_damping);
   m.finish();
 }
 

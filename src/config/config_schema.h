@@ -4,8 +4,11 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "config/config.h"
 #include "config/driver_schema.h"
@@ -17,6 +20,28 @@ namespace hapticd::config::schema {
 // Relative paths in it resolve against `base_dir`; device.driver must name one of `drivers`.
 void read_config(Diagnostics& diag, const YAML::Node& root, const std::string& base_dir,
                  const DriverSchemas& drivers, Config& config);
+
+// A key whose value is one of a few names, each standing for a value of E.
+template <typename E>
+using Options = std::vector<std::pair<std::string, E>>;
+
+template <typename E>
+std::optional<E> choice(Diagnostics& diag, const Field& field, const Options<E>& options) {
+  std::vector<std::string> names;
+  for (const auto& o : options) names.push_back(o.first);
+  if (const auto i = read_choice(diag, field, names)) return options[*i].second;
+  return std::nullopt;
+}
+
+template <typename E>
+const std::string& name_of(const Options<E>& options, E value) {
+  return std::find_if(options.begin(), options.end(),
+                      [&](const auto& o) { return o.second == value; })
+      ->first;
+}
+
+// Reads the section `safety` of `top` (safety_schema.cpp).
+void read_safety(MapReader& top, SafetyConfig& safety);
 
 // Reads the profile under `key` of `parent` into `out`. When the key is absent and
 // `required_by` is set, reports "parent.key: missing (required by <required_by>)".

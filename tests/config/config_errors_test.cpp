@@ -26,7 +26,8 @@ TEST(ConfigErrors, UnknownKeyWithoutNeighbourListsTheAllowedKeys) {
   EXPECT_EQ(errors_of("safety:\n  colour: red\n"),
             Lines{"t.yaml:2: safety.colour: unknown key; expected one of: gate, "
                   "operator_passivity_shortage, passivity_margin, max_speed, stale_fault_ticks, "
-                  "sequence_gap_fault, passivity_controller, passivity_max_damping"});
+                  "sequence_gap_fault, passivity_controller, passivity_max_damping, "
+                  "direction_check, max_penetration"});
   EXPECT_EQ(errors_of("plugins: []\n"),
             Lines{"t.yaml:1: plugins: unknown key; expected one of: loop, device, wall, safety, "
                   "analysis, telemetry"});
