@@ -1,5 +1,6 @@
 #include "control/control_law.h"
 
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -39,6 +40,14 @@ std::optional<analysis::TransferFunction> coupling_filter(const config::Config& 
   return analysis::TransferFunction{cfg.wall.coupling.numerator, cfg.wall.coupling.denominator};
 }
 
+double runaway_penetration(const config::Config& cfg) {
+  if (cfg.safety.max_penetration > 0.0) return cfg.safety.max_penetration;
+  if (cfg.wall.stiffness > 0.0) {
+    return config::kRunawayMargin * cfg.device.max_force / cfg.wall.stiffness;
+  }
+  return std::numeric_limits<double>::infinity();
+}
+
 ControlLaw make_control_law(const config::Config& cfg) {
   ControlLaw law;
   const double t = cfg.loop.sample_period_s();
@@ -55,6 +64,7 @@ ControlLaw make_control_law(const config::Config& cfg) {
   law.delay_samples = cfg.wall.delay_samples;
   law.no_pull = cfg.wall.no_pull;
   law.max_force = cfg.device.max_force;
+  law.runaway_penetration = runaway_penetration(cfg);
   law.sample_period = t;
   law.inv_sample_period = 1.0 / t;
   law.e0 = law.environment.num[0];

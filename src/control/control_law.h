@@ -42,6 +42,9 @@ struct ControlLaw {
   // unilateral wall would leave contact and the loop measured would not be linear.
   bool linear_contact = false;
   double max_force = 0.0;
+  // The runaway guard: a penetration beyond this while the wall pushes at max_force faults
+  // (safety.max_penetration, or kRunawayMargin max_force / K; infinite for K = 0 and none set).
+  double runaway_penetration = 0.0;
   double sample_period = 0.0;
   // Cached derived constants.
   double inv_sample_period = 0.0;
@@ -55,6 +58,9 @@ struct ControlLaw {
 // the gate and `verify` all build their models from these, so they analyse what runs.
 analysis::WallParams wall_params(const config::Config& cfg, double stiffness);
 std::optional<analysis::TransferFunction> coupling_filter(const config::Config& cfg);
+
+// Not RT-safe, pure. The runaway guard's bound for `cfg` (ControlLaw::runaway_penetration).
+double runaway_penetration(const config::Config& cfg);
 
 // Not RT-safe. Throws std::invalid_argument for a law the controller cannot run
 // (too many coefficients, negative feed-through).

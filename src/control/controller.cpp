@@ -11,6 +11,8 @@ void Controller::reset() noexcept {
   xi_.clear();
   force_.clear();
   proxy_.clear();
+  penetration_.clear();
+  stepped_ = 0;
   for (double& v : delay_line_) v = 0.0;
   delay_head_ = 0;
   have_last_position_ = false;
@@ -21,6 +23,8 @@ void Controller::continue_from(const Controller& previous) noexcept {
   xi_ = previous.xi_;
   force_ = previous.force_;
   proxy_ = previous.proxy_;
+  penetration_ = previous.penetration_;
+  stepped_ = previous.stepped_;
   last_position_ = previous.last_position_;
   have_last_position_ = previous.have_last_position_;
   armed_ = previous.armed_;
@@ -47,6 +51,9 @@ ControlOutput Controller::step(double position) noexcept {
   }
   out.force_computed = wall_force(out.penetration, out.flags);
   out.force_commanded = command(delayed(out.force_computed), out.force_computed, out.flags);
+  if (running_away(out)) out.flags |= kControlRunaway;
+  penetration_.push(out.penetration);
+  if (stepped_ < 2 * kRunawayWindow) ++stepped_;
   return out;
 }
 
@@ -86,6 +93,19 @@ double Controller::delayed(double f) noexcept {
   delay_head_ = delay_head_ + 1 == n ? 0 : delay_head_ + 1;
   delay_line_[delay_head_] = f;
   return delay_line_[delay_head_ + 1 == n ? 0 : delay_head_ + 1];
+}
+
+bool Controller::running_away(const ControlOutput& out) const noexcept {
+  // -n u > 0: the command pushes out of the wall, at its limit, and still the device is deeper
+  // than the saturated wall can hold.
+  if (!(out.flags & kControlSaturated) || !(out.penetration > law_.runaway_penetration) ||
+      !(-law_.normal * out.force_commanded > 0.0) || stepped_ < 2 * kRunawayWindow) {
+    return false;
+  }
+  constexpr std::size_t w = kRunawayWindow;
+  const double last = out.penetration - penetration_.at(w - 1);
+  const double before = penetration_.at(w - 1) - penetration_.at(2 * w - 1);
+  return last >= before;  // not braked: pulled in, pushed through, or held there
 }
 
 double Controller::command(double applied, double f, std::uint32_t& flags) const noexcept {

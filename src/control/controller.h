@@ -19,6 +19,9 @@ enum ControlFlag : std::uint32_t {
   kControlNoPullClamped = 1u << 4,  // wall.no_pull turned a pulling force into zero
   kControlUnarmed = 1u << 6,        // inside the wall before it was first left: zero force
   kControlNonFinite = 1u << 7,      // f was not finite: zero commanded, the loop faults
+  // The runaway guard: deeper than law.runaway_penetration while pushing at max_force and the
+  // device not slowing down (the wall is not holding): the loop commands zero and faults.
+  kControlRunaway = 1u << 13,
 };
 
 struct ControlOutput {
@@ -38,6 +41,11 @@ class Controller {
   // A non-finite force (an overflow the configuration checks missed) is never commanded:
   // force_commanded is 0 and kControlNonFinite is set, for the loop to fault on.
   ControlOutput step(double position) noexcept;
+
+  // The runaway guard's window (ticks): it compares the penetration's growth over the last
+  // window with the window before. An impact the saturated wall is braking grows less each
+  // window; a wall that pulls (or a hand stronger than the device) does not.
+  static constexpr std::size_t kRunawayWindow = 4;
 
   // RT-safe. Clears every filter state and the delay line, and disarms (as at construction).
   void reset() noexcept;
@@ -59,6 +67,9 @@ class Controller {
   double delayed(double f) noexcept;
   // The force to write from the delayed one: no_pull, finiteness (of f_k too), saturation.
   double command(double applied, double f, std::uint32_t& flags) const noexcept;
+  // The runaway guard on this step's output: beyond the bound, the force at its limit pushing
+  // out, and the device going in no slower than a window earlier.
+  bool running_away(const ControlOutput& out) const noexcept;
 
   // Past values of one signal: at(i) is the value i+1 samples ago.
   class History {
@@ -75,11 +86,14 @@ class Controller {
     std::size_t head_ = 0;
   };
   static_assert((kMaxTaps & (kMaxTaps - 1)) == 0, "History indexes with a mask");
+  static_assert(2 * kRunawayWindow <= kMaxTaps, "the runaway guard's windows fit a History");
 
   ControlLaw law_;
-  History xi_;     // xi(p_ve) fed to E
-  History force_;  // f, E's output and C's input
-  History proxy_;  // C's output
+  History xi_;               // xi(p_ve) fed to E
+  History force_;            // f, E's output and C's input
+  History proxy_;            // C's output
+  History penetration_;      // p, for the runaway guard's two windows
+  std::size_t stepped_ = 0;  // armed steps so far, up to what the windows need
   std::vector<double> delay_line_;
   std::size_t delay_head_ = 0;
   double last_position_ = 0.0;

@@ -5,7 +5,7 @@
 namespace hapticd::loop {
 
 std::string describe(const Fault& f) {
-  char buf[160];
+  char buf[320];
   const auto tick = static_cast<unsigned long long>(f.tick);
   switch (f.cause) {
     case FaultCause::kNone:
@@ -51,6 +51,33 @@ std::string describe(const Fault& f) {
                     "the controller computed a non-finite force (%g) at tick %llu; zero was "
                     "commanded instead",
                     f.value, tick);
+      break;
+    case FaultCause::kRunaway:
+      std::snprintf(buf, sizeof buf,
+                    "the wall is not holding: penetration %.4g m at tick %llu and not slowing with "
+                    "the force at device.max_force, beyond the %.4g m the wall can hold "
+                    "(safety.max_penetration): a reversed force (a wall that pulls) or a device "
+                    "too weak for the wall",
+                    f.value, tick, f.limit);
+      break;
+    case FaultCause::kForceReversed:
+      std::snprintf(buf, sizeof buf,
+                    "the direction check found the force reversed at tick %llu: the pulse moved "
+                    "the device against the force commanded (gain %.3g +- %.2g): a wall would pull",
+                    tick, f.value, f.limit);
+      break;
+    case FaultCause::kNoProbeMotion:
+      std::snprintf(buf, sizeof buf,
+                    "the direction check saw no motion at tick %llu (gain %.3g +- %.2g, under "
+                    "safety.direction_check.min_motion): the device is held, blocked or too "
+                    "heavy for the pulse",
+                    tick, f.value, f.limit);
+      break;
+    case FaultCause::kNeverAtRest:
+      std::snprintf(buf, sizeof buf,
+                    "the direction check found the device never at rest before tick %llu "
+                    "(safety.direction_check.rest_timeout_ms): it was being moved",
+                    tick);
       break;
   }
   return buf;

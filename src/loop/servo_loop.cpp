@@ -1,10 +1,12 @@
 // The tick, and everything it touches. The RT working set is kept small and listed here, so a
 // change that adds to it is seen: the Device (its state, the driver's buffers), the
 // Controller (ControlLaw and three 16-tap histories, the delay line), the PassivityObserver
-// (two command histories as long as the device's delay, allocated before the loop), this
-// ServoLoop (options, two 4 KB LatencyHistograms, its counters, the LiveStatus atomics), the
-// LawSwap mailbox (one atomic load a tick), the Schedule, SampleCheck and TickRecord on the
-// stack, and one slot of the SPSC ring. Nothing else: no allocation, no lock, no log, no throw.
+// (two command histories as long as the device's delay, allocated before the loop), the
+// DirectionProbe until the wall is armed (its rest ring and fit window, allocated before the
+// loop), this ServoLoop (options, two 4 KB LatencyHistograms, its counters, the LiveStatus
+// atomics), the LawSwap mailbox (one atomic load a tick), the Schedule, SampleCheck and
+// TickRecord on the stack, and one slot of the SPSC ring. Nothing else: no allocation, no
+// lock, no log, no throw.
 #include "loop/servo_loop.h"
 
 #include <sched.h>
@@ -39,7 +41,8 @@ ServoLoop::ServoLoop(Device& device, control::Controller& controller,
       ring_(ring),
       options_(options),
       limits_(sample_limits(options)),
-      observer_(with_period(options.observer, options.period_ns)) {}
+      observer_(with_period(options.observer, options.period_ns)),
+      probe_(options.probe) {}
 
 void ServoLoop::set_fault(Fault f, telemetry::TickRecord& rec, LoopResult& res) const noexcept {
   res.fault = f;
@@ -147,9 +150,16 @@ Sensed ServoLoop::device_tick(std::uint64_t tick, std::int64_t wake, std::uint32
     rec.flags |= telemetry::kFlagNoPosition;
   }
   TickCommand c;
-  if (sensed.has_position) {
+  if (sensed.has_position && !probe_.ended()) {
+    c.command = probe_tick(tick, sensed.position, periods, rec, res);
+  } else if (sensed.has_position) {
     c = step_tick(*controller_, observer_, TickInput::checked(sensed, periods), rec);
     if (c.non_finite) set_fault({FaultCause::kNonFiniteForce, tick, rec.force_computed}, rec, res);
+    if (c.runaway) {
+      set_fault(
+          {FaultCause::kRunaway, tick, rec.penetration, controller_->law().runaway_penetration},
+          rec, res);
+    }
   }
   if (res.fault.cause == FaultCause::kNone) {
     const IoStatus ws = device_.write(c.command);
@@ -168,6 +178,30 @@ Sensed ServoLoop::device_tick(std::uint64_t tick, std::int64_t wake, std::uint32
   return sensed;
 }
 
+double ServoLoop::probe_tick(std::uint64_t tick, double position, std::uint32_t periods,
+                             telemetry::TickRecord& rec, LoopResult& res) noexcept {
+  rec.flags |= telemetry::kFlagProbe;
+  rec.position = position;
+  const double force = probe_.step(position, periods);
+  const control::ProbeResult& r = probe_.result();
+  constexpr auto rel = std::memory_order_relaxed;
+  live_.direction_gain.store(r.gain, rel);
+  live_.direction.store(r.state, rel);
+  if (!probe_.ended()) return force;
+  const bool no_motion = r.state == control::ProbeState::kNoMotion;
+  if (r.state == control::ProbeState::kReversed) {
+    set_fault({FaultCause::kForceReversed, tick, r.gain, r.gain_error}, rec, res);
+  } else if ((no_motion || r.state == control::ProbeState::kNeverAtRest) &&
+             options_.refuse_no_motion) {
+    set_fault({no_motion ? FaultCause::kNoProbeMotion : FaultCause::kNeverAtRest, tick, r.gain,
+               r.gain_error},
+              rec, res);
+  } else {
+    live_.armed.store(true, std::memory_order_release);
+  }
+  return force;
+}
+
 LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
   prefault_stack();
   LoopResult res;
@@ -176,6 +210,10 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
   Schedule schedule(options_.realtime, options_.period_ns, options_.overrun_fault_streak);
   SampleCheck check(limits_);
   observer_.restart();  // nothing in flight from an earlier run
+  probe_.restart();     // every arming checks the direction again
+  live_.direction.store(probe_.result().state, std::memory_order_relaxed);
+  live_.direction_gain.store(0.0, std::memory_order_relaxed);
+  live_.armed.store(probe_.ended(), std::memory_order_release);
   const double work_before = observer_.wall_work_j();
   if (next_tick_ > 0) mark_rearmed(stop);  // enabled again after a fault
 
@@ -212,6 +250,7 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
   run_counts(before, res);
   res.wall_energy_j = observer_.wall_work_j() - work_before;
   res.passivity = passivity();
+  res.direction = probe_.result();
   return res;
 }
 

@@ -11,6 +11,7 @@
 
 #include "base/counters.h"
 #include "control/controller.h"
+#include "control/direction_probe.h"
 #include "control/passivity_observer.h"
 #include "drivers/device.h"
 #include "loop/latency_histogram.h"
@@ -42,6 +43,11 @@ struct LoopOptions {
   // The runtime passivity observer and controller; its sample_period is the loop's. The
   // default observes with no damping credited (b = 0) and never damps.
   control::ObserverParams observer;
+  // The direction check each run() makes before the wall is armed (disabled: armed at once).
+  control::ProbePlan probe;
+  // What a device that did not move under the check gets: refused (a fault ends the run) or
+  // its wall armed unchecked (safety.direction_check.on_no_motion).
+  bool refuse_no_motion = true;
 };
 
 // What the loop is doing, readable from any thread while it runs (relaxed atomics, stored
@@ -53,6 +59,11 @@ struct LiveStatus {
   std::atomic<double> wall_energy_j{0.0};      // LoopResult::wall_energy_j, over every run()
   std::atomic<double> observer_energy_j{0.0};  // PassivityResult::energy_j
   std::atomic<std::uint64_t> damped_ticks{0};  // PassivityResult::damped_ticks
+  // The direction check of the current run (control::ProbeState) and its gain so far; the
+  // wall is armed once it has ended without refusing the device.
+  std::atomic<control::ProbeState> direction{control::ProbeState::kOff};
+  std::atomic<double> direction_gain{0.0};
+  std::atomic<bool> armed{false};
 };
 
 // The loop's counters (ServoLoop::counters()), in this order.
@@ -100,6 +111,7 @@ struct LoopResult {
   // positive when it hands energy back; above the energy its spring holds, the wall was active.
   double wall_energy_j = 0.0;
   PassivityResult passivity;
+  control::ProbeResult direction;  // the direction check this run made
   Fault fault;
 };
 
@@ -125,6 +137,9 @@ class ServoLoop {
   // the rest of what it is doing.
   std::uint64_t ticks_done() const noexcept { return ticks_done_.load(std::memory_order_relaxed); }
   const LiveStatus& live() const noexcept { return live_; }
+  // Any thread, once live().armed reads true (acquire) or after run(): what this run's
+  // direction check found (it does not change again until the next run()).
+  const control::ProbeResult& direction() const noexcept { return probe_.result(); }
   // Off-RT, after run(): the law in force at the end (the last one swapped in).
   control::Controller& controller() const noexcept { return *controller_; }
 
@@ -157,6 +172,10 @@ class ServoLoop {
   void run_counts(const std::array<std::uint64_t, kLoopCounterCount>& before,
                   LoopResult& res) const noexcept;
   PassivityResult passivity() const noexcept;
+  // The direction check's tick while it has not ended: its force, its verdict once it has
+  // (a refusal is this tick's fault). RT-safe: called every tick until the wall is armed.
+  double probe_tick(std::uint64_t tick, double position, std::uint32_t periods,
+                    telemetry::TickRecord& rec, LoopResult& res) noexcept;
 
   Device& device_;
   control::Controller* controller_;
@@ -164,6 +183,7 @@ class ServoLoop {
   LoopOptions options_;
   SampleLimits limits_;
   control::PassivityObserver observer_;
+  control::DirectionProbe probe_;
   LatencyHistogram wake_latency_;
   LatencyHistogram compute_time_;
   std::atomic<std::uint64_t> ticks_done_{0};

@@ -12,6 +12,7 @@ static_assert(same_bit(control::kControlSaturated, telemetry::kFlagSaturated));
 static_assert(same_bit(control::kControlNoPullClamped, telemetry::kFlagNoPullClamped));
 static_assert(same_bit(control::kControlUnarmed, telemetry::kFlagUnarmed));
 static_assert(same_bit(control::kControlNonFinite, telemetry::kFlagNonFinite));
+static_assert(same_bit(control::kControlRunaway, telemetry::kFlagRunaway));
 
 }  // namespace
 
@@ -26,14 +27,15 @@ TickCommand step_tick(control::Controller& law, control::PassivityObserver& obse
   rec.force_computed = out.force_computed;
   rec.flags |= out.flags;
   rec.observer_energy_j = observer.energy_j();
-  if (out.flags & control::kControlNonFinite) return {0.0, 0.0, true};
+  if (out.flags & control::kControlNonFinite) return {0.0, 0.0, true, false};
+  if (out.flags & control::kControlRunaway) return {0.0, 0.0, false, true};
   const control::Damping d = observer.damp(out.force_commanded, law.law());
   if (d.alpha > 0.0) {
     rec.flags |= telemetry::kFlagPassivityDamped;
     rec.passivity_damping = d.alpha;
     if (d.saturated) rec.flags |= telemetry::kFlagSaturated;
   }
-  return {d.command, d.added, false};
+  return {d.command, d.added, false, false};
 }
 
 }  // namespace hapticd::loop

@@ -34,6 +34,7 @@ struct TickCommand {
   double command = 0.0;     // the force to write (0 when the law's force was not finite)
   double added = 0.0;       // the passivity controller's part of it
   bool non_finite = false;  // the law computed a NaN or infinite force: the loop faults
+  bool runaway = false;     // the runaway guard tripped (kFlagRunaway): the loop faults
 };
 
 // RT-safe: called every tick with a position. Observes the period just ended, steps the law,

@@ -25,6 +25,12 @@ enum TickFlag : std::uint32_t {
   // The device reports on change and said nothing this tick: its last position, still
   // current, was held (no new measurement, not stale). Logs before this bit existed leave it 0.
   kFlagHeld = 1u << 12,
+  // The runaway guard faulted this tick: deeper than safety.max_penetration (or 1.5
+  // max_force / K) while the wall pushed at max_force. Logs before this bit leave it 0.
+  kFlagRunaway = 1u << 13,
+  // The direction check's tick (docs/devices.md): the wall not armed yet; the force commanded
+  // is the check's pulse (or zero while it waits for rest). Logs before this bit leave it 0.
+  kFlagProbe = 1u << 14,
 };
 
 // A record that is not a tick but an event at a tick boundary (TickRecord::marker): `tick` is

@@ -1,6 +1,7 @@
 // The contact law against sequences computed by hand from docs/math.md.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <vector>
@@ -221,6 +222,83 @@ TEST(DerivedQuantities, OverflowsAreNamedAtTheKeyToChange) {
   c.wall.coupling = {true, {1e306, 1.0}, {1.0, 0.5}};  // finite C, but 1 + E C overflows
   ASSERT_EQ(derived_errors(c).size(), 1u);
   EXPECT_NE(derived_errors(c)[0].find("wall.coupling: the contact map"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace hapticd::control
+
+namespace hapticd::control {
+namespace {
+
+// Issue 32, the runaway guard: K 2000 N/m, max_force 10 N, so the bound is 1.5 x 5 mm.
+config::Config guarded() {
+  config::Config c = wall(2000, 0.0);
+  c.device.max_force = 10.0;
+  return c;
+}
+
+// Steps `ctl` through positions; whether any step set kControlRunaway, and at which one.
+int first_runaway(Controller& ctl, const std::vector<double>& x) {
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    if (ctl.step(x[k]).flags & kControlRunaway) return static_cast<int>(k);
+  }
+  return -1;
+}
+
+std::vector<double> motion(double x0, double v0, double a, int ticks) {
+  std::vector<double> x;
+  for (int k = 0; k < ticks; ++k) {
+    const double t = k * 1e-3;
+    x.push_back(x0 + v0 * t + 0.5 * a * t * t);
+  }
+  return x;
+}
+
+TEST(RunawayGuard, TheBoundIsOneAndAHalfTimesWhereTheWallSaturatesOrTheConfiguredOne) {
+  EXPECT_DOUBLE_EQ(runaway_penetration(guarded()), 0.0075);
+  config::Config c = guarded();
+  c.safety.max_penetration = 0.02;
+  EXPECT_DOUBLE_EQ(runaway_penetration(c), 0.02);
+  c = guarded();
+  c.wall.stiffness = 0.0;  // a pure damper holds no position: only a configured bound
+  EXPECT_TRUE(std::isinf(runaway_penetration(c)));
+}
+
+TEST(RunawayGuard, ADevicePulledInFaultsAsItPassesTheBound) {
+  Controller ctl(make_control_law(guarded()));
+  // From outside, accelerating into the wall (a wall that pulls: 100 m/s^2).
+  const std::vector<double> x = motion(-0.001, 0.0, 100.0, 30);
+  const int k = first_runaway(ctl, x);
+  ASSERT_GE(k, 0);
+  EXPECT_GT(x[k], 0.0075);
+  EXPECT_LT(x[k - 1], 0.0075) << "at the first tick past the bound";
+}
+
+TEST(RunawayGuard, AHardImpactTheWallIsBrakingPassesTheBoundAndIsLetBe) {
+  Controller ctl(make_control_law(guarded()));
+  // From outside in at 1 m/s, braked at 100 m/s^2 by the saturated wall: past 7.5 mm and back.
+  std::vector<double> x = motion(-0.002, 1.0, 0.0, 8);
+  const std::vector<double> brake = motion(x.back() + 1e-3, 1.0, -100.0, 25);
+  x.insert(x.end(), brake.begin(), brake.end());
+  EXPECT_GT(*std::max_element(x.begin(), x.end()), 0.0075);
+  EXPECT_EQ(first_runaway(ctl, x), -1);
+}
+
+TEST(RunawayGuard, ADevicePinnedBeyondTheBoundFaults) {
+  Controller ctl(make_control_law(guarded()));
+  // From outside in at 1 m/s to 9 mm, then held there.
+  std::vector<double> x = motion(-0.001, 1.0, 0.0, 11);
+  x.insert(x.end(), 10, x.back());
+  EXPECT_GE(first_runaway(ctl, x), 0);
+}
+
+TEST(RunawayGuard, DeepButNotSaturatedIsNoRunaway) {
+  config::Config c = guarded();
+  c.safety.max_penetration = 0.001;  // below where the wall saturates: never at the limit there
+  Controller ctl(make_control_law(c));
+  const std::vector<double> x = motion(-0.001, 0.0, 20.0, 20);  // to 2.6 mm: 5.2 N
+  EXPECT_GT(x.back(), 0.001);
+  EXPECT_EQ(first_runaway(ctl, x), -1);
 }
 
 }  // namespace

@@ -232,7 +232,9 @@ TEST(LoopFaults, OneCountBetweenEdgesMicrosecondsApartIsNoImpossibleSpeed) {
 TEST(LoopFaults, AJumpAfterStaleReadsIsJudgedOverTheTimeThatPassed) {
   ScriptedDevice dev;
   dev.script = [](std::uint64_t k, PositionSample& s) {
-    s.position = k < 7 ? 0.0 : 0.025;  // 25 mm, arriving after two stale reads: 3 periods
+    // 25 mm out of the wall (inside it, deeper than the wall holds, the runaway guard would
+    // fault), arriving after two stale reads: 3 periods.
+    s.position = k < 7 ? 0.0 : -0.025;
     return (k == 5 || k == 6) ? IoStatus::kNoNewData : IoStatus::kOk;
   };
   LoopOptions o = freerun(10);
@@ -285,7 +287,7 @@ TEST(LoopFaults, ADeviceThatSkipsSamplesBeyondThoseTakenInStillFaults) {
 TEST(LoopFaults, HeldPositionsAreNotStaleAndTheNextMoveIsJudgedOverTheirTime) {
   ScriptedDevice dev;
   dev.script = [](std::uint64_t k, PositionSample& s) {
-    s.position = k < 60 ? 0.0 : 0.025;  // 25 mm after 50 held ticks: 0.5 m/s
+    s.position = k < 60 ? 0.0 : -0.025;  // 25 mm out of the wall after 50 held ticks: 0.5 m/s
     s.flags = k >= 10 && k < 60 ? kSampleHeld : 0;
     return IoStatus::kOk;
   };
