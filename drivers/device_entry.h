@@ -17,6 +17,15 @@
 
 namespace hapticd::drivers {
 
+// The one setting of a driver's configuration that reverses the force it commands, as the
+// direction check names it when it finds the force reversed (docs/devices.md): the key, its
+// value now and the value that reverses the force.
+struct ForceReversal {
+  std::string key;
+  std::string now;
+  std::string reversed;
+};
+
 struct DeviceEntry {
   std::string_view name;     // the value of device.driver
   std::string_view summary;  // one line, for messages and `hapticd devices`
@@ -41,6 +50,9 @@ struct DeviceEntry {
   // that select it (`hapticd devices`); null for a driver with nothing to list. A system that
   // cannot be asked is said so in the text, not thrown.
   std::string (*list_devices)() = nullptr;
+  // Not RT-safe, pure. The setting that reverses this driver's force for `cfg`. Every driver
+  // has one (the conformance suite checks it reverses what the device feels).
+  ForceReversal (*force_reversal)(const config::Config& cfg) = nullptr;
 };
 
 }  // namespace hapticd::drivers

@@ -28,6 +28,12 @@ Loopback sim_loopback(const config::Config& cfg) {
   return {std::move(device), std::move(peer)};
 }
 
+// Only the simulated motor itself can be wired the other way round.
+drivers::ForceReversal force_reversal(const config::Config& cfg) {
+  const bool reversed = cfg.device.sim.force_reversed;
+  return {"device.sim.force_reversed", reversed ? "true" : "false", reversed ? "false" : "true"};
+}
+
 }  // namespace
 
 DriverEntry sim_driver() {
@@ -35,6 +41,7 @@ DriverEntry sim_driver() {
   e.name = "sim";
   e.summary = "the exact simulated device, in-process (device.sim)";
   e.declared_delay = &no_delay;
+  e.force_reversal = &force_reversal;
   e.peer.driver = "sim";
   e.make_in_process = &sim_loopback;
   return e;

@@ -7,6 +7,7 @@
 #include <cerrno>
 
 #include "base/errno_text.h"
+#include "config/schema_reader.h"
 #include "drivers/can/can_bus_load.h"
 #include "drivers/can/can_device.h"
 #include "drivers/can/canopen.h"
@@ -67,6 +68,13 @@ std::vector<std::string> can_notes(const config::Config& cfg) {
   return notes;
 }
 
+// The transmission's sign: a motor mounted to turn the axis the other way (docs/drivers/can.md).
+ForceReversal force_reversal(const config::Config& cfg) {
+  using config::schema::format_number;
+  const double k = can_settings(cfg).torque_per_force;
+  return {"device.can.torque_per_force", format_number(k), format_number(-k)};
+}
+
 }  // namespace
 
 std::unique_ptr<Device> make_can_device(const config::Config& cfg,
@@ -86,6 +94,7 @@ DeviceEntry device_entry() {
   e.make_device = &can_device;
   e.make_loopback_device = &can_loopback_device;
   e.notes = &can_notes;
+  e.force_reversal = &force_reversal;
   return e;
 }
 

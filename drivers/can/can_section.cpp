@@ -111,8 +111,11 @@ std::shared_ptr<const config::DriverSettings> read_can_section(MapReader& m,
     s->node_id = static_cast<std::uint8_t>(*v);
   }
   const std::string transmission = "the transmission cannot be guessed; see docs/drivers/can.md";
-  required_number(m, "torque_per_force", Range::greater_than(0.0), s->torque_per_force,
-                  transmission);
+  // Negative for a motor that turns the axis the other way (the direction check says which).
+  required_number(m, "torque_per_force", Range::any(), s->torque_per_force, transmission);
+  if (s->torque_per_force == 0.0) {
+    d.error(m.mark(), m.path() + ".torque_per_force", "must not be 0");
+  }
   required_number(m, "position_per_unit", Range::any(), s->position_per_unit, transmission);
   if (s->position_per_unit == 0.0) {
     d.error(m.mark(), m.path() + ".position_per_unit", "must not be 0");

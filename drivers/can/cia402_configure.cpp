@@ -173,16 +173,16 @@ void Cia402Profile::check_torque_limit() {
   }
   const double limit_nm = (*limit & 0xFFFF) * 1e-3 * rated_torque_mnm_ * 1e-3;
   if (limit_nm < settings_.max_torque * (1.0 - 1e-9)) {
-    const double force = limit_nm / settings_.torque_per_force;
-    throw DeviceError(
-        node_name() +
-        ": the drive limits its torque to 0x6072 = " + std::to_string(*limit & 0xFFFF) +
-        " per mille of 0x6076 (" + number(limit_nm) + " N m), below device.can.max_torque " +
-        number(settings_.max_torque) + " N m: the wall would give way at " + number(force) +
-        " instead of " + number(settings_.max_torque / settings_.torque_per_force) +
-        " (axis force) with no fault; raise 0x6072 with the drive's tool, or set "
-        "device.can.max_torque to at most " +
-        number(limit_nm) + " N m");
+    const double per_force = std::abs(settings_.torque_per_force);
+    const double force = limit_nm / per_force;
+    throw DeviceError(node_name() + ": the drive limits its torque to 0x6072 = " +
+                      std::to_string(*limit & 0xFFFF) + " per mille of 0x6076 (" +
+                      number(limit_nm) + " N m), below device.can.max_torque " +
+                      number(settings_.max_torque) + " N m: the wall would give way at " +
+                      number(force) + " instead of " + number(settings_.max_torque / per_force) +
+                      " (axis force) with no fault; raise 0x6072 with the drive's tool, or set "
+                      "device.can.max_torque to at most " +
+                      number(limit_nm) + " N m");
   }
 }
 

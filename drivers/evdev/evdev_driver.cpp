@@ -3,6 +3,7 @@
 #include <fcntl.h>
 
 #include <cerrno>
+#include <cmath>
 
 #include "base/errno_text.h"
 #include "config/schema_reader.h"
@@ -71,6 +72,14 @@ std::string list_devices() {
   }
 }
 
+// The effect's direction turned by half a turn (docs/drivers/evdev.md).
+ForceReversal force_reversal(const config::Config& cfg) {
+  using config::schema::format_number;
+  const double d = settings_of(cfg)->direction_deg;
+  return {"device.evdev.direction_deg", format_number(d),
+          format_number(std::fmod(d + 180.0, 360.0))};
+}
+
 }  // namespace
 
 DeviceEntry device_entry() {
@@ -83,6 +92,7 @@ DeviceEntry device_entry() {
   e.make_loopback_device = &make_loopback_device;
   e.notes = &notes;
   e.list_devices = &list_devices;
+  e.force_reversal = &force_reversal;
   return e;
 }
 

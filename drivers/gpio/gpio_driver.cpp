@@ -23,6 +23,12 @@ std::unique_ptr<Device> make_loopback_device(const config::Config& cfg, io::Uniq
                                       delay(cfg));
 }
 
+// The direction line's level for a positive force (docs/drivers/gpio.md).
+ForceReversal force_reversal(const config::Config& cfg) {
+  const bool high = gpio_settings(cfg).direction_positive_high;
+  return {"device.gpio.direction_positive", high ? "high" : "low", high ? "low" : "high"};
+}
+
 }  // namespace
 
 DeviceEntry device_entry() {
@@ -33,6 +39,7 @@ DeviceEntry device_entry() {
   e.declared_delay = &delay;
   e.make_device = &make_device;
   e.make_loopback_device = &make_loopback_device;
+  e.force_reversal = &force_reversal;
   return e;
 }
 

@@ -3,8 +3,10 @@
 #include <fcntl.h>
 
 #include <cerrno>
+#include <cmath>
 
 #include "base/errno_text.h"
+#include "config/schema_reader.h"
 #include "drivers/hid/hid_device.h"
 #include "drivers/hid/hidapi_transport.h"
 #include "drivers/hid/socket_transport.h"
@@ -41,6 +43,19 @@ std::unique_ptr<Device> make_loopback_device(const config::Config& cfg, io::Uniq
   return std::make_unique<HidDevice>(s, std::move(open), cfg.loop.sample_period_s());
 }
 
+// The PID profile's Direction turns by half a turn; the report profile's force field changes
+// its sign (docs/drivers/hid.md, which way a positive level pushes).
+ForceReversal force_reversal(const config::Config& cfg) {
+  using config::schema::format_number;
+  const HidSettings& s = *settings_of(cfg);
+  if (s.profile == Profile::kPid) {
+    return {"device.hid.pid.direction_deg", format_number(s.pid.direction_deg),
+            format_number(std::fmod(s.pid.direction_deg + 180.0, 360.0))};
+  }
+  const double scale = s.report.output.force.scale;
+  return {"device.hid.report.output.force.scale", format_number(scale), format_number(-scale)};
+}
+
 std::string list_devices() {
   std::string out;
   for (Backend b : {Backend::kHidraw, Backend::kLibusb}) {
@@ -65,6 +80,7 @@ DeviceEntry device_entry() {
   e.make_device = &make_device;
   e.make_loopback_device = &make_loopback_device;
   e.list_devices = &list_devices;
+  e.force_reversal = &force_reversal;
   return e;
 }
 
