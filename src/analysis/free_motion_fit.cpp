@@ -144,16 +144,20 @@ ModelFit fit_model(const FreeMotionData& d, const Inputs& in, bool coulomb) {
 
 FreeMotionFit to_physical(const ModelFit& f, bool coulomb) {
   constexpr double z = 1.959963984540054;  // two-sided 95 % of the normal distribution
-  const double beta = f.s.theta(2);
   FreeMotionFit out;
+  // A negative 1/b with tau > 0 is a negative mass and damping: the device moved against the
+  // force, which is the same fit as a positive device driven by the force reversed.
+  out.force_reversed = f.s.theta(2) < 0.0;
+  const double sign = out.force_reversed ? -1.0 : 1.0;
+  const double beta = sign * f.s.theta(2);
   const double b = 1.0 / beta, m = f.tau * b;
   if (!(beta > 0.0) || !std::isfinite(b) || !std::isfinite(m) || !(m > 0.0)) {
     throw std::invalid_argument(
-        "the fit found no positive mass and damping: the data are not a free device moved by "
-        "the force (is the device held, at an end stop, or the force's sign reversed?)");
+        "the fit found no mass and damping: the data are not a free device moved by the "
+        "force (is the device held, or at an end stop?)");
   }
-  // Delta method on [ln tau, 1/b (, c/b)].
-  const double var_lt = f.cov(0, 0), var_beta = f.cov(3, 3), cov_lt_beta = f.cov(0, 3);
+  // Delta method on [ln tau, 1/b (, c/b)]; a reversed fit's covariances with 1/b change sign.
+  const double var_lt = f.cov(0, 0), var_beta = f.cov(3, 3), cov_lt_beta = sign * f.cov(0, 3);
   if (!(beta > 4.0 * std::sqrt(var_beta))) {
     throw std::invalid_argument(
         "the force did not measurably move the device (is it held, or at an end stop?)");
@@ -163,8 +167,9 @@ FreeMotionFit to_physical(const ModelFit& f, bool coulomb) {
                      std::sqrt(std::max(
                          0.0, var_lt + var_beta / (beta * beta) - 2.0 * cov_lt_beta / beta))};
   if (coulomb) {
+    // Friction opposes the motion whichever way the force acts: c/b keeps its sign.
     const double gamma = f.s.theta(3);
-    const double dg = 1.0 / beta, db = -gamma / (beta * beta);
+    const double dg = 1.0 / beta, db = -sign * gamma / (beta * beta);
     const double var = dg * dg * f.cov(4, 4) + db * db * var_beta + 2.0 * dg * db * f.cov(3, 4);
     out.coulomb = {gamma / beta, z * std::sqrt(std::max(0.0, var))};
   }

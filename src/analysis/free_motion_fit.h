@@ -38,6 +38,9 @@ struct FreeMotionFit {
   double rms_residual = 0.0;  // m
   std::size_t samples = 0;    // positions fitted
   int delay = 0;
+  // The device moved against the force: the data fit a negative mass and damping (mass and
+  // damping above are then those of the device with the force reversed, both positive).
+  bool force_reversed = false;
 };
 
 // Not RT-safe, pure. Throws std::invalid_argument for data it cannot fit (too short, sizes

@@ -108,11 +108,22 @@ TEST(FreeMotionFit, LeavesOutSamplesThatWereNotFresh) {
   EXPECT_LT(f.samples, 6000u);
 }
 
+// Issue 32: the force's sign flipped fits a negative mass and damping: the fit says the force is
+// reversed, with the device's own m and b.
+TEST(FreeMotionFit, AReversedForceFitsANegativeDeviceAndSaysSo) {
+  FreeMotionData d = simulate({0.1, 2.0}, excitation(), kT, 0);
+  EXPECT_FALSE(fit_free_motion(d).force_reversed);
+  FreeMotionData reversed = d;
+  for (double& u : reversed.force) u = -u;
+  const FreeMotionFit f = fit_free_motion(reversed);
+  EXPECT_TRUE(f.force_reversed);
+  EXPECT_NEAR(f.mass.value, 0.1, 1e-4);
+  EXPECT_NEAR(f.damping.value, 2.0, 2e-3);
+  EXPECT_LT(f.mass.ci95, 1e-3);
+}
+
 TEST(FreeMotionFit, RefusesDataThatIsNoFreeDevice) {
   FreeMotionData d = simulate({0.1, 2.0}, excitation(), kT, 0);
-  FreeMotionData reversed = d;  // the force's sign flipped: a "negative" device
-  for (double& u : reversed.force) u = -u;
-  EXPECT_THROW(fit_free_motion(reversed), std::invalid_argument);
   FreeMotionData held = d;  // held still: nothing moved
   for (double& x : held.position) x = 0.01;
   EXPECT_THROW(fit_free_motion(held), std::invalid_argument);

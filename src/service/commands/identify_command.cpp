@@ -133,13 +133,28 @@ std::string residual_note(const analysis::FreeMotionFit& f, double count) {
          "intervals understate the error";
 }
 
+// The fit of a reversed force: a negative mass and damping (what the data fit as they are).
+double signed_value(const analysis::FreeMotionFit& f, double value) {
+  return f.force_reversed ? -value : value;
+}
+
+// "device.hid.pid.direction_deg: 270 (it is 90)": the driver's setting that reverses the force.
+std::string reversal_fix(const drivers::ForceReversal& r) {
+  return r.key + ": " + r.reversed + " (it is " + r.now + ")";
+}
+
 nlohmann::json to_json(const analysis::FreeMotionFit& f, const Excitation& e,
-                       const config::Config& cfg, bool loopback, double travel, double count) {
+                       const config::Config& cfg, bool loopback, double travel, double count,
+                       const drivers::ForceReversal& reversal) {
   const auto est = [](const analysis::Estimate& x) {
     return nlohmann::json{{"value", x.value}, {"ci95", x.ci95}};
   };
-  return {{"mass", f.mass.value},
-          {"damping", f.damping.value},
+  return {{"schema_version", kIdentifySchemaVersion},
+          {"force_direction", f.force_reversed ? "reversed" : "as commanded"},
+          {"reverse_with",
+           f.force_reversed ? nlohmann::json(reversal_fix(reversal)) : nlohmann::json(nullptr)},
+          {"mass", signed_value(f, f.mass.value)},
+          {"damping", signed_value(f, f.damping.value)},
           {"mass_ci95", f.mass.ci95},
           {"damping_ci95", f.damping.ci95},
           {"coulomb_friction", f.coulomb_kept ? est(f.coulomb) : nlohmann::json(nullptr)},
@@ -162,7 +177,8 @@ nlohmann::json to_json(const analysis::FreeMotionFit& f, const Excitation& e,
 }
 
 std::string to_text(const analysis::FreeMotionFit& f, const Excitation& e,
-                    const config::Config& cfg, bool simulated, double travel, double count) {
+                    const config::Config& cfg, bool simulated, double travel, double count,
+                    const drivers::ForceReversal& reversal) {
   std::ostringstream os;
   const auto pm = [](const analysis::Estimate& x, int digits) {
     return format_number(x.value, digits) + " +- " + format_number(x.ci95, 2);
@@ -172,7 +188,17 @@ std::string to_text(const analysis::FreeMotionFit& f, const Excitation& e,
      << "  excitation     multisine " << format_number(e.amplitude) << " N peak, "
      << format_number(e.f_low) << " to " << format_number(e.f_high) << " Hz, "
      << format_number(e.duration) << " s (" << e.force.size() << " ticks), travel "
-     << format_number(travel * 1e3) << " mm\n"
+     << format_number(travel * 1e3) << " mm\n";
+  if (f.force_reversed) {
+    // Nothing to paste: a wall on this device would pull.
+    os << "  FORCE REVERSED the device moved against the force: the fit needs a negative mass ("
+       << format_number(-f.mass.value, 6) << " kg) and damping ("
+       << format_number(-f.damping.value, 6) << " N s/m); a wall would pull\n"
+       << "  reverse it     " << cfg.locate(reversal.key) << ": " << reversal_fix(reversal)
+       << ", then identify again\n";
+    return os.str();
+  }
+  os << "  force          as commanded (the fit's mass and damping are positive)\n"
      << "  mass m         " << pm(f.mass, 6) << " kg (95 % interval)\n"
      << "  damping b      " << pm(f.damping, 6) << " N s/m\n"
      << "  Coulomb        "
@@ -239,12 +265,20 @@ int identify_command(const IdentifyOptions& options, SignalWatch& signals) {
     spdlog::error("identify: {}", err.what());
     return kExitRuntimeFault;
   }
+  const drivers::ForceReversal reversal = session.driver().force_reversal(cfg);
+  const double count = count_of(cfg, simulated);
   const std::string text =
       options.json
-          ? to_json(fit, e, cfg, options.loopback, rec.travel(), count_of(cfg, simulated)).dump(2) +
-                "\n"
-          : to_text(fit, e, cfg, simulated, rec.travel(), count_of(cfg, simulated));
-  return write_stdout(text) ? kExitOk : kExitRuntimeFault;
+          ? to_json(fit, e, cfg, options.loopback, rec.travel(), count, reversal).dump(2) + "\n"
+          : to_text(fit, e, cfg, simulated, rec.travel(), count, reversal);
+  if (fit.force_reversed) {
+    spdlog::error(
+        "identify: the force is reversed (the fit needs a negative mass): no configuration is "
+        "printed; reverse it with {}",
+        reversal_fix(reversal));
+  }
+  if (!write_stdout(text)) return kExitRuntimeFault;
+  return fit.force_reversed ? kExitRuntimeFault : kExitOk;
 }
 
 }  // namespace hapticd::service

@@ -11,6 +11,10 @@
 
 namespace hapticd::service {
 
+// The shape of `identify --json` (docs/operations.md): 1 had no schema_version; 2 added it,
+// force_direction and reverse_with (mass and damping are negative when the force is reversed).
+inline constexpr int kIdentifySchemaVersion = 2;
+
 struct IdentifyOptions {
   ConfigOptions config;
   bool json = false;
@@ -25,8 +29,10 @@ struct IdentifyOptions {
   double max_travel = 0.1;  // m from the start before the excitation stops as a fault
 };
 
-// Returns the exit code: 0 fitted, 1 a fault during the excitation (zero force, output off),
-// 2 bad input (and a real driver without --yes-the-device-is-free), 4 device error.
+// Returns the exit code: 0 fitted, 1 a fault during the excitation (zero force, output off) or
+// a reversed force (the fit needs a negative mass: reported with the setting that reverses it,
+// and no configuration printed), 2 bad input (and a real driver without
+// --yes-the-device-is-free), 4 device error.
 int identify_command(const IdentifyOptions& options, SignalWatch& signals);
 
 }  // namespace hapticd::service

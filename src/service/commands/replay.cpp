@@ -6,6 +6,7 @@
 #include <memory>
 
 #include "control/controller.h"
+#include "control/direction_probe.h"
 #include "control/passivity_observer.h"
 #include "loop/tick.h"
 #include "service/config_source.h"
@@ -40,10 +41,12 @@ std::uint32_t periods_between(std::int64_t from_ns, std::int64_t to_ns, double p
 struct Walker {
   std::unique_ptr<control::Controller> law;
   std::unique_ptr<control::PassivityObserver> observer;  // built once: it spans re-armings
+  std::unique_ptr<control::DirectionProbe> probe;        // each arming's direction check
   ForceSeries series;
 
   void restart(const config::Config& cfg) {
     law = std::make_unique<control::Controller>(control::make_control_law(cfg));
+    probe = std::make_unique<control::DirectionProbe>(control::probe_plan(cfg, device_delay(cfg)));
     if (!observer) {
       observer = std::make_unique<control::PassivityObserver>(
           control::observer_params(cfg, device_delay(cfg)));
@@ -62,8 +65,11 @@ struct Walker {
                                  std::uint32_t periods) {
     TickRecord rec;
     loop::TickCommand c;
+    const bool checking = (logged.flags & telemetry::kFlagProbe) != 0;
     if (stepped) {
       c = loop::step_tick(*law, *observer, loop::TickInput::recorded(logged, periods), rec);
+    } else if (checking) {  // the direction check's pulse, from the positions it saw
+      c.command = probe->step(logged.position, periods);
     }
     if (faulted || c.non_finite) c = {};
     loop::end_tick(*observer, c.command, c.added, rec);
@@ -71,7 +77,8 @@ struct Walker {
     series.wall_energy_j = observer->wall_work_j();
     series.min_observer_energy_j = observer->min_energy_j();
     series.damped_ticks = observer->damped_ticks();
-    if (!stepped || faulted) return std::nullopt;
+    if ((!stepped && !checking) || faulted) return std::nullopt;
+    if (checking) return rec;  // compared, but no wall acted
     add(rec.force_commanded, rec.penetration, (rec.flags & telemetry::kFlagContact) != 0,
         (rec.flags & telemetry::kFlagSaturated) != 0);
     return rec;

@@ -53,6 +53,11 @@ std::string status_text(const json& s) {
   out << "  wall          K " << num(s["wall"]["stiffness"]) << " N/m  B "
       << num(s["wall"]["damping"]) << " N s/m\n";
   out << "  gate          " << gate_line(s["gate"]) << "\n";
+  if (s.contains("direction_check") && s["direction_check"].is_object()) {
+    const json& d = s["direction_check"];
+    out << "  direction     " << text(d["state"]) << " (gain " << num(d["gain"]) << "), wall "
+        << (d.value("armed", false) ? "armed" : "not armed") << "\n";
+  }
   if (s.contains("derated") && s["derated"].is_object()) {
     out << "  DERATED       wall.stiffness " << num(s["derated"]["configured"])
         << " N/m configured, running at " << num(s["derated"]["ran"]) << " N/m\n";

@@ -47,6 +47,9 @@ std::vector<std::string> reload_blockers(const config::Config& running,
   differs(s.max_speed != t.max_speed || s.stale_fault_ticks != t.stale_fault_ticks ||
               s.sequence_gap_fault != t.sequence_gap_fault,
           "safety.max_speed/stale_fault_ticks/sequence_gap_fault", "new fault checks in the loop");
+  // The check is made when output is enabled, from the plan the loop was built with.
+  differs(!(s.direction_check == t.direction_check), "safety.direction_check",
+          "a new direction check (it runs as output is enabled)");
   // The passivity observer credits b and bounds its damping by m; it spans the whole run.
   differs(running.device.mass != next.device.mass ||
               running.device.damping != next.device.damping ||

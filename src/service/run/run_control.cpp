@@ -69,6 +69,7 @@ json RunSession::handle(const Request& request) {
 json RunSession::status() const {
   std::lock_guard lock(mutex_);
   json j;
+  j["schema_version"] = kSummarySchemaVersion;
   j["state"] = name(phase_);
   j["driver"] = cfg_.device.driver;
   j["config"] = cfg_.source_name;
@@ -100,6 +101,9 @@ json RunSession::status() const {
     j["wall_energy_j"] = live.wall_energy_j.load(r);
     j["observer_energy_j"] = live.observer_energy_j.load(r);
     j["passivity_damped_ticks"] = live.damped_ticks.load(r);
+    j["direction_check"] = {{"state", control::probe_state_name(live.direction.load(r))},
+                            {"gain", live.direction_gain.load(r)},
+                            {"armed", live.armed.load(r)}};
     j["wake_latency_us"] = realtime_ ? percentiles_us(servo_->wake_latency()) : json(nullptr);
     j["compute_us"] = percentiles_us(servo_->compute_time());
   }
@@ -266,7 +270,9 @@ json RunSession::clear_fault() {
 bool RunSession::hold() {
   set_phase(Phase::kHeld);
   spdlog::error("fault latched, output disabled: waiting for `hapticctl clear-fault` or a stop");
-  sd_notify(0, "STATUS=faulted: output disabled, waiting for clear-fault");
+  // Up, though never armed when the fault came during the direction check: systemd's start is
+  // over either way (a second READY=1 is ignored).
+  sd_notify(0, "READY=1\nSTATUS=faulted: output disabled, waiting for clear-fault");
   pollfd fds[3] = {
       {signals_.fd(), POLLIN, 0}, {signals_.pipe_fd(), POLLIN, 0}, {wake_fd_, POLLIN, 0}};
   for (;;) {

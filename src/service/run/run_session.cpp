@@ -19,6 +19,7 @@
 #include "service/exit_codes.h"
 #include "service/run/counters_report.h"
 #include "service/run/crash_guard.h"
+#include "service/run/direction_report.h"
 
 namespace hapticd::service {
 namespace {
@@ -157,7 +158,12 @@ int RunSession::run() {
   if (!start_up(report)) return kExitGateRefused;
   for (;;) {
     accumulate(arm());
-    if (summary_.loop.fault.cause == loop::FaultCause::kNone || !options_.on_fault_hold) break;
+    const loop::FaultCause cause = summary_.loop.fault.cause;
+    // A device the direction check refused is refused again by every re-arming: never held.
+    if (cause == loop::FaultCause::kNone || !options_.on_fault_hold ||
+        loop::is_direction_refusal(cause)) {
+      break;
+    }
     if (!hold()) break;
     // Re-armed: a fresh law from the configuration in force (a reload may have replaced it),
     // recorded after the loop's re-armed marker.
@@ -170,7 +176,11 @@ int RunSession::run() {
   sd_notify(0, "STOPPING=1\nSTATUS=output disabled");
   if (log_.writer) log_.writer->stop();
   summary_.rt = rt_;
-  if (summary_.loop.fault.cause != loop::FaultCause::kNone) summary_.stop_reason = "fault";
+  if (loop::is_direction_refusal(summary_.loop.fault.cause)) {
+    summary_.stop_reason = "direction check";
+  } else if (summary_.loop.fault.cause != loop::FaultCause::kNone) {
+    summary_.stop_reason = "fault";
+  }
   if (const std::uint64_t unarmed = servo_->counters()[loop::kCounterUnarmedTicks].value()) {
     spdlog::warn(
         "the device started inside the wall: the wall stayed off for {} ticks until it "
@@ -221,14 +231,13 @@ loop::LoopResult RunSession::arm() {
                  device.info().description, cfg.loop.rate_hz, realtime_ ? "realtime" : "freerun",
                  cfg.wall.stiffness, cfg.wall.damping);
     if (realtime_ && first) announce_rt(rt_);
-    set_phase(Phase::kRunning);  // before READY=1: whoever waits for it may ask at once
-    sd_notifyf(0, "READY=1\nSTATUS=servo running at %.0f Hz", cfg.loop.rate_hz);
-    supervise(rt);
+    supervise(rt);  // running (READY=1) once the direction check has armed the wall
     result = rt.join();
   }
   set_phase(Phase::kEnded);
   device.disable();
-  summarise_fault(result, device, summary_);
+  summarise_fault(result, device, summary_,
+                  direction_advice(result.fault.cause, cfg, session_->driver()));
   if (result.fault.cause != loop::FaultCause::kNone) {
     std::lock_guard lock(mutex_);
     fault_ = summary_.faults.back();
@@ -258,6 +267,7 @@ void RunSession::supervise(RtThread& rt) {
   std::uint64_t last_ticks = servo_->ticks_done();
   PassivityWatch passivity;
   StuckLoopGuard stuck(summary_.sample_period_s);
+  bool running = false;  // the wall armed: phase running, READY=1 sent
   pollfd fds[4] = {{signals_.fd(), POLLIN, 0},
                    {signals_.pipe_fd(), POLLIN, 0},
                    {rt.ended_fd(), POLLIN, 0},
@@ -267,7 +277,13 @@ void RunSession::supervise(RtThread& rt) {
     reload_file();
   }
   while (!rt.finished()) {
-    poll(fds, 4, 50);  // the time-out paces the watchdog
+    if (!running && servo_->live().armed.load(std::memory_order_acquire)) {
+      running = true;
+      announce_direction(servo_->direction());
+      set_phase(Phase::kRunning);  // before READY=1: whoever waits for it may ask at once
+      sd_notifyf(0, "READY=1\nSTATUS=servo running at %.0f Hz", 1.0 / summary_.sample_period_s);
+    }
+    poll(fds, 4, running ? 50 : 5);  // the time-out paces the watchdog (and READY=1 at first)
     if (const auto sig = signals_.take_pending()) on_signal(*sig, &rt);
     drain(wake_fd_);
     bool stopping = false;
@@ -294,6 +310,7 @@ void RunSession::accumulate(const loop::LoopResult& r) {
   t.max_penetration = std::max(t.max_penetration, r.max_penetration);
   t.wall_energy_j += r.wall_energy_j;
   t.passivity = r.passivity;  // already over every run
+  t.direction = r.direction;  // the last arming's check
   t.fault = r.fault;
 }
 

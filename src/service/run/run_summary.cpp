@@ -4,6 +4,7 @@
 
 #include "gate/number_format.h"
 #include "service/run/counters_report.h"
+#include "service/run/direction_report.h"
 
 namespace hapticd::service {
 namespace {
@@ -115,6 +116,7 @@ void output_text(const RunSummary& s, std::ostream& os) {
 
 json summary_to_json(const RunSummary& s) {
   json j;
+  j["schema_version"] = kSummarySchemaVersion;
   j["ticks"] = s.loop.ticks;
   j["duration_s"] = static_cast<double>(s.loop.ticks) * s.sample_period_s;
   j["clock"] = s.realtime ? "realtime" : "freerun";
@@ -157,6 +159,7 @@ json summary_to_json(const RunSummary& s) {
              {"warnings", s.rt.warnings}};
   j["gate"] = s.gate;
   j["passivity"] = passivity_json(s);
+  j["direction_check"] = direction_json(s.loop.direction);
   j["derated"] = s.derated_stiffness ? json{{"key", "wall.stiffness"},
                                             {"configured", s.derated_stiffness->first},
                                             {"ran", s.derated_stiffness->second}}
@@ -179,6 +182,9 @@ std::string summary_to_text(const RunSummary& s) {
           "the run, at start or by a reload)\n";
   }
   timing_text(s, j, os);
+  if (s.output_was_enabled) {
+    direction_text(s.loop.direction, loop::is_direction_refusal(s.loop.fault.cause), os);
+  }
   wall_text(s, os);
   log_text(s, os);
   output_text(s, os);

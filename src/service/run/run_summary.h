@@ -15,6 +15,11 @@
 
 namespace hapticd::service {
 
+// The shape of --summary-json (and of `hapticctl status`, which shares its objects). Each
+// change of shape is a new version, listed in docs/operations.md: 1 had no schema_version
+// key; 2 added it, direction_check, and the status answer's direction_check.
+inline constexpr int kSummarySchemaVersion = 2;
+
 struct RunSummary {
   bool realtime = true;
   double sample_period_s = 0.0;

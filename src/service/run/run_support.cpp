@@ -100,6 +100,8 @@ loop::LoopOptions loop_options(const RunOptions& options, const config::Config& 
   lo.max_speed = limits.max_speed;
   lo.wait_for_ring = !realtime && logging;  // a simulation logs every tick
   lo.observer = control::observer_params(cfg, info.transport_delay_samples);
+  lo.probe = control::probe_plan(cfg, info.transport_delay_samples);
+  lo.refuse_no_motion = cfg.safety.direction_check.on_no_motion == config::NoMotionAction::kRefuse;
   if (options.duration_s) {
     lo.max_ticks = std::max<std::uint64_t>(
         1, static_cast<std::uint64_t>(std::llround(*options.duration_s * cfg.loop.rate_hz)));
@@ -122,9 +124,10 @@ loop::SampleLimits sample_limits(const config::Config& cfg, const DeviceInfo& in
           info.sequence_modulus};
 }
 
-void summarise_fault(const loop::LoopResult& result, const Device& device, RunSummary& s) {
+void summarise_fault(const loop::LoopResult& result, const Device& device, RunSummary& s,
+                     const std::string& advice) {
   if (result.fault.cause == loop::FaultCause::kNone) return;
-  const std::string f = describe_fault(result.fault, device);
+  const std::string f = describe_fault(result.fault, device) + advice;
   spdlog::error("fault: {}; zero force commanded, output disabled", f);
   s.faults.push_back(f);
 }
@@ -164,7 +167,10 @@ int report(const RunOptions& options, RunSummary& s) {
     if (!finish_output(out, options.summary_json_path)) return kExitRuntimeFault;
   }
   if (!printed) return kExitRuntimeFault;
-  return s.faults.empty() ? kExitOk : kExitRuntimeFault;
+  if (s.faults.empty()) return kExitOk;
+  // The direction check refused the device before any wall acted: a refusal, as the gate's.
+  const bool refused = loop::is_direction_refusal(s.loop.fault.cause) && s.faults.size() == 1;
+  return refused ? kExitGateRefused : kExitRuntimeFault;
 }
 
 bool stop_requested(SignalWatch& signals, RunSummary& s, const char* when, bool& reload) {

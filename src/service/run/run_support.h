@@ -36,7 +36,9 @@ TickLog open_tick_log(const RunOptions& options, const config::Config& cfg, bool
 loop::LoopOptions loop_options(const RunOptions& options, const config::Config& cfg,
                                const DeviceInfo& info, bool realtime, bool logging);
 
-void summarise_fault(const loop::LoopResult& result, const Device& device, RunSummary& s);
+// `advice`: what to change, after the fault's sentence (direction_report.h).
+void summarise_fault(const loop::LoopResult& result, const Device& device, RunSummary& s,
+                     const std::string& advice = "");
 // Not RT-safe. The loop's sentence for a fault, the device's own after it when it latched one.
 std::string describe_fault(const loop::Fault& fault, const Device& device);
 // The limits every tick checks a sample against (safety.*, the device's sequence modulus):
