@@ -16,6 +16,7 @@
 #include "alloc_counter.h"
 #include "config/config_loader.h"
 #include "control/controller.h"
+#include "control/direction_probe.h"
 #include "loop/servo_loop.h"
 #include "sim/peers/paced_device.h"
 #include "sim/peers/peer_runner.h"
@@ -75,11 +76,25 @@ config::Config load(const Case& c, const std::vector<std::string>& sets = {}) {
                                   wiring::driver_schemas());
 }
 
+// The driver configured by `driver_cfg` against the simulated device of `device_cfg`: what a
+// setting changed on the host does to the same physical device (the sim, in process, has one
+// configuration: the driver's).
+wiring::Loopback pair_of(const config::Config& driver_cfg, const config::Config& device_cfg) {
+  const wiring::DriverEntry& d = wiring::find_driver(driver_cfg.device.driver);
+  if (d.make_in_process != nullptr) return d.make_in_process(driver_cfg);
+  auto [device_end, peer_end] = io::seqpacket_pair();
+  wiring::Loopback pair;
+  pair.peer = d.peer.make_peer(device_cfg, std::move(peer_end));
+  pair.device = d.make_loopback_device(driver_cfg, std::move(device_end));
+  return pair;
+}
+
 // The driver wired to its peer, the peer on its own thread, paced as in a freerun run.
 struct Rig {
-  explicit Rig(const config::Config& c)
+  explicit Rig(const config::Config& c) : Rig(c, c) {}
+  Rig(const config::Config& c, const config::Config& device_cfg)
       : cfg(c),
-        pair(wiring::find_driver(c.device.driver).make_loopback(c)),
+        pair(pair_of(c, device_cfg)),
         runner(*pair.peer),
         device(std::move(pair.device), runner) {}
   ~Rig() { device.close(); }
@@ -216,8 +231,17 @@ TEST_P(Conformance, EveryFaultClassFaultsTheLoopWithZeroForce) {
     loop::ServoLoop servo(rig.device, controller, nullptr, o);
     const std::atomic<bool> stop{false};
     loop::LoopResult r;
-    std::thread t([&] { r = servo.run(stop); });
-    while (servo.ticks_done() < 500) std::this_thread::yield();
+    std::atomic<bool> ended{false};
+    std::thread t([&] {
+      r = servo.run(stop);
+      ended = true;
+    });
+    while (servo.ticks_done() < 500 && !ended) std::this_thread::yield();
+    if (ended) {  // a loop that ended by itself cannot meet the fault: say why it ended
+      t.join();
+      ADD_FAILURE() << "the loop ended before the fault: " << loop::describe(r.fault);
+      continue;
+    }
     const bool expressible = rig.peer().inject(fault);
     if (!expressible) rig.peer().inject(sim::PeerFault::kTransportFault);  // end the run
     t.join();
@@ -277,6 +301,83 @@ TEST_P(Conformance, ReadAndWriteNeverAllocate) {
   const loop::LoopResult r = run_loop(rig, 100, {}, &allocations);
   EXPECT_EQ(allocations, 0u) << "on the fault path";
   EXPECT_EQ(r.fault.cause, loop::FaultCause::kDeviceReported);
+}
+
+// The loop as `hapticd run` sets it up: the direction check of the configuration before the
+// wall is armed (off in the LoopOptions the other cases build).
+loop::LoopOptions checked(const Rig& rig) {
+  loop::LoopOptions o;
+  o.probe = control::probe_plan(rig.cfg, rig.device.info().transport_delay_samples);
+  o.refuse_no_motion = true;
+  return o;
+}
+
+// A force as the example configures it is confirmed, and the wall then acts as always; the
+// same device with its motor wired the other way round is refused before the wall ever acts.
+TEST_P(Conformance, TheDirectionCheckConfirmsTheForceAndRefusesItReversed) {
+  for (const bool reversed : {false, true}) {
+    SCOPED_TRACE(reversed ? "reversed" : "as configured");
+    Rig rig(load(GetParam(), {reversed ? "device.sim.force_reversed=true" : "device.sim.seed=1"}));
+    rig.device.configure();
+    rig.device.enable();
+    std::uint64_t allocations = 1;
+    const loop::LoopResult r = run_loop(rig, 3000, checked(rig), &allocations);
+    EXPECT_EQ(allocations, 0u) << "the check allocates nothing either";
+    if (reversed) {
+      EXPECT_EQ(r.direction.state, control::ProbeState::kReversed) << r.direction.gain;
+      EXPECT_EQ(r.fault.cause, loop::FaultCause::kForceReversed) << loop::describe(r.fault);
+      EXPECT_LT(r.direction.gain, -0.2);
+      EXPECT_EQ(r.contact_ticks, 0u) << "no wall acted";
+      rig.settle();
+      EXPECT_EQ(rig.peer().applied_force(), 0.0);
+      EXPECT_EQ(rig.device.last_command(), 0.0);
+    } else {
+      EXPECT_EQ(r.direction.state, control::ProbeState::kConfirmed) << r.direction.gain;
+      EXPECT_EQ(r.fault.cause, loop::FaultCause::kNone) << loop::describe(r.fault);
+      EXPECT_GT(r.direction.gain, 0.2);
+      EXPECT_GT(r.contact_ticks, 0u) << "the demo presses into the wall once it is armed";
+    }
+  }
+}
+
+// With the check off, the reversed wall pulls the device in until it saturates; the runaway
+// guard faults before the penetration passes its bound by more than a tick's motion, with
+// zero force.
+TEST_P(Conformance, TheRunawayGuardStopsAReversedWallWithTheCheckOff) {
+  Rig rig(load(GetParam(), {"device.sim.force_reversed=true"}));
+  rig.device.configure();
+  rig.device.enable();
+  const loop::LoopResult r = run_loop(rig, 20000);
+  ASSERT_EQ(r.fault.cause, loop::FaultCause::kRunaway) << loop::describe(r.fault);
+  const double bound = control::runaway_penetration(rig.cfg);
+  EXPECT_DOUBLE_EQ(r.fault.limit, bound);
+  EXPECT_GT(r.fault.value, bound);
+  // At the speed the saturated force can give the device over the run, one tick's travel.
+  EXPECT_LT(r.max_penetration, bound * 1.2) << "caught within its bound";
+  rig.settle();
+  EXPECT_EQ(rig.peer().applied_force(), 0.0);
+  EXPECT_EQ(rig.device.last_command(), 0.0);
+}
+
+// The setting the check names for a reversed force reverses what the device feels.
+TEST_P(Conformance, TheDriversReversalSettingReversesTheForceTheDeviceFeels) {
+  const config::Config plain = load(GetParam());
+  const wiring::DriverEntry& driver = wiring::find_driver(plain.device.driver);
+  ASSERT_NE(driver.force_reversal, nullptr) << "every driver names its reversal";
+  const ForceReversal f = driver.force_reversal(plain);
+  EXPECT_NE(f.now, f.reversed);
+  for (const bool flip : {false, true}) {
+    SCOPED_TRACE(flip ? f.key + ": " + f.reversed : "as configured");
+    // The driver with the setting, the simulated device as it was: the same motor.
+    Rig rig(load(GetParam(), {flip ? f.key + "=" + f.reversed : "device.sim.seed=1"}), plain);
+    rig.device.configure();
+    rig.device.enable();
+    PositionSample s;
+    rig.device.read(s);
+    ASSERT_EQ(rig.device.write(2.0), IoStatus::kOk);
+    rig.settle();
+    EXPECT_NEAR(rig.peer().applied_force(), flip ? -2.0 : 2.0, 0.01);
+  }
 }
 
 std::string case_name(const ::testing::TestParamInfo<Case>& p) {

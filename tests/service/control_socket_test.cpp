@@ -163,13 +163,13 @@ TEST(ControlSocket, SighupReloadsTheFileTheRunWasStartedWith) {
 // hand's damping stops it within a few ticks, so a re-armed loop runs on. (The simulated
 // plant advances a period per read, so while the fault is held it stays where it faulted.)
 std::vector<std::string> faulting_start(const std::string& x0, const std::string& setpoint) {
-  return {"--on-fault", "hold",
-          "--duration", "120",
-          "--set",      "device.sim.initial_position=" + x0,
-          "--set",      "device.sim.initial_velocity=0.6",
-          "--set",      "safety.max_speed=0.3",
-          "--set",      "device.sim.operator.damping=50",
-          "--set",      "device.sim.operator.setpoint={shape: constant, value: " + setpoint + "}"};
+  return {"--on-fault", "hold", "--duration", "120", "--set", "device.sim.initial_position=" + x0,
+          "--set", "device.sim.initial_velocity=0.6", "--set", "safety.max_speed=0.3", "--set",
+          "device.sim.operator.damping=50",
+          // A hand that damped holds the device too firmly for the direction check to see it
+          // move: the re-arming's check says so and arms the wall anyway.
+          "--set", "safety.direction_check.on_no_motion=run", "--set",
+          "device.sim.operator.setpoint={shape: constant, value: " + setpoint + "}"};
 }
 
 TEST(ControlSocket, ClearFaultReArmsThroughTheGateWithTheDeviceOutsideTheWall) {
@@ -184,6 +184,8 @@ TEST(ControlSocket, ClearFaultReArmsThroughTheGateWithTheDeviceOutsideTheWall) {
   s = d.wait_status([](const json& j) { return j["state"] == "running"; });
   EXPECT_EQ(s["state"], "running");
   EXPECT_TRUE(s["device"]["output_enabled"].get<bool>());
+  EXPECT_EQ(s["direction_check"]["state"], "no motion") << "the re-arming checked again";
+  EXPECT_TRUE(s["direction_check"]["armed"].get<bool>());
   EXPECT_TRUE(s["fault"].is_null());
   const ProcessResult again = d.ctl({"clear-fault"});
   EXPECT_EQ(again.exit_code, 1);

@@ -25,7 +25,9 @@ std::string pressing_config(double k, const std::string& loop, const std::string
          "      kind: hand\n"
          "      stiffness: 300\n"
          "      damping: 5\n"
-         "      setpoint: {shape: constant, value: 0.01}\n"
+         // At rest where it starts until the direction check has armed the wall (about 0.13 s),
+         // then pressing 10 mm into it.
+         "      setpoint: {shape: step, initial: -0.001, final: 0.01, at: 0.3}\n"
          "wall:\n"
          "  stiffness: " +
          std::to_string(k) +

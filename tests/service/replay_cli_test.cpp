@@ -50,8 +50,10 @@ TEST(CliReplay, AFreerunLogIsReproducedBitForBitAndItsEnergyAgrees) {
   ASSERT_EQ(run_process(args).exit_code, 0);
   const json j = replay_json(log);
   expect_reproduced(j, 3000);
+  // Every tick: the law's, and the direction check's pulse replayed from its positions.
   EXPECT_EQ(j["reproduced"]["compared"], 3000);
   const json s = json::parse(read_file(sum));
+  EXPECT_GT(s["direction_check"]["ticks"].get<int>(), 100);
   // The same sum over the same numbers in the same order as the loop's own count.
   EXPECT_EQ(j["logged"]["wall_energy_j"].get<double>(), s["wall_energy_j"].get<double>());
   EXPECT_EQ(j["replayed"]["wall_energy_j"].get<double>(), s["wall_energy_j"].get<double>());
@@ -91,7 +93,8 @@ TEST(CliReplay, ARealtimeLogWithALiveReloadIsReproducedAcrossTheSwap) {
 
 TEST(CliReplay, ALogThatReArmedAfterAClearedFaultIsReproduced) {
   Daemon d({"--on-fault", "hold", "--duration", "120", "--set", "device.sim.initial_velocity=0.6",
-            "--set", "safety.max_speed=0.3", "--set", "device.sim.operator.damping=50"});
+            "--set", "safety.max_speed=0.3", "--set", "device.sim.operator.damping=50", "--set",
+            "safety.direction_check.on_no_motion=run"});  // the hand holds it firmly
   ASSERT_TRUE(d.ready());
   d.wait_status([](const json& s) { return s["state"] == "faulted"; });
   ASSERT_EQ(d.ctl({"clear-fault"}).exit_code, 0);
@@ -132,6 +135,16 @@ TEST(CliReplay, ATamperedForceIsCaught) {
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_TRUE(has(r.out, "NOT reproduced: 1 of 2000 ticks differ, the first at tick 1500"))
       << r.out;
+  // A force of the direction check's pulse too.
+  c = telemetry::read_log(log);
+  ASSERT_TRUE(c.records[60].flags & telemetry::kFlagProbe);
+  ASSERT_NE(c.records[60].force_commanded, 0.0) << "the pulse";
+  c.records[60].force_commanded = -c.records[60].force_commanded;
+  const std::string bad_pulse = temp_path("replay_bad_pulse.hlog");
+  telemetry::write_log_file(bad_pulse, c.header, c.records);
+  const ProcessResult p = run_process({hapticd_binary(), "replay", bad_pulse});
+  EXPECT_EQ(p.exit_code, 1);
+  EXPECT_TRUE(has(p.out, "NOT reproduced: 1 of 2000 ticks differ, the first at tick 60")) << p.out;
 }
 
 TEST(CliReplay, AnotherConfigurationGetsItsVerdictItsSummaryAndItsSeries) {
