@@ -22,7 +22,8 @@ inline constexpr int kFfConstant = 0x52, kFfGain = 0x60, kFfAutocenter = 0x61;
 inline constexpr int kFfStatusStopped = 0, kFfStatusPlaying = 1;
 inline constexpr int kAbsMax = 0x3f;
 inline constexpr int kLevelMax = 0x7fff;  // |ff_constant_effect.level|
-// ff_effect.direction for `degrees`: 0x0000 down, 0x4000 (90) left, 0x8000 up, 0xC000 right.
+// ff_effect.direction for `degrees`: 0x0000 down, 0x4000 (90) left, 0x8000 up, 0xC000 right
+// (<linux/input.h>): the way a positive level pushes.
 std::uint16_t direction_of(double degrees) noexcept;
 
 // The kernel force-feedback driver the device is bound to, by what it does with an update of
@@ -65,7 +66,7 @@ struct EvdevSettings final : config::DriverSettings {
   Selector select;
   AxisSettings axis;
   double force_full_scale = 0.0;  // N (N m) at level 0x7fff, >= device.max_force
-  double direction_deg = 90.0;    // the effect's direction: 90 pushes toward +x, 270 reverses
+  double direction_deg = 270.0;   // ff_effect.direction: 270 (0xC000, right) pushes toward +x
   double gain = 1.0;              // FF_GAIN while output is on, (0, 1]
   double autocenter = 0.0;        // FF_AUTOCENTER while output is off, [0, 1]; 0 while on
   FfDriver ff_driver = FfDriver::kPidff;

@@ -38,7 +38,7 @@ struct Event {
 // The FF_CONSTANT effect of EVIOCSFF: id -1 asks for a new one.
 struct Effect {
   std::int16_t id = -1;
-  std::uint16_t direction = 0x4000;
+  std::uint16_t direction = 0xC000;  // "right" (<linux/input.h>): a positive level toward +x
   std::int16_t level = 0;
   std::uint16_t length_ms = 0;  // 0: plays until stopped
 };

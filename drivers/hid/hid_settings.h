@@ -35,7 +35,7 @@ struct PidSettings {
   std::uint32_t sequence_usage = 0;  // an input usage beside the axis read as a counter; 0: none
   double force_full_scale = 0.0;     // N (N m) at the Magnitude's logical maximum
   double gain = 1.0;                 // Device Gain, a fraction of its logical maximum, (0, 1]
-  double direction_deg = 90.0;       // Set Effect Direction: where a positive magnitude pushes
+  double direction_deg = 270.0;      // Set Effect Direction, where the force comes from: 270 = +X
   double effect_duration_ms = 0.0;   // 0: infinite; else the effect stops unless restarted
   std::uint32_t fault_mask = kPidDefaultFaultMask;  // PidStatus bits that fault the loop
 };

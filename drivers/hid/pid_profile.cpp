@@ -258,7 +258,7 @@ class PidProfile final : public HidProfile {
     set_slot(d, l_.se_axis_x, 1);
     set_slot(d, l_.se_direction_enable, 1);
     // The Direction's logical range is one full turn (0..35999 hundredths of a degree,
-    // 0..255...): where a positive magnitude pushes, polar as DirectInput has it.
+    // 0..255...), polar as DirectInput has it: where the force comes from (docs/drivers/hid.md).
     const Slot& dir = l_.se_direction;
     if (dir.present) {
       const double turn = static_cast<double>(dir.logical_max - dir.logical_min + 1);

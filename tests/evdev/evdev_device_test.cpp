@@ -67,6 +67,9 @@ TEST(EvdevDevice, TheLifecycleUploadsPlaysUpdatesStopsAndErases) {
   EXPECT_EQ(w.back(), (std::pair{3, 1})) << "the effect played last";
   ASSERT_EQ(r.device->write(5.0), IoStatus::kOk);
   EXPECT_EQ(r.script->levels.back(), 16384) << "half of full scale";
+  for (const int d : r.script->directions) {
+    EXPECT_EQ(d, 0xC000) << "the default direction, \"right\" (<linux/input.h>): toward +x";
+  }
   r.device->disable();
   EXPECT_EQ(r.script->levels.back(), 0);
   EXPECT_NE(std::find(w.begin(), w.end(), std::pair{3, 0}), w.end()) << "stopped";

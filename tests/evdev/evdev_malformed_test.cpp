@@ -118,6 +118,7 @@ TEST(EvdevMalformed, AHostileEventStreamIsCountedAndReadWithoutAllocating) {
   h.device->configure();
   h.device->enable();
   h.script->levels.reserve(64);  // the fake's own record of updates: not the driver's
+  h.script->directions.reserve(64);
   for (int i = 0; i < 100; ++i) h.event(ReadStatus::kDropped, kEvSyn, kSynDropped, 0);
   h.event(ReadStatus::kEvent, kEvAbs, 0x3f, 5);                   // an axis it does not use
   h.event(ReadStatus::kEvent, 0x1f, 0xffff, -1);                  // no event type at all

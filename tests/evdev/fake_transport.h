@@ -23,6 +23,7 @@ struct Script {
   bool grabbed = false;
   int fuzz_set = -1;                           // the last fuzz the driver set
   std::vector<int> levels;                     // every update's level
+  std::vector<int> directions;                 // every upload's and update's direction
   std::vector<std::pair<int, int>> ff_writes;  // (code, value) written
   int uploads = 0, erases = 0;
   int next_id = 3;
@@ -44,8 +45,9 @@ class FakeTransport final : public EvdevTransport {
     }
     s_->grabbed = on;
   }
-  int upload(const wire::Effect&) override {
+  int upload(const wire::Effect& e) override {
     ++s_->uploads;
+    s_->directions.push_back(e.direction);
     return s_->next_id;
   }
   int erase(int) noexcept override {
@@ -54,6 +56,7 @@ class FakeTransport final : public EvdevTransport {
   }
   int update(const wire::Effect& e) noexcept override {
     s_->levels.push_back(e.level);
+    s_->directions.push_back(e.direction);
     return s_->update_error;
   }
   int write_ff(int code, int value) noexcept override {

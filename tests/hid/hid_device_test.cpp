@@ -79,7 +79,8 @@ TEST(HidPid, StartUpCreatesLoadsSetsStartsAndEnablesInThatOrder) {
   EXPECT_EQ(slot(effect, l.se_duration), 0xFFFF) << "the null value: infinite";
   EXPECT_EQ(slot(effect, l.se_gain), 255);
   EXPECT_EQ(slot(effect, l.se_axis_x), 1);
-  EXPECT_EQ(slot(effect, l.se_direction), 9000) << "90 degrees: +X";
+  // DirectInput's polar angle, where the force comes from: 270 degrees pushes toward +X.
+  EXPECT_EQ(slot(effect, l.se_direction), 27000) << "270 degrees: toward +X";
   EXPECT_EQ(m[6].payload[0], l.set_constant.id);
   EXPECT_EQ(slot(m[6].payload, l.sc_block), 3);
   EXPECT_EQ(slot(m[6].payload, l.sc_magnitude), 0);

@@ -68,11 +68,14 @@ TEST(HidPidff, TheKernelsPidDriverBindsAndItsConstantForceMovesTheSimulatedDevic
   ASSERT_TRUE(KernelPeer::wait_for([&] { return (fd = open_force_feedback(kKernelSerial)) >= 0; }))
       << "no /dev/input/eventN with FF_CONSTANT: hid-pidff did not bind (see dmesg)";
 
-  // Half of full scale toward +X (direction 0x4000: 90 degrees), playing until stopped.
+  // Half of full scale toward +X, playing until stopped: direction 0xC000, "270 deg -> 0xC000
+  // (right)" in <linux/input.h>. hid-pidff rescales it onto the PID Direction
+  // (pidff_set_effect_report: pidff_rescale(effect->direction, 0xffff, ...), 26999 of
+  // 0..35999), which the simulated device renders as OpenFFBoard does: -sin(direction), +X.
   ff_effect effect{};
   effect.type = FF_CONSTANT;
   effect.id = -1;
-  effect.direction = 0x4000;
+  effect.direction = 0xC000;
   effect.u.constant.level = 0x4000;
   ASSERT_EQ(ioctl(fd, EVIOCSFF, &effect), 0) << std::strerror(errno);
   EXPECT_EQ(device.peer->applied_force(), 0.0) << "uploaded, not yet played";
@@ -83,6 +86,14 @@ TEST(HidPidff, TheKernelsPidDriverBindsAndItsConstantForceMovesTheSimulatedDevic
       [&] { return std::abs(device.peer->applied_force() - expected) < 0.01 * expected; },
       std::chrono::seconds(5)))
       << "applied " << device.peer->applied_force() << " N, expected " << expected << " N";
+  // "90 deg -> 0x4000 (left)": the same level toward -X (hid-pidff sends Set Effect again for
+  // the changed direction).
+  effect.direction = 0x4000;
+  ASSERT_EQ(ioctl(fd, EVIOCSFF, &effect), 0) << std::strerror(errno);
+  EXPECT_TRUE(KernelPeer::wait_for(
+      [&] { return std::abs(device.peer->applied_force() + expected) < 0.01 * expected; },
+      std::chrono::seconds(5)))
+      << "applied " << device.peer->applied_force() << " N, expected " << -expected << " N";
   play(fd, effect.id, 0);
   EXPECT_TRUE(KernelPeer::wait_for([&] { return device.peer->applied_force() == 0.0; },
                                    std::chrono::seconds(5)))

@@ -6,6 +6,7 @@
 // the kernel test machine runs the whole device (tests/reference/hid).
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <thread>
 
 #include "fake_hid_device.h"
@@ -54,7 +55,9 @@ TEST(OpenFfboardBytes, TheStartUpReadsAsTheFirmwaresStructuresMeanIt) {
   EXPECT_EQ(out[0], (Bytes{0x0C, 0x04}));
   EXPECT_EQ(out[1], (Bytes{0x0C, 0x02}));
   // FFB_SetEffect_t: block 1, type 1, duration 100 ms, gain 255, enableAxis X | direction
-  // enable (bits 0 and 1 for one axis), directionX 9000 (sin = 1: +X).
+  // enable (bits 0 and 1 for one axis), directionX 27000: the firmware's torque is
+  // -magnitude * sin(direction) (EffectsCalculator.cpp, calcComponentForce), +magnitude here,
+  // which turns the wheel toward +X.
   const Bytes& effect = out[2];
   ASSERT_GE(effect.size(), 16u);
   EXPECT_EQ(effect[0], 0x01);
@@ -63,7 +66,12 @@ TEST(OpenFfboardBytes, TheStartUpReadsAsTheFirmwaresStructuresMeanIt) {
   EXPECT_EQ(effect[3] | effect[4] << 8, 100);
   EXPECT_EQ(effect[11], 255);
   EXPECT_EQ(effect[13] & 0x03, 0x03);
-  EXPECT_EQ(effect[14] | effect[15] << 8, 9000);
+  // 27000 or 27001: the board declares Direction 0..36000, one more than a turn, and hapticd
+  // rounds 270 / 360 of 36001 steps (hid-pidff takes 36000, 27000).
+  const int direction = effect[14] | effect[15] << 8;
+  EXPECT_NEAR(direction, 27000, 1);
+  EXPECT_NEAR(-std::sin(2.0 * M_PI * direction / 36000.0), 1.0, 1e-6)
+      << "the firmware's share of a positive magnitude along X (HidFFB: phaseX)";
   // FFB_SetConstantForce_Data_t: block 1, magnitude 0, then 2.5 / 10 * 32767.
   EXPECT_EQ(out[3], (Bytes{0x05, 1, 0, 0}));
   EXPECT_EQ(out[4], (Bytes{0x0D, 255})) << "Device Gain";

@@ -4,6 +4,7 @@
 
 #include <memory>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "drivers/hid/pid_protocol.h"
@@ -16,9 +17,10 @@ namespace {
 using Bytes = std::vector<std::uint8_t>;
 
 // The PID firmware of config/hid-pid.yaml (100 ms effects at 1 kHz), with one constant-force
-// effect created, started and the device enabled, as hid-pidff leaves it.
+// effect created, started and the device enabled, as hid-pidff leaves it; its Direction in
+// hundredths of a degree (27000: toward +X).
 struct PidHost {
-  PidHost()
+  explicit PidHost(std::int64_t direction = 27000)
       : fw(sim::hid::make_firmware(testing::load_example("hid-pid.yaml"), 0)),
         l(*find_pid_layout(*parse_report_descriptor(fw->descriptor()).descriptor, kGenericDesktopX)
                .layout) {
@@ -30,7 +32,7 @@ struct PidHost {
       choose(d, l.se_constant);
       set_slot(d, l.se_duration, 100);
       set_slot(d, l.se_gain, 255);
-      set_slot(d, l.se_direction, 9000);
+      set_slot(d, l.se_direction, direction);
     });
     out(l.effect_operation, [&](auto d) {
       set_slot(d, l.eo_block, 1);
@@ -66,6 +68,22 @@ TEST(HidFirmware, AFiniteEffectThatIsNotRestartedRunsOut) {
   EXPECT_DOUBLE_EQ(host.fw->applied_force(), 5.0) << "it plays for its whole 100 ms";
   host.force(5000);
   EXPECT_DOUBLE_EQ(host.fw->applied_force(), 0.0) << "then it has run out";
+}
+
+// The Direction is DirectInput's polar angle, where the force comes from, and the simulated
+// device renders it as OpenFFBoard does (commit 160af910, EffectsCalculator.cpp,
+// calcComponentForce: `result_torque = -forceVector * angle_ratio`, angle_ratio the sine of
+// the direction): a positive magnitude at 90 degrees pushes toward -X, at 270 toward +X. A
+// simulated device with the opposite sign (+sin) fails here.
+TEST(HidFirmware, TheDirectionIsWhereTheForceComesFrom) {
+  for (const auto& [direction, along] :
+       std::vector<std::pair<std::int64_t, double>>{{27000, 1.0}, {9000, -1.0}, {0, 0.0}}) {
+    PidHost host(direction);
+    host.force(5000);
+    EXPECT_NEAR(host.fw->applied_force(), 5.0 * along, 1e-9) << "direction " << direction;
+    host.force(-5000);
+    EXPECT_NEAR(host.fw->applied_force(), -5.0 * along, 1e-9) << "direction " << direction;
+  }
 }
 
 // The device vanishes (another thread cuts the wire: the conformance suite's transport fault)

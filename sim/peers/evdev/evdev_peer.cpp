@@ -95,11 +95,12 @@ void SocketEvdevPeer::send_event(int type, int code, int value) {
 }
 
 // The force the effect asks for, along the axis: the level's share of full scale, times the
-// gain and the sine of the direction (90 degrees pushes toward +x), while it plays.
+// gain, along the direction as <linux/input.h> encodes it (0x4000 "left", 0xC000 "right": a
+// positive level pushes toward -x at 0x4000, -sin(direction)), while it plays.
 void SocketEvdevPeer::apply() noexcept {
   double force = 0.0;
   if (playing_.load() && uploaded_) {
-    const double along = std::sin(effect_.direction / 65536.0 * 2.0 * std::numbers::pi);
+    const double along = -std::sin(effect_.direction / 65536.0 * 2.0 * std::numbers::pi);
     force = ev::level_force(effect_.level, settings_.force_full_scale) * gain_ * along;
     if (std::abs(force) < 1e-12) force = 0.0;
   }

@@ -163,7 +163,9 @@ class PidFirmware final : public HidFirmware {
     if (dir.present) {
       const double turn = static_cast<double>(dir.logical_max - dir.logical_min + 1);
       const double angle = static_cast<double>(get_slot(d, dir) - dir.logical_min) / turn;
-      e->dir_x = std::sin(2.0 * M_PI * angle);  // polar: 90 degrees is +X
+      // DirectInput's polar direction, where the force comes from, as OpenFFBoard renders it
+      // (EffectsCalculator.cpp: -magnitude * sin(direction)): 90 degrees pushes toward -X.
+      e->dir_x = -std::sin(2.0 * M_PI * angle);
     }
   }
 

@@ -161,7 +161,8 @@ void UinputFfDevice::step(double dt) {
     held += e.used ? 1 : 0;
     if (!e.used || !e.playing) continue;
     playing = true;
-    const double along = std::sin(e.direction / 65536.0 * 2.0 * std::numbers::pi);
+    // 0x4000 is "left", toward -X (the header quotes <linux/input.h>).
+    const double along = -std::sin(e.direction / 65536.0 * 2.0 * std::numbers::pi);
     force += e.level / 32767.0 * o_.full_scale * along * gain_.load() / 65535.0;
   }
   const double push = push_.load(), b = o_.damping + hand_damping_.load();

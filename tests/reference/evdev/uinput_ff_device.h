@@ -10,8 +10,10 @@
 // with damping, pushed by the motor and by a hand) in real time and reporting the axis as
 // EV_ABS with SYN_REPORT; the kernel passes a value on only when it changed, as from any
 // device. The motor's force is the playing FF_CONSTANT effect: level / 0x7fff of full scale,
-// times the gain and the sine of the direction. Every upload is recorded with its time, so a
-// test can say what reached the device each tick.
+// times the gain, along the direction as <linux/input.h> (struct ff_effect) encodes it: "0 deg
+// -> 0x0000 (down), 90 deg -> 0x4000 (left), 180 deg -> 0x8000 (up), 270 deg -> 0xC000
+// (right)", so a positive level pushes toward -X at 0x4000 and +X at 0xC000: -sin(direction).
+// Every upload is recorded with its time, so a test can say what reached the device each tick.
 #pragma once
 
 #include <atomic>

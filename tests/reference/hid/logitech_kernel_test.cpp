@@ -100,7 +100,9 @@ TEST(LogitechWheel, WhatAConstantForceBecomesOnTheWire) {
   ff_effect e{};
   e.type = FF_CONSTANT;
   e.id = -1;
-  e.direction = 0x4000;  // 90 degrees: along X
+  // "90 deg -> 0x4000 (left)" (<linux/input.h>): ml_combine_effects makes X = sin(90) *
+  // level, above the centre for a positive level, which turns the wheel left, toward -X.
+  e.direction = 0x4000;
   ASSERT_EQ(ioctl(w.fd, EVIOCSFF, &e), 0) << std::strerror(errno);
   input_event play{};
   play.type = EV_FF;
@@ -135,6 +137,9 @@ TEST(LogitechWheel, WhatAConstantForceBecomesOnTheWire) {
     delays_ms.push_back((at - sent) * 1e-6);
     std::cout << " " << level << "->" << want;
     EXPECT_EQ(w.last_x().first, want) << "nothing after it but its own X";
+    if (level == 0x7fff) {
+      EXPECT_LT(w.wheel->torque(), 0.0) << "a positive level at 0x4000: toward -X";
+    }
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   std::cout << "\n";
@@ -228,6 +233,9 @@ TEST(LogitechWheel, ThroughTheKernelsLogitechDriverTheWallHoldsTheHand) {
   EXPECT_NEAR(calls.per_tick["ioctl EVIOCSFF"], 1.0, 0.02);
   EXPECT_NEAR(x_rest, kPush / kStiffness, 0.02 * kPush / kStiffness) << "resting penetration";
   EXPECT_NEAR(torque_rest, -kPush, 0.02 * kPush) << "the wall's torque at rest";
+  // The shipped direction 270 (0xC000, "right") turns the wall's negative level into X above
+  // the centre: the wheel turns left, toward -X, out of the wall.
+  EXPECT_GT(x_byte, 0);
   std::cout << "logitech: resting penetration " << x_rest << " rad (F/K " << kPush / kStiffness
             << "), torque " << torque_rest << " N m as X - centre " << x_byte << "; " << reports
             << " reports in the 100 ticks of a second at rest\n";

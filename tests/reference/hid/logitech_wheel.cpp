@@ -87,7 +87,8 @@ std::vector<WheelCommand> LogitechWheel::commands() const {
 
 // The constant force as either Logitech driver writes it: hid-lgff 0x51 0x08 X Y (0x7f the
 // centre), hid-lg4ff 0x11 0x08 X 0x80 into force slot 1 (0x80 the centre) and 0x13 0x00 to
-// switch that slot off.
+// switch that slot off. X above the centre turns the wheel left, toward -X (the header says
+// whose word that is).
 void LogitechWheel::output(std::span<const std::uint8_t> r) {
   {
     const std::lock_guard lock(m_);
@@ -95,9 +96,9 @@ void LogitechWheel::output(std::span<const std::uint8_t> r) {
   }
   if (r.size() < 3) return;
   if (r[0] == 0x51 && r[1] == 0x08) {
-    torque_.store((static_cast<double>(r[2]) - 0x7f) / 127.0 * o_.torque_full_scale);
+    torque_.store(-(static_cast<double>(r[2]) - 0x7f) / 127.0 * o_.torque_full_scale);
   } else if (r[0] == 0x11 && r[1] == 0x08) {
-    torque_.store((static_cast<double>(r[2]) - 0x80) / 127.0 * o_.torque_full_scale);
+    torque_.store(-(static_cast<double>(r[2]) - 0x80) / 127.0 * o_.torque_full_scale);
   } else if (r[0] == 0x13) {
     torque_.store(0.0);
   }

@@ -12,7 +12,16 @@
 //   - force: the memless core combines the effects into one signed 8-bit force per axis, and
 //     hid_lgff_play writes 0x51 0x08 X Y (X offset by 0x7f, "0x7f is center"), lg4ff_play
 //     0x11 0x08 X 0x80 into force slot 1 (offset by 0x80, "0x80 is no force") or 0x13 0x00 to
-//     switch the slot off; the wheel turns with (X - centre) / 127 of its full torque.
+//     switch the slot off; the wheel turns with (X - centre) / 127 of its full torque, a byte
+//     above the centre to the left, toward -X (its X grows to the right). Logitech's classic
+//     format as its users write it: nightmode/logitech-g29 (3159ce8c, code/index.js
+//     forceConstant sends round(|n - 1| * 255), docs/api.md: "forceConstant(0) // full left",
+//     "(1) // full right"; data-map.js: wheel turn "0 is far left, 255 is far right") and
+//     wiibrew.org's "Logitech USB steering wheel" ("0x00 is to right, 0x80 is zero force, 0xFF
+//     is to left"). That is the kernel's documented direction through ff-memless: 0x4000 is
+//     "left" (<linux/input.h>) and ml_combine_effects makes X = sin(direction) * level, above
+//     the centre for a positive level. hid-lgff's 0x51 byte is taken the same way: only the
+//     kernel's documentation speaks for it.
 // The wheel reports its axis on change, every 2 ms at most, and again after 100 ms without a
 // change; every output report is recorded
 // with its time, so a test can say what hapticd's force became on the wire.
@@ -33,7 +42,7 @@ namespace hapticd::reference {
 struct LogitechWheelOptions {
   std::string serial = "lg-ffgp-ref";
   double degrees = 270.0;        // lock to lock: X spans it over 0..16383
-  double torque_full_scale = 2;  // N m at X = 0x7f + 127
+  double torque_full_scale = 2;  // N m (toward -X) at X = centre + 127
   double inertia = 0.05, damping = 0.05, start_position = -0.1;  // kg m^2, N m s/rad, rad
 };
 

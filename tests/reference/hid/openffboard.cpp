@@ -112,6 +112,8 @@ double OpenFfboard::torque(std::int64_t now) {
     }
     if (e.type == 1) sum += e.magnitude * e.axis_magnitude * e.gain / 255.0;
   }
+  // calcComponentForce: result_torque = -forceVector * angle_ratio (the header says why).
+  if (o_.force_sign == ForceSign::kOpenFfboard) sum = -sum;
   sum = std::clamp(sum * device_gain_ / 255.0, -32767.0, 32767.0);
   return sum / 32767.0 * o_.torque_full_scale;
 }

@@ -17,9 +17,14 @@
 //     report sent only from new_effect and set_effect: Actuator Power always, Actuators Enabled
 //     and Effect Playing while FFB is on, Device Paused while it is off, and the declared Safety
 //     Switch never;
-//   - EffectsCalculator: a constant force is its magnitude times sin(direction) for one axis
-//     (direction enable set), times the effect's gain and the device gain (/255 each), and an
-//     effect with a finite duration stops that long after its start.
+//   - EffectsCalculator::calcComponentForce: a constant force's torque is `result_torque =
+//     -forceVector * angle_ratio`, angle_ratio the X axis' share HidFFB::set_effect gives it
+//     (sin(directionX), or (directionX - 18000) / 18000 without direction enable), times the
+//     effect's gain and the device gain (/255 each); a finite effect stops that long after its
+//     start. Axis.cpp inverts the angle and the torque together and its idle spring
+//     (-pos_scaled_16b * idlespringscale) restores toward the centre: a positive torque moves
+//     X up. So a positive magnitude at direction 90 degrees turns the wheel toward -X, at 270
+//     toward +X: DirectInput's convention (90 degrees comes from +X).
 // Left out: the optional constant-force low-pass filter (a delay a board may be configured
 // with), conditions, periodic effects and the encoder hardware: the axis is AxisPlant, read
 // every 1 ms FFB cycle.
@@ -40,6 +45,19 @@
 
 namespace hapticd::reference {
 
+// Which way the X axis' share of an effect points.
+enum class ForceSign {
+  // OpenFFBoard's own (EffectsCalculator.cpp, calcComponentForce): torque = -magnitude *
+  // sin(direction); DirectInput's convention.
+  kOpenFfboard,
+  // A firmware built on YukMingLaw/ArduinoJoystickWithFFBLibrary (v1.0.0, ed86e27e,
+  // src/Joystick.cpp, getEffectForce: `angle_ratio = axis == 0 ? sin(angle) : ...`, force =
+  // magnitude * angle_ratio): the reverse of DirectInput's, as its issue 36 ("Force direction
+  // is backwards") reports. Everything else stays OpenFFBoard's, so one configuration drives
+  // both boards and only the direction of the force differs.
+  kArduinoJoystickWithFfbLibrary,
+};
+
 struct OpenFfboardOptions {
   std::string serial = "openffboard-ref";
   double degrees = 900.0;         // axis.degrees: the X axis spans +-degrees/2 at +-32767
@@ -49,6 +67,7 @@ struct OpenFfboardOptions {
   double start_position = -0.1;   // rad
   std::size_t effects = 40;       // MAX_EFFECTS
   int usb_report_rate = 1;        // FFB cycles (1 ms) per send_report call
+  ForceSign force_sign = ForceSign::kOpenFfboard;
 };
 
 class OpenFfboard {

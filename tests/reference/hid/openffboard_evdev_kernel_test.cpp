@@ -1,9 +1,10 @@
 // hapticd's evdev driver against the reference OpenFFBoard (openffboard.h) behind the kernel's
 // own PID host: on the raw gadget the board is a USB device with a complete PID descriptor, so
 // usbhid binds hid-pidff to it, and hapticd meets it as /dev/input/eventN with FF_CONSTANT
-// (device.evdev.ff_driver pidff). The wall must hold the hand's push at F/K within 2 %, as it
-// does through the HID driver; and what the board receives each tick is counted: hid-pidff
-// sends a Set Constant Force report for an update only when the level changed.
+// (device.evdev.ff_driver pidff). With config/evdev.yaml's direction 270 (0xC000, which
+// hid-pidff passes on as the PID Direction) the wall must hold the hand's push at F/K within
+// 2 %, as it does through the HID driver; and what the board receives each tick is counted:
+// hid-pidff sends a Set Constant Force report for an update only when the level changed.
 #include <gtest/gtest.h>
 
 #include <cmath>

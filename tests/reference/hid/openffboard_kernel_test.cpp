@@ -1,10 +1,12 @@
 // hapticd against the reference OpenFFBoard (openffboard.h) as a USB device on the raw gadget,
 // in the kernel test machine, through both hidapi backends, with the shipped
-// config/hid-openffboard.yaml. The machine is emulated (TCG) and its USB controller is
-// dummy_hcd (transfers on a 4 ms timer, wake-ups up to 50 ms late), so the loop runs at 100 Hz
-// with a wall the gate allows there, the effect's duration is 1 s and the liveness bound 1 s:
-// above the emulator's stalls on top of the firmware's ~100 ms resend, far below a hang. The
-// emulated controller also stalls output transfers under load: 100 full ticks fault, not 10.
+// config/hid-openffboard.yaml: its direction 270 is what makes the firmware's torque
+// (-magnitude * sin(direction)) push the wheel out of the wall. The machine is emulated (TCG)
+// and its USB controller is dummy_hcd (transfers on a 4 ms timer, wake-ups up to 50 ms late),
+// so the loop runs at 100 Hz with a wall the gate allows there, the effect's duration is 1 s
+// and the liveness bound 1 s: above the emulator's stalls on top of the firmware's ~100 ms
+// resend, far below a hang. The emulated controller also stalls output transfers under load:
+// 100 full ticks fault, not 10.
 #include <gtest/gtest.h>
 
 #include <cmath>
