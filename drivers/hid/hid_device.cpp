@@ -119,7 +119,9 @@ IoStatus HidDevice::on_read(PositionSample& out) noexcept {
   out.time_ns = now;  // hidapi gives no kernel time stamp: when it was read
   out.flags = kSampleHasTime;
   out.samples = d.samples;
-  if (decoded_.has_sequence) {
+  // A device that reports on change numbers the samples it did not send too: its gaps are
+  // unchanged positions, not lost ones (docs/drivers/hid.md), so they are not counted.
+  if (decoded_.has_sequence && !settings_->reports_on_change) {
     out.sequence = decoded_.sequence;
     out.flags |= kSampleHasSequence;
   }

@@ -146,6 +146,9 @@ struct DirectionCheckConfig {
   double min_motion = 0.2;
   NoMotionAction on_no_motion = NoMotionAction::kRefuse;
   double rest_timeout_ms = 1000.0;  // how long the check waits for the device to be at rest
+  // How much later than the driver declares the device's response may come (a USB link's
+  // queue, a drive's own cycle): the fit searches delays up to this much more.
+  double max_latency_ms = 50.0;
   friend bool operator==(const DirectionCheckConfig&, const DirectionCheckConfig&) = default;
 };
 

@@ -29,6 +29,7 @@ void read_direction_check(MapReader& safety, DirectionCheckConfig& c) {
     c.on_no_motion = *v;
   }
   number(m, "rest_timeout_ms", Range::interval(0.0, false, 60000.0, true), c.rest_timeout_ms);
+  number(m, "max_latency_ms", Range::interval(0.0, true, 1000.0, true), c.max_latency_ms);
   m.finish();
 }
 

@@ -18,20 +18,11 @@ constexpr int kMinHalfTicks = 3;
 constexpr double kRestShare = 0.25;
 // A gain within this many standard errors of zero is no motion, however large.
 constexpr double kSignificance = 4.0;
-
-std::array<double, 9> gram_inverse(const std::vector<double>& e) {
-  Eigen::Matrix3d g = Eigen::Matrix3d::Zero();
-  for (std::size_t i = 0; i < e.size(); ++i) {
-    const Eigen::Vector3d r(1.0, static_cast<double>(i), e[i]);
-    g += r * r.transpose();
-  }
-  const Eigen::Matrix3d inv = g.inverse();
-  std::array<double, 9> out{};
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) out[static_cast<std::size_t>(3 * r + c)] = inv(r, c);
-  }
-  return out;
-}
+// A hand's acceleration over the rest window, carried on over the push's horizon, may move the
+// device by at most this share of the push's own motion.
+constexpr double kCurvatureShare = 0.1;
+// Motion beyond this many times what the model predicts is not the push's.
+constexpr double kMaxGain = 4.0;
 
 }  // namespace
 
@@ -55,11 +46,49 @@ const char* probe_state_name(ProbeState s) noexcept {
   return "unknown";
 }
 
-double ProbePlan::force_at(int j) const noexcept {
-  if (j < half_ticks) return force;
-  if (j < 2 * half_ticks) return -brake * force;
-  return 0.0;
+double ProbePlan::expected(int c, std::size_t i) const noexcept {
+  // Index R - 1 is where the pulse began; the response shows c ticks after that.
+  const long j = static_cast<long>(i) - (rest_ticks - 1) - c;
+  return j > 0 ? response[static_cast<std::size_t>(j)] : 0.0;
 }
+
+namespace {
+
+// The inverse normal matrix of [1, i, e_c(i)] over the first `rows` window positions.
+std::array<double, 9> gram_inverse(const ProbePlan& p, int c, std::size_t rows) {
+  Eigen::Matrix3d g = Eigen::Matrix3d::Zero();
+  for (std::size_t i = 0; i < rows; ++i) {
+    const Eigen::Vector3d r(1.0, static_cast<double>(i), p.expected(c, i));
+    g += r * r.transpose();
+  }
+  const Eigen::Matrix3d inv = g.inverse();
+  std::array<double, 9> out{};
+  for (int r = 0; r < 3; ++r) {
+    for (int k = 0; k < 3; ++k) out[static_cast<std::size_t>(3 * r + k)] = inv(r, k);
+  }
+  return out;
+}
+
+// The weights of the quadratic term of a least-squares fit of [1, i, i^2] over `rows` points:
+// the last row of (X'X)^-1 X'.
+std::vector<double> curvature_weights(int rows) {
+  Eigen::MatrixXd x(rows, 3);
+  for (int i = 0; i < rows; ++i) x.row(i) << 1.0, i, static_cast<double>(i) * i;
+  const Eigen::MatrixXd w = (x.transpose() * x).inverse() * x.transpose();
+  std::vector<double> out(static_cast<std::size_t>(rows));
+  for (int i = 0; i < rows; ++i) out[static_cast<std::size_t>(i)] = w(2, i);
+  return out;
+}
+
+// The fitted positions for a response c ticks late: the rest window and the push's own
+// response, up to where the brake begins to act (n + c after the pulse began). From rest, any
+// passive device's step response has the force's sign (a spring holding it only slows it
+// later): what follows the brake depends on the hand.
+std::size_t fitted_rows(const ProbePlan& p, int c) {
+  return static_cast<std::size_t>(p.rest_ticks + p.half_ticks + c);
+}
+
+}  // namespace
 
 ProbePlan probe_plan(const config::Config& cfg, int device_delay) {
   const config::DirectionCheckConfig& dc = cfg.safety.direction_check;
@@ -70,6 +99,7 @@ ProbePlan probe_plan(const config::Config& cfg, int device_delay) {
       std::max(kMinHalfTicks, static_cast<int>(std::ceil(dc.duration_ms * 1e-3 / period - 1e-9)));
   p.rest_ticks = 2 * p.half_ticks;
   p.delay = device_delay;
+  p.max_delay = device_delay + static_cast<int>(std::ceil(dc.max_latency_ms * 1e-3 / period - 1e-9));
   // The rest window itself is always waited, however short the time-out.
   p.max_wait_ticks =
       std::max(static_cast<std::uint64_t>(p.rest_ticks),
@@ -77,24 +107,12 @@ ProbePlan probe_plan(const config::Config& cfg, int device_delay) {
   p.min_gain = dc.min_motion;
   // Out of the wall first: the way the wall itself would push.
   p.force = -static_cast<double>(cfg.wall.normal) * dc.level * cfg.device.max_force;
-  p.brake = std::exp(-p.half_ticks * period * cfg.device.damping / cfg.device.mass);
-  // The force acting over each period after the pulse began: the command d ticks late.
-  const int after = 3 * p.half_ticks + p.delay;
-  std::vector<double> acting(static_cast<std::size_t>(after) + 1, 0.0);
-  for (int j = 0; j < 2 * p.half_ticks; ++j) {
-    acting[static_cast<std::size_t>(j + p.delay)] = p.force_at(j);
-  }
-  const std::vector<double> x =
-      analysis::free_motion_response(acting, cfg.device.mass, cfg.device.damping, period);
-  // The window: R positions of the rest window (the last one where the pulse begins), then
-  // the `after` positions that follow it.
-  p.expected.assign(static_cast<std::size_t>(p.rest_ticks - 1), 0.0);
-  p.expected.insert(p.expected.end(), x.begin(), x.end());
-  // The fit: the rest window and the push's own response, up to where the brake begins to act
-  // (n + d after the pulse began). From rest, any passive device's step response has the
-  // force's sign (a spring holding it only slows it later): the brake's is a spring's business.
-  p.fitted = static_cast<std::size_t>(p.rest_ticks + p.half_ticks + p.delay);
-  for (const double e : x) {
+  p.brake = std::exp(-(p.half_ticks + p.max_delay) * period * cfg.device.damping /
+                     cfg.device.mass);
+  std::vector<double> pulse(static_cast<std::size_t>(p.half_ticks + p.max_delay) + 1, 0.0);
+  for (int j = 0; j < p.half_ticks; ++j) pulse[static_cast<std::size_t>(j)] = p.force_at(j);
+  p.response = analysis::free_motion_response(pulse, cfg.device.mass, cfg.device.damping, period);
+  for (const double e : p.response) {
     if (std::abs(e) > std::abs(p.expected_peak)) p.expected_peak = e;
   }
   if (!(std::abs(p.expected_peak) > 0.0) || !std::isfinite(p.expected_peak)) {
@@ -103,15 +121,22 @@ ProbePlan probe_plan(const config::Config& cfg, int device_delay) {
         "pulse");
   }
   p.rest_tolerance = kRestShare * std::abs(p.expected_peak);
-  p.gram_inverse =
-      gram_inverse({p.expected.begin(), p.expected.begin() + static_cast<long>(p.fitted)});
+  p.curvature_weights = curvature_weights(p.rest_ticks);
+  const double horizon = p.half_ticks + p.max_delay;
+  p.curvature_tolerance = kCurvatureShare * std::abs(p.expected_peak) / (horizon * horizon);
+  for (int c = p.delay; c <= p.max_delay; ++c) {
+    p.gram_inverses.push_back(gram_inverse(p, c, fitted_rows(p, c)));
+  }
   return p;
 }
 
 DirectionProbe::DirectionProbe(ProbePlan plan)
     : plan_(std::move(plan)),
       rest_(static_cast<std::size_t>(plan_.rest_ticks), 0.0),
-      window_(plan_.window(), 0.0) {
+      window_(plan_.window(), 0.0),
+      sum_y_(plan_.window() + 1, 0.0),
+      sum_iy_(plan_.window() + 1, 0.0),
+      sum_yy_(plan_.window() + 1, 0.0) {
   restart();
 }
 
@@ -119,10 +144,22 @@ void DirectionProbe::restart() noexcept {
   rest_head_ = 0;
   rest_count_ = 0;
   pulse_tick_ = 0;
+  braking_ = 0;
   result_ = {};
   result_.state = plan_.enabled ? ProbeState::kWaiting : ProbeState::kOff;
   result_.force = plan_.force;
   result_.expected_peak = plan_.expected_peak;
+}
+
+// RT-safe. Whether the full rest ring is still: spread, and the acceleration a hand gives it.
+bool DirectionProbe::at_rest() const noexcept {
+  const auto [lo, hi] = std::minmax_element(rest_.begin(), rest_.end());
+  if (!(*hi - *lo <= plan_.rest_tolerance)) return false;
+  double q = 0.0;  // oldest first: the ring's head is the oldest once it is full
+  for (std::size_t i = 0; i < rest_.size(); ++i) {
+    q += plan_.curvature_weights[i] * (rest_[(rest_head_ + i) % rest_.size()] - *lo);
+  }
+  return std::abs(q) <= plan_.curvature_tolerance;
 }
 
 // RT-safe. Zero force until the last R positions are still; then the pulse's first tick.
@@ -130,17 +167,14 @@ double DirectionProbe::wait(double position) noexcept {
   rest_[rest_head_] = position;
   rest_head_ = (rest_head_ + 1) % rest_.size();
   rest_count_ = std::min(rest_count_ + 1, rest_.size());
-  if (rest_count_ == rest_.size()) {
-    const auto [lo, hi] = std::minmax_element(rest_.begin(), rest_.end());
-    if (*hi - *lo <= plan_.rest_tolerance) {
-      // Oldest first: the ring's head is the oldest once it is full.
-      for (std::size_t i = 0; i < rest_.size(); ++i) {
-        window_[i] = rest_[(rest_head_ + i) % rest_.size()];
-      }
-      result_.state = ProbeState::kPulsing;
-      pulse_tick_ = 0;
-      return plan_.force_at(0);
+  if (rest_count_ == rest_.size() && at_rest()) {
+    // Oldest first: the ring's head is the oldest once it is full.
+    for (std::size_t i = 0; i < rest_.size(); ++i) {
+      window_[i] = rest_[(rest_head_ + i) % rest_.size()];
     }
+    result_.state = ProbeState::kPulsing;
+    pulse_tick_ = 0;
+    return plan_.force_at(0);
   }
   if (result_.ticks >= plan_.max_wait_ticks) result_.state = ProbeState::kNeverAtRest;
   return 0.0;
@@ -149,6 +183,10 @@ double DirectionProbe::wait(double position) noexcept {
 double DirectionProbe::step(double position, std::uint32_t periods) noexcept {
   if (ended()) return 0.0;
   ++result_.ticks;
+  if (braking_ > 0) {  // confirmed: the force's sign is known, so this slows the device
+    --braking_;
+    return -plan_.brake * plan_.force;
+  }
   if (result_.state == ProbeState::kPulsing && periods != 1) {
     result_.state = ProbeState::kWaiting;  // the force was held longer than the model's
     rest_count_ = 0;
@@ -156,49 +194,84 @@ double DirectionProbe::step(double position, std::uint32_t periods) noexcept {
   if (result_.state == ProbeState::kWaiting) return wait(position);
   ++pulse_tick_;
   window_[rest_.size() - 1 + static_cast<std::size_t>(pulse_tick_)] = position;
-  if (rest_.size() - 1 + static_cast<std::size_t>(pulse_tick_) + 1 == window_.size()) {
-    decide();
+  if (rest_.size() - 1 + static_cast<std::size_t>(pulse_tick_) + 1 < window_.size()) {
+    return plan_.force_at(pulse_tick_);
+  }
+  decide();
+  if ((result_.state == ProbeState::kConfirmed || result_.state == ProbeState::kReversed) &&
+      std::abs(result_.gain) > kMaxGain) {
+    // Far more motion than the push makes: something else moved it. Wait for rest again.
+    result_.state =
+        result_.ticks >= plan_.max_wait_ticks ? ProbeState::kNeverAtRest : ProbeState::kWaiting;
+    rest_count_ = 0;
     return 0.0;
   }
-  return plan_.force_at(pulse_tick_);
+  if (result_.state != ProbeState::kConfirmed) return 0.0;
+  braking_ = plan_.half_ticks - 1;
+  return -plan_.brake * plan_.force;
 }
 
-// RT-safe. The least-squares fit of y_i = a + c i + g e_i and the verdict from g.
-void DirectionProbe::decide() noexcept {
-  const std::vector<double>& e = plan_.expected;
-  const std::array<double, 9>& gi = plan_.gram_inverse;
-  const double y0 = window_[0];  // positions relative to the first: no large offsets summed
-  double b[3] = {0.0, 0.0, 0.0};
-  const std::size_t n = plan_.fitted;
-  for (std::size_t i = 0; i < n; ++i) {
-    const double y = window_[i] - y0;
-    b[0] += y;
-    b[1] += static_cast<double>(i) * y;
-    b[2] += e[i] * y;
+// RT-safe. The least-squares fit of y_i = a0 + a1 i + g e_c(i) over the fitted rows, from the
+// prefix sums (RSS = y'y - theta' R'y): {g, its standard error}.
+std::array<double, 2> DirectionProbe::fit(int c) const noexcept {
+  const std::size_t rows = fitted_rows(plan_, c);
+  const std::array<double, 9>& gi = plan_.gram_inverses[static_cast<std::size_t>(c - plan_.delay)];
+  const double y0 = window_[0];
+  double b2 = 0.0;  // e_c is zero before the pulse's response: only the push's rows
+  for (std::size_t i = static_cast<std::size_t>(plan_.rest_ticks + c); i < rows; ++i) {
+    b2 += plan_.expected(c, i) * (window_[i] - y0);
   }
+  const double b[3] = {sum_y_[rows], sum_iy_[rows], b2};
   double theta[3];
   for (int r = 0; r < 3; ++r) {
     theta[r] = gi[3 * r] * b[0] + gi[3 * r + 1] * b[1] + gi[3 * r + 2] * b[2];
   }
-  double rss = 0.0;
-  for (std::size_t i = 0; i < n; ++i) {
-    const double fit = theta[0] + theta[1] * static_cast<double>(i) + theta[2] * e[i];
-    const double r = window_[i] - y0 - fit;
-    rss += r * r;
+  const double rss = std::max(0.0, sum_yy_[rows] - theta[0] * b[0] - theta[1] * b[1] - theta[2] * b[2]);
+  const double dof = static_cast<double>(rows) - 3.0;
+  return {theta[2], std::sqrt(std::max(0.0, rss / dof * gi[8]))};
+}
+
+// RT-safe. The fit at each delay the plan allows, from the declared one up: the first that
+// shows significant motion fixes its sign (a shorter delay than the device's own still sees
+// the start of the push, whose sign is the force's; a longer one would fit the brake and what
+// a hand's spring does after it, whose sign is not). Of the longer delays with a fit of that
+// sign, the best one's is the latency, and its gain the motion measured.
+void DirectionProbe::decide() noexcept {
+  const double y0 = window_[0];  // positions relative to the first: no large offsets summed
+  for (std::size_t i = 0; i < window_.size(); ++i) {
+    const double y = window_[i] - y0;
+    sum_y_[i + 1] = sum_y_[i] + y;
+    sum_iy_[i + 1] = sum_iy_[i] + static_cast<double>(i) * y;
+    sum_yy_[i + 1] = sum_yy_[i] + y * y;
   }
-  const double dof = static_cast<double>(n) - 3.0;
-  result_.gain = theta[2];
-  result_.gain_error = std::sqrt(std::max(0.0, rss / dof * gi[8]));
-  const double g = result_.gain, clear = kSignificance * result_.gain_error;
-  if (!std::isfinite(g)) {
-    result_.state = ProbeState::kNoMotion;
-  } else if (g >= plan_.min_gain && g > clear) {
-    result_.state = ProbeState::kConfirmed;
-  } else if (g <= -plan_.min_gain && -g > clear) {
-    result_.state = ProbeState::kReversed;
-  } else {
-    result_.state = ProbeState::kNoMotion;
+  const auto t_of = [](const std::array<double, 2>& f) {
+    return f[1] > 0.0 ? std::abs(f[0]) / f[1] : (f[0] != 0.0 ? HUGE_VAL : 0.0);
+  };
+  int c = plan_.delay;
+  std::array<double, 2> best = fit(c);
+  int found = -1;
+  for (; c <= plan_.max_delay; ++c) {
+    const std::array<double, 2> f = fit(c);
+    if (std::isfinite(f[0]) && t_of(f) > kSignificance) {
+      best = f;
+      found = c;
+      break;
+    }
+    if (t_of(f) > t_of(best)) best = f;  // reported when nothing is significant
   }
+  for (int later = found + 1; found >= 0 && later <= plan_.max_delay; ++later) {
+    const std::array<double, 2> f = fit(later);
+    if (f[0] * best[0] > 0.0 && t_of(f) > t_of(best)) {
+      best = f;
+      found = later;
+    }
+  }
+  result_.gain = best[0];
+  result_.gain_error = best[1];
+  result_.latency = found >= 0 ? found - plan_.delay : 0;
+  result_.state = found < 0 || !(std::abs(best[0]) >= plan_.min_gain)
+                      ? ProbeState::kNoMotion
+                      : (best[0] > 0.0 ? ProbeState::kConfirmed : ProbeState::kReversed);
 }
 
 }  // namespace hapticd::control

@@ -4,18 +4,26 @@
 // reversed wall pulls the device in until it saturates.
 //
 // Once the device is at rest (its positions over the last 2n ticks spread less than a quarter
-// of the motion the pulse will cause), the probe commands a doublet: n ticks of F, then n of
-// -F exp(-n T b / m) (a push out of the wall, then the brake that stops the model's device
-// again), then n + d ticks of zero (d: the driver's declared delay). The positions over the
-// rest window and the push (up to where the brake begins to act) are fitted by least squares to
+// of the motion the pulse will cause), the probe pushes with F for n ticks, out of the wall,
+// then watches with zero force for as long as its response may take to come (D: the driver's
+// declared delay d and up to max_latency_ms more). The positions over the rest window and the
+// push's own response are fitted by least squares to
 //   y_i = a + c i + g e_i,
 // e the response the configured mass and damping predict for the same force from rest (the
-// exact ZOH model, analysis::free_motion_response), a + c i whatever drift the device had. Only
-// the push is fitted: from rest, a mass held by any spring and damper first moves the way it is
-// pushed, while what follows depends on the hand. The gain g says which way and how much: about
-// 1 for a free device pushed as commanded, less for a hand holding it, negative for a reversed
-// force (the fit of a negative mass); a |g| under safety.direction_check.min_motion, or within
-// four standard errors of zero, is no motion.
+// exact ZOH model, analysis::free_motion_response), a + c i whatever drift the device had. The
+// gain g says which way and how much: about 1 for a free device pushed as commanded, less for a
+// hand holding it, negative for a reversed force (the fit of a negative mass); a |g| under
+// safety.direction_check.min_motion, or within four standard errors of zero, is no motion.
+// The push is one-sided: whatever a slow link drops or delays of it, what reaches the device
+// never pushes the other way. From rest, a mass held by any spring and damper first moves the
+// way it is pushed; only later may a hand's spring pull it back. So the delay is searched from
+// the declared one up, and the first fit with significant motion fixes the sign (a delay
+// shorter than the device's own still sees the start of the push's response; a longer one
+// could see the hand's); the best fit of that sign gives the latency. A device that moves far
+// more than the push could move it (|g| over 4) was being moved by something else: the check
+// waits for rest and tries again, until rest_timeout_ms. Once confirmed, and only
+// then, a brake of n ticks takes out what speed the model's device would still have (a
+// reversed force would turn a brake into a push).
 #pragma once
 
 #include <array>
@@ -29,7 +37,7 @@ namespace hapticd::control {
 enum class ProbeState : std::uint8_t {
   kOff,          // safety.direction_check.mode: off
   kWaiting,      // zero force, waiting for the device to be at rest
-  kPulsing,      // the pulse and the motion after it
+  kPulsing,      // the push and the motion after it
   kConfirmed,    // the device moved the way the force pushed
   kReversed,     // it moved the other way: a wall would pull
   kNoMotion,     // it did not move measurably (held firmly, or too heavy for the pulse)
@@ -46,23 +54,37 @@ inline bool probe_ended(ProbeState s) noexcept {
 // What the probe does, resolved from the configuration once, off the RT thread.
 struct ProbePlan {
   bool enabled = false;
-  double force = 0.0;  // the first half's force (N), signed: along -wall.normal
-  // The second half's force as a share of -force: exp(-n T b / m), what stops the model's
-  // device exactly (its damping has already taken that much of the speed the push gave it).
+  double force = 0.0;  // the push's force (N), signed: along -wall.normal
+  // The brake's force as a share of -force, after a confirmed push: exp(-(n + D) T b / m),
+  // what stops the model's device exactly (its damping has taken that much of the speed the
+  // push gave it by the time the brake ends).
   double brake = 1.0;
   int half_ticks = 3;                   // n
   int rest_ticks = 6;                   // R = 2n: the rest window, the fit's baseline
   int delay = 0;                        // d: the driver's declared transport delay
   std::uint64_t max_wait_ticks = 1000;  // ticks with a position before giving up on rest
   double rest_tolerance = 0.0;          // the largest spread of positions at rest (m)
+  // The quadratic term of a least-squares fit of the rest window is sum w_i y_i (oldest
+  // first); at rest, extrapolated over the push's horizon (n + D), it moves the device less
+  // than curvature_tolerance: a hand accelerating it would be read as the push's motion.
+  std::vector<double> curvature_weights;
+  double curvature_tolerance = 0.0;     // (m)
   double min_gain = 0.2;
-  double expected_peak = 0.0;            // the model's largest displacement (m), signed
-  std::vector<double> expected;          // e_i over the window: R zeros, then 3n + d
-  std::size_t fitted = 0;                // the first R + n + d of them: the rest and the push
-  std::array<double, 9> gram_inverse{};  // of [1, i, e_i] over the fitted part, row-major
-  std::size_t window() const noexcept { return expected.size(); }
-  // RT-safe. The force of pulse tick j (0 from 2n on).
-  double force_at(int j) const noexcept;
+  int max_delay = 0;                    // D: d and the latency allowed beyond it (ticks)
+  double expected_peak = 0.0;           // the model's largest displacement (m), signed
+  // The model's positions j ticks after the push began, with no delay: n + D + 1 of them.
+  std::vector<double> response;
+  // For each delay c = d..D, the inverse normal matrix of [1, i, e_c(i)] over the rest window
+  // and the push (the first R + n + c positions), row-major.
+  std::vector<std::array<double, 9>> gram_inverses;
+  // The positions recorded: the rest window (R), then n + D after the push began.
+  std::size_t window() const noexcept {
+    return static_cast<std::size_t>(rest_ticks + half_ticks + max_delay);
+  }
+  // RT-safe. e_c(i): the model's position at window index i for a response c ticks late.
+  double expected(int c, std::size_t i) const noexcept;
+  // RT-safe. The force of pulse tick j: the push's n, then zero.
+  double force_at(int j) const noexcept { return j < half_ticks ? force : 0.0; }
 };
 
 // Not RT-safe, pure. The plan for `cfg` with the driver's declared delay. Throws
@@ -73,9 +95,10 @@ struct ProbeResult {
   ProbeState state = ProbeState::kOff;
   double gain = 0.0;           // g: the motion over the model's, signed
   double gain_error = 0.0;     // its standard error
-  double force = 0.0;          // the first half's force (N)
+  double force = 0.0;          // the push's force (N)
   double expected_peak = 0.0;  // the model's largest displacement (m)
   std::uint64_t ticks = 0;     // ticks the check took (waiting and pulsing)
+  int latency = 0;             // ticks the best fit's response came after the declared delay
 };
 
 class DirectionProbe {
@@ -89,20 +112,27 @@ class DirectionProbe {
   // `periods`: sample periods since the previous tick; a pulse that more than one passed
   // (the loop skipped periods) no longer matches the model, and waits for rest again.
   double step(double position, std::uint32_t periods = 1) noexcept;
-  bool ended() const noexcept { return probe_ended(result_.state); }
+  // Whether it commands nothing more: a verdict reached, and a confirmed one's brake done.
+  bool ended() const noexcept { return probe_ended(result_.state) && braking_ == 0; }
   const ProbeResult& result() const noexcept { return result_; }
   const ProbePlan& plan() const noexcept { return plan_; }
 
  private:
+  bool at_rest() const noexcept;
   double wait(double position) noexcept;
   void decide() noexcept;
+  // The fit for a response c ticks late: {g, its standard error}.
+  std::array<double, 2> fit(int c) const noexcept;
 
   ProbePlan plan_;
   std::vector<double> rest_;    // ring of the last R positions
   std::vector<double> window_;  // the rest window, then the positions after the pulse began
+  // Prefix sums over the window, relative to its first position: y, i y and y^2.
+  std::vector<double> sum_y_, sum_iy_, sum_yy_;
   std::size_t rest_head_ = 0;
   std::size_t rest_count_ = 0;
   int pulse_tick_ = 0;
+  int braking_ = 0;  // brake ticks left after a confirmed push
   ProbeResult result_;
 };
 

@@ -62,7 +62,7 @@ std::string describe(const Fault& f) {
       break;
     case FaultCause::kForceReversed:
       std::snprintf(buf, sizeof buf,
-                    "the direction check found the force reversed at tick %llu: the pulse moved "
+                    "the direction check found the force reversed at tick %llu: the push moved "
                     "the device against the force commanded (gain %.3g +- %.2g): a wall would pull",
                     tick, f.value, f.limit);
       break;
@@ -70,7 +70,7 @@ std::string describe(const Fault& f) {
       std::snprintf(buf, sizeof buf,
                     "the direction check saw no motion at tick %llu (gain %.3g +- %.2g, under "
                     "safety.direction_check.min_motion): the device is held, blocked or too "
-                    "heavy for the pulse",
+                    "heavy for the push",
                     tick, f.value, f.limit);
       break;
     case FaultCause::kNeverAtRest:

@@ -36,6 +36,7 @@ std::vector<std::string> vm_sets(const std::string& profile, int cia402_watchdog
                                    "wall.stiffness=100",
                                    "safety.stale_fault_ticks=10",
                                    "loop.overrun_fault_streak=100",
+                                   "safety.direction_check.max_latency_ms=300",
                                    "device.can.interface=vcan0",
                                    "device.can.sdo_timeout_ms=1000",
                                    "device.can.state_timeout_ms=2000",

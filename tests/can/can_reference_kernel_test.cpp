@@ -46,6 +46,7 @@ std::vector<std::string> run_args(const std::string& profile, double duration,
   }
   for (const char* s :
        {"safety.stale_fault_ticks=10", "loop.overrun_fault_streak=100",
+        "safety.direction_check.max_latency_ms=300",
         "device.can.interface=vcan0", "device.can.sdo_timeout_ms=1000",
         "device.can.state_timeout_ms=2000", "device.can.heartbeat_timeout_ms=3000"}) {
     sets.push_back(s);

@@ -59,6 +59,8 @@ const std::vector<std::string> kGuestSets = {
     "loop.rate_hz=50", "wall.stiffness=150", "device.gpio.counts_per_unit=2000",
     "device.sim.counts_per_unit=2000", "device.gpio.start_count=-4", "device.gpio.max_edge_rate=25",
     "loop.overrun_fault_streak=50", "safety.stale_fault_ticks=10",
+    // The peer answers from its own timer in the emulated machine: up to 300 ms late.
+    "safety.direction_check.max_latency_ms=300",
     // Mid-count, so the plant at rest (numerically still only to 1e-18) does not dither
     // across a count boundary; count -4 has the lines at 00, where gpio-sim leaves them.
     "device.sim.initial_position=-0.00175", "device.sim.operator.setpoint.rest=-0.00175",

@@ -127,7 +127,9 @@ std::string config_text(const std::string& example, const std::vector<std::strin
 }
 
 std::vector<std::string> guest_sets(std::vector<std::string> more) {
-  std::vector<std::string> s = {"loop.rate_hz=100", "loop.overrun_fault_streak=1000"};
+  // The emulated machine's transfers can answer the direction check's pulse 300 ms late.
+  std::vector<std::string> s = {"loop.rate_hz=100", "loop.overrun_fault_streak=1000",
+                                "safety.direction_check.max_latency_ms=300"};
   s.insert(s.end(), more.begin(), more.end());
   return s;
 }

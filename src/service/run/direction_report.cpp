@@ -12,9 +12,9 @@ using gate::format_number;
 
 std::string mm(double metres) { return format_number(metres * 1e3) + " mm"; }
 
-// "a 0.5 N pulse": the force the check pushed with first.
-std::string pulse(const control::ProbeResult& r) {
-  return "a " + format_number(std::abs(r.force)) + " N pulse";
+// "a 0.5 N push": the force the check pushed with.
+std::string push(const control::ProbeResult& r) {
+  return "a " + format_number(std::abs(r.force)) + " N push";
 }
 
 // The wall ran with a direction nobody has checked.
@@ -36,7 +36,7 @@ std::string direction_advice(loop::FaultCause cause, const config::Config& cfg,
     }
     case FaultCause::kNoProbeMotion:
       return ". Let go of the device while it starts (the check takes a fraction of a second), "
-             "or give the pulse more force or time (safety.direction_check.level, duration_ms); "
+             "or give the push more force or time (safety.direction_check.level, duration_ms); "
              "safety.direction_check.on_no_motion: run arms the wall unchecked";
     case FaultCause::kNeverAtRest:
       return ". Hold the device still or let go of it while it starts, or allow longer "
@@ -52,7 +52,15 @@ void announce_direction(const control::ProbeResult& r) {
     spdlog::info(
         "direction check: confirmed: {} moved the device {} of the {} the configured mass and "
         "damping predict, the way it pushed",
-        pulse(r), format_number(r.gain), mm(std::abs(r.expected_peak)));
+        push(r), format_number(r.gain), mm(std::abs(r.expected_peak)));
+    if (r.latency > 0) {
+      // The gate analysed the declared delay: a longer one is a loop it did not prove.
+      spdlog::warn(
+          "direction check: the device's motion came {} ticks later than its driver declares: "
+          "the gate analysed the declared delay; `hapticd check --set wall.delay_samples={}` "
+          "says what the longer one allows",
+          r.latency, r.latency);
+    }
   } else if (unchecked(r)) {
     spdlog::warn(
         "direction check: {} (gain {} +- {}): the wall is armed UNCHECKED "
@@ -69,6 +77,7 @@ nlohmann::json direction_json(const control::ProbeResult& r) {
           {"force", r.force},
           {"expected_motion", r.expected_peak},
           {"ticks", r.ticks},
+          {"latency_ticks", r.latency},
           {"unchecked", r.state != ProbeState::kConfirmed}};
 }
 
@@ -83,16 +92,16 @@ void direction_text(const control::ProbeResult& r, bool refused, std::ostream& o
       os << "not finished: the run ended during the check\n";
       return;
     case ProbeState::kConfirmed:
-      os << "confirmed: " << pulse(r) << " moved the device " << format_number(r.gain) << " of the "
+      os << "confirmed: " << push(r) << " moved the device " << format_number(r.gain) << " of the "
          << mm(std::abs(r.expected_peak)) << " predicted, the way it pushed\n";
       return;
     case ProbeState::kReversed:
-      os << "REVERSED: " << pulse(r) << " moved the device against it (gain "
+      os << "REVERSED: " << push(r) << " moved the device against it (gain "
          << format_number(r.gain) << "): refused\n";
       return;
     case ProbeState::kNoMotion:
     case ProbeState::kNeverAtRest:
-      os << (r.state == ProbeState::kNoMotion ? "NO MOTION under " + pulse(r)
+      os << (r.state == ProbeState::kNoMotion ? "NO MOTION under " + push(r)
                                               : std::string("the device was NEVER AT REST"))
          << " (gain " << format_number(r.gain) << " +- " << format_number(r.gain_error)
          << "): " << (refused ? "refused" : "the wall ran UNCHECKED (on_no_motion: run)") << "\n";

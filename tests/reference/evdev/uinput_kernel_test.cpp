@@ -35,6 +35,7 @@ const std::string kName = "hapticd reference uinput FF device";
 std::vector<std::string> sets(std::vector<std::string> more = {}) {
   std::vector<std::string> s = {"loop.rate_hz=100",
                                 "loop.overrun_fault_streak=1000",
+                                "safety.direction_check.max_latency_ms=300",
                                 "safety.stale_fault_ticks=50",
                                 "wall.stiffness=" + std::to_string(kStiffness),
                                 "wall.damping=0.2",
@@ -65,6 +66,7 @@ struct Rig {
   // back.
   bool pushed() {
     if (!wait_until([&] { return device.playing(); })) return false;
+    std::this_thread::sleep_for(std::chrono::seconds(1));  // the direction check, at rest
     device.hand(kPush, kHandDamping);
     return wait_until([&] { return device.force() < -0.2; });
   }

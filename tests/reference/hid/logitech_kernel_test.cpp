@@ -190,6 +190,7 @@ constexpr double kPush = 1.5;
 std::vector<std::string> wheel_sets(const std::string& serial) {
   return {"loop.rate_hz=100",
           "loop.overrun_fault_streak=1000",
+          "safety.direction_check.max_latency_ms=300",
           "safety.stale_fault_ticks=50",
           "device.mass=0.05",
           "device.damping=0.05",
@@ -215,6 +216,7 @@ TEST(LogitechWheel, ThroughTheKernelsLogitechDriverTheWallHoldsTheHand) {
       [&](pid_t) {
         // The effect plays: the wheel has had its first constant-force report.
         ASSERT_TRUE(wait_until([&] { return w.last_x().second > 0; })) << "output never enabled";
+        std::this_thread::sleep_for(std::chrono::seconds(1));  // the direction check, at rest
         w.wheel->axis().hand(kPush, 1.0);
         std::this_thread::sleep_for(std::chrono::seconds(3));
         const std::size_t before = w.wheel->commands().size();

@@ -24,6 +24,7 @@ constexpr double kPush = 0.5;       // N m: the hand's steady push into the wall
 std::vector<std::string> evdev_sets(const std::string& serial) {
   return {"loop.rate_hz=100",
           "loop.overrun_fault_streak=1000",
+          "safety.direction_check.max_latency_ms=300",
           "safety.stale_fault_ticks=50",
           "device.mass=0.05",
           "device.damping=0.05",
@@ -49,8 +50,10 @@ TEST(OpenFfboardEvdev, BehindHidPidffTheWallHoldsTheHandAtForceOverStiffness) {
   const double window_s = 2.0;
   const HapticdRun r =
       run_hapticd(shipped("evdev.yaml"), evdev_sets(o.serial), {"--duration", "7"}, [&](pid_t) {
-        // Uploaded at configure, played at enable: the hand pushes once the wall is on.
+        // Uploaded at configure, played at enable: the hand pushes once the wall is on, after
+        // the direction check (about 0.2 s at 100 Hz with the wheel at rest).
         ASSERT_TRUE(wait_until([&] { return board->playing(); })) << "output never enabled";
+        std::this_thread::sleep_for(std::chrono::seconds(1));
         board->axis().hand(kPush, 1.0);
         std::this_thread::sleep_for(std::chrono::milliseconds(2500));
         // At rest: the level no longer changes.
@@ -75,6 +78,37 @@ TEST(OpenFfboardEvdev, BehindHidPidffTheWallHoldsTheHandAtForceOverStiffness) {
   EXPECT_LT(static_cast<double>(outputs), ticks) << "an unchanged level sends nothing";
   EXPECT_EQ(board->allocated(), 0u) << "hid-pidff frees the effect hapticd erased";
   EXPECT_EQ(board->axis().motor(), 0.0);
+  EXPECT_EQ(r.summary["direction_check"]["state"], "confirmed") << r.summary.dump();
+  board.reset();
+  EXPECT_TRUE(wait_until([&] {
+    return !kernel_test::hidraw_listed(3, OpenFfboard::kVendor, OpenFfboard::kProduct, o.serial);
+  }));
+}
+
+// Issue 32: a board whose firmware takes +sin (ArduinoJoystickWithFFBLibrary's, everything
+// else OpenFFBoard's) behind hid-pidff with the same configuration: refused by the direction
+// check before its wall acts, naming the setting that reverses the force.
+TEST(OpenFfboardEvdev, ABoardWhoseForceIsReversedIsRefusedBeforeItsWallActs) {
+  OpenFfboardOptions o;
+  o.usb_report_rate = 4;
+  o.serial = "ajwfl-evdev";
+  o.force_sign = ForceSign::kArduinoJoystickWithFfbLibrary;
+  auto board = std::make_unique<OpenFfboard>(o);
+  ASSERT_TRUE(wait_until([&] {
+    return kernel_test::hidraw_listed(3, OpenFfboard::kVendor, OpenFfboard::kProduct, o.serial);
+  }));
+  std::this_thread::sleep_for(std::chrono::seconds(1));  // hid-pidff's own probe at bind
+  const HapticdRun r =
+      run_hapticd(shipped("evdev.yaml"), evdev_sets(o.serial), {"--duration", "7"});
+  EXPECT_EQ(r.status, 3) << r.faults() << "\n" << r.log;
+  EXPECT_NE(r.faults().find("the direction check found the force reversed"), std::string::npos)
+      << r.faults();
+  EXPECT_NE(r.faults().find("device.evdev.direction_deg: 90 (it is 270)"), std::string::npos)
+      << r.faults();
+  EXPECT_EQ(r.summary["counters"]["loop"]["contact_ticks"], 0) << "no wall acted";
+  EXPECT_EQ(board->axis().motor(), 0.0);
+  std::cout << "pidff, +sin board: refused, direction check gain "
+            << r.summary["direction_check"]["gain"] << "\n";
   board.reset();
   EXPECT_TRUE(wait_until([&] {
     return !kernel_test::hidraw_listed(3, OpenFfboard::kVendor, OpenFfboard::kProduct, o.serial);

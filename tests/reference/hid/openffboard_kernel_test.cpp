@@ -9,6 +9,8 @@
 // 100 full ticks fault, not 10.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <iostream>
 #include <memory>
@@ -27,6 +29,7 @@ constexpr double kLivenessMs = 1000.0;
 std::vector<std::string> sets(const char* backend, const std::string& serial) {
   return {"loop.rate_hz=100",
           "loop.overrun_fault_streak=1000",
+          "safety.direction_check.max_latency_ms=300",
           "wall.stiffness=" + std::to_string(kStiffness),
           "device.hid.pid.effect_duration_ms=1000",
           "device.hid.liveness_ms=" + std::to_string(kLivenessMs),
@@ -149,6 +152,62 @@ TEST_P(OpenFfboardUsb, AnUnpluggedBoardFaultsTheRun) {
   EXPECT_EQ(r.status, 1) << r.log;
   EXPECT_NE(r.faults().find("hid: the device is gone"), std::string::npos) << r.faults();
   EXPECT_EQ(final_command(r), 0.0);
+}
+
+// Issue 32: a board whose firmware takes +sin for the direction (ArduinoJoystickWithFFBLibrary's,
+// everything else OpenFFBoard's), driven with the same shipped configuration: the direction
+// check refuses it before its wall acts, naming the setting that reverses the force.
+TEST_P(OpenFfboardUsb, ABoardWhoseForceIsReversedIsRefusedBeforeItsWallActs) {
+  OpenFfboardOptions o = guest_board();
+  o.force_sign = ForceSign::kArduinoJoystickWithFfbLibrary;
+  Board b(o);
+  const HapticdRun r =
+      run_hapticd(shipped("hid-openffboard.yaml"), sets(GetParam(), b.serial), {"--duration", "20"});
+  EXPECT_EQ(r.status, 3) << r.faults() << "\n" << r.log;
+  EXPECT_NE(r.faults().find("the direction check found the force reversed"), std::string::npos)
+      << r.faults();
+  EXPECT_NE(r.faults().find("device.hid.pid.direction_deg: 90 (it is 270)"), std::string::npos)
+      << r.faults();
+  EXPECT_EQ(r.summary["direction_check"]["state"], "reversed");
+  EXPECT_EQ(r.summary["counters"]["loop"]["contact_ticks"], 0) << "no wall acted";
+  EXPECT_EQ(final_command(r), 0.0);
+  EXPECT_EQ(b.board.axis().motor(), 0.0);
+  std::cout << GetParam() << ": +sin board refused, direction check gain "
+            << r.summary["direction_check"]["gain"] << "\n";
+}
+
+// ... and with the check switched off, the wall pulls the wheel in: the runaway guard stops it
+// within its bound (1.5 max_force / K = 0.6 rad with 2 N m, below safety.max_speed), with zero
+// torque after.
+TEST_P(OpenFfboardUsb, WithTheCheckOffTheRunawayGuardStopsTheReversedWallWithinItsBound) {
+  OpenFfboardOptions o = guest_board();
+  o.force_sign = ForceSign::kArduinoJoystickWithFfbLibrary;
+  Board b(o);
+  std::vector<std::string> s = sets(GetParam(), b.serial);
+  s.insert(s.end(), {"safety.direction_check.mode=off", "device.max_force=2"});
+  std::atomic<double> deepest{-1.0};
+  const HapticdRun r = run_hapticd(
+      shipped("hid-openffboard.yaml"), s, {"--duration", "20"}, [&](pid_t pid) {
+        ASSERT_TRUE(wait_until([&] { return b.enabled(); })) << "output never enabled";
+        b.board.axis().hand(kPush, 1.0);
+        // Where the wheel is while the wall still acts on it (the hand goes on pushing after).
+        while (!ended(pid)) {
+          if (b.board.axis().motor() != 0.0) {
+            deepest = std::max(deepest.load(), b.board.axis().position());
+          }
+          std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        }
+      });
+  EXPECT_EQ(r.status, 1) << r.log;
+  EXPECT_NE(r.faults().find("the wall is not holding"), std::string::npos) << r.faults();
+  EXPECT_EQ(final_command(r), 0.0);
+  EXPECT_EQ(b.board.axis().motor(), 0.0);
+  const double bound = 1.5 * 2.0 / kStiffness;
+  // Past it by what the wheel travels in a tick and the USB link's delay, not run away.
+  EXPECT_GT(deepest.load(), bound);
+  EXPECT_LT(deepest.load(), bound + 0.3) << "the guard stopped it near its bound";
+  std::cout << GetParam() << ": reversed wall with the check off, stopped at " << deepest.load()
+            << " rad (bound " << bound << ")\n";
 }
 
 INSTANTIATE_TEST_SUITE_P(Backends, OpenFfboardUsb, ::testing::Values("hidraw", "libusb"),
