@@ -142,7 +142,7 @@ FrameMeaning Cia402Profile::on_tpdo1(const CanSocket::Received& rx, bool active)
   FrameMeaning m;
   m.sample = true;
   statusword_ = pdo->statusword;
-  position_ = pdo->position;
+  position_.next(static_cast<std::uint32_t>(pdo->position));
   sample_time_ns_ = rx.time_ns;
   if (active && (statusword_ & cia402::kSwInternalLimitActive) != 0) {
     link_.count(CanCounter::kInternalLimit);
@@ -208,7 +208,7 @@ FrameMeaning Cia402Profile::on_frame(const CanSocket::Received& rx, bool active)
 }
 
 void Cia402Profile::sample(PositionSample& out) const noexcept {
-  out.position = position_ * settings_.position_per_unit;
+  out.position = static_cast<double>(position_.value()) * settings_.position_per_unit;
   out.time_ns = sample_time_ns_;
   out.status = statusword_;
   out.flags = kSampleHasTime;

@@ -1,8 +1,6 @@
 #include "sim/peers/can/cia402_peer.h"
 
-#include <algorithm>
 #include <cmath>
-#include <limits>
 
 namespace hapticd::sim {
 namespace {
@@ -78,9 +76,9 @@ std::uint32_t Cia402Peer::object(std::uint16_t index, std::uint8_t sub) const {
 }
 
 std::int32_t Cia402Peer::position_units() noexcept {
-  const double units = std::round(axis_.encoder_position() / settings_.position_per_unit);
-  return static_cast<std::int32_t>(std::clamp<double>(
-      units, std::numeric_limits<std::int32_t>::min(), std::numeric_limits<std::int32_t>::max()));
+  const auto units = std::llround(axis_.encoder_position() / settings_.position_per_unit) +
+                     position_offset_.load();
+  return static_cast<std::int32_t>(static_cast<std::uint32_t>(units));  // modulo 2^32
 }
 
 void Cia402Peer::set_power(PowerState s) {

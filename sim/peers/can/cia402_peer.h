@@ -27,6 +27,10 @@ class Cia402Peer final : public CanPeerBase {
 
   // Any thread, for tests: the power state and NMT state right now.
   drivers::can::cia402::PowerState power_state() const noexcept { return power_.load(); }
+  // Any thread, for tests: 0x6064 counts from `counts` at the plant's zero, as a drive that
+  // keeps an offset (a homing, a multi-turn count). 0x6064 is a signed 32-bit count: it
+  // rolls over past 2^31 - 1 to -2^31 and back, as a real drive's does.
+  void offset_position(std::int64_t counts) noexcept { position_offset_.store(counts); }
 
  protected:
   void handle(const drivers::can::CanFrame& f) override;
@@ -69,6 +73,7 @@ class Cia402Peer final : public CanPeerBase {
   std::int64_t last_heartbeat_ns_ = 0;
   std::int64_t last_sync_ns_ = 0;
   std::int64_t last_master_heartbeat_ns_ = 0;  // 0: none seen yet (not watched)
+  std::atomic<std::int64_t> position_offset_{0};
 };
 
 }  // namespace hapticd::sim
