@@ -87,6 +87,7 @@ class Cia402Profile final : public CanProfile {
   void stop_keeping_alive() noexcept;
   std::string node_name() const;
   void walk_to_enabled();
+  cia402::PowerState take_step(cia402::PowerState from, std::uint16_t cw, std::uint16_t& sw);
   cia402::PowerState read_state(std::uint16_t& statusword);
   std::string drive_error_text();
 

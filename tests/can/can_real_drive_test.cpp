@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <thread>
@@ -101,6 +102,58 @@ TEST(CanRealDrive, TheUnwrappedPositionStartsAtTheRawCountAndSurvivesAReEnable) 
   rig.tick(0.0, s);
   ASSERT_EQ(rig.tick(0.0, s), IoStatus::kOk) << rig.device().describe_fault();
   EXPECT_NEAR(s.position, (kWallCount + 120 - 4294967296LL) * kMetresPerCount, 1e-9);
+}
+
+std::string enable_error(CanRig& rig) {
+  try {
+    rig.device().enable();
+  } catch (const DeviceError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// Issue 34, 2: mains switched on with hapticd: the drive refuses the shutdown command until
+// its DC link has charged (1.2 s here, beyond state_timeout_ms 500), bit 4 at 0 meanwhile.
+TEST(CanRealDrive, ADriveWhoseDcLinkIsChargingIsEnabledOnceCharged) {
+  CanRig rig(load_example("can-cia402.yaml"));
+  auto& drive = dynamic_cast<sim::Cia402Peer&>(rig.peer());
+  rig.device().configure();
+  drive.charge_dc_link_after(1200);
+  const auto start = std::chrono::steady_clock::now();
+  EXPECT_EQ(enable_error(rig), "");
+  const auto waited = std::chrono::steady_clock::now() - start;
+  EXPECT_GE(waited, std::chrono::milliseconds(1100)) << "the drive cannot have moved sooner";
+  EXPECT_EQ(drive.power_state(), cia402::PowerState::kOperationEnabled);
+  EXPECT_EQ(rig.device().state(), DeviceState::kActive);
+}
+
+TEST(CanRealDrive, ADriveWhoseDcLinkNeverChargesIsRefusedNamingIt) {
+  CanRig rig(load_example("can-cia402.yaml", {"device.can.cia402.dc_link_timeout_ms=800"}));
+  auto& drive = dynamic_cast<sim::Cia402Peer&>(rig.peer());
+  drive.charge_dc_link_after(-1);  // no mains
+  rig.device().configure();
+  const std::string e = enable_error(rig);
+  EXPECT_NE(e.find("the drive reports no DC-link voltage (statusword 0x0240 switch on disabled, "
+                   "remote: bit 4, voltage enabled, is 0) after 800 ms"),
+            std::string::npos)
+      << e;
+  EXPECT_NE(e.find("device.can.cia402.dc_link_timeout_ms (800)"), std::string::npos) << e;
+  EXPECT_EQ(rig.device().state(), DeviceState::kConfigured);
+  EXPECT_FALSE(rig.peer().output_on());
+}
+
+TEST(CanRealDrive, ADcLinkTimeOutOutsideItsRangeIsRefusedByKey) {
+  try {
+    load_example("can-cia402.yaml", {"device.can.cia402.dc_link_timeout_ms=-5"});
+    FAIL() << "loaded a negative dc_link_timeout_ms";
+  } catch (const config::ConfigError& e) {
+    std::string all;
+    for (const std::string& m : e.messages()) all += m + "\n";
+    EXPECT_NE(all.find("device.can.cia402.dc_link_timeout_ms: must be in 0..600000, got '-5'"),
+              std::string::npos)
+        << all;
+  }
 }
 
 }  // namespace

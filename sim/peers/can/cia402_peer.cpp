@@ -1,6 +1,9 @@
 #include "sim/peers/can/cia402_peer.h"
 
 #include <cmath>
+#include <limits>
+
+#include "base/clock.h"
 
 namespace hapticd::sim {
 namespace {
@@ -95,9 +98,20 @@ void Cia402Peer::set_power(PowerState s) {
   }
 }
 
+void Cia402Peer::charge_dc_link_after(int ms) noexcept {
+  dc_link_charged_ns_.store(ms < 0 ? std::numeric_limits<std::int64_t>::max()
+                                   : base::monotonic_ns() + ms * 1'000'000LL);
+}
+
 void Cia402Peer::set_controlword(std::uint16_t cw) {
-  const PowerState next = cia402::apply_controlword(power_.load(), cw, controlword_);
+  const PowerState now = power_.load();
+  PowerState next = cia402::apply_controlword(now, cw, controlword_);
   controlword_ = cw;
+  // Without DC-link voltage the drive stays in switch on disabled (transition 2 refused); the
+  // command counts when it comes again once charged.
+  if (now == PowerState::kSwitchOnDisabled && base::monotonic_ns() < dc_link_charged_ns_.load()) {
+    next = now;
+  }
   set_power(next);
 }
 
