@@ -143,6 +143,52 @@ TEST(CanRealDrive, ADriveWhoseDcLinkNeverChargesIsRefusedNamingIt) {
   EXPECT_FALSE(rig.peer().output_on());
 }
 
+// Issue 34, 3: an ODrive 0.6 disarmed by a short DC-bus dip is IDLE without an active error by
+// its next heartbeat. The RT path latches the fault (zero torque) and asks Get_Error with it,
+// without waiting; disable takes the answer, and the fault names the disarm reason.
+TEST(CanRealDrive, AnOdrive06ThatDisarmsByItselfIsAskedWhy) {
+  CanRig rig(load_example("can-odrive.yaml"));  // firmware auto: the simulated axis is 0.6
+  auto& axis = dynamic_cast<sim::OdrivePeer&>(rig.peer());
+  rig.device().configure();
+  rig.device().enable();
+  ASSERT_EQ(rig.run_until_fault(0.5, 5), IoStatus::kOk) << rig.device().describe_fault();
+  ASSERT_TRUE(rig.peer().inject_can(sim::CanPeerFault::kDisarm));
+  ASSERT_EQ(rig.run_until_fault(0.5, 10), IoStatus::kDeviceFault);
+  EXPECT_EQ(rig.peer().applied_force(), 0.0);
+  EXPECT_EQ(rig.device().last_command(), 0.0);
+  EXPECT_EQ(axis.error_requests(), 1) << "asked from the RT path, with the latch's zero torque";
+  rig.device().disable();
+  rig.settle();
+  EXPECT_EQ(axis.error_requests(), 1) << "disable took the answer already on its way";
+  const std::string why = rig.device().describe_fault();
+  EXPECT_NE(why.find("left CLOSED_LOOP_CONTROL by itself: its heartbeat says IDLE; disarm reason "
+                     "(Get_Error) 0x00000200 DC_BUS_UNDER_VOLTAGE, active errors now 0x00000000 "
+                     "(no error)"),
+            std::string::npos)
+      << why;
+  rig.device().clear_fault();  // Clear_Errors clears the disarm reason too
+  rig.device().enable();
+  EXPECT_EQ(rig.run_until_fault(0.5, 5), IoStatus::kOk) << rig.device().describe_fault();
+}
+
+// 0.5 has no Get_Error (0x003 is Get_Motor_Error there): an axis leaving closed loop is named
+// as before, and nothing is asked.
+TEST(CanRealDrive, AnOdrive05IsNotAskedForGetError) {
+  const config::Config cfg = load_example("can-odrive.yaml", {"device.can.odrive.firmware=0.5"});
+  CanRig rig(cfg);
+  EXPECT_FALSE(rig.peer().inject_can(sim::CanPeerFault::kDisarm)) << "no disarm reason on 0.5";
+  rig.device().configure();
+  rig.device().enable();
+  ASSERT_EQ(rig.run_until_fault(0.5, 5), IoStatus::kOk) << rig.device().describe_fault();
+  ASSERT_TRUE(rig.peer().inject(sim::PeerFault::kDeviceFault));
+  ASSERT_EQ(rig.run_until_fault(0.5, 10), IoStatus::kDeviceFault);
+  rig.device().disable();
+  rig.settle();
+  EXPECT_EQ(dynamic_cast<sim::OdrivePeer&>(rig.peer()).error_requests(), 0);
+  EXPECT_EQ(rig.device().describe_fault().find("Get_Error"), std::string::npos)
+      << rig.device().describe_fault();
+}
+
 TEST(CanRealDrive, ADcLinkTimeOutOutsideItsRangeIsRefusedByKey) {
   try {
     load_example("can-cia402.yaml", {"device.can.cia402.dc_link_timeout_ms=-5"});
