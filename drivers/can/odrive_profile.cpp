@@ -296,10 +296,13 @@ FrameMeaning OdriveProfile::on_frame(const CanSocket::Received& rx, bool active)
   if (command == odrive::kGetEncoderEstimates) return on_estimates(rx);
   if (command == odrive::kHeartbeat) return on_heartbeat(f, active);
   if (command == odrive::kGetError && firmware_ == odrive::Firmware::k06) {
-    if (const auto e = odrive::decode_error_status(f)) {
-      error_status_ = *e;  // asked for, or sent every error_msg_rate_ms
-    } else {
+    const auto e = odrive::decode_error_status(f);
+    if (!e) {
       link_.count(CanCounter::kWrongLength);
+    } else if (error_requested_) {
+      // Asked for, or sent every error_msg_rate_ms: either way after the heartbeat that showed
+      // the fault (a node's frames keep their order). One from before it says nothing of it.
+      error_status_ = *e;
     }
     return {};
   }

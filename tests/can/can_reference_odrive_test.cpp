@@ -162,5 +162,25 @@ TEST(CanReferenceOdrive, Firmware06DisarmedByADcBusDipIsAskedWhy) {
   EXPECT_EQ(axis.unmodelled_mode_passes(), 0u);
 }
 
+// An axis that also sends Get_Error by itself (error_msg_rate_ms): those messages are the
+// driver's (no unknown ids), and the disarm is named by the reason, not by one sent before it.
+TEST(CanReferenceOdrive, Firmware06SendingGetErrorByItselfIsUnderstood) {
+  reference::Odrive06Config c;
+  c.error_msg_rate_ms = 20;
+  reference::Odrive06 axis(c, still_axis(), reference::monotonic_ns());
+  ReferenceRig rig(odrive_config({"device.can.odrive.vel_limit=0"}), axis);
+  ASSERT_NO_THROW(rig.device->configure());
+  ASSERT_NO_THROW(rig.device->enable());
+  ASSERT_EQ(rig.run(0.5, 300), IoStatus::kOk) << rig.device->describe_fault();
+  axis.dip_dc_bus(20);
+  ASSERT_EQ(rig.run(0.5, 1000), IoStatus::kDeviceFault);
+  rig.device->disable();
+  const std::string why = rig.device->describe_fault();
+  EXPECT_NE(why.find("disarm reason (Get_Error) 0x00000200 DC_BUS_UNDER_VOLTAGE"),
+            std::string::npos)
+      << why;
+  EXPECT_EQ(counter(*rig.device, "unknown_ids").value(), 0u);
+}
+
 }  // namespace
 }  // namespace hapticd::drivers::can::testing
