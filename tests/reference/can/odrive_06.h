@@ -1,7 +1,8 @@
 // An ODrive Pro / S1 axis as firmware 0.6 behaves on CAN Simple, sharing nothing with drivers/.
 // The 0.6 firmware's source is not public; this follows what ODrive publishes for it:
 //
-// - ODriveArduino v0.10.9 (github odriverobotics/ODriveArduino, commit f52eef5),
+// - ODriveArduino v0.10.9 (github odriverobotics/ODriveArduino, tag v0.10.9 = 366b780; the
+//   files below are the same at f52eef5, its newest commit),
 //   src/can_simple_messages.hpp (generated from the firmware's DBC): the command ids and
 //   layouts - Get_Version 0x000 (protocol, hw major/minor/variant, fw major/minor/revision,
 //   unreleased: one byte each), Heartbeat 0x001 (Axis_Error u32, Axis_State u8,
@@ -15,8 +16,10 @@
 // - ODriveArduino v0.10.9 src/ODriveEnums.h: ODriveAxisState (IDLE 1, CLOSED_LOOP_CONTROL 8),
 //   ODriveControlMode (TORQUE_CONTROL 1), ODriveInputMode (PASSTHROUGH 1), ODriveError (the
 //   bits of Axis_Error, Active_Errors and Disarm_Reason: DC_BUS_UNDER_VOLTAGE 0x200,
-//   ESTOP_REQUESTED 0x02000000, ...); the enums as that commit carries them for 0.6 (their
-//   ODriveError is unchanged since the library's first commit, 91afc00, 2023-07-13).
+//   ESTOP_REQUESTED 0x02000000, ...): the enums of firmware 0.6 as that tag carries them
+//   (ODriveError unchanged since the library's first commit, 91afc00, 2023-07-13; the CAN
+//   DBC of firmware 0.6.10, odrive-cansimple-0.6.10, lists the same Axis_Error bits). The
+//   Get_Version answer below says 0.6.10.
 // - ros_odrive (github odriverobotics/ros_odrive, commit 8ed510b), odrive_node/src/
 //   odrive_can_node.cpp, recv_callback: the heartbeat's first u32 is the axis's active errors;
 //   Get_Error carries active_errors then disarm_reason.
