@@ -62,6 +62,7 @@ void read_cia402(MapReader& can, bool selected, CanSettings& s) {
                                  {"none", "fault", "disable_voltage", "quick_stop"})) {
     c.comm_loss_reaction = static_cast<cia402::CommLossReaction>(*v);
   }
+  integer(m, "dc_link_timeout_ms", IntRange::between(0, 600'000), c.dc_link_timeout_ms);
   m.finish();
 }
 

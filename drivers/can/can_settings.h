@@ -28,6 +28,9 @@ struct Cia402Settings {
   int drive_watchdog_ms = 100;         // 0x1016:1 consumer time: the drive's reaction after
                                        // this long without hapticd's heartbeat; 0: not set
   cia402::CommLossReaction comm_loss_reaction = cia402::CommLossReaction::kDisableVoltage;
+  // How long enable waits for a drive that stays in switch on disabled with statusword bit 4
+  // (voltage enabled) at 0: its DC link still charging, 1 to 2 s after mains on many drives.
+  int dc_link_timeout_ms = 3000;
 };
 
 struct OdriveSettings {

@@ -12,7 +12,6 @@ constexpr std::uint16_t kSwWarning = 1u << 7;
 constexpr std::uint16_t kSwRemote = 1u << 9;
 constexpr std::uint16_t kSwTargetReached = 1u << 10;
 constexpr std::uint16_t kSwInternalLimit = 1u << 11;
-constexpr std::uint16_t kSwVoltageEnabled = 1u << 4;
 
 // Controlword commands are recognised by their significant bits (CiA 402 Table 29).
 bool is_shutdown(std::uint16_t cw) { return (cw & 0x87) == 0x06; }

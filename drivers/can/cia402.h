@@ -38,6 +38,10 @@ inline constexpr canopen::SdoAddress kVelocityActual{0x606C, 0};
 inline constexpr std::uint16_t kDeviceProfile402 = 402;  // low 16 bits of 0x1000
 inline constexpr std::int8_t kModeCyclicSynchronousTorque = 10;
 
+// Statusword bit 4, voltage enabled: the power stage has its DC-link voltage. At 0 in switch
+// on disabled the drive may still be charging its DC link after mains on (it refuses the
+// shutdown command until then: KEB COMBIVERT F6, SMC LECSN-T), or have no mains at all.
+inline constexpr std::uint16_t kSwVoltageEnabled = 1u << 4;
 // Statusword bit 11, internal limit active: the drive limits a value itself (0x6072 max
 // torque, a current limit, a thermal derating): a force the wall did not command.
 inline constexpr std::uint16_t kSwInternalLimitActive = 1u << 11;

@@ -292,6 +292,7 @@ void Cia402Profile::map_pdos() {
 DeviceInfo Cia402Profile::configure() {
   notices_.clear();
   stopped_ = true;
+  position_.reset();  // the first TPDO1 of this session sets the base
   switch_off_and_identify();
   check_torque_limit();
   write_parameters();

@@ -28,20 +28,52 @@ void Cia402Profile::walk_to_enabled() {
                         " cannot be enabled from " + cia402::describe_statusword(sw) +
                         (state == PowerState::kFault ? ", " + drive_error_text() : ""));
     }
-    sdo_write(cia402::kControlword, *cw, 2, "controlword");
-    const PowerState from = state;
-    const std::int64_t deadline = base::monotonic_ms() + settings_.state_timeout_ms;
-    while ((state = read_state(sw)) == from && base::monotonic_ms() < deadline) {
-      link_.wait_readable(2);  // the drive's own cycle moves it on; ask again shortly
-    }
-    if (state == from) {
-      throw DeviceError("can: node " + std::to_string(settings_.node_id) + ": controlword " +
-                        hex(*cw, 4) + " did not move the drive out of " +
-                        std::string(cia402::to_string(from)) + " within " +
-                        std::to_string(settings_.state_timeout_ms) + " ms (statusword " +
-                        cia402::describe_statusword(sw) + ")");
-    }
+    state = take_step(state, *cw, sw);
   }
+}
+
+// One controlword, confirmed from the statusword within state_timeout_ms. A drive in switch
+// on disabled without voltage (bit 4 at 0) is given dc_link_timeout_ms for its DC link to
+// charge, the controlword written again every kDcLinkResendMs (a drive may act on it only
+// once charged), and refused naming the DC link if it never does.
+PowerState Cia402Profile::take_step(PowerState from, std::uint16_t cw, std::uint16_t& sw) {
+  constexpr int kDcLinkResendMs = 100;
+  sdo_write(cia402::kControlword, cw, 2, "controlword");
+  const std::int64_t start = base::monotonic_ms();
+  const std::int64_t step_deadline = start + settings_.state_timeout_ms;
+  const std::int64_t dc_link_deadline =
+      std::max(step_deadline, start + settings_.cia402.dc_link_timeout_ms);
+  std::int64_t resend_at = start + kDcLinkResendMs;
+  PowerState state = from;
+  bool charging = false;
+  while ((state = read_state(sw)) == from) {
+    charging = from == PowerState::kSwitchOnDisabled && (sw & cia402::kSwVoltageEnabled) == 0;
+    const std::int64_t now = base::monotonic_ms();
+    if (now >= (charging ? dc_link_deadline : step_deadline)) break;
+    if (charging && now >= resend_at) {
+      sdo_write(cia402::kControlword, cw, 2, "controlword");
+      resend_at = now + kDcLinkResendMs;
+    }
+    link_.wait_readable(2);  // the drive's own cycle moves it on; ask again shortly
+  }
+  if (state != from) return state;
+  const std::string node = "can: node " + std::to_string(settings_.node_id);
+  if (charging) {
+    throw DeviceError(
+        node + ": the drive reports no DC-link voltage (statusword " +
+        cia402::describe_statusword(sw) + ": bit 4, voltage enabled, is 0) after " +
+        std::to_string(std::max(settings_.state_timeout_ms, settings_.cia402.dc_link_timeout_ms)) +
+        " ms: it stays in switch on disabled until its DC link has charged, so controlword " +
+        hex(cw, 4) +
+        " cannot switch it on. Check its mains (power stage) supply: the contactor, fuses, "
+        "wiring, the safe torque off input; a DC link that charges more slowly needs a longer "
+        "device.can.cia402.dc_link_timeout_ms (" +
+        std::to_string(settings_.cia402.dc_link_timeout_ms) + ")");
+  }
+  throw DeviceError(node + ": controlword " + hex(cw, 4) + " did not move the drive out of " +
+                    std::string(cia402::to_string(from)) + " within " +
+                    std::to_string(settings_.state_timeout_ms) + " ms (statusword " +
+                    cia402::describe_statusword(sw) + ")");
 }
 
 void Cia402Profile::enable() {
@@ -142,7 +174,7 @@ FrameMeaning Cia402Profile::on_tpdo1(const CanSocket::Received& rx, bool active)
   FrameMeaning m;
   m.sample = true;
   statusword_ = pdo->statusword;
-  position_ = pdo->position;
+  position_.next(static_cast<std::uint32_t>(pdo->position));
   sample_time_ns_ = rx.time_ns;
   if (active && (statusword_ & cia402::kSwInternalLimitActive) != 0) {
     link_.count(CanCounter::kInternalLimit);
@@ -208,7 +240,7 @@ FrameMeaning Cia402Profile::on_frame(const CanSocket::Received& rx, bool active)
 }
 
 void Cia402Profile::sample(PositionSample& out) const noexcept {
-  out.position = position_ * settings_.position_per_unit;
+  out.position = static_cast<double>(position_.value()) * settings_.position_per_unit;
   out.time_ns = sample_time_ns_;
   out.status = statusword_;
   out.flags = kSampleHasTime;

@@ -33,6 +33,7 @@
 #include "drivers/can/canopen.h"
 #include "drivers/can/cia402.h"
 #include "drivers/can/periodic_sender.h"
+#include "drivers/io/counter_unwrap.h"
 
 namespace hapticd::drivers::can {
 
@@ -86,6 +87,7 @@ class Cia402Profile final : public CanProfile {
   void stop_keeping_alive() noexcept;
   std::string node_name() const;
   void walk_to_enabled();
+  cia402::PowerState take_step(cia402::PowerState from, std::uint16_t cw, std::uint16_t& sw);
   cia402::PowerState read_state(std::uint16_t& statusword);
   std::string drive_error_text();
 
@@ -106,9 +108,11 @@ class Cia402Profile final : public CanProfile {
   std::atomic<std::int64_t> last_sync_ns_{0};  // the RT thread's last SYNC (CLOCK_MONOTONIC)
   std::array<CanFrame, 3> tx_{};               // the tick's frames
 
-  // RT state of the newest sample.
+  // RT state of the newest sample. 0x6064 is a signed 32-bit count that rolls over (a
+  // multi-turn axis, a fine encoder, a drive's offset): unwrapped from the first TPDO1 after
+  // configure on, across enables.
   std::uint16_t statusword_ = 0;
-  std::int32_t position_ = 0;
+  io::CounterUnwrap position_{32, true};
   std::int32_t velocity_ = 0;
   std::int64_t sample_time_ns_ = 0;
 };

@@ -1,8 +1,8 @@
+// The ODrive axis: start-up, the lifecycle and the tick (odrive_faults.cpp: why it stopped).
 #include "drivers/can/odrive_profile.h"
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <cstring>
 
 #include "base/clock.h"
@@ -149,6 +149,7 @@ DeviceInfo OdriveProfile::configure() {
   firmware_ = settings_.odrive.firmware;
   unsolicited_estimates_ = 0;
   controller_error_.reset();
+  forget_error_status();
   notices_.clear();
   stopped_ = true;
   feed_watchdog();
@@ -195,6 +196,7 @@ DeviceInfo OdriveProfile::configure() {
 void OdriveProfile::enable() {
   answered_ = true;
   controller_error_.reset();
+  forget_error_status();
   const std::uint8_t node = settings_.node_id;
   feed_watchdog();  // fed until the loop's own frames take over
   stopped_ = false;
@@ -216,6 +218,7 @@ void OdriveProfile::disable(const CanFault& latched) noexcept {
     link_.send_quietly(odrive::set_input_torque(settings_.node_id, 0.0f));
     link_.send_quietly(odrive::set_axis_state(settings_.node_id, odrive::kAxisIdle));
     read_controller_error(latched);
+    read_error_status(latched);
   }
   try {
     feed_watchdog();  // idle, or holding a fault: the watchdog must not add its own error
@@ -224,32 +227,9 @@ void OdriveProfile::disable(const CanFault& latched) noexcept {
   }
 }
 
-void OdriveProfile::read_controller_error(const CanFault& latched) noexcept {
-  // CONTROLLER_FAILED says only that controller.error is set; 0.5.6 answers
-  // Get_Controller_Error (can_simple.cpp), earlier 0.5 releases stay silent.
-  if (!link_.is_open() || firmware_ != odrive::Firmware::k05 ||
-      latched.kind != CanFaultKind::kAxisError ||
-      (latched.code & odrive::overspeed_error_bits(firmware_)) == 0) {
-    return;
-  }
-  try {
-    link_.send(odrive::request(settings_.node_id, odrive::kGetControllerError, 8),
-               "Get_Controller_Error");
-    link_.await(
-        settings_.sdo_timeout_ms,
-        [&](const CanFrame& f) {
-          if (f.id != id_base_ + odrive::kGetControllerError) return false;
-          controller_error_ = odrive::decode_controller_error(f);
-          return controller_error_.has_value();
-        },
-        nullptr);
-  } catch (...) {
-    // The description falls back on the last velocity the axis reported.
-  }
-}
-
 void OdriveProfile::clear_fault() {
   controller_error_.reset();
+  forget_error_status();
   link_.send(odrive::clear_errors(settings_.node_id, firmware_), "Clear_Errors");
   link_.send(odrive::set_axis_state(settings_.node_id, odrive::kAxisIdle), "Set_Axis_State");
   await_heartbeat(settings_.state_timeout_ms, "without an axis error", &no_error);
@@ -297,6 +277,12 @@ FrameMeaning OdriveProfile::on_heartbeat(const CanFrame& f, bool active) noexcep
   } else if (active && h->axis_state != odrive::kAxisClosedLoop) {
     m.fault = {CanFaultKind::kAxisStateChanged, h->axis_state};
   }
+  // 0.6: why it disarmed is in Get_Error; asked with the next frames (the latch's zero torque),
+  // never waited for here.
+  if (m.fault.kind != CanFaultKind::kNone && firmware_ == odrive::Firmware::k06 &&
+      !error_requested_) {
+    error_request_due_ = true;
+  }
   return m;
 }
 
@@ -309,6 +295,17 @@ FrameMeaning OdriveProfile::on_frame(const CanSocket::Received& rx, bool active)
   const std::uint8_t command = odrive::command_of(f.id);
   if (command == odrive::kGetEncoderEstimates) return on_estimates(rx);
   if (command == odrive::kHeartbeat) return on_heartbeat(f, active);
+  if (command == odrive::kGetError && firmware_ == odrive::Firmware::k06) {
+    const auto e = odrive::decode_error_status(f);
+    if (!e) {
+      link_.count(CanCounter::kWrongLength);
+    } else if (error_requested_) {
+      // Asked for, or sent every error_msg_rate_ms: either way after the heartbeat that showed
+      // the fault (a node's frames keep their order). One from before it says nothing of it.
+      error_status_ = *e;
+    }
+    return {};
+  }
   link_.count(CanCounter::kUnknownIds);
   return {};
 }
@@ -325,61 +322,18 @@ std::span<const CanFrame> OdriveProfile::tick_frames(double force) noexcept {
   const double torque =
       std::clamp(force * settings_.torque_per_force, -settings_.max_torque, settings_.max_torque);
   const std::uint8_t node = settings_.node_id;
-  tx_[0] = odrive::set_input_torque(node, static_cast<float>(torque));
-  if (settings_.odrive.position_source != PositionSource::kRequest) return {tx_.data(), 1};
+  std::size_t n = 0;
+  tx_[n++] = odrive::set_input_torque(node, static_cast<float>(torque));
+  if (error_request_due_) {
+    error_request_due_ = false;
+    error_requested_ = true;
+    tx_[n++] = odrive::request(node, odrive::kGetError, 8);
+  }
+  if (settings_.odrive.position_source != PositionSource::kRequest) return {tx_.data(), n};
   request_ns_ = base::monotonic_ns();  // before it goes out: no answer can precede it
   answered_ = false;
-  tx_[1] = odrive::request(node, odrive::kGetEncoderEstimates, 8);
-  return {tx_.data(), 2};
-}
-
-std::string OdriveProfile::describe(const CanFault& f, const std::string& bus) const {
-  switch (f.kind) {
-    case CanFaultKind::kAxisError:
-      return node_name(bus) + " reports axis error " +
-             odrive::describe_axis_error(firmware_, f.code) + " (firmware " +
-             std::string(to_string(firmware_)) + ")" + overspeed_text(f.code);
-    case CanFaultKind::kAxisStateChanged:
-      return node_name(bus) + " left CLOSED_LOOP_CONTROL by itself: its heartbeat says " +
-             std::string(odrive::axis_state_name(f.code));
-    case CanFaultKind::kHeartbeatLost:
-      return node_name(bus) + ": no heartbeat for " + std::to_string(f.code) +
-             " ticks (heartbeat_timeout_ms " + std::to_string(settings_.heartbeat_timeout_ms) + ")";
-    default:
-      return {};  // the bus's: the device names it
-  }
-}
-
-// Why an axis fails in torque control though hapticd never commanded a speed: the firmware's
-// own velocity limit (controller.cpp: enable_torque_mode_vel_limit clamps the torque to
-// (+-vel_limit - vel) * vel_gain, enable_overspeed_error faults above vel_limit_tolerance
-// times vel_limit; defaults 2 turn/s and 1.2).
-std::string OdriveProfile::overspeed_text(std::uint32_t axis_error) const {
-  if ((axis_error & odrive::overspeed_error_bits(firmware_)) == 0) return {};
-  const OdriveSettings& o = settings_.odrive;
-  const double speed = std::abs(static_cast<double>(last_speed_turns_));
-  std::string text;
-  bool overspeed = firmware_ == odrive::Firmware::k06;  // VELOCITY_LIMIT_VIOLATION says so
-  if (controller_error_) {
-    text = ": controller error " + odrive::describe_controller_error(*controller_error_);
-    overspeed = (*controller_error_ & odrive::kControllerOverspeed) != 0;
-  } else if (firmware_ == odrive::Firmware::k05) {
-    overspeed = o.vel_limit > 0.0 && speed > o.vel_limit;
-    text = overspeed ? ": OVERSPEED, by the last speed the axis reported"
-                     : ": controller.error was not read back (0.5.6 answers "
-                       "Get_Controller_Error; odrivetool shows axis.controller.error)";
-  }
-  if (!overspeed) return text;
-  char numbers[128];
-  std::snprintf(numbers, sizeof numbers,
-                " (%.3g turn/s x %.3g; the last estimate said %.3g turn/s)", o.vel_limit,
-                o.vel_limit_tolerance, speed);
-  return text +
-         ": in torque control the firmware faults when the axis turns faster than "
-         "controller.config.vel_limit x vel_limit_tolerance" +
-         (o.vel_limit > 0.0 ? std::string(numbers) : std::string(" (configured here as off)")) +
-         " and brakes above vel_limit by itself; raise vel_limit, or set "
-         "enable_torque_mode_vel_limit and enable_overspeed_error to False (docs/drivers/can.md)";
+  tx_[n++] = odrive::request(node, odrive::kGetEncoderEstimates, 8);
+  return {tx_.data(), n};
 }
 
 }  // namespace hapticd::drivers::can

@@ -15,6 +15,10 @@
 // between are not samples of this tick) is the position the next tick acts on; the torque
 // acts from now until the next write: one sample of delay (cyclic mode: the message period in
 // samples, at least one).
+// A 0.6 axis that leaves closed loop by itself (or reports an error) is asked why: the RT path
+// latches the fault and sends the remote request for Get_Error with the tick's zero torque,
+// never waiting; the answer (its disarm reason) is taken by disable, which waits for it up to
+// sdo_timeout_ms, and named by describe.
 // disable: torque 0, IDLE, once however often it is asked, and the watchdog fed again.
 // clear_fault: Clear_Errors, confirmed by a heartbeat without error.
 #pragma once
@@ -65,6 +69,13 @@ class OdriveProfile final : public CanProfile {
   void feed_watchdog();
   void note_unsolicited(const CanFrame& f);
   void read_controller_error(const CanFault& latched) noexcept;
+  void read_error_status(const CanFault& latched) noexcept;
+  void forget_error_status() noexcept {
+    error_request_due_ = false;
+    error_requested_ = false;
+    error_status_.reset();
+  }
+  std::string disarm_text(const CanFault& fault) const;
   std::string overspeed_text(std::uint32_t axis_error) const;
   std::string node_name(const std::string& bus) const;
   std::string node_name() const { return node_name(link_.description()); }
@@ -79,7 +90,12 @@ class OdriveProfile final : public CanProfile {
   bool stopped_ = true;            // the disable frames went out since the last enable
   int unsolicited_estimates_ = 0;  // seen while configuring (request mode)
   std::optional<std::uint32_t> controller_error_;  // 0.5.6's answer after CONTROLLER_FAILED
-  std::array<CanFrame, 2> tx_{};                   // the tick's frames
+  std::array<CanFrame, 3> tx_{};                   // the tick's frames
+  // 0.6's Get_Error after the axis disarmed: due from the RT path (sent with the next tick's
+  // frames), sent, and its answer (taken by a read or by disable).
+  bool error_request_due_ = false;
+  bool error_requested_ = false;
+  std::optional<odrive::ErrorStatus> error_status_;
 
   // RT state of the newest sample.
   float position_turns_ = 0.0f;

@@ -26,7 +26,8 @@ constexpr std::array kErrors05 = {
     Bit{0x00040000, "OVER_TEMP"},
     Bit{0x00080000, "UNKNOWN_POSITION"},
 };
-// firmware 0.6.x (ODrive Pro, S1), enum ODriveError.
+// firmware 0.6.x (ODrive Pro, S1), enum ODriveError: the heartbeat's axis error and Get_Error's
+// active errors and disarm reason.
 constexpr std::array kErrors06 = {
     Bit{0x00000001, "INITIALIZING"},
     Bit{0x00000002, "SYSTEM_LEVEL"},
@@ -209,6 +210,18 @@ std::optional<TxSdo> decode_tx_sdo(const CanFrame& f) noexcept {
 std::optional<RxSdo> decode_rx_sdo(const CanFrame& f) noexcept {
   if (f.rtr || f.len != 8 || f.data[0] > 1) return std::nullopt;
   return RxSdo{f.data[0] == 1, get_u16(f, 1), get_u32(f, 4)};
+}
+
+CanFrame error_status(std::uint8_t node, const ErrorStatus& e) noexcept {
+  CanFrame f = make_frame(frame_id(node, kGetError), 8);
+  put_u32(f, 0, e.active_errors);
+  put_u32(f, 4, e.disarm_reason);
+  return f;
+}
+
+std::optional<ErrorStatus> decode_error_status(const CanFrame& f) noexcept {
+  if (f.rtr || f.len != 8) return std::nullopt;
+  return ErrorStatus{get_u32(f, 0), get_u32(f, 4)};
 }
 
 std::string describe_axis_error(Firmware f, std::uint32_t axis_error) {

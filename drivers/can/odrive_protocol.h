@@ -107,6 +107,17 @@ struct RxSdo {
 };
 std::optional<RxSdo> decode_rx_sdo(const CanFrame& f) noexcept;
 
+// 0.6's Get_Error (0x003, asked with a remote request, or sent every error_msg_rate_ms): the
+// errors active now and the disarm reason, both of the ODriveError bits (ODriveArduino
+// can_simple_messages.hpp, Get_Error_msg_t). A short DC-bus dip disarms the axis: by its next
+// heartbeat it is IDLE with no active error, and only the disarm reason says why.
+struct ErrorStatus {
+  std::uint32_t active_errors = 0;
+  std::uint32_t disarm_reason = 0;
+};
+CanFrame error_status(std::uint8_t node, const ErrorStatus& e) noexcept;
+std::optional<ErrorStatus> decode_error_status(const CanFrame& f) noexcept;  // 8 bytes
+
 // "0x00000800 WATCHDOG_TIMER_EXPIRED" (every bit set, named as the firmware names it).
 std::string describe_axis_error(Firmware f, std::uint32_t axis_error);
 // The axis error bit that says the controller failed and why is in controller.error (0.5

@@ -212,6 +212,24 @@ TEST(Odrive, IdsPayloadsAndBothFirmwaresErrors) {
   EXPECT_EQ(odrive::axis_state_name(8), "CLOSED_LOOP_CONTROL");
 }
 
+// 0.6's Get_Error (ODriveArduino can_simple_messages.hpp, Get_Error_msg_t): Active_Errors in
+// bytes 0-3, Disarm_Reason in 4-7, little-endian.
+TEST(Odrive, GetErrorCarriesTheActiveErrorsAndTheDisarmReason) {
+  const CanFrame f = odrive::error_status(3, {0x00000000, 0x00000200});
+  EXPECT_EQ(f.id, 0x063u);
+  EXPECT_EQ(f.len, 8);
+  EXPECT_EQ(f.data[4], 0x00);
+  EXPECT_EQ(f.data[5], 0x02);
+  const auto e = odrive::decode_error_status(f);
+  ASSERT_TRUE(e);
+  EXPECT_EQ(e->active_errors, 0u);
+  EXPECT_EQ(e->disarm_reason, 0x200u);
+  CanFrame short_frame = f;
+  short_frame.len = 4;
+  EXPECT_FALSE(odrive::decode_error_status(short_frame));
+  EXPECT_FALSE(odrive::decode_error_status(odrive::request(3, odrive::kGetError, 8)));
+}
+
 TEST(BusLoad, WorstCaseFrameLengthsAndTheLoadOfEachProfile) {
   EXPECT_EQ(worst_case_frame_bits(0), 55);
   EXPECT_EQ(worst_case_frame_bits(8), 135);

@@ -12,6 +12,7 @@
 #include "child_process.h"
 #include "reference/can/cia402_drive.h"
 #include "reference/can/odrive_056.h"
+#include "reference_kernel_rig.h"
 #include "sysfs.h"
 #include "vcan_interface.h"
 
@@ -20,65 +21,6 @@ namespace {
 
 using std::chrono::milliseconds;
 using std::chrono::seconds;
-
-const std::string kBin = HAPTICD_BINARY;
-// An emulated guest cannot keep 1 kHz, and stalls now and then (over 150 ms was seen under a
-// loaded host): the ODrive at 50 Hz, the CiA 402 drives at 5 Hz (a SYNC-watching drive times
-// out after 1.5 cycles: 300 ms), each with a wall the gate passes there with the driver's one
-// sample of delay, and a hand pushing F into it: the rest is F/K = 20 mm.
-struct Rig {
-  double rate_hz, stiffness, hand_force;
-};
-constexpr Rig kOdriveRig{50.0, 50.0, 1.0};
-constexpr Rig kCia402Rig{5.0, 5.0, 0.1};
-
-std::vector<std::string> run_args(const std::string& profile, double duration,
-                                  std::vector<std::string> sets) {
-  const Rig& r = profile == "odrive" ? kOdriveRig : kCia402Rig;
-  std::vector<std::string> a = {
-      kBin,         "run",
-      "--config",   std::string(HAPTICD_SOURCE_DIR) + "/config/can-" + profile + ".yaml",
-      "--duration", std::to_string(duration)};
-  sets.push_back("loop.rate_hz=" + std::to_string(r.rate_hz));
-  if (profile == "cia402") {  // hapticd's heartbeat each tick, watched over several
-    sets.push_back("device.can.cia402.master_heartbeat_ms=200");
-    sets.push_back("device.can.cia402.drive_watchdog_ms=1500");
-  }
-  for (const char* s :
-       {"safety.stale_fault_ticks=10", "loop.overrun_fault_streak=100",
-        "safety.direction_check.max_latency_ms=300",
-        "device.can.interface=vcan0", "device.can.sdo_timeout_ms=1000",
-        "device.can.state_timeout_ms=2000", "device.can.heartbeat_timeout_ms=3000"}) {
-    sets.push_back(s);
-  }
-  sets.push_back("wall.stiffness=" + std::to_string(r.stiffness));
-  for (const std::string& s : sets) a.insert(a.end(), {"--set", s});
-  return a;
-}
-
-// The hand pushes once hapticd has output on (press_now): a wall that finds the axis already
-// inside it stays off until the axis leaves it.
-reference::PlantParameters hand(double force, double damping) {
-  reference::PlantParameters p;
-  p.damping = damping;
-  p.hand_force = force;
-  p.hand_start_s = 1e6;
-  p.hand_ramp_s = 0.5;
-  return p;
-}
-
-// The axis at rest against the wall: the mean position over the last `ms` before now.
-template <typename Drive>
-double rest_position(const Drive& drive, int ms) {
-  double sum = 0.0;
-  int n = 0;
-  for (int i = 0; i < ms / 10; ++i) {
-    sum += drive.position_m();
-    ++n;
-    std::this_thread::sleep_for(milliseconds(10));
-  }
-  return sum / n;
-}
 
 TEST(CanReferenceOnVcan, Odrive05WithItsWatchdogOnRendersTheWallAndIdlesWhenHapticdIsKilled) {
   kernel_test::VcanInterface bus("vcan0");
@@ -159,8 +101,12 @@ TEST(CanReferenceOnVcan, Cia402DrivesAsTheyAreStartAndRenderTheWall) {
     ChildProcess run(run_args("cia402", 60, k.sets), "/tmp/hapticd-ref-cia402.out");
     kernel_test::wait_until([&] { return drive.torque_on(); }, milliseconds(60'000),
                             "operation enabled");
+    // The hand pushes once the direction check has armed the wall: its pulse moves the axis
+    // some 0.1 m out (3.2 s at 5 Hz), then the hand brings it back (3 s) and in (the slow
+    // pole: 0.6 s).
+    ASSERT_TRUE(wait_for_armed_wall(run, milliseconds(60'000))) << run.output();
     drive.press_now();
-    std::this_thread::sleep_for(milliseconds(5000));  // the slow pole: 0.6 s
+    std::this_thread::sleep_for(milliseconds(10'000));
     const double x = rest_position(drive, 1000);
     const double expected = kCia402Rig.hand_force / kCia402Rig.stiffness;
     EXPECT_NEAR(x, expected, 0.01 * expected) << run.output();

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "reference/can/odrive_056.h"
+#include "reference/can/odrive_06.h"
 #include "reference_rig.h"
 
 namespace hapticd::drivers::can::testing {
@@ -125,6 +126,60 @@ TEST(CanReferenceOdrive, CheckWarnsOfTheTorqueModeVelocityLimitInAxisUnits) {
       joined(wiring::find_driver("can").notes(odrive_config({"device.can.odrive.vel_limit=0"})))
           .find("vel_limit"),
       std::string::npos);
+}
+
+// Issue 34, 3: an ODrive Pro / S1 (0.6) disarmed by a DC-bus dip shorter than its heartbeat
+// period: by its next heartbeat it is IDLE with no active error. The fault is latched at once
+// with zero torque, Get_Error is asked with it, and the disarm reason is named.
+TEST(CanReferenceOdrive, Firmware06DisarmedByADcBusDipIsAskedWhy) {
+  reference::Odrive06 axis({}, still_axis(), reference::monotonic_ns());
+  ReferenceRig rig(odrive_config({"device.can.odrive.vel_limit=0"}), axis);  // firmware auto
+  ASSERT_NO_THROW(rig.device->configure());
+  EXPECT_NE(rig.device->info().description.find("firmware 0.6.10"), std::string::npos)
+      << rig.device->info().description;
+  ASSERT_NO_THROW(rig.device->enable());
+  ASSERT_EQ(rig.run(0.5, 300), IoStatus::kOk) << rig.device->describe_fault();
+  ASSERT_TRUE(axis.armed());
+  axis.dip_dc_bus(20);
+  ASSERT_EQ(rig.run(0.5, 1000), IoStatus::kDeviceFault);
+  sleep_ms(50);
+  EXPECT_FALSE(axis.armed());
+  EXPECT_EQ(axis.active_errors(), 0u) << "the dip is over";
+  EXPECT_EQ(axis.disarm_reason(), reference::Odrive06::kDcBusUnderVoltage);
+  EXPECT_EQ(axis.motor_force_n(), 0.0);
+  EXPECT_EQ(axis.error_requests(), 1) << "asked with the latch's zero torque, before disable";
+  rig.device->disable();
+  EXPECT_EQ(axis.error_requests(), 1) << "disable took that answer";
+  const std::string why = rig.device->describe_fault();
+  EXPECT_NE(why.find("left CLOSED_LOOP_CONTROL by itself: its heartbeat says IDLE; disarm reason "
+                     "(Get_Error) 0x00000200 DC_BUS_UNDER_VOLTAGE"),
+            std::string::npos)
+      << why;
+  rig.device->clear_fault();  // Clear_Errors: the disarm reason goes
+  EXPECT_EQ(axis.disarm_reason(), 0u);
+  ASSERT_NO_THROW(rig.device->enable());
+  EXPECT_EQ(rig.run(0.5, 200), IoStatus::kOk) << rig.device->describe_fault();
+  EXPECT_EQ(axis.unmodelled_mode_passes(), 0u);
+}
+
+// An axis that also sends Get_Error by itself (error_msg_rate_ms): those messages are the
+// driver's (no unknown ids), and the disarm is named by the reason, not by one sent before it.
+TEST(CanReferenceOdrive, Firmware06SendingGetErrorByItselfIsUnderstood) {
+  reference::Odrive06Config c;
+  c.error_msg_rate_ms = 20;
+  reference::Odrive06 axis(c, still_axis(), reference::monotonic_ns());
+  ReferenceRig rig(odrive_config({"device.can.odrive.vel_limit=0"}), axis);
+  ASSERT_NO_THROW(rig.device->configure());
+  ASSERT_NO_THROW(rig.device->enable());
+  ASSERT_EQ(rig.run(0.5, 300), IoStatus::kOk) << rig.device->describe_fault();
+  axis.dip_dc_bus(20);
+  ASSERT_EQ(rig.run(0.5, 1000), IoStatus::kDeviceFault);
+  rig.device->disable();
+  const std::string why = rig.device->describe_fault();
+  EXPECT_NE(why.find("disarm reason (Get_Error) 0x00000200 DC_BUS_UNDER_VOLTAGE"),
+            std::string::npos)
+      << why;
+  EXPECT_EQ(counter(*rig.device, "unknown_ids").value(), 0u);
 }
 
 }  // namespace

@@ -31,6 +31,8 @@ enum class CanPeerFault : std::uint8_t {
   kUnknownIds,        // frames with ids the driver does not expect, each tick
   kTruncatedEmcy,     // an EMCY of 2 bytes (CiA 402)
   kMalformedMessage,  // a message that is not one struct can_frame (socketpair only)
+  kDisarm,            // ODrive 0.6: a short DC-bus dip disarms the axis: IDLE, no active error
+                      // by its heartbeat, the reason only in Get_Error's disarm reason
 };
 
 class CanPeerBase : public LoopbackPeer {

@@ -1,8 +1,9 @@
 #include "sim/peers/can/cia402_peer.h"
 
-#include <algorithm>
 #include <cmath>
 #include <limits>
+
+#include "base/clock.h"
 
 namespace hapticd::sim {
 namespace {
@@ -78,9 +79,9 @@ std::uint32_t Cia402Peer::object(std::uint16_t index, std::uint8_t sub) const {
 }
 
 std::int32_t Cia402Peer::position_units() noexcept {
-  const double units = std::round(axis_.encoder_position() / settings_.position_per_unit);
-  return static_cast<std::int32_t>(std::clamp<double>(
-      units, std::numeric_limits<std::int32_t>::min(), std::numeric_limits<std::int32_t>::max()));
+  const auto units = std::llround(axis_.encoder_position() / settings_.position_per_unit) +
+                     position_offset_.load();
+  return static_cast<std::int32_t>(static_cast<std::uint32_t>(units));  // modulo 2^32
 }
 
 void Cia402Peer::set_power(PowerState s) {
@@ -97,9 +98,20 @@ void Cia402Peer::set_power(PowerState s) {
   }
 }
 
+void Cia402Peer::charge_dc_link_after(int ms) noexcept {
+  dc_link_charged_ns_.store(ms < 0 ? std::numeric_limits<std::int64_t>::max()
+                                   : base::monotonic_ns() + ms * 1'000'000LL);
+}
+
 void Cia402Peer::set_controlword(std::uint16_t cw) {
-  const PowerState next = cia402::apply_controlword(power_.load(), cw, controlword_);
+  const PowerState now = power_.load();
+  PowerState next = cia402::apply_controlword(now, cw, controlword_);
   controlword_ = cw;
+  // Without DC-link voltage the drive stays in switch on disabled (transition 2 refused); the
+  // command counts when it comes again once charged.
+  if (now == PowerState::kSwitchOnDisabled && base::monotonic_ns() < dc_link_charged_ns_.load()) {
+    next = now;
+  }
   set_power(next);
 }
 

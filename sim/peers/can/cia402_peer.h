@@ -27,6 +27,14 @@ class Cia402Peer final : public CanPeerBase {
 
   // Any thread, for tests: the power state and NMT state right now.
   drivers::can::cia402::PowerState power_state() const noexcept { return power_.load(); }
+  // Any thread, for tests: 0x6064 counts from `counts` at the plant's zero, as a drive that
+  // keeps an offset (a homing, a multi-turn count). 0x6064 is a signed 32-bit count: it
+  // rolls over past 2^31 - 1 to -2^31 and back, as a real drive's does.
+  void offset_position(std::int64_t counts) noexcept { position_offset_.store(counts); }
+  // Any thread, for tests: the DC link charges `ms` from now (negative: never, no mains);
+  // until then the drive stays in switch on disabled, its statusword's bit 4 (voltage
+  // enabled) at 0, refusing the shutdown command, as drives do after mains on.
+  void charge_dc_link_after(int ms) noexcept;
 
  protected:
   void handle(const drivers::can::CanFrame& f) override;
@@ -69,6 +77,8 @@ class Cia402Peer final : public CanPeerBase {
   std::int64_t last_heartbeat_ns_ = 0;
   std::int64_t last_sync_ns_ = 0;
   std::int64_t last_master_heartbeat_ns_ = 0;  // 0: none seen yet (not watched)
+  std::atomic<std::int64_t> position_offset_{0};
+  std::atomic<std::int64_t> dc_link_charged_ns_{0};  // CLOCK_MONOTONIC; 0: from the start
 };
 
 }  // namespace hapticd::sim

@@ -20,6 +20,7 @@ OdrivePeer::OdrivePeer(const config::Config& cfg, drivers::can::CanSocket socket
       firmware_(settings_.odrive.detect_firmware ? odrive::Firmware::k06
                                                  : settings_.odrive.firmware),
       watchdog_timeout_s_(settings_.odrive.watchdog_timeout_s) {
+  if (firmware_ == odrive::Firmware::k06) can_faults_.allow(CanPeerFault::kDisarm);
   publish();
 }
 
@@ -39,15 +40,22 @@ void OdrivePeer::set_state(std::uint8_t state) {
   send_heartbeat();  // the simulation says so at once; a real axis at its next heartbeat
 }
 
-void OdrivePeer::apply_device_fault() {
-  axis_error_ |= fault_error();
+void OdrivePeer::disarm(std::uint32_t reason, bool stays_active) {
+  if (stays_active) axis_error_ |= reason;
+  if (firmware_ == odrive::Firmware::k06) disarm_reason_ |= reason;
   set_state(odrive::kAxisIdle);
 }
 
+void OdrivePeer::take_disarm() {
+  // The dip is over before the next heartbeat: nothing stays active.
+  if (can_faults_.take(CanPeerFault::kDisarm)) disarm(kDcBusUnderVoltage, false);
+}
+
+void OdrivePeer::apply_device_fault() { disarm(fault_error(), true); }
+
 void OdrivePeer::on_bus_lost() {
   // A real axis notices when its watchdog expires; the simulation reacts at once.
-  axis_error_ |= odrive::watchdog_error_bit(firmware_);
-  set_state(odrive::kAxisIdle);
+  disarm(odrive::watchdog_error_bit(firmware_), true);
 }
 
 void OdrivePeer::trigger() {
@@ -55,6 +63,7 @@ void OdrivePeer::trigger() {
   if (stepped_) axis_.step();
   stepped_ = true;
   ++triggers_;
+  take_disarm();
   const bool torque_mode =
       control_mode_ == odrive::kControlModeTorque && input_mode_ == odrive::kInputModePassthrough;
   if (state_.load() == odrive::kAxisClosedLoop && torque_mode) {
@@ -107,6 +116,7 @@ void OdrivePeer::on_command(std::uint8_t command, const CanFrame& f) {
       break;
     case odrive::kClearErrors:
       axis_error_ = 0;
+      disarm_reason_ = 0;
       send_heartbeat();
       break;
     case odrive::kRxSdo:
@@ -139,6 +149,11 @@ void OdrivePeer::handle(const CanFrame& f) {
       send(odrive::version_frame(node_, {2, 4, 4, 58, 0, 6, 10}));
     } else if (command == odrive::kHeartbeat) {
       send_heartbeat();
+    } else if (command == odrive::kGetError) {
+      error_requests_.fetch_add(1);
+      if (firmware_ == odrive::Firmware::k06) {
+        send(odrive::error_status(node_, {axis_error_, disarm_reason_}));
+      }
     }
     return;
   }
@@ -146,14 +161,14 @@ void OdrivePeer::handle(const CanFrame& f) {
 }
 
 void OdrivePeer::on_clock(std::int64_t now) {
+  take_disarm();
   if (now - last_heartbeat_ns_ >= settings_.odrive.heartbeat_period_ms * 1'000'000LL) {
     last_heartbeat_ns_ = now;
     send_heartbeat();
   }
   if (state_.load() == odrive::kAxisClosedLoop && last_frame_ns_ != 0 &&
       now - last_frame_ns_ > static_cast<std::int64_t>(watchdog_timeout_s_ * 1e9)) {
-    axis_error_ |= odrive::watchdog_error_bit(firmware_);
-    set_state(odrive::kAxisIdle);
+    disarm(odrive::watchdog_error_bit(firmware_), true);
   }
 }
 

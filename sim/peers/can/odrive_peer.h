@@ -25,6 +25,10 @@ class OdrivePeer final : public CanPeerBase {
   std::uint32_t fault_error() const noexcept;
   // Any thread, for tests.
   std::uint8_t axis_state() const noexcept { return state_.load(); }
+  // Any thread, for tests: remote requests for Get_Error (0x003) received (0.6 answers them).
+  int error_requests() const noexcept { return error_requests_.load(); }
+  // 0.6's DC_BUS_UNDER_VOLTAGE: the disarm reason CanPeerFault::kDisarm leaves.
+  static constexpr std::uint32_t kDcBusUnderVoltage = 0x00000200;
 
  protected:
   void handle(const drivers::can::CanFrame& f) override;
@@ -37,11 +41,16 @@ class OdrivePeer final : public CanPeerBase {
   void trigger();
   void send_heartbeat();
   void on_command(std::uint8_t command, const drivers::can::CanFrame& f);
+  // 0.6: an error disarms the axis and stays in the disarm reason until Clear_Errors.
+  void disarm(std::uint32_t reason, bool stays_active);
+  void take_disarm();
 
   const std::uint8_t node_;
   const drivers::can::odrive::Firmware firmware_;
   std::atomic<std::uint8_t> state_{drivers::can::odrive::kAxisIdle};
-  std::uint32_t axis_error_ = 0;
+  std::uint32_t axis_error_ = 0;     // the heartbeat's: 0.6's active errors
+  std::uint32_t disarm_reason_ = 0;  // 0.6
+  std::atomic<int> error_requests_{0};
   std::uint32_t control_mode_ = 3;  // position control, the firmware's default
   std::uint32_t input_mode_ = 1;
   float input_torque_ = 0.0f;

@@ -11,6 +11,7 @@ namespace {
 // CiA 402 statusword bits.
 constexpr std::uint16_t kRemote = 1u << 9;
 constexpr std::uint16_t kInternalLimit = 1u << 11;
+constexpr std::uint16_t kVoltageEnabled = 1u << 4;
 constexpr std::int8_t kCst = 10;
 
 }  // namespace
@@ -20,10 +21,24 @@ Cia402Drive::Cia402Drive(const Cia402Behaviour& b, const PlantParameters& plant,
     : b_(b), plant_(plant, now_ns) {
   build_dictionary();
   heartbeat_sent_ns_ = now_ns;
+  if (b.mains_on_at_start) mains_on_ns_.store(now_ns);
+  update_dc_link(now_ns);
+}
+
+void Cia402Drive::update_dc_link(std::int64_t now_ns) {
+  const std::int64_t mains = mains_on_ns_.load();
+  dc_link_charged_ =
+      mains >= 0 && now_ns - mains >= static_cast<std::int64_t>(b_.dc_link_charge_ms) * 1'000'000;
+  // The shutdown command the drive holds is taken once its DC link has charged.
+  if (dc_link_charged_ && shutdown_held_ && power_.load() == Power::kSwitchOnDisabled) {
+    shutdown_held_ = false;
+    if ((controlword_ & 0x87) == 0x06) set_power(Power::kReadyToSwitchOn);
+  }
 }
 
 std::uint16_t Cia402Drive::statusword() const {
-  std::uint16_t sw = kRemote | (limited_ ? kInternalLimit : 0);
+  std::uint16_t sw =
+      kRemote | (limited_ ? kInternalLimit : 0) | (dc_link_charged_ ? kVoltageEnabled : 0);
   switch (power_.load()) {
     case Power::kSwitchOnDisabled:
       return sw | 0x0040;
@@ -47,8 +62,11 @@ std::int32_t Cia402Drive::mapped(std::uint16_t index) const {
       return statusword();
     case 0x6061:
       return mode_shown_;
-    case 0x6064:
-      return static_cast<std::int32_t>(std::lround(plant_.position() / b_.metres_per_increment));
+    case 0x6064: {  // INTEGER32: the count rolls over, modulo 2^32
+      const std::int64_t count =
+          std::llround(plant_.position() / b_.metres_per_increment) + b_.position_offset;
+      return static_cast<std::int32_t>(static_cast<std::uint32_t>(count));
+    }
     case 0x606C:
       return static_cast<std::int32_t>(std::lround(plant_.velocity() / b_.metres_per_increment));
     default:
@@ -92,6 +110,7 @@ void Cia402Drive::apply_controlword(std::uint16_t cw) {
     }
     return;
   }
+  shutdown_held_ = false;  // a new command replaces one held for the DC link
   if ((cw & 0x02) == 0) {  // disable voltage
     set_power(Power::kSwitchOnDisabled);
   } else if ((cw & 0x04) == 0) {  // quick stop
@@ -99,6 +118,11 @@ void Cia402Drive::apply_controlword(std::uint16_t cw) {
   } else if (s == Power::kQuickStopActive) {
     // only disable voltage leaves it (above)
   } else if ((cw & 0x01) == 0) {  // shutdown
+    if (s == Power::kSwitchOnDisabled && !dc_link_charged_) {
+      shutdown_held_ = true;  // transition 2 waits for the DC link
+      dc_link_refusals_.fetch_add(1);
+      return;
+    }
     set_power(Power::kReadyToSwitchOn);
   } else if ((cw & 0x08) == 0) {  // switch on / disable operation
     if (s != Power::kSwitchOnDisabled) set_power(Power::kSwitchedOn);
@@ -217,6 +241,7 @@ void Cia402Drive::on_sync(std::int64_t now_ns, std::vector<Frame>& out) {
 
 void Cia402Drive::on_frame(const Frame& f, std::int64_t now_ns, std::vector<Frame>& out) {
   plant_.advance_to(now_ns);
+  update_dc_link(now_ns);
   const std::uint32_t master = (object(0x1016, 1) >> 16) & 0x7F;
   if (f.id == 0x000 && f.len == 2 && (f.data[1] == 0 || f.data[1] == b_.node)) {
     on_nmt(f.data[0], out);
@@ -237,6 +262,7 @@ void Cia402Drive::on_frame(const Frame& f, std::int64_t now_ns, std::vector<Fram
 
 void Cia402Drive::on_clock(std::int64_t now_ns, std::vector<Frame>& out) {
   plant_.advance_to(now_ns);
+  update_dc_link(now_ns);
   if (const std::uint16_t code = injected_fault_.exchange(0)) {
     error_code_ = code;
     set_power(Power::kFault);

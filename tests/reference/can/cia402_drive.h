@@ -24,10 +24,22 @@
 //   lost master: 0 none, 1 fault, 2 disable voltage, 3 quick stop), 0x60C2 interpolation time
 //   period.
 //
+// - CiA 402 0x6064 position actual value: INTEGER32, in increments. A drive counts on past
+//   2^31 - 1 to -2^31 (and back) - a multi-turn axis, a fine encoder, or an offset the drive
+//   keeps (a homing): the count is the axis's position plus the offset, modulo 2^32 (RMP's note
+//   "Signed 32-bit Motor Position Overflow/Underflow" describes the rollover masters see).
+// - The DC link: statusword bit 4 (voltage enabled) is 1 while the power stage has its DC-link
+//   voltage, in every state (SMC LECSN-T, statusword: bit 4 = 0 "the bus voltage is lower than
+//   the certain level"). Until the DC link has charged after mains on, the drive stays in
+//   switch on disabled: the shutdown command (transition 2) is not taken (KEB COMBIVERT F6
+//   manual, CiA 402 state machine: "Switch on disabled is reached when ... the charging of the
+//   DC link is not completed"); the drive acts on the shutdown command it holds once charged.
+//
 // Behaviours real drives have, switchable (Behaviour): TPDO COB-ID bit 30 required (no RTR:
 // writing it 0 aborts 0x06090030; CANopenNode's own TPDO default is 0xC0000180 + node), a
-// lag before 0x6061 shows a new mode, no 0x1006, a 0x60C2, its own 0x6072, no 0x6007, and
-// SYNC loss while enabled handled as a lost master (0x6007).
+// lag before 0x6061 shows a new mode, no 0x1006, a 0x60C2, its own 0x6072, no 0x6007, SYNC
+// loss while enabled handled as a lost master (0x6007), an offset in 0x6064, and a DC link
+// that charges some time after mains on (or mains that never come).
 #pragma once
 
 #include <atomic>
@@ -57,6 +69,12 @@ struct Cia402Behaviour {
   // The axis: metres per 0x6064 increment, motor N m per axis newton.
   double metres_per_increment = 1e-5;
   double nm_per_newton = 0.01;
+  // 0x6064 = the axis position in increments + this, modulo 2^32 (a signed 32-bit count).
+  std::int64_t position_offset = 0;
+  // Mains on at power-on (else when switch_mains_on() is called), and the DC link charged this
+  // long after it; until then bit 4 is 0 and the drive stays in switch on disabled.
+  bool mains_on_at_start = true;
+  int dc_link_charge_ms = 0;
 };
 
 class Cia402Drive final : public ReferenceDevice {
@@ -85,6 +103,12 @@ class Cia402Drive final : public ReferenceDevice {
   void press_now() { plant_.press_from(monotonic_ns()); }
   // Any thread: the drive faults at its next service (EMCY `code`, Fault).
   void inject_fault(std::uint16_t code) { injected_fault_.store(code); }
+  // Any thread: mains on now (the DC link charges dc_link_charge_ms from here).
+  void switch_mains_on() { mains_on_ns_.store(monotonic_ns()); }
+  // Any thread: shutdown commands the drive could not take for want of DC-link voltage.
+  int dc_link_refusals() const { return dc_link_refusals_.load(); }
+  // Any thread: the hand pushes with `newtons` from now on (after its press ramp).
+  void set_hand_force(double newtons) { plant_.set_hand_force(newtons); }
   // The drive's thread, or after the runner stopped.
   std::uint32_t object(std::uint16_t index, std::uint8_t sub) const;
   bool has_object(std::uint16_t index, std::uint8_t sub) const;
@@ -123,6 +147,7 @@ class Cia402Drive final : public ReferenceDevice {
   void on_sync(std::int64_t now_ns, std::vector<Frame>& out);
   void on_rpdo(const Frame& f);
   void apply_controlword(std::uint16_t cw);
+  void update_dc_link(std::int64_t now_ns);
   void set_power(Power p);
   void apply_torque();
   void lose_master(std::uint16_t emcy, std::vector<Frame>& out);
@@ -154,6 +179,11 @@ class Cia402Drive final : public ReferenceDevice {
   std::int64_t heartbeat_sent_ns_ = 0;
   std::uint16_t error_code_ = 0;
   std::atomic<std::uint16_t> injected_fault_{0};
+  // The DC link: mains on since (CLOCK_MONOTONIC; -1 off), charged, a shutdown held for it.
+  std::atomic<std::int64_t> mains_on_ns_{-1};
+  bool dc_link_charged_ = false;
+  bool shutdown_held_ = false;
+  std::atomic<int> dc_link_refusals_{0};
 };
 
 }  // namespace hapticd::reference

@@ -9,11 +9,12 @@ ReferencePlant::ReferencePlant(const PlantParameters& p, std::int64_t t0_ns)
       t_ns_(t0_ns),
       x_(p.start),
       published_x_(p.start),
-      hand_start_ns_(t0_ns + static_cast<std::int64_t>(p.hand_start_s * 1e9)) {}
+      hand_start_ns_(t0_ns + static_cast<std::int64_t>(p.hand_start_s * 1e9)),
+      hand_force_(p.hand_force) {}
 
 double ReferencePlant::hand(std::int64_t t_ns) const {
   const double since = static_cast<double>(t_ns - hand_start_ns_.load()) * 1e-9;
-  return p_.hand_force * std::clamp(since / p_.hand_ramp_s, 0.0, 1.0);
+  return hand_force_.load(std::memory_order_relaxed) * std::clamp(since / p_.hand_ramp_s, 0.0, 1.0);
 }
 
 void ReferencePlant::advance_to(std::int64_t t_ns) {

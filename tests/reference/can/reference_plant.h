@@ -34,6 +34,9 @@ class ReferencePlant {
   double motor_force_now() const { return published_f_.load(std::memory_order_relaxed); }
   // Any thread: the hand starts its push (its ramp) at t_ns instead of hand_start_s after t0.
   void press_from(std::int64_t t_ns) { hand_start_ns_.store(t_ns); }
+  // Any thread: the hand pushes with `f` (N) from now on (a step, once the press's ramp is
+  // done: a hand that eases off or presses harder).
+  void set_hand_force(double f) { hand_force_.store(f); }
 
  private:
   double hand(std::int64_t t_ns) const;
@@ -46,6 +49,7 @@ class ReferencePlant {
   std::atomic<double> published_x_;
   std::atomic<double> published_f_{0.0};
   std::atomic<std::int64_t> hand_start_ns_;
+  std::atomic<double> hand_force_;
 };
 
 }  // namespace hapticd::reference
