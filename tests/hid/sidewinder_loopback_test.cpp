@@ -2,8 +2,8 @@
 // (sim/peers/hid/hid_firmwares.h, PidFirmwareOptions::sidewinder_lineage: Device Control a
 // 0x96 collection alone, ids shared between kinds, PID State declared and never sent, Block
 // Load answered once, +sin(direction)), with config/hid-arduino-ffb.yaml in freerun: the
-// direction check confirms the force's sign, the wall is the sim driver's with the same
-// delay, and the effect block is freed when the run ends.
+// direction check confirms the force's sign, no PID State bit faults (it never sends one),
+// and the wall is the sim driver's with the same delay.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -32,8 +32,12 @@ struct Outcome {
 // sim driver on the same plant and wall with the HID driver's declared delay.
 Outcome run(bool sidewinder) {
   std::vector<std::string> sets = {"loop.clock=freerun", "device.sim.force_reversed=false"};
-  if (!sidewinder)
+  if (sidewinder) {
+    // Every PID State bit under the mask: a device that never sends one faults on none.
+    sets.push_back("device.hid.pid.fault_mask=0x3f");
+  } else {
     sets.insert(sets.end(), {"device.driver=sim", "device.hid=", "wall.delay_samples=1"});
+  }
   const config::Config cfg = testing::load_example("hid-arduino-ffb.yaml", sets);
   std::unique_ptr<Device> inner;
   std::unique_ptr<sim::LoopbackPeer> peer;
