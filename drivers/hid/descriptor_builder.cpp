@@ -113,12 +113,19 @@ void effect_control(DescriptorBuilder& b, const PidReferenceIds& ids) {
   b.end_collection();
 }
 
-void device_reports(DescriptorBuilder& b, const PidReferenceIds& ids) {
-  b.usage(kDeviceControlReport).collection(kLogical).report_id(ids.device_control);
-  b.usage(kDeviceControl).collection(kLogical);
+void device_reports(DescriptorBuilder& b, const PidReferenceOptions& o) {
+  const PidReferenceIds& ids = o.ids;
+  // The report's collection with its array's collection inside; the SideWinder lineage's: the
+  // array's alone.
+  if (o.device_control_report) {
+    b.usage(kDeviceControlReport).collection(kLogical).report_id(ids.device_control);
+    b.usage(kDeviceControl).collection(kLogical);
+  } else {
+    b.usage(kDeviceControl).collection(kLogical).report_id(ids.device_control);
+  }
   b.usage_min(kDcEnableActuators).usage_max(0x9C);
   b.logical(1, 6).report_size(8).report_count(1).output(kArray).end_collection();
-  b.end_collection();
+  if (o.device_control_report) b.end_collection();
   b.usage(kDeviceGainReport).collection(kLogical).report_id(ids.device_gain);
   b.usage(kDeviceGain).logical(0, 255).report_size(8).report_count(1).output(kData);
   b.end_collection();
@@ -183,7 +190,7 @@ std::vector<std::uint8_t> pid_reference_descriptor(const PidReferenceOptions& o)
   set_effect(b, o.ids.set_effect);
   envelope(b, o.ids.set_envelope);
   effect_control(b, o.ids);
-  device_reports(b, o.ids);
+  device_reports(b, o);
   b.end_collection();
   return b.bytes();
 }

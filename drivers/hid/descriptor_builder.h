@@ -64,7 +64,16 @@ struct PidReferenceOptions {
   bool sequence = true;      // a vendor sample counter (0xFF00:0x20, u8) beside the axis
   bool state_report = true;  // the PID State input report
   PidReferenceIds ids;
+  // false: Device Control as the SideWinder-lineage firmwares declare it (adapt-ffb-joy,
+  // ArduinoJoystickWithFFBLibrary, Fino, VNWheel): a logical collection of usage 0x96 holding
+  // its array, with no 0x95 report collection around it.
+  bool device_control_report = true;
 };
+
+// The ids ArduinoJoystickWithFFBLibrary v1.0.0 gives its reports (src/FFBDescriptor.h), one id
+// shared by reports of different kinds: input 1 and Set Effect, PID State and Set Envelope 2,
+// Create New Effect and Set Constant Force 5, Block Load 6, PID Pool 7.
+inline constexpr PidReferenceIds kSideWinderLineageIds{1, 2, 1, 2, 5, 10, 11, 12, 13, 5, 6, 7};
 
 // A one-axis force-feedback joystick on the PID page (HID PID 1.0): Generic Desktop X (16 bit,
 // +-32767) in the input report, one effect type (constant force), and every report a PID host

@@ -17,7 +17,8 @@ using config::schema::number;
 using config::schema::Range;
 using config::schema::read_hex;
 
-const std::vector<std::string> kTypes{"u8", "i8", "u16", "i16", "u32", "i32", "f32"};
+// In FieldType's order.
+const std::vector<std::string> kTypes{"u8", "i8", "u16", "i16", "u32", "i32", "f32", "u24", "i24"};
 
 // Reading state shared by the helpers: where each sub-key is (for errors found after
 // reading) and whether anything went wrong in this section.
@@ -60,14 +61,39 @@ void raw_value(MapReader& m, const Field& f, double& out) {
   if (const auto v = read_hex(m.diag(), f, 0xFFFFFFFFu)) out = static_cast<double>(*v);
 }
 
-// byte, type, endian and (for quantities) scale and offset of one field's mapping.
+// Where one field is and what it holds: {byte, type, endian}, or a field of any width at any
+// bit, {byte, bit, bits, signed, endian}; `bit` also with an integer `type`. Then scale and
+// offset for a quantity. Errors are at the key to change.
 FieldSpec read_spec(MapReader& m, bool quantity) {
   FieldSpec f;
   integer(m, take(m, "byte", "the field's byte offset in the report's data"),
           IntRange::between(0, kMaxReportData - 1), f.byte);
-  const Field type = take(m, "type", "one of u8, i8, u16, i16, u32, i32, f32");
-  if (const auto t = config::schema::read_choice(m.diag(), type, kTypes)) {
-    f.type = static_cast<FieldType>(*t);
+  const Field type = m.take("type");
+  const Field bits = m.take("bits");
+  const Field sign = m.take("signed");
+  if (!type.present && !bits.present) {
+    m.missing("type",
+              "one of u8, i8, u16, i16, u24, i24, u32, i32, f32; or bits: N (1..32) for a field "
+              "of N bits");
+  } else if (type.present && bits.present) {
+    m.diag().error(bits.key_mark, bits.path,
+                   "give type or bits, not both (a type has its width: u16 is 16 bits)");
+  } else if (type.present) {
+    if (const auto t = config::schema::read_choice(m.diag(), type, kTypes)) {
+      f = typed(static_cast<FieldType>(*t), f.byte);
+    }
+  } else {
+    integer(m, bits, IntRange::between(1, kMaxFieldBits), f.bits);
+  }
+  if (sign.present && type.present) {
+    m.diag().error(sign.key_mark, sign.path, "only with bits: the type says whether it is signed");
+  } else if (const auto v = config::schema::read_bool(m.diag(), sign)) {
+    f.is_signed = *v;
+  }
+  const Field bit = m.take("bit");
+  integer(m, bit, IntRange::between(0, 7), f.bit);
+  if (bit.present && f.is_float && f.bit != 0) {
+    m.diag().error(bit.key_mark, bit.path, "an f32 starts at bit 0 of its byte");
   }
   if (const auto e = config::schema::read_choice(m.diag(), m.take("endian"), {"little", "big"})) {
     f.endian = *e == 0 ? Endian::kLittle : Endian::kBig;
@@ -111,6 +137,9 @@ void read_input(MapReader& report, Ctx& c, InputLayout& in) {
   c.mark(pos, "input.position");
   MapReader p(c.d, pos);
   in.position = read_spec(p, true);
+  const Field wraps = p.take("wraps");
+  c.mark(wraps, "input.position.wraps");
+  if (const auto w = config::schema::read_bool(c.d, wraps)) in.position_wraps = *w;
   p.finish();
   in.sequence = optional_field(m, c, "input", "sequence", false);
   const Field status = m.take("status");
@@ -179,6 +208,25 @@ std::optional<FeatureLayout> read_feature(MapReader& report, Ctx& c, const char*
   return f;
 }
 
+// A wrapping position is unwrapped the short way round (drivers/io/counter_unwrap.h): half the
+// field's range must be more than the loop lets the axis move in one period, or a real move
+// could be taken the other way round before the speed check could see it.
+void check_wrap(Ctx& c, const config::Config& cfg, const InputLayout& in, const YAML::Mark& at) {
+  if (!in.position_wraps) return;
+  const double half =
+      std::ldexp(std::abs(in.position.scale), static_cast<int>(in.position.bits) - 1);
+  const double step = cfg.safety.max_speed * cfg.loop.sample_period_s();
+  if (half > step) return;
+  c.error_at("input.position.wraps",
+             "a " + std::to_string(in.position.bits) + "-bit position of " +
+                 config::schema::format_number(in.position.scale) + " per count wraps every " +
+                 config::schema::format_number(2.0 * half) +
+                 ": a move of half that in one period cannot be told from one the other way, and "
+                 "safety.max_speed allows " +
+                 config::schema::format_number(step) + " a period",
+             at);
+}
+
 void read_report_profile(MapReader& hid, Ctx& c, const config::Config& cfg, HidSettings& s) {
   const Field field = take(hid, "report", "the report layout (profile report)");
   MapReader m(c.d, field);
@@ -194,6 +242,7 @@ void read_report_profile(MapReader& hid, Ctx& c, const config::Config& cfg, HidS
     const std::size_t colon = e.find(": ");
     c.error_at(e.substr(0, colon), e.substr(colon + 2), field.key_mark);
   }
+  check_wrap(c, cfg, l.input, field.key_mark);
 }
 
 // {usage_page, usage} -> page << 16 | usage.

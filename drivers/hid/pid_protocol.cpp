@@ -26,26 +26,24 @@ class Finder {
  public:
   explicit Finder(const ParsedDescriptor& d) : d_(d) {}
 
-  // The report whose fields sit in the logical collection `collection`.
-  ReportRef report(pid::Usage collection, ReportKind expected, const char* name, bool required) {
-    for (const ReportField& f : d_.fields) {
-      if (!f.inside(pid::u(collection))) continue;
-      if (f.kind != expected) {
-        if (required) {
-          fail(std::string("the PID ") + name + " report (" + usage_text(pid::u(collection)) +
-               ") is an " + to_string(f.kind) +
-               " report in this descriptor; the profile needs "
-               "it as " +
-               to_string(expected) + " report");
-        }
-        return {};
+  // The report whose fields sit in the logical collection `collection`, or (where the report
+  // has one) in `alternative`: hid-pidff (drivers/hid/usbhid/hid-pidff.c, pidff_reports and
+  // pidff_find_reports) takes a report by the logical collection around its first field, so it
+  // finds Device Control by 0x96, the collection of its array ("device_control is really 0x95,
+  // but 0x96 specified as it is the usage of the only field in that report"), and drives the
+  // SideWinder-lineage firmwares that declare 0x96 alone.
+  ReportRef report(pid::Usage collection, ReportKind expected, const char* name, bool required,
+                   std::uint32_t alternative = 0) {
+    for (const std::uint32_t c : {pid::u(collection), alternative}) {
+      if (c == 0) continue;
+      for (const ReportField& f : d_.fields) {
+        if (f.inside(c)) return found(f, c, expected, name, required);
       }
-      const ReportInfo* info = d_.find_report(f.kind, f.report_id);
-      return {true, f.kind, f.report_id, info != nullptr ? info->data_bytes() : 0};
     }
     if (required) {
       fail(std::string("the report descriptor has no PID ") + name + " report (" +
-           usage_text(pid::u(collection)) + ")");
+           usage_text(pid::u(collection)) +
+           (alternative != 0 ? ", nor a " + usage_text(alternative) + " collection" : "") + ")");
     }
     return {};
   }
@@ -108,6 +106,19 @@ class Finder {
   void fail(const std::string& what) {
     if (error_.empty()) error_ = what;
   }
+  ReportRef found(const ReportField& f, std::uint32_t c, ReportKind expected, const char* name,
+                  bool required) {
+    if (f.kind != expected) {
+      if (required) {
+        fail(std::string("the PID ") + name + " report (" + usage_text(c) + ") is an " +
+             to_string(f.kind) + " report in this descriptor; the profile needs it as " +
+             to_string(expected) + " report");
+      }
+      return {};
+    }
+    const ReportInfo* info = d_.find_report(f.kind, f.report_id);
+    return {true, f.kind, f.report_id, info != nullptr ? info->data_bytes() : 0};
+  }
 
   const ParsedDescriptor& d_;
   std::string error_;
@@ -146,7 +157,8 @@ void find_effect_reports(Finder& f, PidLayout& l) {
 
 void find_device_reports(Finder& f, PidLayout& l) {
   using namespace pid;
-  l.device_control = f.report(kDeviceControlReport, ReportKind::kOutput, "Device Control", true);
+  l.device_control = f.report(kDeviceControlReport, ReportKind::kOutput, "Device Control", true,
+                              u(kDeviceControl));
   l.dc_enable = f.choice(l.device_control, u(kDcEnableActuators));
   l.dc_disable = f.choice(l.device_control, u(kDcDisableActuators));
   l.dc_stop_all = f.choice(l.device_control, u(kDcStopAllEffects));

@@ -12,10 +12,41 @@ struct Named {
   const FieldSpec* field;
 };
 
+// "bytes 5..6", or for a field that shares a byte with others: "byte 5, byte 6 bits 0..3".
 std::string bytes_text(const FieldSpec& f) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "bytes %zu..%zu", f.byte, f.end() - 1);
-  return buf;
+  bool whole = true;
+  for (std::size_t k = f.byte; k < f.end(); ++k) whole = whole && f.mask_of_byte(k) == 0xFF;
+  if (whole) return "bytes " + std::to_string(f.byte) + ".." + std::to_string(f.end() - 1);
+  std::string s;
+  for (std::size_t k = f.byte; k < f.end(); ++k) {
+    const unsigned m = f.mask_of_byte(k);
+    s += (s.empty() ? "byte " : ", byte ") + std::to_string(k);
+    if (m == 0xFF) continue;
+    const int lo = __builtin_ctz(m), hi = 31 - __builtin_clz(m);
+    s += lo == hi ? " bit " + std::to_string(lo)
+                  : " bits " + std::to_string(lo) + ".." + std::to_string(hi);
+  }
+  return s;
+}
+
+bool overlap(const FieldSpec& f, const FieldSpec& g) {
+  for (std::size_t k = std::max(f.byte, g.byte); k < std::min(f.end(), g.end()); ++k) {
+    if ((f.mask_of_byte(k) & g.mask_of_byte(k)) != 0) return true;
+  }
+  return false;
+}
+
+// The field's shape: a width and a start an integer of at most 32 bits can have, an f32 whole.
+void check_shape(const std::string& where, const FieldSpec& f, std::vector<std::string>& errors) {
+  if (f.bits < 1 || f.bits > kMaxFieldBits) {
+    errors.push_back(where + ".bits: must be 1.." + std::to_string(kMaxFieldBits) + ", got " +
+                     std::to_string(f.bits));
+  } else if (f.bit > 7) {
+    errors.push_back(where + ".bit: must be 0..7 (a later byte is a larger `byte`), got " +
+                     std::to_string(f.bit));
+  } else if (f.is_float && (f.bits != 32 || f.bit != 0)) {
+    errors.push_back(where + ": an f32 is 32 bits from bit 0");
+  }
 }
 
 std::string num(double v) {
@@ -27,11 +58,14 @@ std::string num(double v) {
 // Length, fit, overlap and scale of the fields of one report.
 void check_report(const std::string& report, std::size_t length, const std::vector<Named>& fields,
                   std::vector<std::string>& errors) {
+  const std::size_t before = errors.size();
   if (length == 0 || length > kMaxReportData) {
     errors.push_back(report + ".length: must be 1.." + std::to_string(kMaxReportData) +
                      " data bytes, got " + std::to_string(length));
     return;
   }
+  for (const Named& n : fields) check_shape(n.where, *n.field, errors);
+  if (errors.size() != before) return;  // the rest reads the fields' bits
   for (std::size_t i = 0; i < fields.size(); ++i) {
     const FieldSpec& f = *fields[i].field;
     if (f.end() > length) {
@@ -43,7 +77,7 @@ void check_report(const std::string& report, std::size_t length, const std::vect
     }
     for (std::size_t j = 0; j < i; ++j) {
       const FieldSpec& g = *fields[j].field;
-      if (f.byte < g.end() && g.byte < f.end()) {
+      if (overlap(f, g)) {
         errors.push_back(fields[i].where + ": " + bytes_text(f) + " overlap " + fields[j].where +
                          " (" + bytes_text(g) + ")");
       }
@@ -53,32 +87,32 @@ void check_report(const std::string& report, std::size_t length, const std::vect
 
 void require_integer(const std::string& where, const FieldSpec& f, bool is_unsigned,
                      std::vector<std::string>& errors) {
-  if (!is_integer(f.type) || (is_unsigned && counter_modulus(f.type) == 0)) {
-    errors.push_back(where + ": type must be " +
-                     (is_unsigned ? "an unsigned integer (u8, u16, u32)" : "an integer") +
-                     ", got " + std::string(to_string(f.type)));
+  if (!is_integer(f) || (is_unsigned && counter_modulus(f) == 0)) {
+    errors.push_back(
+        where + ": type must be " +
+        (is_unsigned ? "an unsigned integer (u8, u16, u32, or bits: N)" : "an integer") + ", got " +
+        type_name(f));
   }
 }
 
 // A value the field holds exactly. A float must be one too: 0.1 would be sent as
 // 0.100000001, which the device does not compare equal to the configured on value.
-bool raw_fits(double raw, FieldType t) {
-  return std::isfinite(raw) && raw >= raw_min(t) && raw <= raw_max(t) &&
-         (is_integer(t) ? raw == std::floor(raw)
+bool raw_fits(double raw, const FieldSpec& f) {
+  return std::isfinite(raw) && raw >= raw_min(f) && raw <= raw_max(f) &&
+         (is_integer(f) ? raw == std::floor(raw)
                         : static_cast<double>(static_cast<float>(raw)) == raw);
 }
 
 void check_force(const OutputLayout& o, double max_force, std::vector<std::string>& errors) {
   const FieldSpec& f = o.force;
   // A raw value itself: a fractional limit of an integer field rounds past it (127.5 -> 128).
-  if (!raw_fits(o.full_scale, f.type) || o.full_scale <= 0.0) {
+  if (!raw_fits(o.full_scale, f) || o.full_scale <= 0.0) {
     errors.push_back("output.force.full_scale: must be > 0 and fit the field's type " +
-                     std::string(to_string(f.type)) + " (" +
-                     (is_integer(f.type) ? "whole counts, " : "") + "at most " +
-                     num(raw_max(f.type)) + "), got " + num(o.full_scale));
+                     type_name(f) + " (" + (is_integer(f) ? "whole counts, " : "") + "at most " +
+                     num(raw_max(f)) + "), got " + num(o.full_scale));
     return;
   }
-  const double lo_raw = std::max(-o.full_scale, raw_min(f.type));
+  const double lo_raw = std::max(-o.full_scale, raw_min(f));
   const double a = lo_raw * f.scale + f.offset;
   const double b = o.full_scale * f.scale + f.offset;
   const double lo = std::min(a, b), hi = std::max(a, b);
@@ -100,9 +134,8 @@ void check_force(const OutputLayout& o, double max_force, std::vector<std::strin
 
 void check_switch(const std::string& where, const FieldSpec& f, double on, double off, bool has_off,
                   std::vector<std::string>& errors) {
-  if (!raw_fits(on, f.type) || (has_off && !raw_fits(off, f.type))) {
-    errors.push_back(where + ": on/off values must be raw values of type " +
-                     std::string(to_string(f.type)));
+  if (!raw_fits(on, f) || (has_off && !raw_fits(off, f))) {
+    errors.push_back(where + ": on/off values must be raw values of type " + type_name(f));
   } else if (has_off && on == off) {
     errors.push_back(where + ": on and off must differ");
   }
@@ -123,7 +156,7 @@ void check_input(const InputLayout& in, std::vector<std::string>& errors) {
   if (in.status) {
     fields.push_back({"input.status", &*in.status});
     require_integer("input.status", *in.status, false, errors);
-    const std::size_t bits = 8 * field_size(in.status->type);
+    const std::size_t bits = in.status->bits;
     if (bits < 32 && (in.fault_mask >> bits) != 0) {
       errors.push_back("input.status.fault_mask: has bits beyond the field's " +
                        std::to_string(bits));
@@ -131,6 +164,9 @@ void check_input(const InputLayout& in, std::vector<std::string>& errors) {
   }
   if (in.velocity) fields.push_back({"input.velocity", &*in.velocity});
   check_report("input", in.length, fields, errors);
+  if (in.position_wraps && !is_integer(in.position)) {
+    errors.push_back("input.position.wraps: only an integer field wraps (this one is f32)");
+  }
 }
 
 }  // namespace
@@ -147,6 +183,11 @@ std::vector<std::string> validate(const ReportProfileLayout& l, double max_force
   if (o.keepalive) {
     out.push_back({"output.keepalive", &*o.keepalive});
     require_integer("output.keepalive", *o.keepalive, true, errors);
+    if (o.keepalive->bits == 1) {
+      errors.push_back(
+          "output.keepalive: one bit cannot both differ from the output-off report's 0 and "
+          "change with every report: give it 2 bits or more");
+    }
   }
   check_report("output", o.length, out, errors);
   check_force(o, max_force, errors);
@@ -200,14 +241,12 @@ InputDecode decode_input(std::span<const std::uint8_t> report, const InputLayout
   const std::span<const std::uint8_t> data = numbered ? report.subspan(1) : report;
   if (data.size() < layout.length) return InputDecode::kTooShort;
   out.position = read_si(data.data(), layout.position);
+  out.position_count = read_count(data.data(), layout.position);
   if (layout.sequence) {
-    out.sequence = static_cast<std::uint32_t>(read_raw(
-        data.data() + layout.sequence->byte, layout.sequence->type, layout.sequence->endian));
+    out.sequence = static_cast<std::uint32_t>(read_count(data.data(), *layout.sequence));
   }
   if (layout.status) {
-    const double raw =
-        read_raw(data.data() + layout.status->byte, layout.status->type, layout.status->endian);
-    out.status = static_cast<std::uint32_t>(static_cast<std::int64_t>(raw));
+    out.status = static_cast<std::uint32_t>(read_count(data.data(), *layout.status));
   }
   if (layout.velocity) out.velocity = read_si(data.data(), *layout.velocity);
   return InputDecode::kOk;
@@ -218,16 +257,14 @@ void encode_input(const InputValues& in, const InputLayout& layout,
   std::fill(report.begin(), report.end(), std::uint8_t{0});
   std::uint8_t* data = report.data();
   if (layout.report_id != 0) *data++ = layout.report_id;
-  write_si(data, layout.position, in.position);
-  if (layout.sequence) {
-    const double wrap = static_cast<double>(counter_modulus(layout.sequence->type));
-    write_raw(data + layout.sequence->byte, layout.sequence->type, layout.sequence->endian,
-              std::fmod(static_cast<double>(in.sequence), wrap));
+  const double count = std::nearbyint(si_to_raw(in.position, layout.position));
+  if (layout.position_wraps && std::isfinite(count) && std::abs(count) < 0x1p62) {
+    write_wrapped(data, layout.position, static_cast<std::int64_t>(count));  // a multi-turn axis
+  } else {
+    write_si(data, layout.position, in.position);
   }
-  if (layout.status) {
-    write_raw(data + layout.status->byte, layout.status->type, layout.status->endian,
-              static_cast<double>(in.status));
-  }
+  if (layout.sequence) write_wrapped(data, *layout.sequence, in.sequence);
+  if (layout.status) write_raw(data, *layout.status, static_cast<double>(in.status));
   if (layout.velocity) write_si(data, *layout.velocity, in.velocity);
 }
 
@@ -235,25 +272,19 @@ void encode_force(double force, const OutputLayout& layout,
                   std::span<std::uint8_t> report) noexcept {
   const double raw =
       std::clamp(si_to_raw(force, layout.force), -layout.full_scale, layout.full_scale);
-  write_raw(report.data() + 1 + layout.force.byte, layout.force.type, layout.force.endian, raw);
+  write_raw(report.data() + 1, layout.force, raw);
 }
 
 bool decode_output(std::span<const std::uint8_t> report, const OutputLayout& layout,
                    OutputValues& out) noexcept {
   if (report.size() < wire_size(layout.length) || report[0] != layout.report_id) return false;
   const std::uint8_t* data = report.data() + 1;
-  const double raw = read_raw(data + layout.force.byte, layout.force.type, layout.force.endian);
+  const double raw = read_raw(data, layout.force);
   out.force = std::clamp(raw, -layout.full_scale, layout.full_scale) * layout.force.scale +
               layout.force.offset;
   out.enable = true;
-  if (layout.enable) {
-    const FieldSpec& e = layout.enable->field;
-    out.enable = read_raw(data + e.byte, e.type, e.endian) == layout.enable->on;
-  }
-  if (layout.keepalive) {
-    out.keepalive =
-        read_raw(data + layout.keepalive->byte, layout.keepalive->type, layout.keepalive->endian);
-  }
+  if (layout.enable) out.enable = read_raw(data, layout.enable->field) == layout.enable->on;
+  if (layout.keepalive) out.keepalive = read_raw(data, *layout.keepalive);
   return true;
 }
 
@@ -261,7 +292,7 @@ void encode_feature(double raw, const FeatureLayout& layout,
                     std::span<std::uint8_t> report) noexcept {
   std::fill(report.begin(), report.end(), std::uint8_t{0});
   report[0] = layout.report_id;
-  write_raw(report.data() + 1 + layout.field.byte, layout.field.type, layout.field.endian, raw);
+  write_raw(report.data() + 1, layout.field, raw);
 }
 
 std::optional<double> decode_feature(std::span<const std::uint8_t> report,
@@ -269,7 +300,7 @@ std::optional<double> decode_feature(std::span<const std::uint8_t> report,
   if (report.size() < wire_size(layout.length) || report[0] != layout.report_id) {
     return std::nullopt;
   }
-  return read_raw(report.data() + 1 + layout.field.byte, layout.field.type, layout.field.endian);
+  return read_raw(report.data() + 1, layout.field);
 }
 
 }  // namespace hapticd::drivers::hid

@@ -24,9 +24,12 @@ namespace hapticd::drivers::hid {
 inline constexpr std::size_t kMaxReportData = 1024;
 
 struct InputLayout {
-  std::uint8_t report_id = 0;         // 0: the device does not number its reports
-  std::size_t length = 0;             // data bytes after the id
-  FieldSpec position;                 // m or rad
+  std::uint8_t report_id = 0;  // 0: the device does not number its reports
+  std::size_t length = 0;      // data bytes after the id
+  FieldSpec position;          // m or rad
+  // The position is a counter of a multi-turn axis that wraps modulo 2^bits: the driver
+  // unwraps it (position_count, one sample to the next) into the real motion.
+  bool position_wraps = false;
   std::optional<FieldSpec> sequence;  // the device's sample counter (unsigned integer)
   std::optional<FieldSpec> status;    // status bits (integer)
   std::uint32_t fault_mask = 0;       // status bits that mean the device has faulted
@@ -86,6 +89,7 @@ struct InputValues {
   double velocity = 0.0;
   std::uint32_t sequence = 0;
   std::uint32_t status = 0;
+  std::int64_t position_count = 0;  // an integer position field's raw count (decode only)
 };
 
 // RT-safe: called every tick. Decodes one report as hid_read returned it.

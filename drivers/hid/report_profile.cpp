@@ -5,6 +5,7 @@
 #include "drivers/device.h"
 #include "drivers/hid/hid_profile.h"
 #include "drivers/hid/report_descriptor.h"
+#include "drivers/io/counter_unwrap.h"
 
 namespace hapticd::drivers::hid {
 namespace {
@@ -35,7 +36,7 @@ class ReportProfile final : public HidProfile {
   }
 
   std::uint64_t sequence_modulus() const override {
-    return l_.input.sequence ? counter_modulus(l_.input.sequence->type) : 0;
+    return l_.input.sequence ? counter_modulus(*l_.input.sequence) : 0;
   }
 
   void enable(HidTransport& t) override {
@@ -73,6 +74,12 @@ class ReportProfile final : public HidProfile {
         return InputKind::kTooShort;
     }
     d.position = v.position;
+    if (l_.input.position_wraps) {  // a multi-turn axis: the count goes on past the field's ends
+      const FieldSpec& p = l_.input.position;
+      d.position = static_cast<double>(unwrap_.next(static_cast<std::uint64_t>(v.position_count))) *
+                       p.scale +
+                   p.offset;
+    }
     d.velocity = v.velocity;
     d.sequence = v.sequence;
     d.status = v.status;
@@ -93,8 +100,8 @@ class ReportProfile final : public HidProfile {
       const FieldSpec& k = *l_.output.keepalive;
       // 1, 2, ... M-1, 1...: never the output-off report's 0, so the report after it and
       // the one before it both differ from it.
-      keepalive_ = keepalive_ % (counter_modulus(k.type) - 1) + 1;
-      write_raw(out_.data() + 1 + k.byte, k.type, k.endian, static_cast<double>(keepalive_));
+      keepalive_ = keepalive_ % (counter_modulus(k) - 1) + 1;
+      write_raw(out_.data() + 1, k, static_cast<double>(keepalive_));
     }
     return out_;
   }
@@ -111,7 +118,7 @@ class ReportProfile final : public HidProfile {
     r[0] = l_.output.report_id;
     if (l_.output.enable) {
       const SwitchField& e = *l_.output.enable;
-      write_raw(r.data() + 1 + e.field.byte, e.field.type, e.field.endian, on ? e.on : e.off);
+      write_raw(r.data() + 1, e.field, on ? e.on : e.off);
     }
     encode_force(0.0, l_.output, r);
   }
@@ -172,6 +179,9 @@ class ReportProfile final : public HidProfile {
   std::vector<std::uint8_t> out_;  // the per-tick report, enable on
   std::vector<std::uint8_t> off_;  // zero force, enable off
   std::uint64_t keepalive_ = 0;
+  io::CounterUnwrap unwrap_{
+      static_cast<int>(l_.input.position.bits),
+      l_.input.position.is_signed};  // position_wraps: the count since configure
   std::string descriptor_note_;
   // The input report's length as the device declares it (the layout's when it has no
   // descriptor): anything longer is malformed.

@@ -47,19 +47,32 @@ class HidInput {
     const std::uint64_t lo = u32();
     return std::bit_cast<double>(lo | std::uint64_t{u32()} << 32);
   }
-  // Type byte: bits 0-2 the type (mod 7), 3 big-endian, 4 a 16-bit offset, 5 a scale, 6 an
-  // offset in SI units.
+  // Type byte: bits 0-2 the type (mod 7: u8, i8, u16, i16, u32, i32, f32), 3 big-endian, 4 a
+  // 16-bit offset, 5 a scale, 6 an offset in SI units, 7 a field of any width at any bit:
+  // after the offset, a shape byte (bits 0-2 the bit, 3 signed, 4 wraps: read by the layout
+  // for its position) and a width byte (1 + its value mod 40: past 32 too, which validate
+  // refuses). Inputs written before bit 7 meant anything read the same.
   drivers::hid::FieldSpec field() {
     namespace hid = drivers::hid;
     const std::uint8_t t = u8();
-    hid::FieldSpec f;
-    f.type = static_cast<hid::FieldType>((t & 7u) % 7u);
+    hid::FieldSpec f = hid::typed(static_cast<hid::FieldType>((t & 7u) % 7u));
     f.endian = (t & 8u) != 0 ? hid::Endian::kBig : hid::Endian::kLittle;
     f.byte = (t & 16u) != 0 ? u16() : u8();
+    last_wraps_ = false;
+    if ((t & 128u) != 0) {
+      const std::uint8_t shape = u8();
+      f.bit = shape & 7u;
+      f.is_signed = (shape & 8u) != 0;
+      f.is_float = false;
+      last_wraps_ = (shape & 16u) != 0;
+      f.bits = 1u + u8() % 40u;
+    }
     if ((t & 32u) != 0) f.scale = number();
     if ((t & 64u) != 0) f.offset = number();
     return f;
   }
+  // Whether the last field() read had its wraps bit.
+  bool last_wraps() const { return last_wraps_; }
   // 0xFF: a 16-bit length follows (past kMaxReportData, which validate refuses).
   std::size_t length() {
     const std::uint8_t n = u8();
@@ -76,6 +89,7 @@ class HidInput {
  private:
   std::span<const std::uint8_t> b_;
   std::size_t at_ = 0;
+  bool last_wraps_ = false;
 };
 
 }  // namespace hapticd::fuzz

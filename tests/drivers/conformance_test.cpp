@@ -37,6 +37,13 @@ const Case kCases[] = {
     {"sim", "config/sim.yaml"},
 #if HAPTICD_WITH_HID
     {"hid", "config/hid-report.yaml"},
+    // Packed fields sharing a byte, and a position that wraps and is unwrapped (issue 34).
+    {"hid",
+     "config/hid-report.yaml",
+     {"device.hid.report.input.position={byte: 4, bits: 12, signed: true, scale: 1.0e-5, "
+      "wraps: true}",
+      "device.hid.report.input.velocity={byte: 5, bit: 4, bits: 12, signed: true, scale: "
+      "1.0e-3}"}},
     // The simulated PID device's sample counter, so a sequence gap can be injected.
     {"hid", "config/hid-pid.yaml", {"device.hid.pid.sequence={usage_page: 0xff00, usage: 0x20}"}},
 #endif

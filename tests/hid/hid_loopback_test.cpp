@@ -104,6 +104,53 @@ TEST(HidLoopback, AtALowerRateTheLinkDelayVanishesFromTheLoop) {
               0.01 * sim.result.max_penetration);
 }
 
+// Issue 34 item 5: a 12-bit position sharing its byte with a 4-bit sample counter, as the
+// Switch Pro Controller packs its sticks' axes (docs/drivers/hid.md): the simulated device
+// writes both through the same codec, and the wall is the i16 layout's.
+TEST(HidLoopback, APackedTwelveBitPositionRendersTheSameWall) {
+  const RunResult packed =
+      run(testing::load_example(
+              "hid-report.yaml",
+              {"loop.clock=freerun",
+               "device.hid.report.input.position={byte: 4, bits: 12, scale: 1.0e-5, offset: -0.03}",
+               "device.hid.report.input.sequence={byte: 5, bit: 4, bits: 4}"}),
+          3.0);
+  const RunResult whole =
+      run(testing::load_example("hid-report.yaml", {"loop.clock=freerun"}), 3.0);
+  ASSERT_EQ(packed.result.fault.cause, loop::FaultCause::kNone) << packed.fault;
+  ASSERT_EQ(whole.result.fault.cause, loop::FaultCause::kNone) << whole.fault;
+  EXPECT_GT(packed.result.contact_ticks, 1000u);
+  // Within a count: the offset's rounding can put the wall's edge a count apart.
+  EXPECT_NEAR(packed.result.max_penetration, whole.result.max_penetration, 1.01e-5);
+  EXPECT_NEAR(static_cast<double>(packed.result.contact_ticks),
+              static_cast<double>(whole.result.contact_ticks), 2.0);
+}
+
+// Issue 34 item 1: an 8-bit position of 0.1 mm counts (+-12.8 mm) on an axis pushed 25 mm out,
+// into a wall at 15 mm: the simulated device wraps the field, the driver unwraps it
+// (`wraps: true`), and the wall is the sim driver's on the same plant. Read as it is, the
+// field would jump 25.6 mm in one tick (safety.max_speed) where the axis passes 12.8 mm.
+TEST(HidLoopback, AWrappingPositionIsUnwrappedIntoTheRealMotion) {
+  const std::vector<std::string> sets = {"loop.clock=freerun",
+                                         "wall.position=0.015",
+                                         "device.sim.counts_per_unit=10000",
+                                         "device.sim.initial_position=0",
+                                         "device.sim.operator.setpoint.rest=0",
+                                         "device.sim.operator.setpoint.depth=0.025"};
+  std::vector<std::string> hid_sets = sets;
+  hid_sets.push_back(
+      "device.hid.report.input.position={byte: 0, type: i8, scale: 1.0e-4, wraps: true}");
+  const RunResult hid = run(testing::load_example("hid-report.yaml", hid_sets), 3.0);
+  std::vector<std::string> sim_sets = sets;
+  sim_sets.insert(sim_sets.end(), {"device.driver=sim", "device.hid=", "wall.delay_samples=1"});
+  const RunResult sim = run(testing::load_example("hid-report.yaml", sim_sets), 3.0);
+  ASSERT_EQ(hid.result.fault.cause, loop::FaultCause::kNone) << hid.fault;
+  ASSERT_EQ(sim.result.fault.cause, loop::FaultCause::kNone) << sim.fault;
+  EXPECT_GT(hid.result.contact_ticks, 1000u);
+  EXPECT_NEAR(hid.result.max_penetration, sim.result.max_penetration,
+              0.01 * sim.result.max_penetration);
+}
+
 TEST(HidLoopback, FeatureReportsDriveTheSimulatedAmplifier) {
   const config::Config cfg = testing::load_example(
       "hid-report.yaml",

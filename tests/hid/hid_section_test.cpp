@@ -129,6 +129,64 @@ TEST(HidConfig, MistakesAreNamed) {
   EXPECT_TRUE(has(e, "device.hid.limits.out_queue: must be")) << all(e);
 }
 
+// Issue 34 items 5 and 1: a field of any width at any bit, signed or not, 24-bit types, and
+// a position that wraps; every misspelling named at its key.
+TEST(HidConfig, BitFieldsTwentyFourBitTypesAndWrappingPositionsAreSpelledAndChecked) {
+  const config::Config c =
+      load(file("hid-report.yaml"),
+           {"device.hid.report.input.position={byte: 0, bits: 12, signed: true, scale: 1.0e-5, "
+            "wraps: true}",
+            "device.hid.report.input.sequence={byte: 1, bit: 4, bits: 4}",
+            "device.hid.report.input.velocity={byte: 4, type: i24, endian: big, scale: 1.0e-3}"});
+  const InputLayout& in = hid(c).report.input;
+  EXPECT_EQ(in.position.bits, 12u);
+  EXPECT_TRUE(in.position.is_signed);
+  EXPECT_TRUE(in.position_wraps);
+  EXPECT_EQ(in.sequence->bit, 4u);
+  EXPECT_EQ(in.sequence->bits, 4u);
+  EXPECT_FALSE(in.sequence->is_signed);
+  EXPECT_EQ(in.velocity->bits, 24u);
+  EXPECT_EQ(in.velocity->endian, Endian::kBig);
+  const auto e =
+      errors(file("hid-report.yaml"),
+             {"device.hid.report.input.position={byte: 0, type: i16, bits: 12, scale: 1}",
+              "device.hid.report.input.sequence={byte: 2, bits: 40}",
+              "device.hid.report.input.status={byte: 3, type: u8, signed: true}",
+              "device.hid.report.input.velocity={byte: 4, bit: 9, bits: 4, scale: 1}",
+              "device.hid.report.output.keepalive={byte: 3}",
+              "device.hid.report.output.enable={byte: 2, type: f32, bit: 3}"});
+  EXPECT_TRUE(has(e, "device.hid.report.input.position.bits: give type or bits, not both"))
+      << all(e);
+  EXPECT_TRUE(has(e, "device.hid.report.input.sequence.bits: must be in 1..32, got '40'"))
+      << all(e);
+  EXPECT_TRUE(has(e, "device.hid.report.input.status.signed: only with bits")) << all(e);
+  EXPECT_TRUE(has(e, "device.hid.report.input.velocity.bit: must be in 0..7")) << all(e);
+  EXPECT_TRUE(has(e,
+                  "device.hid.report.output.keepalive.type: missing (one of u8, i8, u16, "
+                  "i16, u24, i24, u32, i32, f32; or bits: N"))
+      << all(e);
+  EXPECT_TRUE(has(e, "device.hid.report.output.enable.bit: an f32 starts at bit 0")) << all(e);
+  auto w = errors(file("hid-report.yaml"), {"device.hid.report.input.velocity={byte: 4, type: "
+                                            "i16, scale: 1, wraps: true}"});
+  EXPECT_TRUE(has(w, "device.hid.report.input.velocity.wraps: unknown key")) << all(w);
+  w = errors(file("hid-report.yaml"), {"device.hid.report.input.position={byte: 4, type: f32, "
+                                       "scale: 1, wraps: true}"});
+  EXPECT_TRUE(has(w, "device.hid.report.input.position.wraps: only an integer field wraps"))
+      << all(w);
+}
+
+TEST(HidConfig, ABitFieldThatOverlapsIsReportedAtItsLine) {
+  std::string text = file("hid-report.yaml");
+  const std::string from = "sequence: {byte: 2, type: u8}";
+  text.replace(text.find(from), from.size(), "sequence: {byte: 1, bit: 3, bits: 4}");
+  const auto line = 1 + std::count(text.begin(), text.begin() + text.find("sequence:"), '\n');
+  const auto e = errors(text);
+  ASSERT_EQ(e.size(), 1u) << all(e);
+  EXPECT_EQ(e[0], "hid.yaml:" + std::to_string(line) +
+                      ": device.hid.report.input.sequence: byte 1 bits 3..6 overlap "
+                      "input.position (bytes 0..1)");
+}
+
 TEST(HidConfig, ASelectorThatMatchesEverythingIsRefused) {
   const auto e = errors(file("hid-report.yaml"), {"device.hid.select={interface: 0}"});
   EXPECT_TRUE(has(e, "device.hid.select: selects every HID device")) << all(e);

@@ -39,13 +39,18 @@ PidLayout own_layout(const std::vector<std::uint8_t>& descriptor, const config::
 
 class PidFirmware final : public HidFirmware {
  public:
-  PidFirmware(const config::Config& cfg, const HidSettings& s, int link_delay)
+  PidFirmware(const config::Config& cfg, const HidSettings& s, int link_delay,
+              const PidFirmwareOptions& o)
       : HidFirmware(cfg, link_delay),
         p_(s.pid),
+        o_(o),
         period_ms_(cfg.loop.sample_period_s() * 1e3),
         descriptor_(pid_reference_descriptor(
-            {p_.sequence_usage == kReferenceSequenceUsage, true, PidReferenceIds{}})),
+            {p_.sequence_usage == kReferenceSequenceUsage, true,
+             o.sidewinder_lineage ? kSideWinderLineageIds : PidReferenceIds{},
+             !o.sidewinder_lineage})),
         l_(own_layout(descriptor_, cfg, p_)),
+        pool_{o.sidewinder_lineage ? kSideWinderLineageIds.pool : PidReferenceIds{}.pool},
         position_(make_report(l_.position_report, l_.numbered)),
         state_(make_report(l_.state, l_.numbered)) {}
 
@@ -96,6 +101,7 @@ class PidFirmware final : public HidFirmware {
     if (!is_report(r, l_.create_effect, l_.numbered)) return EPIPE;
     load_status_ = l_.bl_error;
     load_block_ = 0;
+    load_answered_ = false;
     if (chosen(data_of(r, l_.create_effect, l_.numbered), l_.ce_constant)) {
       load_status_ = l_.bl_full;
       for (std::size_t i = 0; i < effects_.size(); ++i) {
@@ -120,6 +126,9 @@ class PidFirmware final : public HidFirmware {
     const auto used = std::count_if(effects_.begin(), effects_.end(),
                                     [](const Effect& e) { return e.allocated; });
     set_slot(d, l_.bl_ram_pool, static_cast<std::int64_t>(effects_.size()) - used);
+    // The SideWinder lineage answers once: its stored report's id byte is 0 after that.
+    if (o_.sidewinder_lineage && load_answered_) out[0] = 0;
+    load_answered_ = true;
     return 0;
   }
 
@@ -164,8 +173,9 @@ class PidFirmware final : public HidFirmware {
       const double turn = static_cast<double>(dir.logical_max - dir.logical_min + 1);
       const double angle = static_cast<double>(get_slot(d, dir) - dir.logical_min) / turn;
       // DirectInput's polar direction, where the force comes from, as OpenFFBoard renders it
-      // (EffectsCalculator.cpp: -magnitude * sin(direction)): 90 degrees pushes toward -X.
-      e->dir_x = -std::sin(2.0 * M_PI * angle);
+      // (EffectsCalculator.cpp: -magnitude * sin(direction)): 90 degrees pushes toward -X. The
+      // SideWinder lineage's +sin (ArduinoJoystickWithFFBLibrary, getEffectForce) the reverse.
+      e->dir_x = (o_.sidewinder_lineage ? 1.0 : -1.0) * std::sin(2.0 * M_PI * angle);
     }
   }
 
@@ -215,7 +225,8 @@ class PidFirmware final : public HidFirmware {
   }
 
   void send_state(const Send& send) {
-    if (!l_.state.present || !answering()) return;
+    // The SideWinder lineage declares PID State and never sends it.
+    if (!l_.state.present || !answering() || o_.sidewinder_lineage) return;
     const bool playing =
         std::any_of(effects_.begin(), effects_.end(), [](const Effect& e) { return e.playing; });
     const auto d = data_of(std::span<std::uint8_t>(state_), l_.state, l_.numbered);
@@ -235,22 +246,25 @@ class PidFirmware final : public HidFirmware {
     std::size_t size = 4;  // RAM Pool Size u16, Simultaneous Effects Max u8, two flags + pad
   };
   PidSettings p_;
+  PidFirmwareOptions o_;
   double period_ms_;
-  PoolRef pool_;
   std::vector<std::uint8_t> descriptor_;
   PidLayout l_;
+  PoolRef pool_;
   std::vector<std::uint8_t> position_, state_, sent_state_;
   std::array<Effect, 8> effects_{};
   double device_gain_ = 1.0;
   Choice load_status_;
   std::int64_t load_block_ = 0;
+  bool load_answered_ = false;  // Block Load read since the last Create New Effect
 };
 
 }  // namespace
 
 std::unique_ptr<HidFirmware> make_pid_firmware(const config::Config& cfg,
-                                               const drivers::hid::HidSettings& s, int link_delay) {
-  return std::make_unique<PidFirmware>(cfg, s, link_delay);
+                                               const drivers::hid::HidSettings& s, int link_delay,
+                                               const PidFirmwareOptions& options) {
+  return std::make_unique<PidFirmware>(cfg, s, link_delay, options);
 }
 
 std::unique_ptr<HidFirmware> make_firmware(const config::Config& cfg, int link_delay) {
