@@ -2,9 +2,11 @@
 
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 
 #include "base/clock.h"
 #include "base/errno_text.h"
+#include "config/schema_reader.h"
 
 namespace hapticd::drivers::evdev {
 namespace {
@@ -65,6 +67,42 @@ void EvdevDevice::unfuzz(int fuzz) {
                      "close");
 }
 
+// A device whose value is a counter of its report field's width: the kernel passes the field's
+// value as it is, neither clamped nor wrapped (<linux/input.h>, struct input_absinfo: "input
+// core does not clamp reported values to the [minimum, maximum] limits"), so the counter's
+// rollover reaches the driver as a jump of the whole range. Unwrapped, the range must hold 2^n
+// values, as a field of n bits does.
+void EvdevDevice::check_wrap(const wire::Facts& f) {
+  if (!settings_->axis.wraps) return;
+  const int bits = counter_bits(f.range);
+  if (bits == 0) {
+    throw DeviceError("evdev: \"" + f.name +
+                      "\": device.evdev.axis.wraps needs a counter's range, " +
+                      "2^n values, but the kernel gives " + abs_name(settings_->axis.code) + " [" +
+                      std::to_string(f.range.minimum) + ", " + std::to_string(f.range.maximum) +
+                      "]: it cannot be unwrapped");
+  }
+  unwrap_ = io::CounterUnwrap(bits, false);  // a new session: the first value sets the base
+}
+
+std::int64_t EvdevDevice::unwrapped(int raw) noexcept {
+  if (!settings_->axis.wraps) return raw;
+  const auto from_min = static_cast<std::uint64_t>(std::int64_t{raw} - range_.minimum);
+  return range_.minimum + unwrap_.next(from_min);
+}
+
+// The update thread, at SCHED_FIFO one below the loop, timing each update against what the
+// declared delay covers.
+void EvdevDevice::start_updates() {
+  const UpdateThread::Timing timing{
+      static_cast<std::int64_t>(covered_update_s(*settings_, period_s_) * 1e9),
+      settings_->late_update_fault};
+  updates_ = std::make_unique<UpdateThread>(
+      *transport_, settings_->writer_priority, timing,
+      UpdateThread::Counters{c_[kEffectUpdates], c_[kLateUpdates], c_[kLongestUpdate]});
+  updates_->start_session(effect_);
+}
+
 void EvdevDevice::upload() {
   effect_ = {};
   effect_.direction = direction_of(settings_->direction_deg);
@@ -83,6 +121,7 @@ DeviceInfo EvdevDevice::on_configure() {
   const wire::Facts f = transport_->facts(settings_->axis.code);
   check_device(f);
   range_ = f.range;
+  check_wrap(f);
   unfuzz(f.fuzz);
   has_gain_ = f.ff_gain;
   has_autocenter_ = f.ff_autocenter;
@@ -90,6 +129,7 @@ DeviceInfo EvdevDevice::on_configure() {
   if (has_autocenter_)
     ff_or_throw(kFfAutocenter, fraction16(settings_->autocenter), "FF_AUTOCENTER");
   upload();
+  start_updates();
   emergency_.store(transport_.get());
   if (o.listing) note_kernel_driver(*o.listing);
   return {transport_->describe() + ", " + abs_name(settings_->axis.code) + ", ff_driver " +
@@ -135,11 +175,13 @@ void EvdevDevice::on_enable() {
       throw DeviceError("evdev: reading at enable: " + base::errno_text(error));
   }
   const wire::Facts f = transport_->facts(settings_->axis.code);
-  value_ = f.value;
+  value_ = unwrapped(f.value);
   frame_moved_ = false;
   have_position_ = true;
   if (has_autocenter_) ff_or_throw(kFfAutocenter, 0, "FF_AUTOCENTER");  // hapticd renders alone
-  if (const int e = set_level(0); e != 0) {
+  updates_->start_session(effect_);
+  zero_and_wait("at enable");
+  if (const int e = updates_->error(); e != 0) {
     throw DeviceError("evdev: EVIOCSFF at enable: " + base::errno_text(e));
   }
   ff_or_throw(effect_.id, 1, "the effect playing");
@@ -147,16 +189,32 @@ void EvdevDevice::on_enable() {
   active_ = true;
 }
 
+// Level 0 through the update thread, and its EVIOCSFF awaited (not on the RT thread).
+void EvdevDevice::zero_and_wait(const char* when) {
+  post(0);
+  if (!updates_->flush(kSettle)) {
+    throw DeviceError(std::string("evdev: the device did not take an update ") + when + " within " +
+                      std::to_string(kSettle.count()) + " s (device.evdev.update_latency_ms " +
+                      config::schema::format_number(settings_->update_latency_ms) + ")");
+  }
+}
+
+// RT-safe. The stop is an EV_FF write the kernel passes on at once, whatever update the device
+// has in hand: zero reaches it ahead of any level still waiting, and level 0 then replaces
+// that level.
 void EvdevDevice::stop_effect() noexcept {
   if (effect_.id < 0) return;
-  set_level(0);
   transport_->write_ff(effect_.id, 0);
+  post(0);
 }
 
 void EvdevDevice::on_disable() noexcept {
   active_ = false;
   if (!transport_) return;
   stop_effect();
+  // Before the effect is erased: an update still in hand would meet an erased id. A device
+  // that does not answer in time is stopped already; the erase then waits in the kernel.
+  updates_->flush(kSettle);
   if (effect_.id >= 0) {
     transport_->set_emergency_effect(-1);
     transport_->erase(effect_.id);
@@ -173,6 +231,7 @@ void EvdevDevice::on_disable() noexcept {
 void EvdevDevice::on_close() noexcept {
   active_ = false;
   emergency_.store(nullptr);
+  updates_.reset();  // joined before the transport it updates through goes
   if (transport_ && effect_.id >= 0) transport_->erase(effect_.id);
   effect_.id = -1;
   if (transport_ && kernel_fuzz_ != 0) {
@@ -186,8 +245,14 @@ void EvdevDevice::on_close() noexcept {
   transport_.reset();  // closing the node also erases whatever effect this process left
 }
 
+// The stop of the effect, write(2) on the open node: it does not wait behind an update the
+// device has in hand.
 void EvdevDevice::emergency_stop() noexcept {
   if (EvdevTransport* t = emergency_.load()) t->emergency();
+}
+
+void EvdevDevice::wait_output() const noexcept {
+  if (updates_) updates_->wait_done();
 }
 
 EvdevDevice::Drained EvdevDevice::drain() noexcept {
@@ -226,7 +291,7 @@ EvdevDevice::Drained EvdevDevice::drain() noexcept {
 }
 
 void EvdevDevice::take_frame(Drained& d, std::int64_t time_ns) noexcept {
-  value_ = pending_value_;
+  value_ = unwrapped(pending_value_);
   frame_moved_ = false;
   if (d.samples > 0) c_[kSuperseded].add();
   ++d.samples;
@@ -271,27 +336,47 @@ IoStatus EvdevDevice::hold(PositionSample& out) noexcept {
   return IoStatus::kOk;
 }
 
-// Counts only what the kernel took: a refused update is the run's transport fault, not a level
-// the device plays.
-int EvdevDevice::set_level(std::int16_t level) noexcept {
+// RT-safe: called every tick. The update thread counts what the kernel took (effect_updates);
+// a level replaced before it was taken is counted here.
+void EvdevDevice::post(std::int16_t level) noexcept {
   effect_.level = level;
-  const int e = transport_->update(effect_);
-  if (e == 0) c_[kEffectUpdates].add();
-  return e;
+  if (updates_->post(level)) c_[kUpdatesSuperseded].add();
 }
 
+// RT-safe: called every tick. A refused update, or late_update_fault late ones in a row, is
+// the run's transport fault at the next write: the level is handed on, never waited for.
 IoStatus EvdevDevice::on_write(double force) noexcept {
   if (state() == DeviceState::kFaulted) {  // nothing but zero, and the effect stopped
     stop_effect();
     return IoStatus::kOk;
   }
-  const std::int16_t level = force_level(force, settings_->force_full_scale);
-  if (level == 0) quiet_since_ns_ = base::monotonic_ns();  // nothing is pushed: silence is fine
-  if (const int e = set_level(level); e != 0) {
+  if (const int e = updates_->error(); e != 0) {
     set_fault_code(static_cast<std::uint32_t>(e));
     return IoStatus::kTransportFault;
   }
+  if (updates_->late()) {
+    late_ns_ = updates_->late_ns();
+    set_fault_code(kUpdatesLate);
+    return IoStatus::kTransportFault;
+  }
+  const std::int16_t level = force_level(force, settings_->force_full_scale);
+  if (level == 0) quiet_since_ns_ = base::monotonic_ns();  // nothing is pushed: silence is fine
+  post(level);
   return IoStatus::kOk;
+}
+
+std::string EvdevDevice::describe_late() const {
+  using config::schema::format_number;
+  const int d = declared_delay_samples(*settings_, period_s_);
+  char took[32], covered[32];
+  std::snprintf(took, sizeof took, "%.1f", static_cast<double>(late_ns_) * 1e-6);
+  std::snprintf(covered, sizeof covered, "%.1f", covered_update_s(*settings_, period_s_) * 1e3);
+  return std::string("evdev: the device took up to ") + took + " ms to take an update, " +
+         std::to_string(settings_->late_update_fault) + " in a row longer than the " + covered +
+         " ms the declared delay covers (device.evdev.update_latency_ms " +
+         format_number(settings_->update_latency_ms) + ", " + std::to_string(d) +
+         " samples declared): the gate's analysis no longer holds; raise update_latency_ms "
+         "(the run's longest_update_us says what it measured)";
 }
 
 std::string EvdevDevice::describe(const DeviceFault& fault) const {
@@ -299,6 +384,7 @@ std::string EvdevDevice::describe(const DeviceFault& fault) const {
     return "evdev: the device stopped hapticd's force-feedback effect itself (EV_FF_STATUS "
            "stopped)";
   }
+  if (fault.code == kUpdatesLate) return describe_late();
   const int e = static_cast<int>(fault.code);
   if (e == ENODEV || e == EIO || e == ESHUTDOWN) {
     return std::string("evdev: the device is gone (") + base::errno_text(e) +
