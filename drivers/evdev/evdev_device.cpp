@@ -2,7 +2,6 @@
 
 #include <cerrno>
 #include <cmath>
-#include <cstdio>
 
 #include "base/clock.h"
 #include "base/errno_text.h"
@@ -25,33 +24,6 @@ EvdevDevice::EvdevDevice(std::shared_ptr<const EvdevSettings> settings,
 
 EvdevDevice::~EvdevDevice() { close(); }
 
-void EvdevDevice::check_device(const wire::Facts& f) const {
-  const AxisSettings& a = settings_->axis;
-  const std::string who = "evdev: \"" + f.name + "\"";
-  if (!f.has_axis) throw DeviceError(who + " has no " + abs_name(a.code) + " axis");
-  if (!f.ff_constant) {
-    throw DeviceError(who +
-                      " offers no FF_CONSTANT force feedback (`hapticd devices` lists "
-                      "the devices that do)");
-  }
-  if (f.ff_effects < 1) throw DeviceError(who + " holds no force-feedback effect");
-  if (a.scale == Scale::kRange && f.range.maximum <= f.range.minimum) {
-    throw DeviceError(who + ": the kernel gives " + abs_name(a.code) + " the range [" +
-                      std::to_string(f.range.minimum) + ", " + std::to_string(f.range.maximum) +
-                      "], which cannot be mapped onto device.evdev.axis.min..max");
-  }
-  if (a.scale == Scale::kResolution && f.range.resolution <= 0) {
-    throw DeviceError(who + ": the kernel gives " + abs_name(a.code) +
-                      " no resolution: use device.evdev.axis.scale range with min and max");
-  }
-  if (settings_->gain < 1.0 && !f.ff_gain) {
-    throw DeviceError(who + " has no FF_GAIN: device.evdev.gain must be 1");
-  }
-  if (settings_->autocenter > 0.0 && !f.ff_autocenter) {
-    throw DeviceError(who + " has no FF_AUTOCENTER: device.evdev.autocenter must be 0");
-  }
-}
-
 // The kernel smooths an axis with fuzz (hid-input gives a joystick's 1/256 of its range): a
 // change within fuzz/2 is dropped and up to twice fuzz averaged with the last value, a dead
 // band and a lag in the position the wall is rendered from. hapticd turns it off while it has
@@ -65,24 +37,6 @@ void EvdevDevice::unfuzz(int fuzz) {
                      std::to_string(fuzz) + " (changes within " + std::to_string(fuzz / 2) +
                      " counts dropped): hapticd sets it to 0 while it runs and gives it back at "
                      "close");
-}
-
-// A device whose value is a counter of its report field's width: the kernel passes the field's
-// value as it is, neither clamped nor wrapped (<linux/input.h>, struct input_absinfo: "input
-// core does not clamp reported values to the [minimum, maximum] limits"), so the counter's
-// rollover reaches the driver as a jump of the whole range. Unwrapped, the range must hold 2^n
-// values, as a field of n bits does.
-void EvdevDevice::check_wrap(const wire::Facts& f) {
-  if (!settings_->axis.wraps) return;
-  const int bits = counter_bits(f.range);
-  if (bits == 0) {
-    throw DeviceError("evdev: \"" + f.name +
-                      "\": device.evdev.axis.wraps needs a counter's range, " +
-                      "2^n values, but the kernel gives " + abs_name(settings_->axis.code) + " [" +
-                      std::to_string(f.range.minimum) + ", " + std::to_string(f.range.maximum) +
-                      "]: it cannot be unwrapped");
-  }
-  unwrap_ = io::CounterUnwrap(bits, false);  // a new session: the first value sets the base
 }
 
 std::int64_t EvdevDevice::unwrapped(int raw) noexcept {
@@ -143,24 +97,6 @@ void EvdevDevice::ff_or_throw(int code, int value, const char* what) {
   }
 }
 
-void EvdevDevice::note_kernel_driver(const InputListing& l) {
-  const std::optional<FfDriver> guess = guess_ff_driver(l);
-  const std::string configured = to_string(settings_->ff_driver);
-  if (!guess) {
-    notices_.push_back("kernel driver '" + l.kernel_driver +
-                       "' is not one hapticd knows: check that its force feedback is what "
-                       "device.evdev.ff_driver " +
-                       configured +
-                       " says, or the declared delay is wrong (docs/drivers/evdev.md)");
-  } else if (*guess != settings_->ff_driver) {
-    notices_.push_back(std::string("the device is bound to kernel driver '") +
-                       (l.virtual_device ? std::string("uinput") : l.kernel_driver) +
-                       "', whose force feedback is " + to_string(*guess) +
-                       ", but device.evdev.ff_driver says " + configured + ": the gate analyses " +
-                       configured + "'s delay (docs/drivers/evdev.md)");
-  }
-}
-
 void EvdevDevice::on_enable() {
   transport_->grab(true);
   if (effect_.id < 0) upload();  // a disable erased it
@@ -180,6 +116,7 @@ void EvdevDevice::on_enable() {
   have_position_ = true;
   if (has_autocenter_) ff_or_throw(kFfAutocenter, 0, "FF_AUTOCENTER");  // hapticd renders alone
   updates_->start_session(effect_);
+  stopping_ = false;
   zero_and_wait("at enable");
   if (const int e = updates_->error(); e != 0) {
     throw DeviceError("evdev: EVIOCSFF at enable: " + base::errno_text(e));
@@ -199,21 +136,23 @@ void EvdevDevice::zero_and_wait(const char* when) {
   }
 }
 
-// RT-safe. The stop is an EV_FF write the kernel passes on at once, whatever update the device
-// has in hand: zero reaches it ahead of any level still waiting, and level 0 then replaces
-// that level.
+// RT-safe, once a session: the update thread stops the effect right after the update it has in
+// hand (the kernel lets nothing through the node before that one is answered), then makes
+// level 0, which replaces any level still waiting. The RT thread makes no system call for it
+// but a wake.
 void EvdevDevice::stop_effect() noexcept {
-  if (effect_.id < 0) return;
-  transport_->write_ff(effect_.id, 0);
-  post(0);
+  if (effect_.id < 0 || stopping_) return;
+  stopping_ = true;
+  effect_.level = 0;
+  if (updates_->post_stop()) c_[kUpdatesSuperseded].add();
 }
 
 void EvdevDevice::on_disable() noexcept {
   active_ = false;
   if (!transport_) return;
   stop_effect();
-  // Before the effect is erased: an update still in hand would meet an erased id. A device
-  // that does not answer in time is stopped already; the erase then waits in the kernel.
+  // The stop and level 0 made before the effect is erased (an update in hand would meet an
+  // erased id). A device that does not answer in time: the erase waits for it in the kernel.
   updates_->flush(kSettle);
   if (effect_.id >= 0) {
     transport_->set_emergency_effect(-1);
@@ -245,8 +184,8 @@ void EvdevDevice::on_close() noexcept {
   transport_.reset();  // closing the node also erases whatever effect this process left
 }
 
-// The stop of the effect, write(2) on the open node: it does not wait behind an update the
-// device has in hand.
+// The stop of the effect, write(2) on the open node from the crash handler: the kernel lets it
+// through once the update the device has in hand is answered (evdev's node mutex).
 void EvdevDevice::emergency_stop() noexcept {
   if (EvdevTransport* t = emergency_.load()) t->emergency();
 }
@@ -363,34 +302,6 @@ IoStatus EvdevDevice::on_write(double force) noexcept {
   if (level == 0) quiet_since_ns_ = base::monotonic_ns();  // nothing is pushed: silence is fine
   post(level);
   return IoStatus::kOk;
-}
-
-std::string EvdevDevice::describe_late() const {
-  using config::schema::format_number;
-  const int d = declared_delay_samples(*settings_, period_s_);
-  char took[32], covered[32];
-  std::snprintf(took, sizeof took, "%.1f", static_cast<double>(late_ns_) * 1e-6);
-  std::snprintf(covered, sizeof covered, "%.1f", covered_update_s(*settings_, period_s_) * 1e3);
-  return std::string("evdev: the device took up to ") + took + " ms to take an update, " +
-         std::to_string(settings_->late_update_fault) + " in a row longer than the " + covered +
-         " ms the declared delay covers (device.evdev.update_latency_ms " +
-         format_number(settings_->update_latency_ms) + ", " + std::to_string(d) +
-         " samples declared): the gate's analysis no longer holds; raise update_latency_ms "
-         "(the run's longest_update_us says what it measured)";
-}
-
-std::string EvdevDevice::describe(const DeviceFault& fault) const {
-  if (fault.fault_class == FaultClass::kDevice) {
-    return "evdev: the device stopped hapticd's force-feedback effect itself (EV_FF_STATUS "
-           "stopped)";
-  }
-  if (fault.code == kUpdatesLate) return describe_late();
-  const int e = static_cast<int>(fault.code);
-  if (e == ENODEV || e == EIO || e == ESHUTDOWN) {
-    return std::string("evdev: the device is gone (") + base::errno_text(e) +
-           "): unplugged or reset?";
-  }
-  return std::string("evdev: the device failed: ") + base::errno_text(e);
 }
 
 }  // namespace hapticd::drivers::evdev

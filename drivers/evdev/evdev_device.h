@@ -117,6 +117,7 @@ class EvdevDevice final : public Device {
   std::unique_ptr<UpdateThread> updates_;  // from configure to close
   bool frame_moved_ = false;
   bool active_ = false;
+  bool stopping_ = false;  // the stop asked for this session (a fault's, or disable's)
   bool have_position_ = false;
   bool has_gain_ = false, has_autocenter_ = false;
   std::int64_t late_ns_ = 0;  // the longest update of the late streak that faulted

@@ -85,7 +85,7 @@ struct EvdevSettings final : config::DriverSettings {
   // longer than the declared delay covers is late, and late_update_fault of them in a row
   // fault the loop.
   double update_latency_ms = 0.0;
-  int late_update_fault = 3;
+  int late_update_fault = 10;
   int writer_priority = 1;  // SCHED_FIFO of the update thread (loop.rt_priority - 1)
 };
 

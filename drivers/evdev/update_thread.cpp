@@ -61,8 +61,29 @@ bool UpdateThread::post(std::int16_t level) noexcept {
   return (before & kTaken) == 0;
 }
 
+// RT-safe. The stop is asked for before level 0 is handed over, and the thread looks for a
+// stop before it takes a level: the stop comes first.
+bool UpdateThread::post_stop() noexcept {
+  stops_asked_.fetch_add(1, std::memory_order_seq_cst);
+  return post(0);
+}
+
+void UpdateThread::stop_effect() noexcept {
+  const std::uint32_t asked = stops_asked_.load(std::memory_order_acquire);
+  const auto id =
+      static_cast<int>(static_cast<std::int16_t>(effect_.load(std::memory_order_acquire) & 0xFFFF));
+  transport_.write_ff(id, 0);  // best effort: a device that is gone says so to the reads
+  stops_made_.store(asked, std::memory_order_release);
+  done_.notify_all();
+}
+
 void UpdateThread::run() noexcept {
   while (!stop_.load(std::memory_order_acquire)) {
+    if (stops_asked_.load(std::memory_order_acquire) !=
+        stops_made_.load(std::memory_order_relaxed)) {
+      stop_effect();
+      continue;
+    }
     std::uint64_t v = slot_.load(std::memory_order_acquire);
     if ((v & kTaken) != 0) {
       const std::uint32_t bell = bell_.load(std::memory_order_acquire);
@@ -120,26 +141,30 @@ void UpdateThread::judge(std::int64_t ns) noexcept {
   }
 }
 
+// Every level handed over has been through the transport, and every stop asked for made.
+bool UpdateThread::idle() const noexcept {
+  const std::uint64_t v = slot_.load(std::memory_order_acquire);
+  return (v & kTaken) != 0 && reached(done_.load(std::memory_order_acquire), seq_of(v)) &&
+         stops_made_.load(std::memory_order_acquire) ==
+             stops_asked_.load(std::memory_order_acquire);
+}
+
 // RT-safe.
 void UpdateThread::wait_done() const noexcept {
-  const std::uint32_t target = seq_of(slot_.load(std::memory_order_acquire));
   while (!stop_.load(std::memory_order_acquire)) {
     const std::uint32_t done = done_.load(std::memory_order_acquire);
-    if (reached(done, target)) return;
+    if (idle()) return;
     done_.wait(done, std::memory_order_acquire);
   }
 }
 
 bool UpdateThread::flush(std::chrono::milliseconds timeout) const noexcept {
   const auto end = std::chrono::steady_clock::now() + timeout;
-  while (true) {
-    const std::uint64_t v = slot_.load(std::memory_order_acquire);
-    if ((v & kTaken) != 0 && reached(done_.load(std::memory_order_acquire), seq_of(v))) {
-      return true;
-    }
+  while (!idle()) {
     if (std::chrono::steady_clock::now() >= end) return false;
     std::this_thread::sleep_for(std::chrono::microseconds(200));
   }
+  return true;
 }
 
 }  // namespace hapticd::drivers::evdev

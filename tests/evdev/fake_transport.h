@@ -33,6 +33,7 @@ struct Script {
   std::vector<int> levels;                     // every update's level
   std::vector<int> directions;                 // every upload's and update's direction
   std::vector<std::pair<int, int>> ff_writes;  // (code, value) written
+  std::vector<std::string> calls;              // "update LEVEL", "write CODE VALUE", in order
   int uploads = 0, erases = 0;
   int next_id = 3;
   std::uint64_t library_messages = 0;  // what libevdev would have logged
@@ -67,11 +68,13 @@ class FakeTransport final : public EvdevTransport {
     if (s_->update_delay.count() > 0) std::this_thread::sleep_for(s_->update_delay);
     s_->levels.push_back(e.level);
     s_->directions.push_back(e.direction);
+    s_->calls.push_back("update " + std::to_string(e.level));
     s_->updating.fetch_sub(1);
     return s_->update_error;
   }
   int write_ff(int code, int value) noexcept override {
     s_->ff_writes.emplace_back(code, value);
+    s_->calls.push_back("write " + std::to_string(code) + " " + std::to_string(value));
     return 0;
   }
   ReadStatus read(wire::Event& ev, int& error) noexcept override {

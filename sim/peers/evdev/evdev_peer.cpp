@@ -127,16 +127,30 @@ void SocketEvdevPeer::apply() noexcept {
 void SocketEvdevPeer::on_update(const ev::wire::Effect& e) {
   const std::int64_t latency = latency_ns_.load();
   if (latency <= 0 && pending_.empty()) return take_update(e);
-  pending_.push_back({base::monotonic_ns() + latency, e});
+  Message m;
+  m.type = Type::kUpload;
+  m.effect = e;
+  pending_.push_back({base::monotonic_ns() + latency, m});
 }
 
 void SocketEvdevPeer::take_due() {
   const std::int64_t now = base::monotonic_ns();
   while (!pending_.empty() && pending_.front().due_ns <= now) {
-    const ev::wire::Effect e = pending_.front().effect;
+    const Message m = pending_.front().m;
     pending_.pop_front();
-    take_update(e);
+    if (m.type == Type::kUpload) {
+      take_update(m.effect);
+    } else {
+      write_ff(m.a, m.b);
+    }
   }
+}
+
+// An EV_FF event written to the node: play or stop the effect, the gain.
+void SocketEvdevPeer::write_ff(int code, int value) {
+  if (code == ev::kFfGain) gain_ = value / 65535.0;
+  if (uploaded_ && code == effect_.id) playing_.store(value > 0 && fault_.load() == kNoFault);
+  apply();
 }
 
 int SocketEvdevPeer::service_interval_ms() const noexcept {
@@ -160,6 +174,7 @@ void SocketEvdevPeer::take_update(const ev::wire::Effect& e) {
   axis_.step();
   fifo_[fifo_head_] = axis_.encoder_position();
   fifo_head_ = (fifo_head_ + 1) % fifo_.size();
+  last_level_.store(e.level);
   updates_taken_.fetch_add(1);
   answer_update(0, e.id);
   if (silent_.load()) return;
@@ -203,10 +218,8 @@ void SocketEvdevPeer::handle(const Message& m) {
       apply();
       return answer(0);
     case Type::kWriteFf:
-      if (m.a == ev::kFfGain) gain_ = m.b / 65535.0;
-      if (uploaded_ && m.a == effect_.id) playing_.store(m.b > 0 && fault_.load() == kNoFault);
-      apply();
-      return;
+      if (!pending_.empty()) return pending_.push_back({0, m});  // behind the update in hand
+      return write_ff(m.a, m.b);
     default:
       return;  // a device never receives its own message types
   }

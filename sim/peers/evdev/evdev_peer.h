@@ -10,8 +10,9 @@
 // driver declares, so a loopback run is the loop the gate analysed. Each update is answered on
 // the descriptor the driver handed over (kAnswers), as EVIOCSFF returns; told to, it takes an
 // update only after a while, as a device in user space slow to answer UI_FF_UPLOAD does (its
-// own slowness is then its delay: it holds nothing more), while the EV_FF writes (a stop) still
-// act at once.
+// own slowness is then its delay: it holds nothing more). An EV_FF write (a stop) that comes
+// meanwhile acts once that update is taken, as the kernel's evdev lets a write to the node
+// through only then (it holds the node's mutex across EVIOCSFF).
 #pragma once
 
 #include <array>
@@ -51,23 +52,26 @@ class SocketEvdevPeer final : public LoopbackPeer {
   void take_updates_after(std::chrono::nanoseconds latency) noexcept {
     latency_ns_.store(latency.count());
   }
-  // Any thread. Updates taken so far.
+  // Any thread. Updates taken so far, and the level of the last one.
   std::uint64_t updates_taken() const noexcept { return updates_taken_.load(); }
+  int last_level() const noexcept { return last_level_.load(); }
 
   // The raw axis value the device reports for position `x`, and its range.
   std::int32_t raw_value(double x) const noexcept;
   drivers::evdev::AxisRange range() const noexcept { return range_; }
 
  private:
+  // An update to take at its time, or an EV_FF write that came behind one (due_ns 0).
   struct Pending {
     std::int64_t due_ns;
-    drivers::evdev::wire::Effect effect;
+    drivers::evdev::wire::Message m;
   };
   void receive(std::size_t n, int passed_fd);
   void handle(const drivers::evdev::wire::Message& m);
   void answer(std::int32_t error, std::int32_t value = 0);
   void answer_update(std::int32_t error, std::int32_t value);
   void on_update(const drivers::evdev::wire::Effect& e);
+  void write_ff(int code, int value);
   void take_update(const drivers::evdev::wire::Effect& e);
   void take_due();
   void apply() noexcept;
@@ -93,7 +97,8 @@ class SocketEvdevPeer final : public LoopbackPeer {
   std::atomic<int> fault_{kNoFault};  // an injected device fault: the effect stopped for good
   std::atomic<std::int64_t> latency_ns_{0};
   std::atomic<std::uint64_t> updates_taken_{0};
-  std::deque<Pending> pending_;  // updates received, to be taken at their time
+  std::atomic<int> last_level_{0};
+  std::deque<Pending> pending_;  // updates received and what came behind them, in order
   std::array<std::uint8_t, drivers::evdev::wire::kMaxMessage> rx_{};
   std::vector<std::uint8_t> tx_;
 };
