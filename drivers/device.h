@@ -135,6 +135,13 @@ class Device {
   // A non-finite force is never passed on: zero is written and the device faults.
   IoStatus write(double force) noexcept;
 
+  // RT-safe (it may sleep on a futex; it never allocates). For a driver whose write() hands
+  // the command to a thread of its own (evdev's update thread): returns once that thread has
+  // passed the newest command through the transport, so a paced loopback
+  // (sim/peers/paced_device.h) waits for its simulated device alone after it. Default: write()
+  // passed the command on itself.
+  virtual void wait_output() const noexcept {}
+
   // Async-signal-safe: called from a crash handler, where nothing else can run. Only write(2)
   // of prebuilt zero-force and disable messages on already-open descriptors. Default: nothing
   // (an in-process device has nothing to stop once the process is gone).

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "drivers/evdev/evdev_settings.h"
+#include "drivers/io/output_thread.h"
 
 namespace hapticd::drivers::evdev {
 namespace {
@@ -86,6 +87,7 @@ void read_axis(MapReader& ev, AxisSettings& a) {
           config::schema::read_choice(m.diag(), take(m, "scale"), {"range", "resolution"})) {
     a.scale = *s == 0 ? Scale::kRange : Scale::kResolution;
   }
+  if (const auto v = config::schema::read_bool(m.diag(), take(m, "wraps"))) a.wraps = *v;
   const Field min = take(m, "min"), max = take(m, "max");
   const Field rotary = take(m, "rotary"), offset = take(m, "offset");
   if (a.scale == Scale::kRange) {
@@ -171,6 +173,15 @@ void read_liveness(MapReader& ev, const config::Config& cfg, EvdevSettings& s) {
   }
 }
 
+// What an update of the effect takes the device, and how many late ones in a row fault.
+void read_update(MapReader& ev, const config::Config& cfg, EvdevSettings& s) {
+  number(ev, take(ev, "update_latency_ms"), Range::interval(0.0, true, 10000.0, true),
+         s.update_latency_ms);
+  config::schema::integer(ev, take(ev, "late_update_fault"), IntRange::between(1, 10000),
+                          s.late_update_fault);
+  s.writer_priority = io::output_thread_priority(cfg.loop.rt_priority);
+}
+
 }  // namespace
 
 std::shared_ptr<const config::DriverSettings> read_evdev_section(MapReader& ev,
@@ -182,6 +193,7 @@ std::shared_ptr<const config::DriverSettings> read_evdev_section(MapReader& ev,
   read_force(ev, cfg, *s);
   read_ff_driver(ev, cfg, *s);
   read_liveness(ev, cfg, *s);
+  read_update(ev, cfg, *s);
   if (ev.diag().messages().size() != errors_before) return nullptr;
   return s;
 }

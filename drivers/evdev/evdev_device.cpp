@@ -5,6 +5,7 @@
 
 #include "base/clock.h"
 #include "base/errno_text.h"
+#include "config/schema_reader.h"
 
 namespace hapticd::drivers::evdev {
 namespace {
@@ -23,33 +24,6 @@ EvdevDevice::EvdevDevice(std::shared_ptr<const EvdevSettings> settings,
 
 EvdevDevice::~EvdevDevice() { close(); }
 
-void EvdevDevice::check_device(const wire::Facts& f) const {
-  const AxisSettings& a = settings_->axis;
-  const std::string who = "evdev: \"" + f.name + "\"";
-  if (!f.has_axis) throw DeviceError(who + " has no " + abs_name(a.code) + " axis");
-  if (!f.ff_constant) {
-    throw DeviceError(who +
-                      " offers no FF_CONSTANT force feedback (`hapticd devices` lists "
-                      "the devices that do)");
-  }
-  if (f.ff_effects < 1) throw DeviceError(who + " holds no force-feedback effect");
-  if (a.scale == Scale::kRange && f.range.maximum <= f.range.minimum) {
-    throw DeviceError(who + ": the kernel gives " + abs_name(a.code) + " the range [" +
-                      std::to_string(f.range.minimum) + ", " + std::to_string(f.range.maximum) +
-                      "], which cannot be mapped onto device.evdev.axis.min..max");
-  }
-  if (a.scale == Scale::kResolution && f.range.resolution <= 0) {
-    throw DeviceError(who + ": the kernel gives " + abs_name(a.code) +
-                      " no resolution: use device.evdev.axis.scale range with min and max");
-  }
-  if (settings_->gain < 1.0 && !f.ff_gain) {
-    throw DeviceError(who + " has no FF_GAIN: device.evdev.gain must be 1");
-  }
-  if (settings_->autocenter > 0.0 && !f.ff_autocenter) {
-    throw DeviceError(who + " has no FF_AUTOCENTER: device.evdev.autocenter must be 0");
-  }
-}
-
 // The kernel smooths an axis with fuzz (hid-input gives a joystick's 1/256 of its range): a
 // change within fuzz/2 is dropped and up to twice fuzz averaged with the last value, a dead
 // band and a lag in the position the wall is rendered from. hapticd turns it off while it has
@@ -63,6 +37,24 @@ void EvdevDevice::unfuzz(int fuzz) {
                      std::to_string(fuzz) + " (changes within " + std::to_string(fuzz / 2) +
                      " counts dropped): hapticd sets it to 0 while it runs and gives it back at "
                      "close");
+}
+
+std::int64_t EvdevDevice::unwrapped(int raw) noexcept {
+  if (!settings_->axis.wraps) return raw;
+  const auto from_min = static_cast<std::uint64_t>(std::int64_t{raw} - range_.minimum);
+  return range_.minimum + unwrap_.next(from_min);
+}
+
+// The update thread, at SCHED_FIFO one below the loop, timing each update against what the
+// declared delay covers.
+void EvdevDevice::start_updates() {
+  const UpdateThread::Timing timing{
+      static_cast<std::int64_t>(covered_update_s(*settings_, period_s_) * 1e9),
+      settings_->late_update_fault};
+  updates_ = std::make_unique<UpdateThread>(
+      *transport_, settings_->writer_priority, timing,
+      UpdateThread::Counters{c_[kEffectUpdates], c_[kLateUpdates], c_[kLongestUpdate]});
+  updates_->start_session(effect_);
 }
 
 void EvdevDevice::upload() {
@@ -83,6 +75,7 @@ DeviceInfo EvdevDevice::on_configure() {
   const wire::Facts f = transport_->facts(settings_->axis.code);
   check_device(f);
   range_ = f.range;
+  check_wrap(f);
   unfuzz(f.fuzz);
   has_gain_ = f.ff_gain;
   has_autocenter_ = f.ff_autocenter;
@@ -90,6 +83,7 @@ DeviceInfo EvdevDevice::on_configure() {
   if (has_autocenter_)
     ff_or_throw(kFfAutocenter, fraction16(settings_->autocenter), "FF_AUTOCENTER");
   upload();
+  start_updates();
   emergency_.store(transport_.get());
   if (o.listing) note_kernel_driver(*o.listing);
   return {transport_->describe() + ", " + abs_name(settings_->axis.code) + ", ff_driver " +
@@ -100,24 +94,6 @@ DeviceInfo EvdevDevice::on_configure() {
 void EvdevDevice::ff_or_throw(int code, int value, const char* what) {
   if (const int e = transport_->write_ff(code, value); e != 0) {
     throw DeviceError(std::string("evdev: setting ") + what + ": " + base::errno_text(e));
-  }
-}
-
-void EvdevDevice::note_kernel_driver(const InputListing& l) {
-  const std::optional<FfDriver> guess = guess_ff_driver(l);
-  const std::string configured = to_string(settings_->ff_driver);
-  if (!guess) {
-    notices_.push_back("kernel driver '" + l.kernel_driver +
-                       "' is not one hapticd knows: check that its force feedback is what "
-                       "device.evdev.ff_driver " +
-                       configured +
-                       " says, or the declared delay is wrong (docs/drivers/evdev.md)");
-  } else if (*guess != settings_->ff_driver) {
-    notices_.push_back(std::string("the device is bound to kernel driver '") +
-                       (l.virtual_device ? std::string("uinput") : l.kernel_driver) +
-                       "', whose force feedback is " + to_string(*guess) +
-                       ", but device.evdev.ff_driver says " + configured + ": the gate analyses " +
-                       configured + "'s delay (docs/drivers/evdev.md)");
   }
 }
 
@@ -135,11 +111,14 @@ void EvdevDevice::on_enable() {
       throw DeviceError("evdev: reading at enable: " + base::errno_text(error));
   }
   const wire::Facts f = transport_->facts(settings_->axis.code);
-  value_ = f.value;
+  value_ = unwrapped(f.value);
   frame_moved_ = false;
   have_position_ = true;
   if (has_autocenter_) ff_or_throw(kFfAutocenter, 0, "FF_AUTOCENTER");  // hapticd renders alone
-  if (const int e = set_level(0); e != 0) {
+  updates_->start_session(effect_);
+  stopping_ = false;
+  zero_and_wait("at enable");
+  if (const int e = updates_->error(); e != 0) {
     throw DeviceError("evdev: EVIOCSFF at enable: " + base::errno_text(e));
   }
   ff_or_throw(effect_.id, 1, "the effect playing");
@@ -147,16 +126,34 @@ void EvdevDevice::on_enable() {
   active_ = true;
 }
 
+// Level 0 through the update thread, and its EVIOCSFF awaited (not on the RT thread).
+void EvdevDevice::zero_and_wait(const char* when) {
+  post(0);
+  if (!updates_->flush(kSettle)) {
+    throw DeviceError(std::string("evdev: the device did not take an update ") + when + " within " +
+                      std::to_string(kSettle.count()) + " s (device.evdev.update_latency_ms " +
+                      config::schema::format_number(settings_->update_latency_ms) + ")");
+  }
+}
+
+// RT-safe, once a session: the update thread stops the effect right after the update it has in
+// hand (the kernel lets nothing through the node before that one is answered), then makes
+// level 0, which replaces any level still waiting. The RT thread makes no system call for it
+// but a wake.
 void EvdevDevice::stop_effect() noexcept {
-  if (effect_.id < 0) return;
-  set_level(0);
-  transport_->write_ff(effect_.id, 0);
+  if (effect_.id < 0 || stopping_) return;
+  stopping_ = true;
+  effect_.level = 0;
+  if (updates_->post_stop()) c_[kUpdatesSuperseded].add();
 }
 
 void EvdevDevice::on_disable() noexcept {
   active_ = false;
   if (!transport_) return;
   stop_effect();
+  // The stop and level 0 made before the effect is erased (an update in hand would meet an
+  // erased id). A device that does not answer in time: the erase waits for it in the kernel.
+  updates_->flush(kSettle);
   if (effect_.id >= 0) {
     transport_->set_emergency_effect(-1);
     transport_->erase(effect_.id);
@@ -173,6 +170,7 @@ void EvdevDevice::on_disable() noexcept {
 void EvdevDevice::on_close() noexcept {
   active_ = false;
   emergency_.store(nullptr);
+  updates_.reset();  // joined before the transport it updates through goes
   if (transport_ && effect_.id >= 0) transport_->erase(effect_.id);
   effect_.id = -1;
   if (transport_ && kernel_fuzz_ != 0) {
@@ -186,8 +184,14 @@ void EvdevDevice::on_close() noexcept {
   transport_.reset();  // closing the node also erases whatever effect this process left
 }
 
+// The stop of the effect, write(2) on the open node from the crash handler: the kernel lets it
+// through once the update the device has in hand is answered (evdev's node mutex).
 void EvdevDevice::emergency_stop() noexcept {
   if (EvdevTransport* t = emergency_.load()) t->emergency();
+}
+
+void EvdevDevice::wait_output() const noexcept {
+  if (updates_) updates_->wait_done();
 }
 
 EvdevDevice::Drained EvdevDevice::drain() noexcept {
@@ -226,7 +230,7 @@ EvdevDevice::Drained EvdevDevice::drain() noexcept {
 }
 
 void EvdevDevice::take_frame(Drained& d, std::int64_t time_ns) noexcept {
-  value_ = pending_value_;
+  value_ = unwrapped(pending_value_);
   frame_moved_ = false;
   if (d.samples > 0) c_[kSuperseded].add();
   ++d.samples;
@@ -271,40 +275,33 @@ IoStatus EvdevDevice::hold(PositionSample& out) noexcept {
   return IoStatus::kOk;
 }
 
-// Counts only what the kernel took: a refused update is the run's transport fault, not a level
-// the device plays.
-int EvdevDevice::set_level(std::int16_t level) noexcept {
+// RT-safe: called every tick. The update thread counts what the kernel took (effect_updates);
+// a level replaced before it was taken is counted here.
+void EvdevDevice::post(std::int16_t level) noexcept {
   effect_.level = level;
-  const int e = transport_->update(effect_);
-  if (e == 0) c_[kEffectUpdates].add();
-  return e;
+  if (updates_->post(level)) c_[kUpdatesSuperseded].add();
 }
 
+// RT-safe: called every tick. A refused update, or late_update_fault late ones in a row, is
+// the run's transport fault at the next write: the level is handed on, never waited for.
 IoStatus EvdevDevice::on_write(double force) noexcept {
   if (state() == DeviceState::kFaulted) {  // nothing but zero, and the effect stopped
     stop_effect();
     return IoStatus::kOk;
   }
-  const std::int16_t level = force_level(force, settings_->force_full_scale);
-  if (level == 0) quiet_since_ns_ = base::monotonic_ns();  // nothing is pushed: silence is fine
-  if (const int e = set_level(level); e != 0) {
+  if (const int e = updates_->error(); e != 0) {
     set_fault_code(static_cast<std::uint32_t>(e));
     return IoStatus::kTransportFault;
   }
+  if (updates_->late()) {
+    late_ns_ = updates_->late_ns();
+    set_fault_code(kUpdatesLate);
+    return IoStatus::kTransportFault;
+  }
+  const std::int16_t level = force_level(force, settings_->force_full_scale);
+  if (level == 0) quiet_since_ns_ = base::monotonic_ns();  // nothing is pushed: silence is fine
+  post(level);
   return IoStatus::kOk;
-}
-
-std::string EvdevDevice::describe(const DeviceFault& fault) const {
-  if (fault.fault_class == FaultClass::kDevice) {
-    return "evdev: the device stopped hapticd's force-feedback effect itself (EV_FF_STATUS "
-           "stopped)";
-  }
-  const int e = static_cast<int>(fault.code);
-  if (e == ENODEV || e == EIO || e == ESHUTDOWN) {
-    return std::string("evdev: the device is gone (") + base::errno_text(e) +
-           "): unplugged or reset?";
-  }
-  return std::string("evdev: the device failed: ") + base::errno_text(e);
 }
 
 }  // namespace hapticd::drivers::evdev

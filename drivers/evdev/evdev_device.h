@@ -3,14 +3,18 @@
 // level 0 and sets FF_GAIN and FF_AUTOCENTER as configured; enable grabs the device
 // (EVIOCGRAB), turns autocenter off and plays the effect; every tick drains the events and
 // updates the effect's level (EVIOCSFF); disable and every fault set level 0, stop and erase
-// the effect, give autocenter back and release the grab. The input core passes an axis value
-// only when it changes, so a tick without one holds the last position; no event for
-// device.evdev.liveness_ms while a force is commanded is stale data. An unplugged device is a
-// transport fault; the device stopping the effect itself (EV_FF_STATUS) a device fault.
+// the effect, give autocenter back and release the grab. The updates go through the update
+// thread (update_thread.h): EVIOCSFF waits for the device, the RT thread never does. The input
+// core passes an axis value only when it changes, so a tick without one holds the last
+// position; no event for device.evdev.liveness_ms while a force is commanded is stale data. An
+// unplugged device is a transport fault, and so are an update the kernel refused and updates
+// slower than the declared delay covers; the device stopping the effect itself (EV_FF_STATUS)
+// is a device fault.
 #pragma once
 
 #include <array>
 #include <atomic>
+#include <chrono>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -19,6 +23,8 @@
 #include "drivers/evdev/device_select.h"
 #include "drivers/evdev/evdev_settings.h"
 #include "drivers/evdev/evdev_transport.h"
+#include "drivers/evdev/update_thread.h"
+#include "drivers/io/counter_unwrap.h"
 
 namespace hapticd::drivers::evdev {
 
@@ -39,6 +45,9 @@ class EvdevDevice final : public Device {
   void emergency_stop() noexcept override;
   std::vector<std::string> notices() const override { return notices_; }
   std::span<const base::Counter> counters() const noexcept override { return c_; }
+  // RT-safe: waits until the newest level written has been through EVIOCSFF (the loopback's
+  // pacing).
+  void wait_output() const noexcept override;
 
  protected:
   DeviceInfo on_configure() override;
@@ -51,13 +60,19 @@ class EvdevDevice final : public Device {
 
  private:
   static constexpr int kMaxDrain = 512;  // events per tick: a flooding device cannot stall it
-  // Fault codes beyond errno: the device stopped the effect itself (EV_FF_STATUS).
+  // Fault codes beyond errno: the device stopped the effect itself (EV_FF_STATUS); updates
+  // took longer than the declared delay covers, late_update_fault of them in a row.
   static constexpr std::uint32_t kEffectStopped = 0x10000;
+  static constexpr std::uint32_t kUpdatesLate = 0x10001;
+  static constexpr auto kSettle = std::chrono::seconds(2);  // an update at enable and disable
   enum CounterIndex : std::size_t {
     kAxisEvents,
     kSuperseded,
     kHeld,
     kEffectUpdates,
+    kUpdatesSuperseded,
+    kLongestUpdate,
+    kLateUpdates,
     kDropped,
     kSilent,
     kOtherEvents,
@@ -76,11 +91,16 @@ class EvdevDevice final : public Device {
   void take_frame(Drained& d, std::int64_t time_ns) noexcept;  // the axis' pending value is new
   void check_device(const wire::Facts& f) const;
   void upload();
+  void start_updates();
+  void zero_and_wait(const char* when);
   void stop_effect() noexcept;
   IoStatus hold(PositionSample& out) noexcept;
-  int set_level(std::int16_t level) noexcept;
+  void post(std::int16_t level) noexcept;
+  std::int64_t unwrapped(int raw) noexcept;
+  void check_wrap(const wire::Facts& f);
   void ff_or_throw(int code, int value, const char* what);
   void note_kernel_driver(const InputListing& l);
+  std::string describe_late() const;
   void unfuzz(int fuzz);
 
   std::shared_ptr<const EvdevSettings> settings_;
@@ -90,14 +110,18 @@ class EvdevDevice final : public Device {
   std::unique_ptr<EvdevTransport> transport_;
   std::vector<std::string> notices_;
   AxisRange range_;
-  wire::Effect effect_;    // the uploaded effect (id -1: none)
-  int pending_value_ = 0;  // the axis value of the frame being read
-  int value_ = 0;          // the last complete frame's
+  wire::Effect effect_;     // the uploaded effect (id -1: none), the level last written
+  int pending_value_ = 0;   // the axis value of the frame being read
+  std::int64_t value_ = 0;  // the last complete frame's, unwrapped (axis.wraps)
+  io::CounterUnwrap unwrap_{32, false};    // axis.wraps: the value less the range's minimum
+  std::unique_ptr<UpdateThread> updates_;  // from configure to close
   bool frame_moved_ = false;
   bool active_ = false;
+  bool stopping_ = false;  // the stop asked for this session (a fault's, or disable's)
   bool have_position_ = false;
   bool has_gain_ = false, has_autocenter_ = false;
-  int kernel_fuzz_ = 0;  // the fuzz the kernel had on the axis, given back at close
+  std::int64_t late_ns_ = 0;  // the longest update of the late streak that faulted
+  int kernel_fuzz_ = 0;       // the fuzz the kernel had on the axis, given back at close
   std::atomic<EvdevTransport*> emergency_{nullptr};
   std::int64_t quiet_since_ns_ = 0;  // the last axis event, or the last zero force after it
   using K = base::CounterKind;
@@ -105,7 +129,13 @@ class EvdevDevice final : public Device {
       {"axis_events", K::kCount, "frames (SYN_REPORT) that moved the configured axis"},
       {"superseded", K::kCount, "axis frames replaced by a newer one in the same tick"},
       {"held_ticks", K::kCount, "ticks without an axis event: the position held"},
-      {"effect_updates", K::kCount, "EVIOCSFF updates of the effect's level"},
+      {"effect_updates", K::kCount, "EVIOCSFF updates of the effect's level the kernel took"},
+      {"updates_superseded", K::kCount,
+       "levels replaced by a newer one before the update thread took them (the device was "
+       "busy with an earlier update)"},
+      {"longest_update_us", K::kCount, "the longest EVIOCSFF, us"},
+      {"late_updates", K::kAnomaly,
+       "EVIOCSFF updates longer than the declared delay covers (device.evdev.update_latency_ms)"},
       {"syn_dropped", K::kAnomaly, "times the kernel's event buffer overflowed (SYN_DROPPED)"},
       {"silent_ticks", K::kAnomaly,
        "ticks past device.evdev.liveness_ms without an axis event while a force was commanded"},

@@ -60,13 +60,22 @@ std::string abs_name(int code) {
   return text;
 }
 
-double axis_position(int value, const AxisSettings& axis, const AxisRange& range) noexcept {
+double axis_position(std::int64_t value, const AxisSettings& axis,
+                     const AxisRange& range) noexcept {
   if (axis.scale == Scale::kResolution) {
     const double per_unit = axis.rotary ? range.resolution : range.resolution * 1e3;
     return value / per_unit + axis.offset;
   }
   const double span = static_cast<double>(range.maximum) - range.minimum;
   return axis.min + (static_cast<double>(value) - range.minimum) / span * (axis.max - axis.min);
+}
+
+int counter_bits(const AxisRange& range) noexcept {
+  const std::int64_t values = std::int64_t{range.maximum} - range.minimum + 1;
+  for (int n = 1; n <= 32; ++n) {
+    if (values == std::int64_t{1} << n) return n;
+  }
+  return 0;
 }
 
 std::int16_t force_level(double force, double full_scale) noexcept {
@@ -79,13 +88,29 @@ double level_force(int level, double full_scale) noexcept {
   return static_cast<double>(level) * (full_scale / kLevelMax);
 }
 
-int declared_delay_samples(const EvdevSettings& s, double sample_period_s) noexcept {
-  if (s.ff_driver == FfDriver::kUinput) return 0;
-  double seconds = 2.0 * s.poll_interval_ms * 1e-3;
-  if (s.ff_driver == FfDriver::kMemless) seconds += 1.0 / s.kernel_hz;
+namespace {
+
+// Whole samples of delay for `seconds` from a write to its answer: the answer is read at the
+// tick ceil(seconds / T) after the write's, one tick later than an in-process device gives it.
+int samples_for(double seconds, double sample_period_s) noexcept {
   // A hair of tolerance, so 2 ms over 1 ms is 2 periods, not 3.
   const int periods = static_cast<int>(std::ceil(seconds / sample_period_s - 1e-9));
   return std::max(0, periods - 1);
+}
+
+}  // namespace
+
+int declared_delay_samples(const EvdevSettings& s, double sample_period_s) noexcept {
+  const int update = samples_for(2.0 * s.update_latency_ms * 1e-3, sample_period_s);
+  if (s.ff_driver == FfDriver::kUinput) return update;
+  double seconds = 2.0 * s.poll_interval_ms * 1e-3;
+  if (s.ff_driver == FfDriver::kMemless) seconds += 1.0 / s.kernel_hz;
+  return samples_for(seconds, sample_period_s) + update;
+}
+
+double covered_update_s(const EvdevSettings& s, double sample_period_s) noexcept {
+  const int update = samples_for(2.0 * s.update_latency_ms * 1e-3, sample_period_s);
+  return (update + 1) * sample_period_s / 2.0;
 }
 
 double highest_rate_hz(const EvdevSettings& s) noexcept {

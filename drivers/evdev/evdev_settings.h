@@ -60,6 +60,10 @@ struct AxisSettings {
   double min = 0.0, max = 0.0;  // kRange: the positions (m or rad) at minimum and maximum
   bool rotary = false;          // kResolution: units per rad (true) or per mm (false)
   double offset = 0.0;          // kResolution: added to value / resolution
+  // The device's value is a counter that passes its maximum and continues at its minimum (a
+  // multi-turn encoder in a report field of its own width): unwrapped from the previous
+  // sample. The kernel's range must then hold 2^n values (docs/drivers/evdev.md).
+  bool wraps = false;
 };
 
 struct EvdevSettings final : config::DriverSettings {
@@ -76,6 +80,13 @@ struct EvdevSettings final : config::DriverSettings {
   // (a device that hangs without being unplugged). 0: no bound, the default: through evdev a
   // device held still cannot be told from one that hangs (docs/drivers/evdev.md).
   double liveness_ms = 0.0;
+  // The longest the device takes to take an update of the effect (EVIOCSFF returns then: a
+  // device in user space answers each upload itself). Declared as delay; an update measured
+  // longer than the declared delay covers is late, and late_update_fault of them in a row
+  // fault the loop.
+  double update_latency_ms = 0.0;
+  int late_update_fault = 10;
+  int writer_priority = 1;  // SCHED_FIFO of the update thread (loop.rt_priority - 1)
 };
 
 // The axis range the kernel reports (EVIOCGABS).
@@ -88,9 +99,12 @@ std::optional<int> abs_code(std::string_view name) noexcept;
 // The name of `code`, or "ABS_0xNN" for one without a name here.
 std::string abs_name(int code);
 
-// RT-safe. The axis value in SI (m or rad). kRange needs maximum != minimum, kResolution a
-// resolution > 0 (configure checks both).
-double axis_position(int value, const AxisSettings& axis, const AxisRange& range) noexcept;
+// RT-safe. The axis value in SI (m or rad); an unwrapped value may lie beyond the range.
+// kRange needs maximum != minimum, kResolution a resolution > 0 (configure checks both).
+double axis_position(std::int64_t value, const AxisSettings& axis, const AxisRange& range) noexcept;
+// The width n of a counter whose values fill the range: maximum - minimum + 1 = 2^n (1..32),
+// or 0 when they do not (such an axis cannot be unwrapped: axis.wraps refuses it).
+int counter_bits(const AxisRange& range) noexcept;
 
 // RT-safe. The FF_CONSTANT level for `force`: force / full_scale of 0x7fff, rounded and held
 // within +-0x7fff (a non-finite force reads 0; the Device never passes one on).
@@ -99,9 +113,14 @@ std::int16_t force_level(double force, double full_scale) noexcept;
 double level_force(int level, double full_scale) noexcept;
 
 // Whole samples between write() and the force acting, as the gate analyses them
-// (docs/drivers/evdev.md): uinput 0; pidff like the HID driver, ceil(2 P / T) - 1; memless
-// adds one timer tick, ceil((2 P + 1/HZ) / T) - 1.
+// (docs/drivers/evdev.md): what the kernel's driver adds - uinput 0; pidff like the HID
+// driver, ceil(2 P / T) - 1; memless one timer tick more, ceil((2 P + 1/HZ) / T) - 1 - plus
+// what the update itself takes, L = update_latency_ms: a level can wait behind the update
+// before it (up to L) and then take L, ceil(2 L / T) - 1 (0 while L <= T/2).
 int declared_delay_samples(const EvdevSettings& s, double sample_period_s) noexcept;
+// The longest update the declared delay covers: (d_L + 1) T / 2, d_L the samples it adds for
+// update_latency_ms. An update measured longer is late (T/2 when update_latency_ms is 0).
+double covered_update_s(const EvdevSettings& s, double sample_period_s) noexcept;
 // The highest loop rate whose every update can reach the device: memless plays at most one
 // update per timer tick (kernel_hz); the others are bounded by the USB polling interval
 // (1000 / poll_interval_ms); uinput by nothing of the kernel's (0: none).

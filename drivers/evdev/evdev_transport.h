@@ -40,8 +40,10 @@ class EvdevTransport {
   // Not RT-safe, never throws. EVIOCRMFF: 0 or an errno.
   virtual int erase(int id) noexcept = 0;
 
-  // RT-safe: called every tick. EVIOCSFF of the uploaded effect with a new level: 0 or the
-  // errno.
+  // Called on the update thread alone (update_thread.h), never allocating: EVIOCSFF of the
+  // uploaded effect with a new level, which returns once the device has taken it (a device in
+  // user space answers it itself, as slowly as it does): 0 or the errno. The RT thread's
+  // read() and write_ff() run meanwhile and must not wait for it.
   virtual int update(const wire::Effect& effect) noexcept = 0;
   // RT-safe. An EV_FF event written to the device (play/stop effect `code`, FF_GAIN,
   // FF_AUTOCENTER): 0 or the errno.

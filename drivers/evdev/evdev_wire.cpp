@@ -91,6 +91,8 @@ std::size_t encode_fixed(const Message& m, std::uint8_t* buf) {
       break;
     case Type::kFacts:
       break;  // variable length: encode() adds it
+    case Type::kAnswers:
+      break;  // the descriptor travels beside the bytes
   }
   return static_cast<std::size_t>(w.p - buf);
 }
@@ -154,7 +156,7 @@ std::optional<Message> decode(std::span<const std::uint8_t> bytes) {
   Message m;
   const std::uint32_t type = r.u8();
   if (type < static_cast<std::uint32_t>(Type::kEvent) ||
-      type > static_cast<std::uint32_t>(Type::kStatus)) {
+      type > static_cast<std::uint32_t>(Type::kAnswers)) {
     return std::nullopt;
   }
   m.type = static_cast<Type>(type);
@@ -184,6 +186,8 @@ std::optional<Message> decode(std::span<const std::uint8_t> bytes) {
       break;
     case Type::kFacts:
       m.facts = decode_facts(r);
+      break;
+    case Type::kAnswers:
       break;
   }
   if (!r.ok() || !r.at_end()) return std::nullopt;

@@ -3,6 +3,8 @@
 // /dev/input/eventN node. Each message stands for one thing the kernel interface does: an
 // input event read from the node, an ioctl (the device's facts, EVIOCGRAB, EVIOCSFF,
 // EVIOCRMFF) with its answer, or an EV_FF event written to it (play, stop, gain, autocenter).
+// An update's answer comes back on a descriptor of its own (kAnswers), as EVIOCSFF's return is
+// not in the node's event stream.
 // Little-endian, one message per datagram, the type in the first byte. Pure: no OS header, so
 // the simulated device speaks the driver's bytes through the same code.
 #pragma once
@@ -26,6 +28,11 @@ enum class Type : std::uint8_t {
   kErase,      // driver -> device: EVIOCRMFF; answered kStatus
   kWriteFf,    // driver -> device: an EV_FF event written (play/stop an id, gain, autocenter)
   kStatus,     // device -> driver: an ioctl's answer: 0 or an errno, and a value
+  // driver -> device, first: the descriptor the device answers each update (kUpload of an
+  // existing id, EVIOCSFF of a new level) on, passed with the message (SCM_RIGHTS). EVIOCSFF
+  // returns only once the device has taken the update; the update thread waits for that
+  // answer there while the RT thread reads the events here.
+  kAnswers,
 };
 
 // One input event as read(2) gives it, its time in CLOCK_MONOTONIC ns.

@@ -101,7 +101,6 @@ class LibevdevTransport final : public EvdevTransport {
  public:
   LibevdevTransport(io::UniqueFd fd, EvdevPtr dev, std::string path)
       : fd_(std::move(fd)), dev_(std::move(dev)), path_(std::move(path)) {
-    effect_.type = FF_CONSTANT;
     libevdev_set_device_log_function(dev_.get(), count_message, LIBEVDEV_LOG_INFO, &messages_);
   }
   ~LibevdevTransport() override { emergency_id_.store(-1); }
@@ -160,17 +159,18 @@ class LibevdevTransport final : public EvdevTransport {
   }
 
   int upload(const wire::Effect& effect) override {
-    fill(effect);
-    effect_.id = -1;
-    if (ioctl(fd_.get(), EVIOCSFF, &effect_) != 0) throw failed("EVIOCSFF");
-    return effect_.id;
+    ff_effect e = constant(effect);
+    e.id = -1;
+    if (ioctl(fd_.get(), EVIOCSFF, &e) != 0) throw failed("EVIOCSFF");
+    return e.id;
   }
 
   int erase(int id) noexcept override { return ioctl(fd_.get(), EVIOCRMFF, id) == 0 ? 0 : errno; }
 
+  // The update thread's: an ff_effect of its own on its stack.
   int update(const wire::Effect& effect) noexcept override {
-    fill(effect);
-    return ioctl(fd_.get(), EVIOCSFF, &effect_) == 0 ? 0 : errno;
+    ff_effect e = constant(effect);
+    return ioctl(fd_.get(), EVIOCSFF, &e) == 0 ? 0 : errno;
   }
 
   int write_ff(int code, int value) noexcept override {
@@ -226,18 +226,20 @@ class LibevdevTransport final : public EvdevTransport {
     return DeviceError(std::string("evdev: ") + call + " on " + path_ + ": " +
                        base::errno_text(errno));
   }
-  void fill(const wire::Effect& e) noexcept {
-    effect_.id = e.id;
-    effect_.direction = e.direction;
-    effect_.u.constant.level = e.level;
-    effect_.replay.length = e.length_ms;
-    effect_.replay.delay = 0;
+  static ff_effect constant(const wire::Effect& e) noexcept {
+    ff_effect out{};
+    out.type = FF_CONSTANT;
+    out.id = e.id;
+    out.direction = e.direction;
+    out.u.constant.level = e.level;
+    out.replay.length = e.length_ms;
+    out.replay.delay = 0;
+    return out;
   }
 
   io::UniqueFd fd_;
   EvdevPtr dev_;
   std::string path_;
-  ff_effect effect_{};
   bool syncing_ = false;
   std::atomic<int> emergency_id_{-1};
   std::atomic<std::uint64_t> messages_{0};

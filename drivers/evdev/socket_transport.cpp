@@ -4,6 +4,7 @@
 #include <sys/socket.h>
 
 #include <cerrno>
+#include <cstring>
 
 #include "base/errno_text.h"
 #include "drivers/device.h"
@@ -13,7 +14,32 @@ namespace hapticd::drivers::evdev {
 using wire::Type;
 
 SocketTransport::SocketTransport(io::UniqueFd fd, std::chrono::milliseconds timeout)
-    : fd_(std::move(fd)), timeout_(timeout) {}
+    : fd_(std::move(fd)), timeout_(timeout) {
+  hand_over_answers();
+}
+
+// The device's end of a new socketpair, passed to it with SCM_RIGHTS; this end stays.
+void SocketTransport::hand_over_answers() {
+  auto [mine, theirs] = io::seqpacket_pair();
+  std::uint8_t type = static_cast<std::uint8_t>(Type::kAnswers);
+  iovec iov{&type, 1};
+  alignas(cmsghdr) char control[CMSG_SPACE(sizeof(int))] = {};
+  msghdr msg{};
+  msg.msg_iov = &iov;
+  msg.msg_iovlen = 1;
+  msg.msg_control = control;
+  msg.msg_controllen = sizeof control;
+  cmsghdr* c = CMSG_FIRSTHDR(&msg);
+  c->cmsg_level = SOL_SOCKET;
+  c->cmsg_type = SCM_RIGHTS;
+  c->cmsg_len = CMSG_LEN(sizeof(int));
+  const int fd = theirs.get();
+  std::memcpy(CMSG_DATA(c), &fd, sizeof fd);
+  if (::sendmsg(fd_.get(), &msg, MSG_DONTWAIT | MSG_NOSIGNAL) < 0) {
+    throw DeviceError("evdev loopback: the simulated device is gone: " + base::errno_text(errno));
+  }
+  answers_ = std::move(mine);  // theirs closes here: the device holds its own copy
+}
 
 int SocketTransport::send_bytes(const std::uint8_t* data, std::size_t size) noexcept {
   if (::send(fd_.get(), data, size, MSG_DONTWAIT | MSG_NOSIGNAL) >= 0) return 0;
@@ -43,12 +69,6 @@ wire::Message SocketTransport::request(const wire::Message& m, Type answer) {
       throw DeviceError("evdev loopback: " + base::errno_text(errno));
     }
     const auto reply = wire::decode({rx_.data(), static_cast<std::size_t>(n)});
-    if (reply && reply->type == Type::kStatus && unanswered_ > 0) {
-      // The device answers in order: this is an earlier update's, not this request's.
-      --unanswered_;
-      if (reply->error != 0 && refused_ == 0) refused_ = reply->error;  // for the next read
-      continue;
-    }
     if (reply && reply->type == answer) return *reply;
   }
 }
@@ -97,11 +117,29 @@ int SocketTransport::erase(int id) noexcept {
   }
 }
 
+// The update thread's: sends the update and waits for its answer, as EVIOCSFF does.
 int SocketTransport::update(const wire::Effect& effect) noexcept {
-  const std::size_t n = wire::encode_upload(effect, tx_);
-  const int e = send_bytes(tx_.data(), n);
-  if (e == 0) ++unanswered_;
-  return e;
+  const std::size_t n = wire::encode_upload(effect, utx_);
+  if (const int e = send_bytes(utx_.data(), n); e != 0) return e;
+  return await_answer();
+}
+
+// The device's answer to the update just sent: 0 or its errno; ETIMEDOUT when none came within
+// the time-out, ENODEV when the device is gone.
+int SocketTransport::await_answer() noexcept {
+  pollfd p{answers_.get(), POLLIN, 0};
+  while (true) {
+    const int r = ::poll(&p, 1, static_cast<int>(timeout_.count()));
+    if (r < 0 && errno == EINTR) continue;
+    if (r == 0) return ETIMEDOUT;
+    if (r < 0) return errno;
+    const ssize_t n = ::recv(answers_.get(), urx_.data(), urx_.size(), MSG_DONTWAIT);
+    if (n < 0 && (errno == EAGAIN || errno == EINTR)) continue;
+    if (n <= 0) return n == 0 || errno == ECONNRESET ? ENODEV : errno;
+    const auto m = wire::decode({urx_.data(), static_cast<std::size_t>(n)});
+    if (!m || m->type != Type::kStatus) return EPROTO;  // a device that answers nonsense
+    return m->error;
+  }
 }
 
 int SocketTransport::write_ff(int code, int value) noexcept {
@@ -110,11 +148,6 @@ int SocketTransport::write_ff(int code, int value) noexcept {
 }
 
 ReadStatus SocketTransport::read(wire::Event& ev, int& error) noexcept {
-  if (refused_ != 0) {  // an update refused while a request waited for its own answer
-    error = refused_;
-    refused_ = 0;
-    return ReadStatus::kError;
-  }
   while (true) {
     const ssize_t n = ::recv(fd_.get(), rx_.data(), rx_.size(), MSG_DONTWAIT);
     if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) return ReadStatus::kEmpty;
@@ -123,18 +156,12 @@ ReadStatus SocketTransport::read(wire::Event& ev, int& error) noexcept {
       error = n == 0 || errno == ECONNRESET ? ENODEV : errno;
       return ReadStatus::kError;
     }
-    // Only an event or an update's answer is decoded here: a kFacts would allocate its strings.
-    const auto type = static_cast<Type>(rx_[0]);
-    const auto m = type == Type::kEvent || type == Type::kStatus
+    // Only an event is decoded here (a kFacts would allocate its strings); an answer here is
+    // none the driver waits for.
+    const auto m = static_cast<Type>(rx_[0]) == Type::kEvent
                        ? wire::decode({rx_.data(), static_cast<std::size_t>(n)})
                        : std::nullopt;
     if (!m) return ReadStatus::kMalformed;
-    if (m->type == Type::kStatus && unanswered_ > 0) --unanswered_;
-    if (m->type == Type::kStatus && m->error != 0) {
-      error = m->error;  // an update the device refused
-      return ReadStatus::kError;
-    }
-    if (m->type != Type::kEvent) continue;
     ev = m->event;
     return ev.type == kEvSyn && ev.code == kSynDropped ? ReadStatus::kDropped : ReadStatus::kEvent;
   }

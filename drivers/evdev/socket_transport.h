@@ -1,8 +1,8 @@
 // The evdev transport over the loopback socketpair (evdev_wire.h): the simulated device on the
 // other end stands in for the kernel's input device. An ioctl is a request answered by the
-// device; an EV_FF write and an effect update are sent without waiting, and the update's
-// answer is read with the events that follow (a refused update is then a transport fault, as
-// a failing EVIOCSFF is).
+// device; an EV_FF write is sent without waiting. An effect update waits for the device's
+// answer as EVIOCSFF does, on a socketpair of its own (kAnswers, made at construction): the
+// update thread reads the answers there while the RT thread reads the events here.
 #pragma once
 
 #include <array>
@@ -16,6 +16,8 @@ namespace hapticd::drivers::evdev {
 
 class SocketTransport final : public EvdevTransport {
  public:
+  // Not RT-safe. Hands the device the descriptor it answers updates on; throws DeviceError
+  // when it cannot.
   SocketTransport(io::UniqueFd fd, std::chrono::milliseconds timeout);
 
   std::string describe() const override { return "the simulated device over a socketpair"; }
@@ -33,19 +35,22 @@ class SocketTransport final : public EvdevTransport {
 
  private:
   // Sends `m` and waits for the answer of type `answer` (events before it are dropped: they
-  // precede what the request changes; so are the answers of updates still unanswered, which
-  // come first). Throws DeviceError on a time-out or a broken pair.
+  // precede what the request changes). Throws DeviceError on a time-out or a broken pair.
   wire::Message request(const wire::Message& m, wire::Type answer);
   int send_bytes(const std::uint8_t* data, std::size_t size) noexcept;
 
+  void hand_over_answers();
+  int await_answer() noexcept;
+
   io::UniqueFd fd_;
+  io::UniqueFd answers_;  // the update thread's: where the device answers each update
   std::chrono::milliseconds timeout_;
   std::array<std::uint8_t, wire::kMaxMessage> rx_{};
-  std::array<std::uint8_t, 32> tx_{};
+  std::array<std::uint8_t, 32> tx_{};   // the RT thread's EV_FF writes
+  std::array<std::uint8_t, 32> utx_{};  // the update thread's
+  std::array<std::uint8_t, 32> urx_{};
   std::array<std::uint8_t, 32> stop_{};  // the emergency stop, prebuilt
   std::size_t stop_size_ = 0;
-  int unanswered_ = 0;  // updates sent whose kStatus has not been read yet
-  int refused_ = 0;     // an update's refusal a request passed over: the next read's error
 };
 
 }  // namespace hapticd::drivers::evdev

@@ -3,8 +3,6 @@
 #include <dlfcn.h>
 #include <fcntl.h>
 #include <hidapi/hidapi.h>
-#include <pthread.h>
-#include <sched.h>
 #include <sys/eventfd.h>
 #include <unistd.h>
 
@@ -20,6 +18,7 @@
 #include "drivers/device.h"
 #include "drivers/hid/report_descriptor.h"
 #include "drivers/hid/sysfs_descriptor.h"
+#include "drivers/io/output_thread.h"
 
 namespace hapticd::drivers::hid {
 namespace {
@@ -213,13 +212,9 @@ HidapiTransport::HidapiTransport(const Api& a, Backend b, hid_device* dev, Devic
     if (emergency_fd_ >= 0) ::close(emergency_fd_);
     throw DeviceError(std::string("hid: eventfd: ") + base::errno_text(errno));
   }
-  writer_ = std::thread([this] { run(); });
-  pthread_setname_np(writer_.native_handle(), "hapticd-hidout");
-  sched_param sp{};
-  sp.sched_priority = s.writer_priority;
-  // Refused without privileges: the writer then competes as an ordinary thread (counted as
-  // OUT-queue-full ticks if it falls behind).
-  pthread_setschedparam(writer_.native_handle(), SCHED_FIFO, &sp);
+  // Without the privilege for its priority the writer competes as an ordinary thread
+  // (counted as OUT-queue-full ticks if it falls behind).
+  writer_ = io::start_output_thread("hapticd-hidout", s.writer_priority, [this] { run(); });
 }
 
 HidapiTransport::~HidapiTransport() {

@@ -1,5 +1,6 @@
 // A driver paced by its in-process loopback peer: after configure, enable and every write it waits
-// until the peer has handled what the driver sent and answered, so the next read (the first tick's
+// until the driver has sent what it was given (Device::wait_output: a driver with an output thread
+// of its own) and the peer has handled it and answered, so the next read (the first tick's
 // too) sees the answer whatever the two threads' timing (freerun, and real-time `--loopback` runs:
 // peer_runner.h says why). The simulated device's clock is its protocol trigger, not the wall
 // clock, so its samples are handed on without the wall-clock receive time (a host stall between the
@@ -22,6 +23,7 @@ class PacedDevice final : public Device {
   void emergency_stop() noexcept override { inner_->emergency_stop(); }
   std::vector<std::string> notices() const override { return inner_->notices(); }
   std::span<const base::Counter> counters() const noexcept override { return inner_->counters(); }
+  void wait_output() const noexcept override { inner_->wait_output(); }
 
  protected:
   DeviceInfo on_configure() override {
@@ -47,6 +49,7 @@ class PacedDevice final : public Device {
   }
   IoStatus on_write(double force) noexcept override {
     const IoStatus r = inner_->write(force);
+    inner_->wait_output();
     runner_.wait_idle();
     if (r == IoStatus::kTransportFault || r == IoStatus::kDeviceFault) {
       set_fault_code(inner_->fault().code);

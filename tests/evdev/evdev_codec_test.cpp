@@ -46,6 +46,15 @@ TEST(EvdevWire, EveryMessageComesBackAsItWasSent) {
   ASSERT_TRUE(ev);
   EXPECT_EQ(ev->event.value, -7);
   EXPECT_EQ(ev->event.time_ns, 123456789012);
+  wire::Message answers;  // the type alone: its descriptor travels beside the bytes
+  answers.type = wire::Type::kAnswers;
+  wire::encode(answers, bytes);
+  EXPECT_EQ(bytes, std::vector<std::uint8_t>{9});
+  const auto a = wire::decode(bytes);
+  ASSERT_TRUE(a);
+  EXPECT_EQ(a->type, wire::Type::kAnswers);
+  const std::uint8_t answers_with_more[] = {9, 0};
+  EXPECT_FALSE(wire::decode(answers_with_more));
 }
 
 TEST(EvdevWire, BytesThatAreNoMessageAreRefused) {
@@ -99,6 +108,31 @@ TEST(EvdevDelay, EachDriverClassDeclaresItsOwn) {
   s.poll_interval_ms = 10;  // a wheel polled every 10 ms
   EXPECT_EQ(highest_rate_hz(s), 100.0);
   EXPECT_EQ(declared_delay_samples(s, 1e-2), 2);
+}
+
+// docs/drivers/evdev.md, "The update thread": what the update's own time L adds, ceil(2L/T) - 1
+// (none while L <= T/2), on top of each class's, and the longest update that covers.
+TEST(EvdevDelay, TheUpdatesOwnTimeIsDeclaredAndCovered) {
+  EvdevSettings s;
+  s.ff_driver = FfDriver::kUinput;
+  EXPECT_DOUBLE_EQ(covered_update_s(s, 1e-2), 5e-3) << "half a period with L = 0";
+  s.update_latency_ms = 5;
+  EXPECT_EQ(declared_delay_samples(s, 1e-2), 0) << "L = T/2: within the tick";
+  s.update_latency_ms = 15;  // issue 34's device at 100 Hz
+  EXPECT_EQ(declared_delay_samples(s, 1e-2), 2);
+  EXPECT_DOUBLE_EQ(covered_update_s(s, 1e-2), 15e-3);
+  s.update_latency_ms = 25;
+  EXPECT_EQ(declared_delay_samples(s, 1e-2), 4);
+  EXPECT_DOUBLE_EQ(covered_update_s(s, 1e-2), 25e-3);
+  s.update_latency_ms = 16;  // covered up to the next whole sample's worth
+  EXPECT_EQ(declared_delay_samples(s, 1e-2), 3);
+  EXPECT_DOUBLE_EQ(covered_update_s(s, 1e-2), 20e-3);
+  s.ff_driver = FfDriver::kPidff;  // 1 for the USB link at 1 kHz, then the update's own
+  s.update_latency_ms = 0;
+  EXPECT_EQ(declared_delay_samples(s, 1e-3), 1);
+  EXPECT_DOUBLE_EQ(covered_update_s(s, 1e-3), 0.5e-3);
+  s.update_latency_ms = 2;
+  EXPECT_EQ(declared_delay_samples(s, 1e-3), 1 + 3);
 }
 
 }  // namespace

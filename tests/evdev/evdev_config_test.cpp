@@ -44,7 +44,14 @@ TEST(EvdevConfig, TheExampleLoads) {
   EXPECT_EQ(s.axis.code, 0);
   EXPECT_EQ(s.ff_driver, FfDriver::kPidff);
   EXPECT_EQ(s.liveness_ms, 0.0);
+  EXPECT_EQ(s.update_latency_ms, 0.0);
+  EXPECT_EQ(s.late_update_fault, 10);
+  EXPECT_FALSE(s.axis.wraps);
+  EXPECT_EQ(s.writer_priority, 79) << "one below loop.rt_priority 80";
   EXPECT_EQ(wiring::find_driver("evdev").declared_delay(c), 1);
+  const config::Config slow = load({"device.evdev.update_latency_ms=2"});
+  EXPECT_EQ(wiring::find_driver("evdev").declared_delay(slow), 1 + 3)
+      << "the USB link's, and ceil(2 x 2 ms / 1 ms) - 1 for the update's own";
 }
 
 TEST(EvdevConfig, AMistakeInTheFileIsNamedAtItsLine) {
@@ -101,6 +108,16 @@ TEST(EvdevConfig, MistakesAreNamedWithTheKey) {
       << errors({"device.evdev.axis={code: ABS_X, min: -1e308, max: 1e308}"});
   EXPECT_NE(errors({"device.evdev.axis={code: ABS_X, min: 0, max: 1, rotary: true}"})
                 .find("device.evdev.axis.rotary: only with scale: resolution"),
+            std::string::npos);
+  EXPECT_NE(errors({"device.evdev.update_latency_ms=-1"})
+                .find("device.evdev.update_latency_ms: must be in [0, 10000], got '-1'"),
+            std::string::npos)
+      << errors({"device.evdev.update_latency_ms=-1"});
+  EXPECT_NE(errors({"device.evdev.late_update_fault=0"})
+                .find("device.evdev.late_update_fault: must be in 1..10000"),
+            std::string::npos);
+  EXPECT_NE(errors({"device.evdev.axis={code: ABS_X, min: 0, max: 1, wraps: yes please}"})
+                .find("device.evdev.axis.wraps: must be true or false"),
             std::string::npos);
   EXPECT_NE(errors({"device.evdev.gian=0.5"})
                 .find("device.evdev.gian: unknown key (did you mean 'gain'?)"),

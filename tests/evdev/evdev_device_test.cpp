@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "device_counter.h"
+#include "device_rig.h"
 #include "drivers/evdev/evdev_device.h"
 #include "fake_transport.h"
 
@@ -16,43 +17,7 @@ namespace {
 
 using hapticd::testing::counter_value;
 
-using testing::FakeTransport;
-using testing::Script;
-
-struct Rig {
-  explicit Rig(double liveness_ms = 0.0, InputListing listing = {}) {
-    auto s = std::make_shared<EvdevSettings>();
-    s->select.name = "x";
-    s->axis = {0, Scale::kRange, -0.05, 0.05, false, 0.0};
-    s->force_full_scale = 10.0;
-    s->autocenter = 0.5;
-    s->liveness_ms = liveness_ms;
-    settings = s;
-    script->facts.name = "scripted";
-    script->facts.has_axis = true;
-    script->facts.range = {-1000, 1000, 0};
-    script->facts.value = -200;  // -0.01 m
-    script->facts.ff_constant = script->facts.ff_gain = script->facts.ff_autocenter = true;
-    script->facts.ff_effects = 16;
-    const bool with_listing = !listing.path.empty();
-    device = std::make_unique<EvdevDevice>(
-        s,
-        [sc = script, listing, with_listing] {
-          EvdevDevice::Opened o;
-          o.transport = std::make_unique<FakeTransport>(sc);
-          if (with_listing) o.listing = listing;
-          return o;
-        },
-        0.001);
-  }
-  void frame(int value, std::int64_t t = 1000) {
-    script->events.push_back({ReadStatus::kEvent, {kEvAbs, 0, value, t}});
-    script->events.push_back({ReadStatus::kEvent, {kEvSyn, kSynReport, 0, t}});
-  }
-  std::shared_ptr<const EvdevSettings> settings;
-  std::shared_ptr<Script> script = std::make_shared<Script>();
-  std::unique_ptr<EvdevDevice> device;
-};
+using testing::Rig;
 
 TEST(EvdevDevice, TheLifecycleUploadsPlaysUpdatesStopsAndErases) {
   Rig r;
@@ -66,6 +31,7 @@ TEST(EvdevDevice, TheLifecycleUploadsPlaysUpdatesStopsAndErases) {
       << "autocenter off while hapticd renders";
   EXPECT_EQ(w.back(), (std::pair{3, 1})) << "the effect played last";
   ASSERT_EQ(r.device->write(5.0), IoStatus::kOk);
+  r.device->wait_output();  // the update thread made it
   EXPECT_EQ(r.script->levels.back(), 16384) << "half of full scale";
   for (const int d : r.script->directions) {
     EXPECT_EQ(d, 0xC000) << "the default direction, \"right\" (<linux/input.h>): toward +x";
@@ -152,7 +118,9 @@ TEST(EvdevDevice, TheDeviceStoppingTheEffectIsADeviceFaultWithZeroForce) {
   r.script->events.push_back({ReadStatus::kEvent, {kEvFfStatus, 3, kFfStatusStopped, 1}});
   PositionSample s;
   EXPECT_EQ(r.device->read(s), IoStatus::kDeviceFault);
-  EXPECT_EQ(r.script->levels.back(), 0) << "zero at the read that saw it";
+  r.device->wait_output();  // the update thread stops it, then makes level 0
+  const std::vector<std::string> tail(r.script->calls.end() - 2, r.script->calls.end());
+  EXPECT_EQ(tail, (std::vector<std::string>{"write 3 0", "update 0"}));
   EXPECT_NE(r.device->describe_fault().find("stopped hapticd's force-feedback effect"),
             std::string::npos);
 }
@@ -169,17 +137,22 @@ TEST(EvdevDevice, AnUnpluggedDeviceIsATransportFaultSaidSo) {
 }
 
 // effect_updates is what the device was told: a level the kernel refused is not one of them.
-TEST(EvdevDevice, AnUpdateTheKernelRefusesIsATransportFaultAndNoUpdate) {
+// The update is made on the update thread, so the refusal is the next write's transport fault.
+TEST(EvdevDevice, AnUpdateTheKernelRefusesIsATransportFaultAtTheNextWriteAndNoUpdate) {
   Rig r;
   r.device->configure();
   r.device->enable();
   ASSERT_EQ(r.device->write(1.0), IoStatus::kOk);
+  r.device->wait_output();
   const std::uint64_t taken = counter_value(*r.device, "effect_updates");
   EXPECT_GT(taken, 0u);
   r.script->update_error = EIO;
-  EXPECT_EQ(r.device->write(2.0), IoStatus::kTransportFault);
+  ASSERT_EQ(r.device->write(2.0), IoStatus::kOk) << "handed on, not waited for";
+  r.device->wait_output();
+  EXPECT_EQ(r.device->write(3.0), IoStatus::kTransportFault);
   EXPECT_EQ(counter_value(*r.device, "effect_updates"), taken) << "the refused level counted";
-  EXPECT_FALSE(r.device->describe_fault().empty());
+  EXPECT_NE(r.device->describe_fault().find("Input/output error"), std::string::npos)
+      << r.device->describe_fault();
 }
 
 TEST(EvdevDevice, AGrabHeldElsewhereRefusesTheEnableAndLeavesNothingPlaying) {

@@ -6,7 +6,9 @@
 #include <sys/socket.h>
 
 #include <climits>
+#include <cstring>
 #include <string_view>
+#include <thread>
 
 #include "alloc_counter.h"
 #include "device_counter.h"
@@ -57,31 +59,72 @@ TEST(EvdevMalformed, LoopbackMessagesThatAreNoEventAreSkippedWithoutAllocating) 
   EXPECT_EQ(t.read(ev, error), ReadStatus::kEmpty);
 }
 
-// The device answers every update (EVIOCSFF) and every request in order; the driver waits
-// only for a request's. A request must take its own answer, not an earlier update's.
-TEST(EvdevMalformed, ARequestTakesItsOwnAnswerNotAnEarlierUpdates) {
+// The simulated device's end of the transport: what the driver sent, and the descriptor it
+// answers updates on (kAnswers, handed over with SCM_RIGHTS when the transport is made).
+struct DeviceEnd {
+  explicit DeviceEnd(int fd) : main(fd) {
+    std::uint8_t type = 0;
+    iovec iov{&type, 1};
+    alignas(cmsghdr) char control[CMSG_SPACE(sizeof(int))] = {};
+    msghdr msg{};
+    msg.msg_iov = &iov;
+    msg.msg_iovlen = 1;
+    msg.msg_control = control;
+    msg.msg_controllen = sizeof control;
+    EXPECT_EQ(::recvmsg(fd, &msg, MSG_CMSG_CLOEXEC), 1);
+    EXPECT_EQ(type, static_cast<std::uint8_t>(wire::Type::kAnswers));
+    const cmsghdr* c = CMSG_FIRSTHDR(&msg);
+    EXPECT_NE(c, nullptr);
+    int passed = -1;
+    if (c != nullptr) std::memcpy(&passed, CMSG_DATA(c), sizeof passed);
+    answers.reset(passed);
+  }
+  void status(int fd, int error) {
+    wire::Message m;
+    m.type = wire::Type::kStatus;
+    m.error = error;
+    Bytes b;
+    wire::encode(m, b);
+    send(fd, b);
+  }
+  io::UniqueFd main, answers;
+};
+
+// EVIOCSFF returns once the device has taken the update, with its answer: over the loopback the
+// update waits for that answer on a socket of its own, so the events the RT thread reads meanwhile
+// are left where they are, and a request (EVIOCGRAB) still takes its own answer, not an update's.
+TEST(EvdevMalformed, AnUpdateWaitsForItsAnswerOnItsOwnSocketAndRequestsTakeTheirOwn) {
   int fds[2];
   ASSERT_EQ(::socketpair(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC, 0, fds), 0);
-  SocketTransport t{io::UniqueFd(fds[0]), std::chrono::milliseconds(100)};
-  const io::UniqueFd peer{fds[1]};
-  ASSERT_EQ(t.update({0, 0x4000, 100, 0}), 0);
-  wire::Message status;
-  status.type = wire::Type::kStatus;
-  Bytes bytes;
-  wire::encode(status, bytes);
-  send(peer.get(), bytes);  // the update's answer: done
-  status.error = EBUSY;
-  wire::encode(status, bytes);
-  send(peer.get(), bytes);  // the grab's: held elsewhere
+  SocketTransport t{io::UniqueFd(fds[0]), std::chrono::milliseconds(300)};
+  DeviceEnd dev(fds[1]);
+  ASSERT_TRUE(dev.answers);
+  Bytes event(32);
+  event.resize(wire::encode_event({kEvAbs, 0, 42, 7}, event));
+  send(dev.main.get(), event);
+  const auto t0 = std::chrono::steady_clock::now();
+  std::thread late([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(60));
+    dev.status(dev.answers.get(), EIO);
+  });
+  EXPECT_EQ(t.update({0, 0x4000, 100, 0}), EIO) << "the device's answer, whenever it comes";
+  late.join();
+  EXPECT_GE(std::chrono::steady_clock::now() - t0, std::chrono::milliseconds(60));
+  wire::Event ev;
+  int error = 0;
+  ASSERT_EQ(t.read(ev, error), ReadStatus::kEvent) << "the event is still the RT thread's";
+  EXPECT_EQ(ev.value, 42);
+  dev.status(dev.main.get(), EBUSY);  // the grab's answer: held elsewhere
   try {
     t.grab(true);
-    ADD_FAILURE() << "the grab took the update's answer for its own";
+    ADD_FAILURE() << "the grab took no answer";
   } catch (const DeviceError& e) {
     EXPECT_NE(std::string(e.what()).find("another process has grabbed"), std::string::npos)
         << e.what();
   }
-  wire::Event ev;
-  int error = 0;
+  EXPECT_EQ(t.update({0, 0x4000, 100, 0}), ETIMEDOUT) << "no answer within the time-out";
+  dev.answers.reset();
+  EXPECT_EQ(t.update({0, 0x4000, 100, 0}), ENODEV) << "the device gone";
   EXPECT_EQ(t.read(ev, error), ReadStatus::kEmpty) << "no answer left over for a later tick";
 }
 
@@ -134,6 +177,7 @@ TEST(EvdevMalformed, AHostileEventStreamIsCountedAndReadWithoutAllocating) {
     written = h.device->write(25.0);  // beyond full scale: the level's limit
     EXPECT_EQ(scope.count(), 0u);
   }
+  h.device->wait_output();
   ASSERT_EQ(read, IoStatus::kOk);
   EXPECT_DOUBLE_EQ(s.position, 0.05) << "INT_MAX is the range's maximum";
   EXPECT_EQ(written, IoStatus::kOk);

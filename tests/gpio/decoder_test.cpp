@@ -7,6 +7,7 @@
 #include <random>
 #include <vector>
 
+#include "drivers/gpio/gpio_transport.h"
 #include "drivers/gpio/quadrature_decoder.h"
 
 namespace hapticd::drivers::gpio {
@@ -252,6 +253,23 @@ TEST(QuadratureDecoder, CountsWrapAtTheEndsOfTheRange) {
   idx.apply({5, 0, Line::kIndex, true});
   idx.apply(edge_between(state_of_count(kMin), state_of_count(kMax), 6));
   EXPECT_EQ(idx.count(), kMax) << "the index may set a count at the edge of the range";
+}
+
+// The kernel numbers a line request's edge events with a 32-bit counter (struct
+// gpio_v2_line_event: __u32 seqno), as the loopback's wire does: after 2^32 events (two days at
+// 25 000 edges a second) it passes 0xFFFFFFFF and continues at 0. Gaps are counted modulo 2^32,
+// so the wrap is no gap and a gap across it is counted as one.
+TEST(SequenceCheck, TheKernelsEventNumbersWrapAt32BitsWithoutAGap) {
+  SequenceCheck seq;
+  EXPECT_EQ(seq.next(0xFFFF'FFFEu), 0u) << "the first number sets the base";
+  EXPECT_EQ(seq.next(0xFFFF'FFFFu), 0u);
+  EXPECT_EQ(seq.next(0u), 0u) << "across the wrap";
+  EXPECT_EQ(seq.next(1u), 0u);
+  EXPECT_EQ(seq.next(4u), 2u) << "2 and 3 lost";
+  seq.reset();
+  EXPECT_EQ(seq.next(0xFFFF'FFFEu), 0u);
+  EXPECT_EQ(seq.next(2u), 3u) << "0xFFFFFFFF, 0 and 1 lost, across the wrap";
+  EXPECT_EQ(seq.next(1u), 1u) << "a number from the past: the stream cannot be trusted";
 }
 
 }  // namespace

@@ -1,8 +1,9 @@
 // What the loop's thread asks of the kernel each tick, read from `strace -ff -T` of a hapticd
 // run (one file per thread): the thread that sleeps in clock_nanosleep most is the loop's
-// (hapticd-rt), and its system calls between two of those sleeps are one tick's. For the
-// BENCHMARKS.md table of each driver class, and the tests that hold the evdev driver to one
-// read-and-update a tick.
+// (hapticd-rt), and its system calls between two of those sleeps are one tick's. The evdev
+// driver's EVIOCSFF is made by its update thread (hapticd-evout), counted apart over the
+// loop's ticks. For the BENCHMARKS.md table of each driver class, and the tests that hold the
+// evdev driver to one read-and-update a tick.
 #pragma once
 
 #include <algorithm>
@@ -24,8 +25,9 @@ inline std::vector<std::string> strace_to(const std::string& prefix) {
 
 struct TickCalls {
   long ticks = 0;                          // sleeps of the loop's thread, steady state
-  std::map<std::string, double> per_tick;  // "read", "ioctl EVIOCSFF", ...: calls a tick
-  double evioc_sff_us_median = 0.0;        // time in one EVIOCSFF (strace -T)
+  std::map<std::string, double> per_tick;  // "read", "futex", ...: calls a tick
+  double sff_elsewhere_per_tick = 0.0;     // EVIOCSFF on the other threads, per loop tick
+  double evioc_sff_us_median = 0.0;        // time in one EVIOCSFF (strace -T), any thread
 };
 
 // Reads PREFIX.*; `skip` ticks at each end are left out (start-up and shut-down).
@@ -77,6 +79,16 @@ inline TickCalls tick_calls(const std::string& prefix, long skip = 20) {
     ++counts[c.name];
     if (c.name.find("EVIOCSFF") != std::string::npos) sff.push_back(c.seconds * 1e6);
   }
+  long elsewhere = 0;
+  for (const auto& [tid, calls] : by_thread) {
+    if (&calls == rt) continue;
+    for (const Call& c : calls) {
+      if (c.name.find("EVIOCSFF") == std::string::npos) continue;
+      ++elsewhere;
+      sff.push_back(c.seconds * 1e6);
+    }
+  }
+  if (most > 0) out.sff_elsewhere_per_tick = static_cast<double>(elsewhere) / most;
   out.ticks = most - 2 * skip;
   for (const auto& [name, n] : counts) out.per_tick[name] = static_cast<double>(n) / out.ticks;
   if (!sff.empty()) {
@@ -90,6 +102,7 @@ inline std::string describe(const TickCalls& t) {
   std::ostringstream os;
   os << t.ticks << " ticks:";
   for (const auto& [name, n] : t.per_tick) os << " " << name << " " << n;
+  os << "; on other threads EVIOCSFF " << t.sff_elsewhere_per_tick << " a tick";
   os << "; EVIOCSFF median " << t.evioc_sff_us_median << " us";
   return os.str();
 }

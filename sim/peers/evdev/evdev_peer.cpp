@@ -6,6 +6,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <limits>
 #include <numbers>
 #include <string>
@@ -86,6 +87,20 @@ void SocketEvdevPeer::answer(std::int32_t error, std::int32_t value) {
   send(m);
 }
 
+// An update's answer goes where EVIOCSFF's return would: the descriptor the driver handed over.
+void SocketEvdevPeer::answer_update(std::int32_t error, std::int32_t value) {
+  if (!answers_) return answer(error, value);  // a driver that handed none over
+  Message m;
+  m.type = Type::kStatus;
+  m.error = error;
+  m.b = value;
+  ev::wire::encode(m, tx_);
+  if (::send(answers_.get(), tx_.data(), tx_.size(), MSG_DONTWAIT | MSG_NOSIGNAL) < 0 &&
+      errno != EPIPE && errno != ECONNRESET && errno != EAGAIN) {
+    throw std::system_error(errno, std::system_category(), "evdev peer: send an answer");
+  }
+}
+
 void SocketEvdevPeer::send_event(int type, int code, int value) {
   Message m;
   m.type = Type::kEvent;
@@ -110,6 +125,44 @@ void SocketEvdevPeer::apply() noexcept {
 }
 
 void SocketEvdevPeer::on_update(const ev::wire::Effect& e) {
+  const std::int64_t latency = latency_ns_.load();
+  if (latency <= 0 && pending_.empty()) return take_update(e);
+  Message m;
+  m.type = Type::kUpload;
+  m.effect = e;
+  pending_.push_back({base::monotonic_ns() + latency, m});
+}
+
+void SocketEvdevPeer::take_due() {
+  const std::int64_t now = base::monotonic_ns();
+  while (!pending_.empty() && pending_.front().due_ns <= now) {
+    const Message m = pending_.front().m;
+    pending_.pop_front();
+    if (m.type == Type::kUpload) {
+      take_update(m.effect);
+    } else {
+      write_ff(m.a, m.b);
+    }
+  }
+}
+
+// An EV_FF event written to the node: play or stop the effect, the gain.
+void SocketEvdevPeer::write_ff(int code, int value) {
+  if (code == ev::kFfGain) gain_ = value / 65535.0;
+  if (uploaded_ && code == effect_.id) playing_.store(value > 0 && fault_.load() == kNoFault);
+  apply();
+}
+
+int SocketEvdevPeer::service_interval_ms() const noexcept {
+  if (pending_.empty()) return -1;
+  const std::int64_t left = pending_.front().due_ns - base::monotonic_ns();
+  return left <= 0 ? 0 : static_cast<int>((left + 999'999) / 1'000'000);
+}
+
+// The update taken: the level applied, the plant stepped, the update answered and the axis
+// reported (held by the declared delay; a device slowed on purpose holds nothing more).
+void SocketEvdevPeer::take_update(const ev::wire::Effect& e) {
+  if (!uploaded_ || e.id != effect_.id) return answer_update(EINVAL, 0);  // erased meanwhile
   if (fault_.load() == kFaultPending) {  // the device stops the effect itself, and says so
     fault_.store(kFaultSaid);
     playing_.store(false);
@@ -121,9 +174,12 @@ void SocketEvdevPeer::on_update(const ev::wire::Effect& e) {
   axis_.step();
   fifo_[fifo_head_] = axis_.encoder_position();
   fifo_head_ = (fifo_head_ + 1) % fifo_.size();
-  answer(0, e.id);
+  last_level_.store(e.level);
+  updates_taken_.fetch_add(1);
+  answer_update(0, e.id);
   if (silent_.load()) return;
-  send_event(ev::kEvAbs, settings_.axis.code, raw_value(fifo_[fifo_head_]));
+  const double x = latency_ns_.load() > 0 ? axis_.encoder_position() : fifo_[fifo_head_];
+  send_event(ev::kEvAbs, settings_.axis.code, raw_value(x));
   send_event(ev::kEvSyn, ev::kSynReport, 0);
 }
 
@@ -153,7 +209,7 @@ void SocketEvdevPeer::handle(const Message& m) {
         effect_.id = 0;
         return answer(0, 0);
       }
-      if (!uploaded_ || m.effect.id != effect_.id) return answer(EINVAL);
+      if (!uploaded_ || m.effect.id != effect_.id) return answer_update(EINVAL, 0);
       return on_update(m.effect);
     case Type::kErase:
       if (!uploaded_ || m.a != effect_.id) return answer(EINVAL);
@@ -162,10 +218,8 @@ void SocketEvdevPeer::handle(const Message& m) {
       apply();
       return answer(0);
     case Type::kWriteFf:
-      if (m.a == ev::kFfGain) gain_ = m.b / 65535.0;
-      if (uploaded_ && m.a == effect_.id) playing_.store(m.b > 0 && fault_.load() == kNoFault);
-      apply();
-      return;
+      if (!pending_.empty()) return pending_.push_back({0, m});  // behind the update in hand
+      return write_ff(m.a, m.b);
     default:
       return;  // a device never receives its own message types
   }
@@ -174,21 +228,52 @@ void SocketEvdevPeer::handle(const Message& m) {
 void SocketEvdevPeer::lose_host() noexcept {
   playing_.store(false);
   uploaded_ = false;  // closing the node erases the effects of the process that made them
+  pending_.clear();
+  answers_.reset();  // an update waiting for its answer learns the device is gone
   apply();
 }
 
+// One message, and the descriptor passed with it (kAnswers), -1 for none.
+void SocketEvdevPeer::receive(std::size_t n, int passed_fd) {
+  io::UniqueFd passed(passed_fd);
+  const auto m = ev::wire::decode({rx_.data(), n});
+  if (!m) return;
+  if (m->type == Type::kAnswers) {
+    answers_ = std::move(passed);
+    return;
+  }
+  handle(*m);
+}
+
 void SocketEvdevPeer::service() {
+  take_due();
   while (true) {
-    const ssize_t n = ::recv(fd_.get(), rx_.data(), rx_.size(), MSG_DONTWAIT);
-    if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) return;
+    iovec iov{rx_.data(), rx_.size()};
+    alignas(cmsghdr) char control[CMSG_SPACE(sizeof(int))] = {};
+    msghdr msg{};
+    msg.msg_iov = &iov;
+    msg.msg_iovlen = 1;
+    msg.msg_control = control;
+    msg.msg_controllen = sizeof control;
+    const ssize_t n = ::recvmsg(fd_.get(), &msg, MSG_DONTWAIT | MSG_CMSG_CLOEXEC);
+    if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) break;
     if (n < 0 && errno == EINTR) continue;
+    int passed = -1;
+    if (n > 0) {
+      const cmsghdr* c = CMSG_FIRSTHDR(&msg);
+      if (c != nullptr && c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_RIGHTS) {
+        std::memcpy(&passed, CMSG_DATA(c), sizeof passed);
+      }
+    }
     if (n <= 0 || vanished_.load()) {  // the driver closed its end, or the device is gone
+      if (passed >= 0) ::close(passed);
       lose_host();
       if (n > 0) continue;  // what was sent to a vanished device is taken off and lost
       return;
     }
-    if (const auto m = ev::wire::decode({rx_.data(), static_cast<std::size_t>(n)})) handle(*m);
+    receive(static_cast<std::size_t>(n), passed);
   }
+  take_due();
 }
 
 bool SocketEvdevPeer::inject(PeerFault fault) noexcept {

@@ -7,11 +7,19 @@
 // and a SYN_REPORT. It stands for a device whose encoder is never still: it reports the axis
 // after every step, changed or not, so only an injected silence is silent (the kernel's input
 // core passes changes only; the kernel tests meet that). Its answers are held by the delay the
-// driver declares, so a loopback run is the loop the gate analysed.
+// driver declares, so a loopback run is the loop the gate analysed. Each update is answered on
+// the descriptor the driver handed over (kAnswers), as EVIOCSFF returns; told to, it takes an
+// update only after a while, as a device in user space slow to answer UI_FF_UPLOAD does (its
+// own slowness is then its delay: it holds nothing more). An EV_FF write (a stop) that comes
+// meanwhile acts once that update is taken, as the kernel's evdev lets a write to the node
+// through only then (it holds the node's mutex across EVIOCSFF).
 #pragma once
 
 #include <array>
 #include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <deque>
 #include <vector>
 
 #include "config/config.h"
@@ -30,6 +38,8 @@ class SocketEvdevPeer final : public LoopbackPeer {
 
   void service() override;
   int fd() const noexcept override { return fd_.get(); }
+  // While an update waits to be taken: the ms until it is.
+  int service_interval_ms() const noexcept override;
   double applied_force() const noexcept override { return applied_.load(); }
   bool output_on() const noexcept override { return playing_.load(); }
   const Plant& plant() const noexcept override { return axis_.plant(); }
@@ -37,15 +47,33 @@ class SocketEvdevPeer final : public LoopbackPeer {
   // (EV_FF_STATUS stopped); kTransportFault: the device vanishes. kSkipSequence: no (evdev
   // numbers nothing).
   bool inject(PeerFault fault) noexcept override;
+  // Any thread. Each update received from now on is taken (applied, the plant stepped, the
+  // axis reported and the update answered) `latency` after it came; zero: at once.
+  void take_updates_after(std::chrono::nanoseconds latency) noexcept {
+    latency_ns_.store(latency.count());
+  }
+  // Any thread. Updates taken so far, and the level of the last one.
+  std::uint64_t updates_taken() const noexcept { return updates_taken_.load(); }
+  int last_level() const noexcept { return last_level_.load(); }
 
   // The raw axis value the device reports for position `x`, and its range.
   std::int32_t raw_value(double x) const noexcept;
   drivers::evdev::AxisRange range() const noexcept { return range_; }
 
  private:
+  // An update to take at its time, or an EV_FF write that came behind one (due_ns 0).
+  struct Pending {
+    std::int64_t due_ns;
+    drivers::evdev::wire::Message m;
+  };
+  void receive(std::size_t n, int passed_fd);
   void handle(const drivers::evdev::wire::Message& m);
   void answer(std::int32_t error, std::int32_t value = 0);
+  void answer_update(std::int32_t error, std::int32_t value);
   void on_update(const drivers::evdev::wire::Effect& e);
+  void write_ff(int code, int value);
+  void take_update(const drivers::evdev::wire::Effect& e);
+  void take_due();
   void apply() noexcept;
   void send_event(int type, int code, int value);
   void send(const drivers::evdev::wire::Message& m);
@@ -53,6 +81,7 @@ class SocketEvdevPeer final : public LoopbackPeer {
 
   const drivers::evdev::EvdevSettings& settings_;
   io::UniqueFd fd_;
+  io::UniqueFd answers_;  // where updates are answered (kAnswers)
   SimAxis axis_;
   double counts_per_unit_;
   drivers::evdev::AxisRange range_;
@@ -66,6 +95,10 @@ class SocketEvdevPeer final : public LoopbackPeer {
   std::atomic<bool> silent_{false}, vanished_{false};
   enum : int { kNoFault, kFaultPending, kFaultSaid };
   std::atomic<int> fault_{kNoFault};  // an injected device fault: the effect stopped for good
+  std::atomic<std::int64_t> latency_ns_{0};
+  std::atomic<std::uint64_t> updates_taken_{0};
+  std::atomic<int> last_level_{0};
+  std::deque<Pending> pending_;  // updates received and what came behind them, in order
   std::array<std::uint8_t, drivers::evdev::wire::kMaxMessage> rx_{};
   std::vector<std::uint8_t> tx_;
 };

@@ -2,11 +2,11 @@
 #include "reference_clock.h"
 
 #include <fcntl.h>
-#include <linux/uinput.h>
 #include <poll.h>
 #include <sys/ioctl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -81,6 +81,11 @@ std::vector<Upload> UinputFfDevice::uploads() const {
   return uploads_;
 }
 
+std::vector<Stop> UinputFfDevice::stops() const {
+  const std::lock_guard lock(m_);
+  return stops_;
+}
+
 void UinputFfDevice::emit(int type, int code, int value) {
   if (type == EV_ABS) {
     const double span = o_.position_max - o_.position_min;
@@ -103,10 +108,21 @@ void UinputFfDevice::emit(int type, int code, int value) {
   [[maybe_unused]] const ssize_t n = ::write(fd_.get(), ev, sizeof ev);
 }
 
+// <linux/uinput.h>, "To implement upload_effect()": 3. UI_BEGIN_FF_UPLOAD fills in the struct,
+// 4. "Perform the effect upload, and place a return code back", 5. UI_END_FF_UPLOAD; and "The
+// callback blocks until this return code is sent". Step 3 at once, 4 and 5 after upload_latency.
 void UinputFfDevice::upload_request(int request) {
   uinput_ff_upload up{};
   up.request_id = static_cast<__u32>(request);
   if (ioctl(fd_.get(), UI_BEGIN_FF_UPLOAD, &up) < 0) return;
+  pending_ = up;
+  pending_due_ = std::chrono::steady_clock::now() + o_.upload_latency;
+  answering_.store(true);
+  if (o_.upload_latency.count() == 0) finish_upload();
+}
+
+void UinputFfDevice::finish_upload() {
+  uinput_ff_upload& up = *pending_;
   const int id = up.effect.id;
   if (up.effect.type != FF_CONSTANT || id < 0 || id >= o_.effects) {
     up.retval = -EINVAL;
@@ -119,6 +135,16 @@ void UinputFfDevice::upload_request(int request) {
     uploads_.push_back({now_ns(), id, e.level});
   }
   ioctl(fd_.get(), UI_END_FF_UPLOAD, &up);
+  pending_.reset();
+  answering_.store(false);
+}
+
+// Until the next step of the axis, or the pending upload's answer if that comes first.
+int UinputFfDevice::poll_timeout_ms(std::chrono::steady_clock::time_point next) const {
+  const auto until = pending_ ? std::min(next, pending_due_) : next;
+  const auto wait = std::chrono::duration_cast<std::chrono::milliseconds>(
+      until - std::chrono::steady_clock::now());
+  return static_cast<int>(std::max<std::int64_t>(0, wait.count()));
 }
 
 void UinputFfDevice::erase_request(int request) {
@@ -147,7 +173,9 @@ void UinputFfDevice::service() {
       autocenter_.store(ev.value);
     } else if (ev.code < effects_.size()) {
       const std::lock_guard lock(m_);
-      effects_[ev.code].playing = ev.value > 0 && effects_[ev.code].used;
+      Effect& e = effects_[ev.code];
+      if (e.playing && ev.value == 0) stops_.push_back({now_ns(), uploads_.size()});
+      e.playing = ev.value > 0 && e.used;
     }
   }
 }
@@ -178,11 +206,10 @@ void UinputFfDevice::run() {
   auto next = std::chrono::steady_clock::now();
   auto last = next;
   while (!stop_.load()) {
-    const auto wait = std::chrono::duration_cast<std::chrono::milliseconds>(
-        next - std::chrono::steady_clock::now());
     pollfd p{fd_.get(), POLLIN, 0};
-    ::poll(&p, 1, static_cast<int>(std::max<std::int64_t>(0, wait.count())));
+    ::poll(&p, 1, poll_timeout_ms(next));
     service();
+    if (pending_ && std::chrono::steady_clock::now() >= pending_due_) finish_upload();
     const auto now = std::chrono::steady_clock::now();
     if (now < next) continue;
     // Integrated over the time that really passed: the axis moves whether or not this

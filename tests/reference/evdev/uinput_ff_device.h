@@ -14,11 +14,21 @@
 // -> 0x0000 (down), 90 deg -> 0x4000 (left), 180 deg -> 0x8000 (up), 270 deg -> 0xC000
 // (right)", so a positive level pushes toward -X at 0x4000 and +X at 0xC000: -sin(direction).
 // Every upload is recorded with its time, so a test can say what reached the device each tick.
+// A device can be made slow to answer uploads (upload_latency): it takes the request with
+// UI_BEGIN_FF_UPLOAD at once, but takes the effect and answers with UI_END_FF_UPLOAD only that
+// much later, as a device that forwards each update over a slow link of its own would; the
+// kernel holds the uploading process's EVIOCSFF until then (<linux/uinput.h>: "The callback
+// blocks until this return code is sent"), while the EV_FF events written meanwhile (a stop)
+// still arrive.
 #pragma once
 
+#include <linux/uinput.h>
+
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -36,11 +46,18 @@ struct UinputFfOptions {
   double mass = 0.1, damping = 2.0, start = -0.01;   // kg, N s/m, m
   double rate_hz = 1000.0;                           // the device's own loop
   int effects = 4;                                   // ff_effects_max
+  std::chrono::nanoseconds upload_latency{0};        // from UI_FF_UPLOAD to UI_END_FF_UPLOAD
+};
+
+// A playing effect stopped (EV_FF, value 0).
+struct Stop {
+  std::int64_t time_ns;  // CLOCK_MONOTONIC
+  std::size_t uploads_before;
 };
 
 // One upload as it reached the device.
 struct Upload {
-  std::int64_t time_ns;  // CLOCK_MONOTONIC, when the device took it
+  std::int64_t time_ns;  // CLOCK_MONOTONIC, when the device took it (answered it)
   int id;
   int level;
 };
@@ -64,6 +81,10 @@ class UinputFfDevice {
   int autocenter() const { return autocenter_.load(); }
   int effects_held() const { return held_.load(); }
   std::uint64_t erases() const { return erases_.load(); }
+  // Each stop of a playing effect: when it came, and how many uploads had been answered then.
+  std::vector<Stop> stops() const;
+  // An upload taken (UI_BEGIN_FF_UPLOAD) and not answered yet.
+  bool answering() const { return answering_.load(); }
   std::vector<Upload> uploads() const;
   // The axis stops reporting (a device whose firmware hangs with its link up).
   void go_silent() { silent_.store(true); }
@@ -74,6 +95,8 @@ class UinputFfDevice {
   void run();
   void service();
   void upload_request(int request);
+  void finish_upload();
+  int poll_timeout_ms(std::chrono::steady_clock::time_point next) const;
   void erase_request(int request);
   void step(double dt);
   void emit(int type, int code, int value);
@@ -92,8 +115,14 @@ class UinputFfDevice {
   };
   std::vector<Effect> effects_;
   std::vector<Upload> uploads_;
+  std::vector<Stop> stops_;
+  // The upload taken with UI_BEGIN_FF_UPLOAD and not answered yet (the kernel lets one at a
+  // time through: ff->mutex), and when it is to be.
+  std::optional<uinput_ff_upload> pending_;
+  std::chrono::steady_clock::time_point pending_due_;
   std::atomic<double> push_{0.0}, hand_damping_{0.0}, force_{0.0};
   std::atomic<bool> playing_{false}, silent_{false}, stop_{false}, gone_{false};
+  std::atomic<bool> answering_{false};
   std::atomic<int> gain_{0xffff}, autocenter_{-1}, held_{0};
   std::atomic<std::uint64_t> erases_{0};
   std::thread thread_;

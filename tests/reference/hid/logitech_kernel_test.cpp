@@ -186,11 +186,14 @@ constexpr double kStiffness = 5.0;  // N m/rad: at 100 Hz the gate allows up to 
 constexpr double kPush = 1.5;
 
 // hapticd with config/evdev.yaml on the wheel: ff_driver memless at 100 Hz (below the kernel's
-// 250 Hz timer), its 270 degrees and 2 N m.
+// 250 Hz timer), its 270 degrees and 2 N m. The emulated machine's thresholds: overruns and
+// late updates (an EVIOCSFF through ff-memless takes it 3 ms, up to 14, above the 5 ms that
+// update_latency_ms 0 covers) are counted, not faulted.
 std::vector<std::string> wheel_sets(const std::string& serial) {
   return {"loop.rate_hz=100",
           "loop.overrun_fault_streak=1000",
           "safety.direction_check.max_latency_ms=300",
+          "device.evdev.late_update_fault=1000",
           "safety.stale_fault_ticks=50",
           "device.mass=0.05",
           "device.damping=0.05",
@@ -229,10 +232,12 @@ TEST(LogitechWheel, ThroughTheKernelsLogitechDriverTheWallHoldsTheHand) {
       strace_to("/tmp/hapticd-logitech-strace"));
   ASSERT_EQ(r.status, 0) << r.faults() << "\n" << r.log;
   EXPECT_EQ(r.faults(), "[]");
-  // The loop's thread under strace (rt_syscalls.h): what it asks of the kernel each tick.
+  // The loop's thread under strace (rt_syscalls.h): what it asks of the kernel each tick. The
+  // update (EVIOCSFF) is the driver's update thread's, one a tick.
   TickCalls calls = tick_calls("/tmp/hapticd-logitech-strace");
   std::cout << "logitech, the loop's thread: " << describe(calls) << "\n";
-  EXPECT_NEAR(calls.per_tick["ioctl EVIOCSFF"], 1.0, 0.02);
+  EXPECT_EQ(calls.per_tick.count("ioctl EVIOCSFF"), 0u) << "not on the loop's thread";
+  EXPECT_NEAR(calls.sff_elsewhere_per_tick, 1.0, 0.05);
   EXPECT_NEAR(x_rest, kPush / kStiffness, 0.02 * kPush / kStiffness) << "resting penetration";
   EXPECT_NEAR(torque_rest, -kPush, 0.02 * kPush) << "the wall's torque at rest";
   // The shipped direction 270 (0xC000, "right") turns the wall's negative level into X above

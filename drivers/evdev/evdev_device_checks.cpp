@@ -1,0 +1,104 @@
+// What configure checks of the device the kernel offers (the axis, force feedback, gain and
+// autocenter where the configuration needs them, a counter's range for axis.wraps, the kind of
+// its kernel driver), and the sentences the driver's faults are named with.
+#include <cerrno>
+#include <cstdio>
+
+#include "base/errno_text.h"
+#include "config/schema_reader.h"
+#include "drivers/evdev/evdev_device.h"
+
+namespace hapticd::drivers::evdev {
+
+void EvdevDevice::check_device(const wire::Facts& f) const {
+  const AxisSettings& a = settings_->axis;
+  const std::string who = "evdev: \"" + f.name + "\"";
+  if (!f.has_axis) throw DeviceError(who + " has no " + abs_name(a.code) + " axis");
+  if (!f.ff_constant) {
+    throw DeviceError(who +
+                      " offers no FF_CONSTANT force feedback (`hapticd devices` lists "
+                      "the devices that do)");
+  }
+  if (f.ff_effects < 1) throw DeviceError(who + " holds no force-feedback effect");
+  if (a.scale == Scale::kRange && f.range.maximum <= f.range.minimum) {
+    throw DeviceError(who + ": the kernel gives " + abs_name(a.code) + " the range [" +
+                      std::to_string(f.range.minimum) + ", " + std::to_string(f.range.maximum) +
+                      "], which cannot be mapped onto device.evdev.axis.min..max");
+  }
+  if (a.scale == Scale::kResolution && f.range.resolution <= 0) {
+    throw DeviceError(who + ": the kernel gives " + abs_name(a.code) +
+                      " no resolution: use device.evdev.axis.scale range with min and max");
+  }
+  if (settings_->gain < 1.0 && !f.ff_gain) {
+    throw DeviceError(who + " has no FF_GAIN: device.evdev.gain must be 1");
+  }
+  if (settings_->autocenter > 0.0 && !f.ff_autocenter) {
+    throw DeviceError(who + " has no FF_AUTOCENTER: device.evdev.autocenter must be 0");
+  }
+}
+
+// A device whose value is a counter of its report field's width: the kernel passes the field's
+// value as it is, neither clamped nor wrapped (<linux/input.h>, struct input_absinfo: "input
+// core does not clamp reported values to the [minimum, maximum] limits"), so the counter's
+// rollover reaches the driver as a jump of the whole range. Unwrapped, the range must hold 2^n
+// values, as a field of n bits does.
+void EvdevDevice::check_wrap(const wire::Facts& f) {
+  if (!settings_->axis.wraps) return;
+  const int bits = counter_bits(f.range);
+  if (bits == 0) {
+    throw DeviceError("evdev: \"" + f.name +
+                      "\": device.evdev.axis.wraps needs a counter's range, " +
+                      "2^n values, but the kernel gives " + abs_name(settings_->axis.code) + " [" +
+                      std::to_string(f.range.minimum) + ", " + std::to_string(f.range.maximum) +
+                      "]: it cannot be unwrapped");
+  }
+  unwrap_ = io::CounterUnwrap(bits, false);  // a new session: the first value sets the base
+}
+
+void EvdevDevice::note_kernel_driver(const InputListing& l) {
+  const std::optional<FfDriver> guess = guess_ff_driver(l);
+  const std::string configured = to_string(settings_->ff_driver);
+  if (!guess) {
+    notices_.push_back("kernel driver '" + l.kernel_driver +
+                       "' is not one hapticd knows: check that its force feedback is what "
+                       "device.evdev.ff_driver " +
+                       configured +
+                       " says, or the declared delay is wrong (docs/drivers/evdev.md)");
+  } else if (*guess != settings_->ff_driver) {
+    notices_.push_back(std::string("the device is bound to kernel driver '") +
+                       (l.virtual_device ? std::string("uinput") : l.kernel_driver) +
+                       "', whose force feedback is " + to_string(*guess) +
+                       ", but device.evdev.ff_driver says " + configured + ": the gate analyses " +
+                       configured + "'s delay (docs/drivers/evdev.md)");
+  }
+}
+
+std::string EvdevDevice::describe_late() const {
+  using config::schema::format_number;
+  const int d = declared_delay_samples(*settings_, period_s_);
+  char took[32], covered[32];
+  std::snprintf(took, sizeof took, "%.1f", static_cast<double>(late_ns_) * 1e-6);
+  std::snprintf(covered, sizeof covered, "%.1f", covered_update_s(*settings_, period_s_) * 1e3);
+  return std::string("evdev: the device took up to ") + took + " ms to take an update, " +
+         std::to_string(settings_->late_update_fault) + " in a row longer than the " + covered +
+         " ms the declared delay covers (device.evdev.update_latency_ms " +
+         format_number(settings_->update_latency_ms) + ", " + std::to_string(d) +
+         " samples declared): the gate's analysis no longer holds; raise update_latency_ms "
+         "(the run's longest_update_us says what it measured)";
+}
+
+std::string EvdevDevice::describe(const DeviceFault& fault) const {
+  if (fault.fault_class == FaultClass::kDevice) {
+    return "evdev: the device stopped hapticd's force-feedback effect itself (EV_FF_STATUS "
+           "stopped)";
+  }
+  if (fault.code == kUpdatesLate) return describe_late();
+  const int e = static_cast<int>(fault.code);
+  if (e == ENODEV || e == EIO || e == ESHUTDOWN) {
+    return std::string("evdev: the device is gone (") + base::errno_text(e) +
+           "): unplugged or reset?";
+  }
+  return std::string("evdev: the device failed: ") + base::errno_text(e);
+}
+
+}  // namespace hapticd::drivers::evdev
