@@ -301,6 +301,10 @@ void RunSession::supervise(RtThread& rt) {
     last_ticks = ticks;
     watch_passivity(servo_->live(), passivity, 20);  // damping: every 20 polls (about 1 s)
   }
+  // A run shorter than a poll (freerun) armed and ended between two looks.
+  if (!running && servo_->live().armed.load(std::memory_order_acquire)) {
+    announce_direction(servo_->direction());
+  }
 }
 
 void RunSession::accumulate(const loop::LoopResult& r) {
