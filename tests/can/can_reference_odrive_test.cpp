@@ -156,7 +156,7 @@ TEST(CanReferenceOdrive, Firmware06DisarmedByADcBusDipIsAskedWhy) {
             std::string::npos)
       << why;
   rig.device->clear_fault();  // Clear_Errors: the disarm reason goes
-  EXPECT_EQ(axis.disarm_reason(), 0u);
+  EXPECT_TRUE(eventually([&] { return axis.disarm_reason() == 0u; })) << axis.disarm_reason();
   ASSERT_NO_THROW(rig.device->enable());
   EXPECT_EQ(rig.run(0.5, 200), IoStatus::kOk) << rig.device->describe_fault();
   EXPECT_EQ(axis.unmodelled_mode_passes(), 0u);

@@ -8,6 +8,7 @@
 #include <sched.h>
 
 #include <chrono>
+#include <functional>
 #include <memory>
 #include <string>
 #include <thread>
@@ -73,6 +74,16 @@ struct ReferenceRig {
 };
 
 inline void sleep_ms(int ms) { std::this_thread::sleep_for(std::chrono::milliseconds(ms)); }
+
+// Until `done` holds, or `ms` pass: the reference device answers from its own thread, which a
+// loaded host may hold up for longer than any fixed sleep.
+inline bool eventually(const std::function<bool()>& done, int ms = 2000) {
+  for (int waited = 0; waited < ms; waited += 5) {
+    if (done()) return true;
+    sleep_ms(5);
+  }
+  return done();
+}
 
 inline std::string joined(const std::vector<std::string>& lines) {
   std::string out;

@@ -64,7 +64,9 @@ const std::vector<std::string> kGuestSets = {
     // Mid-count, so the plant at rest (numerically still only to 1e-18) does not dither
     // across a count boundary; count -4 has the lines at 00, where gpio-sim leaves them.
     "device.sim.initial_position=-0.00175", "device.sim.operator.setpoint.rest=-0.00175",
-    "device.sim.operator.setpoint.start=1", "device.sim.operator.setpoint.ramp=5",
+    // The hand presses 2 s after the plant starts (before hapticd enables: the direction check
+    // pushes a device at rest and sees it move, ~0.5 s at 50 Hz in the emulated machine).
+    "device.sim.operator.setpoint.start=2", "device.sim.operator.setpoint.ramp=5",
     "device.sim.operator.setpoint.hold=2"};
 
 // N of the simulator's /sys/class/pwm/pwmchipN.
@@ -226,9 +228,10 @@ struct RunResult {
 };
 
 // hapticd takes seconds to start in an emulated guest, more on a loaded host: the peer, and
-// with it the plant's clock and the hand's press, starts (start_peer) once hapticd says it has
-// enabled output (the PWM channel itself is enabled at duty 0 from configure on, before the
-// gate). At the start count the lines are at 00, where gpio-sim has them: no edge then.
+// with it the plant's clock and the hand's press, starts (start_peer) once hapticd has
+// configured (the PWM channel is enabled at duty 0 from configure on) and passed its gate,
+// before it enables output: the plant moves when the direction check pushes it, as a real one
+// does. At the start count the lines are at 00, where gpio-sim has them: no edge then.
 RunResult run_hapticd(const Machine& m, double duration_s, const std::vector<std::string>& extra,
                       const std::function<sim::gpio::GpioPeer&()>& start_peer,
                       std::optional<sim::gpio::WireFault> fault) {
@@ -265,12 +268,14 @@ RunResult run_hapticd(const Machine& m, double duration_s, const std::vector<std
     text << log.rdbuf();
     return text.str();
   };
-  const auto enabled = [&] { return output().find("output enabled") != std::string::npos; };
-  while (running() && !enabled()) std::this_thread::sleep_for(5ms);
+  const auto logged = [&](const char* words) { return output().find(words) != std::string::npos; };
+  while (running() && !logged("gate: pass")) std::this_thread::sleep_for(5ms);
   if (!exited) {
     sim::gpio::GpioPeer& peer = start_peer();
     if (fault) {
-      // Once the wall pushes (a duty is applied and the device is in contact), strike.
+      // Once the wall pushes (armed by the direction check, a duty applied and the device in
+      // contact), strike.
+      while (!logged("direction check: confirmed") && running()) std::this_thread::sleep_for(5ms);
       while (peer.applied_force() >= -0.5 && running()) std::this_thread::sleep_for(5ms);
       EXPECT_LT(peer.applied_force(), -0.5) << "the wall never pushed";
       EXPECT_TRUE(peer.inject_wire(*fault));
@@ -314,7 +319,7 @@ class GpioKernelRun : public testing::Test {
 };
 
 TEST_F(GpioKernelRun, RendersTheWallAt50HzNoFault) {
-  const RunResult r = run(9.0, std::nullopt);
+  const RunResult r = run(10.0, std::nullopt);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   ASSERT_TRUE(r.summary.is_object()) << r.output;
   EXPECT_EQ(r.summary["faults"].size(), 0u) << r.output;

@@ -75,6 +75,7 @@ TEST_P(HidGadget, AnUnpluggedDeviceFaultsTheRun) {
   const Hapticd h = run_hapticd(
       with_sets({"run", "--config", example("hid-report.yaml"), "--duration", "30"}, rig.sets),
       [&](pid_t) {
+        ASSERT_TRUE(reference::wait_armed()) << "the direction check never armed the wall";
         ASSERT_TRUE(KernelPeer::wait_for([&] { return rig.device().applied_force() < -0.2; }));
         rig.peer.reset();
         rig.gadget.reset();

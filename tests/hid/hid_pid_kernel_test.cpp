@@ -79,6 +79,7 @@ TEST_P(HidPidUsb, AnUnpluggedDeviceFaultsTheRun) {
   const Hapticd h = run_hapticd(
       with_sets({"run", "--config", example("hid-pid.yaml"), "--duration", "30"}, rig.sets),
       [&](pid_t) {
+        ASSERT_TRUE(reference::wait_armed()) << "the direction check never armed the wall";
         ASSERT_TRUE(KernelPeer::wait_for([&] { return rig.device().applied_force() < -0.2; }));
         ASSERT_TRUE(rig.device().inject(sim::PeerFault::kTransportFault));
       });

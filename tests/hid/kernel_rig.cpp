@@ -79,6 +79,7 @@ void expect_fault_exit(const char* config, const std::vector<std::string>& sets,
                        sim::LoopbackPeer& peer, sim::PeerFault fault, const std::string& words) {
   const Hapticd h = run_hapticd(
       with_sets({"run", "--config", example(config), "--duration", "30"}, sets), [&](pid_t) {
+        ASSERT_TRUE(reference::wait_armed()) << "the direction check never armed the wall";
         ASSERT_TRUE(KernelPeer::wait_for([&] { return peer.applied_force() < -0.2; }))
             << "the wall never pushed";
         ASSERT_TRUE(peer.inject(fault));
@@ -95,6 +96,7 @@ void expect_no_force_after_sigkill(const char* config, const std::vector<std::st
                                    sim::LoopbackPeer& peer) {
   const Hapticd h = run_hapticd(
       with_sets({"run", "--config", example(config), "--duration", "30"}, sets), [&](pid_t pid) {
+        ASSERT_TRUE(reference::wait_armed()) << "the direction check never armed the wall";
         ASSERT_TRUE(KernelPeer::wait_for([&] { return peer.applied_force() < -0.2; }));
         ::kill(pid, SIGKILL);
       });

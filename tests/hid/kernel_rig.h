@@ -31,15 +31,18 @@ namespace hapticd::drivers::hid::testing {
 // emulator's stalls make answers late (a stale tick, then two answers at once: a gap of one),
 // which the production thresholds would rightly call a fault: here the thresholds sit above
 // what the emulator does and below what the injected faults do (silence for good, a jump of
-// 50 sequence numbers, a status bit). The direction check looks for the pulse's motion up to
-// 300 ms later than declared: the emulated USB controller's transfers wait that long.
+// 50 sequence numbers, a status bit). The direction check looks for the push's motion up to
+// 300 ms later than declared (the emulated USB controller's transfers wait that long), and the
+// simulated hand presses 1.5 s into the run (the peer's clock starts with hapticd's first
+// report), once the check has armed the wall.
 inline const std::vector<std::string> kKernelRate = {"loop.rate_hz=100",
                                                      "wall.stiffness=250",
                                                      "wall.damping=0.2",
                                                      "safety.stale_fault_ticks=50",
                                                      "safety.sequence_gap_fault=20",
                                                      "loop.overrun_fault_streak=1000",
-                                                     "safety.direction_check.max_latency_ms=300"};
+                                                     "safety.direction_check.max_latency_ms=300",
+                                                     "device.sim.operator.setpoint.start=1.5"};
 
 // `hapticd` in its own process, as the reference devices' tests run it.
 using Hapticd = reference::HapticdRun;

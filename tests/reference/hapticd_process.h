@@ -34,6 +34,12 @@ inline std::string shipped(const std::string& name) {
   return std::string(HAPTICD_SOURCE_DIR) + "/config/" + name;
 }
 
+// The log (stderr, written line by line) of the hapticd run_hapticd runs now, for `during`.
+inline std::string& running_log() {
+  static std::string path;
+  return path;
+}
+
 // Runs `hapticd ARGS... --summary-json FILE` (HAPTICD_BINARY); `during(pid)` runs while it
 // does, then the process is waited for. The HID driver's kernel tests use it too. `under`, when
 // given, is a program (with its arguments) that runs hapticd, such as strace.
@@ -46,6 +52,7 @@ inline HapticdRun run_hapticd(std::vector<std::string> args,
   args.insert(args.begin(), HAPTICD_BINARY);
   args.insert(args.begin(), under.begin(), under.end());
   args.insert(args.end(), {"--summary-json", stem + ".json"});
+  running_log() = stem + ".err";
   const pid_t pid = ::fork();
   if (pid == 0) {
     if (!std::freopen((stem + ".err").c_str(), "w", stderr) ||
@@ -89,6 +96,19 @@ inline bool wait_until(const std::function<bool()>& done,
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
   return done();
+}
+
+// Until the running hapticd's direction check has armed the wall (its log line), or `timeout`;
+// false then. A hand that pushes before it keeps the device from the rest the check waits for,
+// and a fault struck before it is the check's, not the wall's: a user acts once the log says so.
+inline bool wait_armed(std::chrono::milliseconds timeout = std::chrono::seconds(30)) {
+  return wait_until(
+      [] {
+        std::ifstream log(running_log());
+        const std::string text{std::istreambuf_iterator<char>(log), {}};
+        return text.find("direction check: confirmed") != std::string::npos;
+      },
+      timeout);
 }
 
 // Whether process `pid` (a child) has ended, without reaping it.

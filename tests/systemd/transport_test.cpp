@@ -155,9 +155,9 @@ TEST_F(Transport, GpioWithGpioSimAndThePwmSimulator) {
       << "udev exports the channel";
   EXPECT_EQ(st.st_gid, hapticd_gid());
 
-  ASSERT_EQ(gpio.systemctl("start").status, 0) << gpio.journal();
-  // The plant's clock starts with the device's, once output is enabled (READY=1).
+  // The plant runs first, as a real one does: the direction check, before READY=1, pushes it.
   SimulatedDevice device(load_config(m.yaml(), gpio.config_path()), m.endpoint());
+  ASSERT_EQ(gpio.systemctl("start").status, 0) << gpio.journal();
   EXPECT_GE(wait_for_contact(gpio, 50, std::chrono::seconds(40)), 50) << gpio.journal();
   EXPECT_GT(m.pwm.applied(0).duty_cycle_ns, 0u) << "the wall pushes";
   expect_clean_stop(gpio, "gpio");

@@ -64,8 +64,9 @@ TEST_F(Watchdog, AStuckLoopThreadIsCaughtWithinWatchdogSecAndItsSignalLeavesDuty
   InstanceRules rules(stuck, m.trigger());
   ASSERT_EQ(rules.error(), "");
   DropIn pwm_writable(stuck, m.drop_in());
-  ASSERT_EQ(stuck.systemctl("start").status, 0) << stuck.journal();
+  // The plant runs first, as a real one does: the direction check, before READY=1, pushes it.
   SimulatedDevice device(load_config(m.yaml(), stuck.config_path()), m.endpoint());
+  ASSERT_EQ(stuck.systemctl("start").status, 0) << stuck.journal();
   // Into the wall, until it pushes.
   EXPECT_GE(wait_for_contact(stuck, 25, std::chrono::seconds(40)), 25) << stuck.journal();
   kernel_test::wait_until([&] { return m.pwm.applied(0).duty_cycle_ns > 0; },

@@ -78,7 +78,7 @@ struct Rig {
   // guest), a hand pushes the axis into the wall, and the wall pushes back.
   bool pushed(double push = kPush) {
     if (!wait_until([&] { return device.playing(); })) return false;
-    std::this_thread::sleep_for(std::chrono::milliseconds(2000));
+    if (!wait_armed()) return false;
     device.hand(push, kHandDamping);
     return wait_until([&] { return device.force() < -0.2; });
   }

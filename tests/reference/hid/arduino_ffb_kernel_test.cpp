@@ -70,14 +70,9 @@ struct Board {
       return !kernel_test::hidraw_listed(3, ArduinoFfb::kVendor, ArduinoFfb::kProduct, serial);
     })) << "the board did not go";
   }
-  // hapticd has enabled output and runs: its effect plays, and two seconds later still does,
-  // its direction check over (the wait for rest and the 100 ms halves of the pulse, through
-  // the emulator's lag): a hand that pushed during it would be refused as motion.
-  bool enabled() {
-    if (!board.playing()) return false;
-    std::this_thread::sleep_for(std::chrono::seconds(2));
-    return board.playing();
-  }
+  // hapticd has enabled output, its effect plays, and its direction check has armed the wall
+  // (its log says so): a hand that pushed during the check would keep it from rest.
+  bool enabled() { return board.playing() && wait_armed() && board.playing(); }
   std::string serial;
   std::unique_ptr<ArduinoFfb> owned;
   ArduinoFfb& board;

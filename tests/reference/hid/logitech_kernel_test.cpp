@@ -219,7 +219,7 @@ TEST(LogitechWheel, ThroughTheKernelsLogitechDriverTheWallHoldsTheHand) {
       [&](pid_t) {
         // The effect plays: the wheel has had its first constant-force report.
         ASSERT_TRUE(wait_until([&] { return w.last_x().second > 0; })) << "output never enabled";
-        std::this_thread::sleep_for(std::chrono::seconds(1));  // the direction check, at rest
+        ASSERT_TRUE(wait_armed()) << "the direction check never armed the wall";
         w.wheel->axis().hand(kPush, 1.0);
         std::this_thread::sleep_for(std::chrono::seconds(3));
         const std::size_t before = w.wheel->commands().size();

@@ -57,7 +57,7 @@ TEST(OpenFfboardEvdev, BehindHidPidffTheWallHoldsTheHandAtForceOverStiffness) {
         // Uploaded at configure, played at enable: the hand pushes once the wall is on, after
         // the direction check (about 0.2 s at 100 Hz with the wheel at rest).
         ASSERT_TRUE(wait_until([&] { return board->playing(); })) << "output never enabled";
-        std::this_thread::sleep_for(std::chrono::seconds(1));
+        ASSERT_TRUE(wait_armed()) << "the direction check never armed the wall";
         board->axis().hand(kPush, 1.0);
         std::this_thread::sleep_for(std::chrono::milliseconds(2500));
         // At rest: the level no longer changes.

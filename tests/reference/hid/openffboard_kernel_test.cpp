@@ -67,11 +67,11 @@ struct Board {
       return !kernel_test::hidraw_listed(3, OpenFfboard::kVendor, OpenFfboard::kProduct, serial);
     })) << "the board did not go";
   }
-  // hapticd has enabled output and runs: its effect plays, FFB is on, and a second passed.
+  // hapticd has enabled output, its effect plays, FFB is on, and its direction check has armed
+  // the wall (its log says so): a hand, a hang or an unplug before it would be the check's.
   bool enabled() {
     if (board.allocated() == 0 || !board.ffb_active()) return false;
-    std::this_thread::sleep_for(std::chrono::seconds(1));
-    return board.allocated() > 0 && board.ffb_active();
+    return wait_armed() && board.allocated() > 0 && board.ffb_active();
   }
   std::string serial;
   std::unique_ptr<OpenFfboard> owned;
@@ -161,8 +161,8 @@ TEST_P(OpenFfboardUsb, ABoardWhoseForceIsReversedIsRefusedBeforeItsWallActs) {
   OpenFfboardOptions o = guest_board();
   o.force_sign = ForceSign::kArduinoJoystickWithFfbLibrary;
   Board b(o);
-  const HapticdRun r =
-      run_hapticd(shipped("hid-openffboard.yaml"), sets(GetParam(), b.serial), {"--duration", "20"});
+  const HapticdRun r = run_hapticd(shipped("hid-openffboard.yaml"), sets(GetParam(), b.serial),
+                                   {"--duration", "20"});
   EXPECT_EQ(r.status, 3) << r.faults() << "\n" << r.log;
   EXPECT_NE(r.faults().find("the direction check found the force reversed"), std::string::npos)
       << r.faults();
@@ -186,9 +186,11 @@ TEST_P(OpenFfboardUsb, WithTheCheckOffTheRunawayGuardStopsTheReversedWallWithinI
   std::vector<std::string> s = sets(GetParam(), b.serial);
   s.insert(s.end(), {"safety.direction_check.mode=off", "device.max_force=2"});
   std::atomic<double> deepest{-1.0};
-  const HapticdRun r = run_hapticd(
-      shipped("hid-openffboard.yaml"), s, {"--duration", "20"}, [&](pid_t pid) {
-        ASSERT_TRUE(wait_until([&] { return b.enabled(); })) << "output never enabled";
+  const HapticdRun r =
+      run_hapticd(shipped("hid-openffboard.yaml"), s, {"--duration", "20"}, [&](pid_t pid) {
+        // The check off: the wall acts from enable on.
+        ASSERT_TRUE(wait_until([&] { return b.board.allocated() > 0 && b.board.ffb_active(); }))
+            << "output never enabled";
         b.board.axis().hand(kPush, 1.0);
         // Where the wheel is while the wall still acts on it (the hand goes on pushing after).
         while (!ended(pid)) {

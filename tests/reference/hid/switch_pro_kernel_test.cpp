@@ -40,7 +40,7 @@ TEST(SwitchProStyle, ATwelveBitPackedPositionRendersTheWall) {
   const HapticdRun r = run_hapticd(
       shipped("hid-report.yaml"), sets(o.serial, kPacked), {"--duration", "8"}, [&](pid_t) {
         ASSERT_TRUE(wait_until([&] { return d.output_on(); })) << "never enabled";
-        std::this_thread::sleep_for(std::chrono::seconds(1));  // the direction check
+        ASSERT_TRUE(wait_armed()) << "the direction check never armed the wall";
         d.axis().hand(kPush, 5.0);
         std::this_thread::sleep_for(std::chrono::seconds(4));
         rest = d.axis().position();
