@@ -54,21 +54,6 @@ double ProbePlan::expected(int c, std::size_t i) const noexcept {
 
 namespace {
 
-// The inverse normal matrix of [1, i, e_c(i)] over the first `rows` window positions.
-std::array<double, 9> gram_inverse(const ProbePlan& p, int c, std::size_t rows) {
-  Eigen::Matrix3d g = Eigen::Matrix3d::Zero();
-  for (std::size_t i = 0; i < rows; ++i) {
-    const Eigen::Vector3d r(1.0, static_cast<double>(i), p.expected(c, i));
-    g += r * r.transpose();
-  }
-  const Eigen::Matrix3d inv = g.inverse();
-  std::array<double, 9> out{};
-  for (int r = 0; r < 3; ++r) {
-    for (int k = 0; k < 3; ++k) out[static_cast<std::size_t>(3 * r + k)] = inv(r, k);
-  }
-  return out;
-}
-
 // The weights of the quadratic term of a least-squares fit of [1, i, i^2] over `rows` points:
 // the last row of (X'X)^-1 X'.
 std::vector<double> curvature_weights(int rows) {
@@ -99,7 +84,8 @@ ProbePlan probe_plan(const config::Config& cfg, int device_delay) {
       std::max(kMinHalfTicks, static_cast<int>(std::ceil(dc.duration_ms * 1e-3 / period - 1e-9)));
   p.rest_ticks = 2 * p.half_ticks;
   p.delay = device_delay;
-  p.max_delay = device_delay + static_cast<int>(std::ceil(dc.max_latency_ms * 1e-3 / period - 1e-9));
+  p.max_delay =
+      device_delay + static_cast<int>(std::ceil(dc.max_latency_ms * 1e-3 / period - 1e-9));
   // The rest window itself is always waited, however short the time-out.
   p.max_wait_ticks =
       std::max(static_cast<std::uint64_t>(p.rest_ticks),
@@ -107,8 +93,7 @@ ProbePlan probe_plan(const config::Config& cfg, int device_delay) {
   p.min_gain = dc.min_motion;
   // Out of the wall first: the way the wall itself would push.
   p.force = -static_cast<double>(cfg.wall.normal) * dc.level * cfg.device.max_force;
-  p.brake = std::exp(-(p.half_ticks + p.max_delay) * period * cfg.device.damping /
-                     cfg.device.mass);
+  p.brake = std::exp(-(p.half_ticks + p.max_delay) * period * cfg.device.damping / cfg.device.mass);
   std::vector<double> pulse(static_cast<std::size_t>(p.half_ticks + p.max_delay) + 1, 0.0);
   for (int j = 0; j < p.half_ticks; ++j) pulse[static_cast<std::size_t>(j)] = p.force_at(j);
   p.response = analysis::free_motion_response(pulse, cfg.device.mass, cfg.device.damping, period);
@@ -124,9 +109,6 @@ ProbePlan probe_plan(const config::Config& cfg, int device_delay) {
   p.curvature_weights = curvature_weights(p.rest_ticks);
   const double horizon = p.half_ticks + p.max_delay;
   p.curvature_tolerance = kCurvatureShare * std::abs(p.expected_peak) / (horizon * horizon);
-  for (int c = p.delay; c <= p.max_delay; ++c) {
-    p.gram_inverses.push_back(gram_inverse(p, c, fitted_rows(p, c)));
-  }
   return p;
 }
 
@@ -134,9 +116,7 @@ DirectionProbe::DirectionProbe(ProbePlan plan)
     : plan_(std::move(plan)),
       rest_(static_cast<std::size_t>(plan_.rest_ticks), 0.0),
       window_(plan_.window(), 0.0),
-      sum_y_(plan_.window() + 1, 0.0),
-      sum_iy_(plan_.window() + 1, 0.0),
-      sum_yy_(plan_.window() + 1, 0.0) {
+      residual_(plan_.window(), 0.0) {
   restart();
 }
 
@@ -211,24 +191,23 @@ double DirectionProbe::step(double position, std::uint32_t periods) noexcept {
   return -plan_.brake * plan_.force;
 }
 
-// RT-safe. The least-squares fit of y_i = a0 + a1 i + g e_c(i) over the fitted rows, from the
-// prefix sums (RSS = y'y - theta' R'y): {g, its standard error}.
+// RT-safe. The least-squares fit of r_i = g e_c(i) over the push's fitted rows, r the positions
+// less the rest window's line: {g, its standard error}. The baseline comes from the rest window
+// alone: fitted jointly with the push, a line could take up the response itself (a coarse or
+// slow encoder's steps), and the fit at a later delay would see the opposite sign.
 std::array<double, 2> DirectionProbe::fit(int c) const noexcept {
   const std::size_t rows = fitted_rows(plan_, c);
-  const std::array<double, 9>& gi = plan_.gram_inverses[static_cast<std::size_t>(c - plan_.delay)];
-  const double y0 = window_[0];
-  double b2 = 0.0;  // e_c is zero before the pulse's response: only the push's rows
-  for (std::size_t i = static_cast<std::size_t>(plan_.rest_ticks + c); i < rows; ++i) {
-    b2 += plan_.expected(c, i) * (window_[i] - y0);
+  double ee = 0.0, er = 0.0, rr = 0.0;
+  for (std::size_t i = rest_.size(); i < rows; ++i) {
+    const double e = plan_.expected(c, i);
+    ee += e * e;
+    er += e * residual_[i];
+    rr += residual_[i] * residual_[i];
   }
-  const double b[3] = {sum_y_[rows], sum_iy_[rows], b2};
-  double theta[3];
-  for (int r = 0; r < 3; ++r) {
-    theta[r] = gi[3 * r] * b[0] + gi[3 * r + 1] * b[1] + gi[3 * r + 2] * b[2];
-  }
-  const double rss = std::max(0.0, sum_yy_[rows] - theta[0] * b[0] - theta[1] * b[1] - theta[2] * b[2]);
-  const double dof = static_cast<double>(rows) - 3.0;
-  return {theta[2], std::sqrt(std::max(0.0, rss / dof * gi[8]))};
+  if (!(ee > 0.0)) return {0.0, 0.0};
+  const double g = er / ee;
+  const double dof = static_cast<double>(rows - rest_.size()) - 1.0;
+  return {g, std::sqrt(std::max(0.0, rr - g * er) / dof / ee)};
 }
 
 // RT-safe. The fit at each delay the plan allows, from the declared one up: the first that
@@ -237,12 +216,22 @@ std::array<double, 2> DirectionProbe::fit(int c) const noexcept {
 // a hand's spring does after it, whose sign is not). Of the longer delays with a fit of that
 // sign, the best one's is the latency, and its gain the motion measured.
 void DirectionProbe::decide() noexcept {
-  const double y0 = window_[0];  // positions relative to the first: no large offsets summed
+  // The rest window's least-squares line, relative to its first position (no large offsets
+  // summed), carried on through the push.
+  const double y0 = window_[0];
+  const double n = static_cast<double>(rest_.size());
+  double si = 0.0, sy = 0.0, sii = 0.0, siy = 0.0;
+  for (std::size_t i = 0; i < rest_.size(); ++i) {
+    const double x = static_cast<double>(i), y = window_[i] - y0;
+    si += x;
+    sy += y;
+    sii += x * x;
+    siy += x * y;
+  }
+  const double slope = (n * siy - si * sy) / (n * sii - si * si);
+  const double intercept = (sy - slope * si) / n;
   for (std::size_t i = 0; i < window_.size(); ++i) {
-    const double y = window_[i] - y0;
-    sum_y_[i + 1] = sum_y_[i] + y;
-    sum_iy_[i + 1] = sum_iy_[i] + static_cast<double>(i) * y;
-    sum_yy_[i + 1] = sum_yy_[i] + y * y;
+    residual_[i] = window_[i] - y0 - (intercept + slope * static_cast<double>(i));
   }
   const auto t_of = [](const std::array<double, 2>& f) {
     return f[1] > 0.0 ? std::abs(f[0]) / f[1] : (f[0] != 0.0 ? HUGE_VAL : 0.0);

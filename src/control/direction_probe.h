@@ -68,15 +68,12 @@ struct ProbePlan {
   // first); at rest, extrapolated over the push's horizon (n + D), it moves the device less
   // than curvature_tolerance: a hand accelerating it would be read as the push's motion.
   std::vector<double> curvature_weights;
-  double curvature_tolerance = 0.0;     // (m)
+  double curvature_tolerance = 0.0;  // (m)
   double min_gain = 0.2;
-  int max_delay = 0;                    // D: d and the latency allowed beyond it (ticks)
-  double expected_peak = 0.0;           // the model's largest displacement (m), signed
+  int max_delay = 0;           // D: d and the latency allowed beyond it (ticks)
+  double expected_peak = 0.0;  // the model's largest displacement (m), signed
   // The model's positions j ticks after the push began, with no delay: n + D + 1 of them.
   std::vector<double> response;
-  // For each delay c = d..D, the inverse normal matrix of [1, i, e_c(i)] over the rest window
-  // and the push (the first R + n + c positions), row-major.
-  std::vector<std::array<double, 9>> gram_inverses;
   // The positions recorded: the rest window (R), then n + D after the push began.
   std::size_t window() const noexcept {
     return static_cast<std::size_t>(rest_ticks + half_ticks + max_delay);
@@ -127,8 +124,8 @@ class DirectionProbe {
   ProbePlan plan_;
   std::vector<double> rest_;    // ring of the last R positions
   std::vector<double> window_;  // the rest window, then the positions after the pulse began
-  // Prefix sums over the window, relative to its first position: y, i y and y^2.
-  std::vector<double> sum_y_, sum_iy_, sum_yy_;
+  // The window's positions less the rest window's own line (its drift carried on).
+  std::vector<double> residual_;
   std::size_t rest_head_ = 0;
   std::size_t rest_count_ = 0;
   int pulse_tick_ = 0;

@@ -31,9 +31,15 @@ struct Device {
   // A hand moving it to and fro on top: amplitude (m), frequency (Hz), phase (rad).
   double wobble = 0.0, wobble_hz = 1.0, wobble_phase = 0.0;
   int delay = 0;
+  double period = kT;    // the loop's sample period (s)
   double quantum = 0.0;  // encoder count (m); 0: exact
   double noise = 0.0;    // Gaussian noise (m)
   double lost = 0.0;     // share of commands a congested link loses (the last one stays)
+  // An encoder whose reading moves at most one count every `slow_counts` ticks (edges spaced
+  // out, as a GPIO line the kernel delivers late): it follows the motion, behind it.
+  int slow_counts = 0;
+  double shown = 0.0;
+  int since_count = 0;
   double x = 0.0, v = 0.0, t = 0.0;
   std::vector<double> pending;
   std::mt19937_64 rng{7};
@@ -42,7 +48,11 @@ struct Device {
     double y = x + drift * t + wobble * std::sin(2.0 * M_PI * wobble_hz * t + wobble_phase);
     if (noise > 0.0) y += std::normal_distribution<double>(0.0, noise)(rng);
     if (quantum > 0.0) y = std::floor(y / quantum) * quantum;
-    return y;
+    if (slow_counts > 0 && ++since_count >= slow_counts && y != shown) {
+      shown += y > shown ? quantum : -quantum;
+      since_count = 0;
+    }
+    return slow_counts > 0 ? shown : y;
   }
   void write(double u) {
     if (lost > 0.0 && !pending.empty() && std::uniform_real_distribution<double>()(rng) < lost) {
@@ -53,13 +63,13 @@ struct Device {
                               ? pending[pending.size() - 1 - delay]
                               : 0.0;
     const int steps = 200;
-    const double h = kT / steps;
+    const double h = period / steps;
     for (int i = 0; i < steps; ++i) {
       const double f = sign * acting - (damping + hand_damping) * v - hand_stiffness * (x - rest);
       v += f / mass * h;
       x += v * h;
     }
-    t += kT;
+    t += period;
   }
 };
 
@@ -151,11 +161,9 @@ TEST(DirectionProbe, NoHandEverTurnsTheVerdictAround) {
           const ProbeResult r = run(probe, d);
           SCOPED_TRACE("late " + std::to_string(late) + " k " + std::to_string(k) + " b_h " +
                        std::to_string(bh));
-          EXPECT_NE(r.state, sign > 0 ? ProbeState::kReversed : ProbeState::kConfirmed)
-              << r.gain;
+          EXPECT_NE(r.state, sign > 0 ? ProbeState::kReversed : ProbeState::kConfirmed) << r.gain;
           if (k <= 1e3 && bh <= 5.0) {
-            EXPECT_EQ(r.state, sign > 0 ? ProbeState::kConfirmed : ProbeState::kReversed)
-                << r.gain;
+            EXPECT_EQ(r.state, sign > 0 ? ProbeState::kConfirmed : ProbeState::kReversed) << r.gain;
             // The delay is found by the model's shape, which a stiff hand changes.
             if (k <= 300.0) {
               EXPECT_NEAR(r.latency, late, 2) << "the delay the motion came with";
@@ -205,8 +213,7 @@ TEST(DirectionProbe, AHandMovingTheDeviceNeverTurnsTheVerdictAround) {
           const ProbeResult r = run(demo(), d);
           SCOPED_TRACE("amplitude " + std::to_string(amplitude) + " Hz " + std::to_string(hz) +
                        " phase " + std::to_string(phase));
-          EXPECT_NE(r.state, sign > 0 ? ProbeState::kReversed : ProbeState::kConfirmed)
-              << r.gain;
+          EXPECT_NE(r.state, sign > 0 ? ProbeState::kReversed : ProbeState::kConfirmed) << r.gain;
         }
       }
     }
@@ -236,6 +243,38 @@ TEST(DirectionProbe, ADelayedTransportACoarseNoisyEncoderAndADriftDoNotFoolIt) {
     const ProbeResult r = run(demo(), d);
     EXPECT_EQ(r.state, sign > 0 ? ProbeState::kConfirmed : ProbeState::kReversed) << r.gain;
     EXPECT_NEAR(r.gain, sign, 0.15);
+  }
+}
+
+// A coarse encoder that can only follow the push's motion behind it (one count every few
+// ticks): its steps come late and few, and a fit whose baseline could bend to take them up
+// saw the hand's return as motion against the push. Never reversed; confirmed when it shows.
+TEST(DirectionProbe, AnEncoderSlowerThanThePushNeverTurnsTheVerdictAround) {
+  config::Config cfg = demo();  // 50 Hz, its transport allowed 300 ms: a GPIO device's rig
+  cfg.loop.rate_hz = 50;
+  cfg.safety.direction_check.max_latency_ms = 300;
+  for (const int slow : {1, 2, 4, 8}) {
+    for (const double k : {0.0, 300.0, 1e3}) {
+      for (const double sign : {1.0, -1.0}) {
+        Device d;
+        d.period = 0.02;
+        d.sign = sign;
+        d.quantum = 5e-4;  // 0.5 mm counts
+        d.slow_counts = slow;
+        d.hand_stiffness = k;
+        d.hand_damping = 5.0;
+        const ProbeResult r = run(cfg, d);
+        SCOPED_TRACE("a count every " + std::to_string(slow) + " ticks, hand " + std::to_string(k) +
+                     " N/m");
+        EXPECT_NE(r.state, sign > 0 ? ProbeState::kReversed : ProbeState::kConfirmed) << r.gain;
+        if (r.gain_error > 0.0 && std::abs(r.gain) > 4.0 * r.gain_error) {
+          EXPECT_GT(r.gain * sign, 0.0) << "a significant fit has the push's sign";
+        }
+        if (slow == 1 && k <= 300.0) {
+          EXPECT_EQ(r.state, sign > 0 ? ProbeState::kConfirmed : ProbeState::kReversed) << r.gain;
+        }
+      }
+    }
   }
 }
 

@@ -62,20 +62,25 @@ TEST_P(HidPidUsb, ASafetySwitchOffFaultsWithZeroForce) {
 }
 
 TEST_P(HidPidUsb, SkippedSequenceNumbersFaultWithZeroForce) {
-  PidRig rig(GetParam(), kRawGadget, {"device.hid.pid.sequence={usage_page: 0xff00, usage: 0x20}"});
+  PidRig rig(GetParam(), kRawGadget,
+             {"device.hid.pid.effect_duration_ms=1000",
+              "device.hid.pid.sequence={usage_page: 0xff00, usage: 0x20}"});
   expect_fault_exit("hid-pid.yaml", rig.sets, rig.device(), sim::PeerFault::kSkipSequence,
                     "sequence skipped 5[0-9] samples");
 }
 
-// Without hapticd the effect runs out: the device's own duration is the watchdog.
+// Without hapticd the effect runs out: the device's own duration is the watchdog. A 1 s
+// effect (as above): with hid-pid.yaml's 100 ms, a stall of the emulated machine during the
+// direction check's push lets the push run out, and the check rightly refuses the device.
 TEST_P(HidPidUsb, AKilledHapticdLeavesNoForceBehindThroughTheEffectsDuration) {
-  PidRig rig(GetParam(), kRawGadget);
-  expect_no_force_after_sigkill("hid-pid.yaml", rig.sets, rig.device());
+  PidRig rig(GetParam(), kRawGadget, {"device.hid.pid.effect_duration_ms=1000"});
+  expect_no_force_after_sigkill("hid-pid.yaml", rig.sets, rig.device(), std::chrono::seconds(2));
 }
 
 // Unplugged mid-run: the raw gadget released, the host sees a disconnect.
 TEST_P(HidPidUsb, AnUnpluggedDeviceFaultsTheRun) {
-  PidRig rig(GetParam(), kRawGadget, {"safety.stale_fault_ticks=1000"});
+  PidRig rig(GetParam(), kRawGadget,
+             {"device.hid.pid.effect_duration_ms=1000", "safety.stale_fault_ticks=1000"});
   const Hapticd h = run_hapticd(
       with_sets({"run", "--config", example("hid-pid.yaml"), "--duration", "30"}, rig.sets),
       [&](pid_t) {

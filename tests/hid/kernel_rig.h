@@ -101,8 +101,9 @@ void expect_the_sim_drivers_wall(const char* config, const std::vector<std::stri
 void expect_fault_exit(const char* config, const std::vector<std::string>& sets,
                        sim::LoopbackPeer& peer, sim::PeerFault fault, const std::string& words);
 // SIGKILL leaves hapticd no chance to disable: the device's own watchdog (the report
-// firmware's keep-alive, the PID effect's duration) must drop the force within 1 s.
-void expect_no_force_after_sigkill(const char* config, const std::vector<std::string>& sets,
-                                   sim::LoopbackPeer& peer);
+// firmware's keep-alive, the PID effect's duration) must drop the force within `watchdog`.
+void expect_no_force_after_sigkill(
+    const char* config, const std::vector<std::string>& sets, sim::LoopbackPeer& peer,
+    std::chrono::milliseconds watchdog = std::chrono::milliseconds(1000));
 
 }  // namespace hapticd::drivers::hid::testing

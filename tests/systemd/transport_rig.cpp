@@ -102,8 +102,9 @@ std::string GpioMachine::yaml() const {
       {"loop.rate_hz=50", "wall.stiffness=150", "device.gpio.counts_per_unit=2000",
        "device.sim.counts_per_unit=2000", "device.gpio.start_count=-4",
        "device.gpio.max_edge_rate=25", "loop.overrun_fault_streak=50",
-       "safety.direction_check.max_latency_ms=300", "safety.stale_fault_ticks=10",
-       "device.sim.initial_position=-0.00175",
+       // tests/gpio/gpio_kernel_test.cpp: an encoder slower than the check's push.
+       "safety.direction_check.max_latency_ms=300", "safety.direction_check.on_no_motion=run",
+       "safety.stale_fault_ticks=10", "device.sim.initial_position=-0.00175",
        // The simulated device runs before the service starts (the direction check pushes a
        // plant at rest and sees it move); the hand presses once the service is up, seconds
        // into the emulated machine's start of it.
