@@ -34,6 +34,7 @@ std::vector<std::string> sets(const char* backend, const std::string& serial) {
           "device.mass=0.05",
           "device.damping=0.05",
           "device.hid.pid.effect_duration_ms=1000",
+          "safety.direction_check.max_latency_ms=300",
           "safety.direction_check.duration_ms=100",
           "safety.stale_fault_ticks=" + std::to_string(kStaleTicks),
           "device.hid.limits.out_queue_full_fault=100",

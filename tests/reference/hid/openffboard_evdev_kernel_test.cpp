@@ -28,6 +28,7 @@ std::vector<std::string> evdev_sets(const std::string& serial) {
   return {"loop.rate_hz=100",
           "loop.overrun_fault_streak=1000",
           "safety.direction_check.max_latency_ms=300",
+          "safety.direction_check.duration_ms=100",
           "safety.stale_fault_ticks=50",
           "device.evdev.late_update_fault=1000",
           "device.mass=0.05",

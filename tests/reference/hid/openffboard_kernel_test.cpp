@@ -27,15 +27,15 @@ constexpr double kPush = 0.5;       // N m: the hand's steady push into the wall
 constexpr double kLivenessMs = 1000.0;
 
 std::vector<std::string> sets(const char* backend, const std::string& serial) {
-  return {"loop.rate_hz=100",
-          "loop.overrun_fault_streak=1000",
-          "safety.direction_check.max_latency_ms=300",
-          "wall.stiffness=" + std::to_string(kStiffness),
-          "device.hid.pid.effect_duration_ms=1000",
+  return {"loop.rate_hz=100", "loop.overrun_fault_streak=1000",
+          // The emulated USB controller delivers the push's motion up to 300 ms late, and the
+          // zero after the push late too: a 100 ms push, which a late zero lengthens little (a
+          // 30 ms one moved the wheel up to four times the model's, read as a hand moving it).
+          "safety.direction_check.max_latency_ms=300", "safety.direction_check.duration_ms=100",
+          "wall.stiffness=" + std::to_string(kStiffness), "device.hid.pid.effect_duration_ms=1000",
           "device.hid.liveness_ms=" + std::to_string(kLivenessMs),
           "device.hid.limits.out_queue_full_fault=100",
-          std::string("device.hid.backend=") + backend,
-          "device.hid.select.serial=" + serial};
+          std::string("device.hid.backend=") + backend, "device.hid.select.serial=" + serial};
 }
 
 // The board as the test machine can carry it: its report rate setting (usb_report_rate, the

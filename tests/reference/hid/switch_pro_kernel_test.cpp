@@ -18,12 +18,12 @@ constexpr double kStiffness = 150.0;  // N/m
 constexpr double kPush = 1.0;         // N
 
 std::vector<std::string> sets(const std::string& serial, const std::string& position) {
-  return {"loop.rate_hz=50",
-          "loop.overrun_fault_streak=1000",
-          "wall.stiffness=" + std::to_string(kStiffness),
-          "safety.stale_fault_ticks=50",
-          "safety.max_speed=1",
-          "device.hid.select.product_id=0x0003",
+  return {"loop.rate_hz=50", "loop.overrun_fault_streak=1000",
+          "wall.stiffness=" + std::to_string(kStiffness), "safety.stale_fault_ticks=50",
+          // The emulated machine's USB: the push's motion up to 300 ms late, and the push
+          // long enough that a late zero after it changes it little.
+          "safety.direction_check.max_latency_ms=300", "safety.direction_check.duration_ms=100",
+          "safety.max_speed=1", "device.hid.select.product_id=0x0003",
           "device.hid.select.serial=" + serial,
           "device.hid.report.input={report_id: 0x30, length: 48, position: " + position + "}"};
 }

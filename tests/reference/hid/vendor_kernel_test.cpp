@@ -19,6 +19,7 @@ std::vector<std::string> sets(const std::string& serial, std::vector<std::string
   std::vector<std::string> s = {"loop.rate_hz=50",
                                 "loop.overrun_fault_streak=1000",
                                 "safety.direction_check.max_latency_ms=300",
+                                "safety.direction_check.duration_ms=100",
                                 "wall.stiffness=150",
                                 "safety.stale_fault_ticks=50",
                                 "device.hid.select.product_id=0x0002",
