@@ -32,8 +32,7 @@ namespace hapticd::drivers::hid::testing {
 // which the production thresholds would rightly call a fault: here the thresholds sit above
 // what the emulator does and below what the injected faults do (silence for good, a jump of
 // 50 sequence numbers, a status bit). The direction check looks for the push's motion up to
-// 300 ms later than declared (the emulated USB controller's transfers wait that long), pushes
-// for 100 ms (a zero delivered late lengthens it little), and the
+// 300 ms later than declared (the emulated USB controller's transfers wait that long), and the
 // simulated hand presses 1.5 s into the run (the peer's clock starts with hapticd's first
 // report), once the check has armed the wall.
 inline const std::vector<std::string> kKernelRate = {"loop.rate_hz=100",
@@ -43,7 +42,6 @@ inline const std::vector<std::string> kKernelRate = {"loop.rate_hz=100",
                                                      "safety.sequence_gap_fault=20",
                                                      "loop.overrun_fault_streak=1000",
                                                      "safety.direction_check.max_latency_ms=300",
-                                                     "safety.direction_check.duration_ms=100",
                                                      "device.sim.operator.setpoint.start=1.5"};
 
 // `hapticd` in its own process, as the reference devices' tests run it.

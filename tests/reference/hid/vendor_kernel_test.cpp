@@ -28,13 +28,13 @@ std::vector<std::string> sets(const std::string& serial, std::vector<std::string
   return s;
 }
 
-// The hand pushes 1 N into the wall (at 0) half a second after output is on; `rest` is where
-// the axis is 1.5 s later, while hapticd still runs (4 s).
+// The hand pushes 1 N into the wall (at 0) once the direction check has armed it; `rest` is
+// where the axis is 1.5 s later, while hapticd still runs (5 s).
 HapticdRun push_into_the_wall(VendorDevice& d, const std::vector<std::string>& s,
                               double* rest = nullptr) {
-  return run_hapticd(shipped("hid-report.yaml"), s, {"--duration", "4"}, [&](pid_t) {
+  return run_hapticd(shipped("hid-report.yaml"), s, {"--duration", "5"}, [&](pid_t) {
     ASSERT_TRUE(wait_until([&] { return d.output_on(); })) << "output never enabled";
-    std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    ASSERT_TRUE(wait_armed()) << "the direction check never armed the wall";
     d.axis().hand(1.0, 5.0);
     std::this_thread::sleep_for(std::chrono::milliseconds(1500));
     if (rest != nullptr) *rest = d.axis().position();
