@@ -211,7 +211,7 @@ std::array<double, 2> DirectionProbe::fit(int c) const noexcept {
 }
 
 // RT-safe. The fit at each delay the plan allows, from the declared one up: the first that
-// shows significant motion fixes its sign (a shorter delay than the device's own still sees
+// shows significant motion of at least min_gain fixes its sign (a shorter delay than the device's own still sees
 // the start of the push, whose sign is the force's; a longer one would fit the brake and what
 // a hand's spring does after it, whose sign is not). Of the longer delays with a fit of that
 // sign, the best one's is the latency, and its gain the motion measured.
@@ -241,7 +241,9 @@ void DirectionProbe::decide() noexcept {
   int found = -1;
   for (; c <= plan_.max_delay; ++c) {
     const std::array<double, 2> f = fit(c);
-    if (std::isfinite(f[0]) && t_of(f) > kSignificance) {
+    // Motion, not a count of drift: significant and as large as the check asks for (a still
+    // device's residuals are exact zeros, so one count of creep is significant).
+    if (std::isfinite(f[0]) && t_of(f) > kSignificance && std::abs(f[0]) >= plan_.min_gain) {
       best = f;
       found = c;
       break;
