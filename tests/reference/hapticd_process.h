@@ -101,14 +101,18 @@ inline bool wait_until(const std::function<bool()>& done,
 // Until the running hapticd's direction check has armed the wall (its log line), or `timeout`;
 // false then. A hand that pushes before it keeps the device from the rest the check waits for,
 // and a fault struck before it is the check's, not the wall's: a user acts once the log says so.
+// A fault ends the wait at once (false).
 inline bool wait_armed(std::chrono::milliseconds timeout = std::chrono::seconds(30)) {
-  return wait_until(
-      [] {
+  bool armed = false;
+  wait_until(
+      [&] {
         std::ifstream log(running_log());
         const std::string text{std::istreambuf_iterator<char>(log), {}};
-        return text.find("direction check: confirmed") != std::string::npos;
+        armed = text.find("direction check: confirmed") != std::string::npos;
+        return armed || text.find("] fault: ") != std::string::npos;
       },
       timeout);
+  return armed;
 }
 
 // Whether process `pid` (a child) has ended, without reaping it.

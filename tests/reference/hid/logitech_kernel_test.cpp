@@ -190,21 +190,16 @@ constexpr double kPush = 1.5;
 // late updates (an EVIOCSFF through ff-memless takes it 3 ms, up to 14, above the 5 ms that
 // update_latency_ms 0 covers) are counted, not faulted.
 std::vector<std::string> wheel_sets(const std::string& serial) {
-  return {"loop.rate_hz=100",
-          "loop.overrun_fault_streak=1000",
-          "safety.direction_check.max_latency_ms=300",
-          "safety.direction_check.duration_ms=100",
-          "device.evdev.late_update_fault=1000",
-          "safety.stale_fault_ticks=50",
-          "device.mass=0.05",
-          "device.damping=0.05",
-          "device.max_force=2",
-          "wall.stiffness=" + std::to_string(kStiffness),
-          "wall.damping=0",
+  return {"loop.rate_hz=100", "loop.overrun_fault_streak=1000",
+          "safety.direction_check.max_latency_ms=300", "safety.direction_check.duration_ms=100",
+          // A wheel that coasts (J/b = 1 s): tests/reference/hid/openffboard_kernel_test.cpp.
+          "safety.direction_check.level=0.02", "safety.direction_check.rest_timeout_ms=5000",
+          "device.evdev.late_update_fault=1000", "safety.stale_fault_ticks=50", "device.mass=0.05",
+          "device.damping=0.05", "device.max_force=2",
+          "wall.stiffness=" + std::to_string(kStiffness), "wall.damping=0",
           "device.evdev.select={vendor_id: 0x046d, product_id: 0xc293, uniq: \"" + serial + "\"}",
           "device.evdev.axis={code: ABS_X, min: -2.356194, max: 2.356194}",
-          "device.evdev.force_full_scale=2",
-          "device.evdev.ff_driver=memless"};
+          "device.evdev.force_full_scale=2", "device.evdev.ff_driver=memless"};
 }
 
 TEST(LogitechWheel, ThroughTheKernelsLogitechDriverTheWallHoldsTheHand) {

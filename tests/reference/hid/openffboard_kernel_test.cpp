@@ -30,8 +30,11 @@ std::vector<std::string> sets(const char* backend, const std::string& serial) {
   return {"loop.rate_hz=100", "loop.overrun_fault_streak=1000",
           // The emulated USB controller delivers the push's motion up to 300 ms late, and the
           // zero after the push late too: a 100 ms push, which a late zero lengthens little (a
-          // 30 ms one moved the wheel up to four times the model's, read as a hand moving it).
+          // 30 ms one moved the wheel up to four times the model's, read as a hand moving it),
+          // at 2 % of max_force, as far as the 30 ms one at 5 %. The wheel coasts (J/b = 1 s):
+          // rest within 5 s of enable.
           "safety.direction_check.max_latency_ms=300", "safety.direction_check.duration_ms=100",
+          "safety.direction_check.level=0.02", "safety.direction_check.rest_timeout_ms=5000",
           "wall.stiffness=" + std::to_string(kStiffness), "device.hid.pid.effect_duration_ms=1000",
           "device.hid.liveness_ms=" + std::to_string(kLivenessMs),
           "device.hid.limits.out_queue_full_fault=100",
@@ -94,6 +97,8 @@ TEST_P(OpenFfboardUsb, HeldStillThenAtRestInTheWallTheShippedConfigurationRender
       shipped("hid-openffboard.yaml"), sets(GetParam(), b.serial), {"--duration", "20"},
       [&](pid_t pid) {
         ASSERT_TRUE(wait_until([&] { return b.enabled(); })) << "output never enabled";
+        // The check's push has set the wheel coasting (J/b = 1 s): held still from when it stops.
+        ASSERT_TRUE(wait_until([&] { return std::abs(b.board.axis().velocity()) < 1e-3; }));
         const std::uint64_t before = b.board.gamepad_reports();
         std::this_thread::sleep_for(std::chrono::seconds(10));  // nobody touches the wheel
         reports_held = b.board.gamepad_reports() - before;

