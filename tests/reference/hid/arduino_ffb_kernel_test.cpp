@@ -28,18 +28,15 @@ constexpr double kPush = 0.5;       // N m: the hand's steady push into the wall
 constexpr int kStaleTicks = 50;
 
 std::vector<std::string> sets(const char* backend, const std::string& serial) {
-  return {"loop.rate_hz=100",
-          "loop.overrun_fault_streak=1000",
-          "wall.stiffness=" + std::to_string(kStiffness),
-          "device.mass=0.05",
-          "device.damping=0.05",
-          "device.hid.pid.effect_duration_ms=1000",
-          "safety.direction_check.max_latency_ms=300",
+  return {"loop.rate_hz=100", "loop.overrun_fault_streak=1000",
+          "wall.stiffness=" + std::to_string(kStiffness), "device.mass=0.05", "device.damping=0.05",
+          "device.hid.pid.effect_duration_ms=1000", "safety.direction_check.max_latency_ms=300",
           "safety.direction_check.duration_ms=100",
+          // A wheel that coasts (J/b = 1 s) from the previous run's check: rest within 5 s.
+          "safety.direction_check.rest_timeout_ms=5000",
           "safety.stale_fault_ticks=" + std::to_string(kStaleTicks),
           "device.hid.limits.out_queue_full_fault=100",
-          std::string("device.hid.backend=") + backend,
-          "device.hid.select.serial=" + serial};
+          std::string("device.hid.backend=") + backend, "device.hid.select.serial=" + serial};
 }
 
 // The board plugged in, and listed by the kernel before the test goes on; unplugged and gone
