@@ -25,15 +25,20 @@ constexpr double kPush = 0.5;       // N m: the hand's steady push into the wall
 // hid-pidff takes it milliseconds, above the 5 ms that update_latency_ms 0 covers) are counted,
 // not faulted, below its stalls.
 std::vector<std::string> evdev_sets(const std::string& serial) {
-  return {"loop.rate_hz=100", "loop.overrun_fault_streak=1000",
-          "safety.direction_check.max_latency_ms=300", "safety.direction_check.duration_ms=100",
-          // A wheel that coasts (J/b = 1 s): tests/reference/hid/openffboard_kernel_test.cpp.
-          "safety.direction_check.level=0.02", "safety.direction_check.rest_timeout_ms=5000",
-          "safety.stale_fault_ticks=50", "device.evdev.late_update_fault=1000", "device.mass=0.05",
-          "device.damping=0.05", "wall.stiffness=" + std::to_string(kStiffness), "wall.damping=0",
+  return {"loop.rate_hz=100",
+          "loop.overrun_fault_streak=1000",
+          "safety.direction_check.max_latency_ms=300",
+          "safety.direction_check.duration_ms=100",
+          "safety.stale_fault_ticks=50",
+          "device.evdev.late_update_fault=1000",
+          "device.mass=0.05",
+          "device.damping=0.05",
+          "wall.stiffness=" + std::to_string(kStiffness),
+          "wall.damping=0",
           "device.evdev.select={vendor_id: 0x1209, product_id: 0xffb0, uniq: \"" + serial + "\"}",
           "device.evdev.axis={code: ABS_X, min: -7.853982, max: 7.853982}",
-          "device.evdev.force_full_scale=10", "device.evdev.ff_driver=pidff"};
+          "device.evdev.force_full_scale=10",
+          "device.evdev.ff_driver=pidff"};
 }
 
 TEST(OpenFfboardEvdev, BehindHidPidffTheWallHoldsTheHandAtForceOverStiffness) {
