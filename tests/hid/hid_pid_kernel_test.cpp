@@ -82,7 +82,8 @@ TEST_P(HidPidUsb, AnUnpluggedDeviceFaultsTheRun) {
   PidRig rig(GetParam(), kRawGadget,
              {"device.hid.pid.effect_duration_ms=1000", "safety.stale_fault_ticks=1000"});
   const Hapticd h = run_hapticd(
-      with_sets({"run", "--config", example("hid-pid.yaml"), "--duration", "30"}, rig.sets),
+      with_sets({"run", "--config", example("hid-pid.yaml"), "--duration", "30"},
+                unchecked(rig.sets)),
       [&](pid_t) {
         ASSERT_TRUE(reference::wait_armed()) << "the direction check never armed the wall";
         ASSERT_TRUE(KernelPeer::wait_for([&] { return rig.device().applied_force() < -0.2; }));

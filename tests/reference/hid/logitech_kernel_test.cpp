@@ -190,21 +190,20 @@ constexpr double kPush = 1.5;
 // late updates (an EVIOCSFF through ff-memless takes it 3 ms, up to 14, above the 5 ms that
 // update_latency_ms 0 covers) are counted, not faulted.
 std::vector<std::string> wheel_sets(const std::string& serial) {
-  return {"loop.rate_hz=100", "loop.overrun_fault_streak=1000",
-          // The push OpenFFBoard's tests give (0.5 N m for 30 ms: a quarter of this wheel's
-          // max_force), whose motion its 14-bit position shows many counts of; a wheel that
-          // coasts (J/b = 1 s) is given 5 s to come to rest.
-          "safety.direction_check.max_latency_ms=300", "safety.direction_check.level=0.25",
-          "safety.direction_check.rest_timeout_ms=5000",
-          // Through ff-memless in the emulated machine the wheel was seen never at rest for 5 s
-          // after enable (why is not yet known): the wall arms unchecked then, saying so; the
-          // direction through hid-lg4ff is asserted by WhatAConstantForceBecomesOnTheWire.
-          "safety.direction_check.on_no_motion=run", "device.evdev.late_update_fault=1000",
-          "safety.stale_fault_ticks=50", "device.mass=0.05", "device.damping=0.05",
-          "device.max_force=2", "wall.stiffness=" + std::to_string(kStiffness), "wall.damping=0",
+  return {"loop.rate_hz=100",
+          "loop.overrun_fault_streak=1000",
+          "safety.direction_check.max_latency_ms=300",
+          "device.evdev.late_update_fault=1000",
+          "safety.stale_fault_ticks=50",
+          "device.mass=0.05",
+          "device.damping=0.05",
+          "device.max_force=2",
+          "wall.stiffness=" + std::to_string(kStiffness),
+          "wall.damping=0",
           "device.evdev.select={vendor_id: 0x046d, product_id: 0xc293, uniq: \"" + serial + "\"}",
           "device.evdev.axis={code: ABS_X, min: -2.356194, max: 2.356194}",
-          "device.evdev.force_full_scale=2", "device.evdev.ff_driver=memless"};
+          "device.evdev.force_full_scale=2",
+          "device.evdev.ff_driver=memless"};
 }
 
 TEST(LogitechWheel, ThroughTheKernelsLogitechDriverTheWallHoldsTheHand) {
@@ -215,12 +214,17 @@ TEST(LogitechWheel, ThroughTheKernelsLogitechDriverTheWallHoldsTheHand) {
   double x_rest = 0.0, torque_rest = 0.0;
   std::size_t reports = 0;
   int x_byte = -1000;
+  // Under strace the loop skips periods, and the direction check starts its push again after
+  // each (docs/devices.md): never done within its time-out, it is off here (the direction
+  // through hid-lg4ff is WhatAConstantForceBecomesOnTheWire's, the shipped configuration's
+  // check OpenFfboardEvdev's), not what is measured.
+  std::vector<std::string> sets = wheel_sets(w.serial);
+  sets.push_back("safety.direction_check.mode=off");
   const HapticdRun r = run_hapticd(
-      shipped("evdev.yaml"), wheel_sets(w.serial), {"--duration", "7"},
+      shipped("evdev.yaml"), sets, {"--duration", "7"},
       [&](pid_t) {
         // The effect plays: the wheel has had its first constant-force report.
         ASSERT_TRUE(wait_until([&] { return w.last_x().second > 0; })) << "output never enabled";
-        ASSERT_TRUE(wait_armed()) << "the direction check never armed the wall";
         w.wheel->axis().hand(kPush, 1.0);
         std::this_thread::sleep_for(std::chrono::seconds(3));
         const std::size_t before = w.wheel->commands().size();
