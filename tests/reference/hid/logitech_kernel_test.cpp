@@ -238,7 +238,7 @@ TEST(LogitechWheel, ThroughTheKernelsLogitechDriverTheWallHoldsTheHand) {
   ASSERT_EQ(r.status, 0) << r.faults() << "\n" << r.log;
   EXPECT_EQ(r.faults(), "[]");
   // The loop's thread under strace (rt_syscalls.h): what it asks of the kernel each tick. The
-  // update (EVIOCSFF) is the driver's update thread's, one a tick.
+  // update (EVIOCSFF) is the driver's update thread's.
   TickCalls calls = tick_calls("/tmp/hapticd-logitech-strace");
   std::cout << "logitech, the loop's thread: " << describe(calls) << "\n";
   EXPECT_EQ(calls.per_tick.count("ioctl EVIOCSFF"), 0u) << "not on the loop's thread";
