@@ -61,9 +61,11 @@ TEST(CanReferenceRealDrive, A0x6064ThatRollsOverBothWaysIsFollowed) {
       << "the first sample is the count as sent";
   EXPECT_TRUE(above) << "went past 2^31";
   EXPECT_LT(rig.samples.back().position, kWrap) << "and came back below it";
-  // Where the drive's axis is: the offset plus its position, in the same frame.
+  // Where the drive's axis is: the offset plus its position, in the same frame, read a moment
+  // after the last sample while the drive's own thread moves it on (10 mm a sample period: up
+  // to five periods on a loaded host, 20.4 mm seen on one).
   EXPECT_NEAR(rig.samples.back().position,
-              static_cast<double>(b.position_offset) * kMetresPerCount + drive.position_m(), 0.02);
+              static_cast<double>(b.position_offset) * kMetresPerCount + drive.position_m(), 0.05);
 }
 
 std::string enable_error(ReferenceRig& rig) {
