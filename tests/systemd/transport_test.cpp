@@ -59,12 +59,17 @@ TEST_F(Transport, CanOnVcanWithTheSimulatedDriveOfHapticdPeer) {
   // and the drive's watchdog on hapticd's heartbeat at 1 s: the emulator stalls hapticd's RT
   // thread for over 100 ms at times (CI's Debian 12 guest: wake p99.9 126 ms, then EMCY 0x8130).
   Instance can(
-      "can", config_text("can-cia402.yaml",
-                         guest_sets({"wall.stiffness=100", "safety.stale_fault_ticks=50",
-                                     "device.can.interface=vcan0", "device.can.sdo_timeout_ms=1000",
-                                     "device.can.state_timeout_ms=2000",
-                                     "device.can.heartbeat_timeout_ms=1000",
-                                     "device.can.cia402.drive_watchdog_ms=1000"})));
+      "can",
+      config_text(
+          "can-cia402.yaml",
+          guest_sets(
+              {"wall.stiffness=100", "safety.stale_fault_ticks=50", "device.can.interface=vcan0",
+               "device.can.sdo_timeout_ms=1000", "device.can.state_timeout_ms=2000",
+               "device.can.heartbeat_timeout_ms=1000", "device.can.cia402.drive_watchdog_ms=1000",
+               // The drive runs before the service starts, its hand at
+               // rest until the service is up (the direction check waits
+               // for rest), then pressed for as long as the test runs.
+               "device.sim.operator.setpoint.start=10", "device.sim.operator.setpoint.hold=600"})));
   InstanceRules rules(can, "--subsystem-match=net --sysname-match=vcan0");
   ASSERT_EQ(rules.error(), "");
   EXPECT_FALSE(contains(rules.rules(), "ip link set")) << "no bitrate for vcan:\n" << rules.rules();
@@ -77,7 +82,7 @@ TEST_F(Transport, CanOnVcanWithTheSimulatedDriveOfHapticdPeer) {
                           std::chrono::seconds(30), "hapticd peer on vcan0");
 
   ASSERT_EQ(can.systemctl("start").status, 0) << can.journal();
-  EXPECT_GE(wait_for_contact(can, 50), 50) << can.journal();
+  EXPECT_GE(wait_for_contact(can, 50, std::chrono::seconds(40)), 50) << can.journal();
   expect_clean_stop(can, "can");
   drive.signal(SIGTERM);
   EXPECT_EQ(drive.wait(std::chrono::seconds(10)), 0) << drive.output();
