@@ -108,7 +108,7 @@ std::string GpioMachine::yaml() const {
        // The simulated device runs before the service starts (the direction check pushes a
        // plant at rest and sees it move); the hand presses once the service is up, seconds
        // into the emulated machine's start of it.
-       "device.sim.operator.setpoint.rest=-0.00175", "device.sim.operator.setpoint.start=6",
+       "device.sim.operator.setpoint.rest=-0.00175", "device.sim.operator.setpoint.start=20",
        "device.sim.operator.setpoint.ramp=5", "device.sim.operator.setpoint.hold=600",
        // By number: a chip's label cannot be matched by a udev rule (docs/operations.md).
        "device.gpio.chip=" + chip.chip_name(), "device.gpio.pwm.chip=" + pwm_chip().substr(7)});

@@ -69,7 +69,7 @@ TEST_F(Transport, CanOnVcanWithTheSimulatedDriveOfHapticdPeer) {
                // The drive runs before the service starts, its hand at
                // rest until the service is up (the direction check waits
                // for rest), then pressed for as long as the test runs.
-               "device.sim.operator.setpoint.start=10", "device.sim.operator.setpoint.hold=600"})));
+               "device.sim.operator.setpoint.start=20", "device.sim.operator.setpoint.hold=600"})));
   InstanceRules rules(can, "--subsystem-match=net --sysname-match=vcan0");
   ASSERT_EQ(rules.error(), "");
   EXPECT_FALSE(contains(rules.rules(), "ip link set")) << "no bitrate for vcan:\n" << rules.rules();
@@ -82,7 +82,7 @@ TEST_F(Transport, CanOnVcanWithTheSimulatedDriveOfHapticdPeer) {
                           std::chrono::seconds(30), "hapticd peer on vcan0");
 
   ASSERT_EQ(can.systemctl("start").status, 0) << can.journal();
-  EXPECT_GE(wait_for_contact(can, 50, std::chrono::seconds(40)), 50) << can.journal();
+  EXPECT_GE(wait_for_contact(can, 50, std::chrono::seconds(60)), 50) << can.journal();
   expect_clean_stop(can, "can");
   drive.signal(SIGTERM);
   EXPECT_EQ(drive.wait(std::chrono::seconds(10)), 0) << drive.output();
@@ -123,9 +123,12 @@ kernel_test::UsbHidGadgetConfig gadget_for(const config::Config& cfg) {
 TEST_F(Transport, HidThroughHidrawWithASimulatedUsbDevice) {
   // tests/hid/kernel_rig.h: dummy_hcd's timing in the emulated machine.
   const std::string yaml = config_text(
-      "hid-report.yaml", guest_sets({"wall.stiffness=250", "safety.stale_fault_ticks=50",
-                                     "safety.sequence_gap_fault=20", "device.hid.backend=hidraw",
-                                     "device.hid.select.serial=hapticd-systemd"}));
+      "hid-report.yaml",
+      guest_sets(
+          {"wall.stiffness=250", "safety.stale_fault_ticks=50", "safety.sequence_gap_fault=20",
+           "device.hid.backend=hidraw", "device.hid.select.serial=hapticd-systemd",
+           // As the CAN drive's: at rest until the service is up.
+           "device.sim.operator.setpoint.start=20", "device.sim.operator.setpoint.hold=600"}));
   Instance hid("hid", yaml);
   const config::Config cfg = load_config(yaml, hid.config_path());
   InstanceRules rules(hid, "--subsystem-match=hidraw");  // before the device: udevd applies them
@@ -139,7 +142,7 @@ TEST_F(Transport, HidThroughHidrawWithASimulatedUsbDevice) {
   EXPECT_EQ(st.st_mode & 0777, 0660u);
 
   ASSERT_EQ(hid.systemctl("start").status, 0) << hid.journal();
-  EXPECT_GE(wait_for_contact(hid, 50), 50) << hid.journal();
+  EXPECT_GE(wait_for_contact(hid, 50, std::chrono::seconds(60)), 50) << hid.journal();
   EXPECT_TRUE(device.peer->output_on()) << "the device's amplifier while servoing";
   expect_clean_stop(hid, "hid");
   EXPECT_FALSE(device.peer->output_on()) << "the stop left the simulated amplifier on";
@@ -163,7 +166,7 @@ TEST_F(Transport, GpioWithGpioSimAndThePwmSimulator) {
   // The plant runs first, as a real one does: the direction check, before READY=1, pushes it.
   SimulatedDevice device(load_config(m.yaml(), gpio.config_path()), m.endpoint());
   ASSERT_EQ(gpio.systemctl("start").status, 0) << gpio.journal();
-  EXPECT_GE(wait_for_contact(gpio, 50, std::chrono::seconds(40)), 50) << gpio.journal();
+  EXPECT_GE(wait_for_contact(gpio, 50, std::chrono::seconds(60)), 50) << gpio.journal();
   EXPECT_GT(m.pwm.applied(0).duty_cycle_ns, 0u) << "the wall pushes";
   expect_clean_stop(gpio, "gpio");
   EXPECT_EQ(m.pwm.applied(0).duty_cycle_ns, 0u) << "zero when the run ended";

@@ -68,7 +68,7 @@ TEST_F(Watchdog, AStuckLoopThreadIsCaughtWithinWatchdogSecAndItsSignalLeavesDuty
   SimulatedDevice device(load_config(m.yaml(), stuck.config_path()), m.endpoint());
   ASSERT_EQ(stuck.systemctl("start").status, 0) << stuck.journal();
   // Into the wall, until it pushes.
-  EXPECT_GE(wait_for_contact(stuck, 25, std::chrono::seconds(40)), 25) << stuck.journal();
+  EXPECT_GE(wait_for_contact(stuck, 25, std::chrono::seconds(60)), 25) << stuck.journal();
   kernel_test::wait_until([&] { return m.pwm.applied(0).duty_cycle_ns > 0; },
                           std::chrono::seconds(20), "a duty on the PWM");
 
