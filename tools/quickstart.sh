@@ -4,18 +4,19 @@
 # incrementally, then
 #   tools/quickstart.sh demo   builds the daemon and runs `hapticd run` on the embedded
 #                              config/sim.yaml (nothing else is built)
-#   tools/quickstart.sh test   builds everything and runs every test, what .ci/run does
-#                              (stages below)
+#   tools/quickstart.sh test   builds what the stages below need and runs every test once,
+#                              what .ci/run does
 #   tools/quickstart.sh build  builds the daemon only (what tools/hapticd-plot calls)
 #   tools/quickstart.sh packages  installs what test needs and builds nothing (tools/fuzz.sh)
 # The test command's stages, each timed, all run even when one fails:
-#   main    Release build (warnings are errors) and the whole suite, the kernel tests in the
-#           kernel test machine and the service under that machine's systemd included
-#           (HAPTICD_KERNEL_TESTS=0 skips both boots, and says so)
+#   main    Release build (warnings are errors) of the daemon, the benchmarks and what these
+#           tests run: the kernel tests in the kernel test machine and the service under that
+#           machine's systemd (HAPTICD_KERNEL_TESTS=0 skips both boots, and says so), the
+#           coupling designs end to end, the plot tool, the layering probes
 #   asan    one clang build under AddressSanitizer + UndefinedBehaviorSanitizer with the
-#           libFuzzer targets: the suite (kernel tests aside), every fuzz target's corpus and
+#           libFuzzer targets: the rest of the suite, every fuzz target's corpus and
 #           regressions replayed, a few seconds of fuzzing each (HAPTICD_FUZZ=0 leaves the
-#           fuzz targets out, and says so)
+#           fuzz targets out, and says so); built in the background while main runs
 #   tsan    the loop, telemetry and service tests under ThreadSanitizer (sim device only)
 # HAPTICD_STAGES="main asan" runs only the named stages.
 set -euo pipefail
@@ -170,24 +171,30 @@ run_stage() {
   [[ $status -eq 0 ]] || failed+=("$name $dir")
 }
 
+# The Release build runs what needs it: the kernel and systemd test machines (timed against an
+# emulator, and what a user runs), the coupling designs end to end (minutes of CPU under a
+# sanitizer), the plot tool and the layering probes. The rest of the suite runs once, under
+# the sanitizers (stage asan), which catch there what a Release run of it would and more; gcc
+# compiles the daemon and every test the machines run with warnings as errors, clang the rest.
 stage_main() {
-  configure_and_build "$1" -DCMAKE_BUILD_TYPE=Release || return
-  cd "$1" && ctest --output-on-failure -j "$(nproc)"
+  configure_and_build "$1" -DCMAKE_BUILD_TYPE=Release -- hapticd_release_tests || return
+  cd "$1" && ctest --output-on-failure -j "$(nproc)" -L "^(kernel|systemd|design|slow|plot|layering)$"
 }
 # clang, because libFuzzer ships with it: one instrumented build serves both the suite under
 # the sanitizers and the fuzz targets (fuzz/README.md), where two builds of the same code
 # took a third of the test command. Line tables are all a sanitizer's report needs (full
 # debug information: 6 % more compile time, objects 6 times larger, e.g. sim/plant.cpp).
-stage_asan() {
+build_asan() {
   local fuzz=ON
-  if [[ ${HAPTICD_FUZZ:-1} == 0 ]]; then
-    echo "quickstart: HAPTICD_FUZZ=0: fuzz targets skipped on purpose"
-    fuzz=OFF
-  fi
-  CC=clang CXX=clang++ configure_and_build "$1" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  [[ ${HAPTICD_FUZZ:-1} == 0 ]] && fuzz=OFF
+  CC=clang CXX=clang++ configure_and_build build-asan-clang -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -gline-tables-only -DNDEBUG" \
     -DHAPTICD_SANITIZE=address -DHAPTICD_FUZZ=$fuzz -DHAPTICD_BUILD_BENCHMARKS=OFF \
-    -DHAPTICD_BUILD_KERNEL_TESTS=OFF || return
+    -DHAPTICD_BUILD_KERNEL_TESTS=OFF
+}
+stage_asan() {
+  [[ ${HAPTICD_FUZZ:-1} == 0 ]] && echo "quickstart: HAPTICD_FUZZ=0: fuzz targets skipped on purpose"
+  build_asan || return
   # One boot of the kernel test machine per run: the main stage's; its binaries are not even
   # built here (a sixth of the build). Not the layering probes (they compile, run nothing) nor
   # the plot tool's test (Python drawing what the Cli tests' commands print): the main stage
@@ -199,13 +206,16 @@ stage_asan() {
 # Without the CAN, GPIO, HID and evdev drivers: the loop, telemetry and service tests run the sim
 # device, so those drivers' threads are not exercised here (their own tests run in main and
 # asan), and leaving them out takes a fifth of this stage's build (141 steps to 111).
-stage_tsan() {
-  configure_and_build "$1" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+build_tsan() {
+  configure_and_build build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -g1 -DNDEBUG" -DHAPTICD_SANITIZE=thread \
     -DHAPTICD_BUILD_BENCHMARKS=OFF -DHAPTICD_WITH_CAN=OFF -DHAPTICD_WITH_GPIO=OFF \
     -DHAPTICD_WITH_HID=OFF -DHAPTICD_WITH_EVDEV=OFF \
     -- hapticd hapticd_loop_tests hapticd_telemetry_tests hapticd_service_tests \
-    hapticd_service_unit_tests || return
+    hapticd_service_unit_tests
+}
+stage_tsan() {
+  build_tsan || return
   # Not the two tests of a signal at start-up: TSan intercepts signals and defers them to its
   # own safe points, and one random-signal trial in three loaded runs lost a start-up signal
   # that way, and one stop during start-up in a Debian 12 check ended the daemon by the
@@ -232,7 +242,32 @@ failure_report() {  # STAGE DIR
     on && n && n <= 12 && !/^$/ { print "    " substr($0, 1, 200); n++ }' "$failed_list" "$2/Testing/Temporary/LastTest.log"
 }
 
+# The sanitizer stages' builds start in the background at the lowest priority (SCHED_IDLE)
+# when the main stage does: they take only what the main stage leaves idle (an emulated guest
+# waiting on its tests' timers leaves more than a core), and the guest's threads preempt them
+# at once, so the tests keep the machine they are timed on. Their stages wait for them, then
+# build what is left (nothing, or what a failed background build stopped at: its errors are
+# printed there).
+background_builds() {
+  local s
+  for s in asan tsan; do
+    [[ " $stages " == *" $s "* ]] || continue
+    echo "quickstart: === $s build (background, idle priority) ==="
+    "build_$s" || echo "quickstart: the $s build failed in the background; its stage builds again"
+  done
+}
+background=
+if [[ " $stages " == *" main "* && " $stages " =~ \ (asan|tsan)\  ]] && command -v chrt >/dev/null; then
+  echo "quickstart: building the sanitizer stages at idle priority beside main (build-background.log)"
+  chrt --idle 0 bash -c "$(declare -f configure_and_build build_asan build_tsan background_builds)
+    stages='$stages'; background_builds" >build-background.log 2>&1 &
+  background=$!
+fi
 run_stage main build stage_main
+if [[ -n $background ]]; then
+  echo "quickstart: waiting for the background builds (build-background.log)"
+  wait "$background" || true
+fi
 run_stage asan build-asan-clang stage_asan
 run_stage tsan build-tsan stage_tsan
 for s in ${failed[@]+"${failed[@]}"}; do

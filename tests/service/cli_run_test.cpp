@@ -51,7 +51,7 @@ TEST(CliRun, SigtermStopsCleanlyWithZeroForceAndAFlushedLog) {
   NotifySocket notify;
   BackgroundProcess p({hapticd_binary(), "run", "--log", log, "--summary-json", sum},
                       {notify.env()});
-  ASSERT_TRUE(notify.wait_for("READY=1")) << "servoing";         // the log is open from here on
+  ASSERT_EQ(wait_ready(notify, p), "");                          // the log is open from here on
   std::this_thread::sleep_for(std::chrono::milliseconds(1500));  // into contact: hand pressing
   p.signal(SIGTERM);
   const ProcessResult r = p.wait();

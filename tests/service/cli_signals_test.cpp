@@ -52,7 +52,7 @@ TEST(CliSignals, EveryTerminatingSignalStopsTheRunLikeSigterm) {
     BackgroundProcess p(
         {hapticd_binary(), "run", "--duration", "10", "--log", log, "--summary-json", sum},
         {notify.env()});
-    ASSERT_TRUE(notify.wait_for("READY=1")) << "servoing";
+    ASSERT_EQ(wait_ready(notify, p), "");
     p.signal(n.sig);
     const ProcessResult r = p.wait();
     ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -73,7 +73,7 @@ TEST(CliSignals, SighupReloadsAndNeverStopsTheRun) {
   BackgroundProcess p({hapticd_binary(), "run", "--duration", "1.5", "--log", log, "--summary-json",
                        sum, "--set", "loop.overrun_fault_streak=1000000000"},
                       {notify.env()});
-  ASSERT_TRUE(notify.wait_for("READY=1"));
+  ASSERT_EQ(wait_ready(notify, p), "");
   p.signal(SIGHUP);
   const ProcessResult r = p.wait();
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -90,7 +90,7 @@ TEST(CliSignals, SignalsWhoseOnlyHarmIsTheirDefaultAreIgnored) {
   NotifySocket notify;
   BackgroundProcess p({hapticd_binary(), "run", "--duration", "10", "--summary-json", sum},
                       {notify.env()});
-  ASSERT_TRUE(notify.wait_for("READY=1"));
+  ASSERT_EQ(wait_ready(notify, p), "");
   for (int sig : {SIGPIPE, SIGXFSZ, SIGTTIN, SIGTTOU}) p.signal(sig);
   std::this_thread::sleep_for(std::chrono::milliseconds(200));
   p.signal(SIGTERM);
@@ -107,7 +107,7 @@ TEST(CliSignals, AClosedOutputPipeDoesNotKillTheRun) {
   NotifySocket notify;
   BackgroundProcess p({hapticd_binary(), "run", "--duration", "10", "--summary-json", sum},
                       {notify.env()});
-  ASSERT_TRUE(notify.wait_for("READY=1"));
+  ASSERT_EQ(wait_ready(notify, p), "");
   p.close_output();
   p.signal(SIGTERM);
   const ProcessResult r = p.wait();

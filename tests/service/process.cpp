@@ -170,6 +170,20 @@ bool NotifySocket::wait_for(const std::string& text, int timeout_ms) {
   return false;
 }
 
+std::string wait_ready(NotifySocket& notify, BackgroundProcess& p) {
+  for (int waited_ms = 0; waited_ms < 30000; waited_ms += 100) {
+    if (notify.wait_for("READY=1", 100)) return "";
+    siginfo_t info{};  // WNOWAIT: p.wait() still collects it
+    if (waitid(P_PID, static_cast<id_t>(p.pid()), &info, WEXITED | WNOHANG | WNOWAIT) == 0 &&
+        info.si_pid == p.pid()) {
+      break;  // ended without being ready
+    }
+  }
+  p.signal(SIGKILL);
+  const ProcessResult r = p.wait();
+  return "never ready (exit " + std::to_string(r.exit_code) + "):\n" + r.err;
+}
+
 std::string hapticd_binary() { return HAPTICD_BINARY; }
 std::string source_dir() { return HAPTICD_SOURCE_DIR; }
 std::string build_dir() { return HAPTICD_BUILD_DIR; }

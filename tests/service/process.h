@@ -65,6 +65,11 @@ class NotifySocket {
   int fd_ = -1;
 };
 
+// Waits (up to 30 s) for `p` to report READY=1 on `notify`: "" when it did; otherwise `p` is
+// killed and the answer says how it ended and what it printed, so a failed start names its
+// cause instead of a bare time-out.
+std::string wait_ready(NotifySocket& notify, BackgroundProcess& p);
+
 std::string hapticd_binary();                    // path of the built daemon
 std::string source_dir();                        // the project root
 std::string build_dir();                         // the build tree the tests belong to

@@ -4,12 +4,14 @@
 // the axis out of the wall, and the board is driven although its descriptor has no 0x95
 // Device Control collection, answers Block Load once, and never sends its PID State. The
 // machine is emulated (TCG) and its USB controller is dummy_hcd, so the loop runs at 100 Hz
-// with a wall the gate allows there (and the reference axis' own inertia and damping), the
-// effect's duration is 1 s, and the stale bound 0.5 s: above the emulator's stalls, far below
-// a hang. The emulated controller also stalls output transfers under load: 100 full ticks
-// fault, not 10. And it hands this board's reports over up to ~150 ms late at times: the
-// direction check's pulse is 100 ms a half (10 ticks), not the default 3 ticks, which moves
-// the axis a few encoder counts that a late report can hide.
+// with a wall the gate allows there (and the reference axis' own inertia and damping), and the
+// stale bound 0.5 s: above the emulator's stalls, far below a hang. The emulated controller
+// also stalls output transfers under load: 100 full ticks fault, not 10, and the effect lasts
+// 4 s (restarted every 2 s): with 1 s, a CI run faulted on time-kept ticks with the held axis
+// pushed through the wall (0.305 rad), as when a stalled restart lets the effect run out. And it
+// hands this board's reports over up to ~150 ms late at times: the direction check's pulse is 100
+// ms a half (10 ticks), not the default 3 ticks, which moves the axis a few encoder counts that a
+// late report can hide.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -30,7 +32,7 @@ constexpr int kStaleTicks = 50;
 std::vector<std::string> sets(const char* backend, const std::string& serial) {
   return {"loop.rate_hz=100", "loop.overrun_fault_streak=1000",
           "wall.stiffness=" + std::to_string(kStiffness), "device.mass=0.05", "device.damping=0.05",
-          "device.hid.pid.effect_duration_ms=1000", "safety.direction_check.max_latency_ms=300",
+          "device.hid.pid.effect_duration_ms=4000", "safety.direction_check.max_latency_ms=300",
           "safety.direction_check.duration_ms=100",
           // A wheel that coasts (J/b = 1 s) from the previous run's check: rest within 5 s.
           "safety.direction_check.rest_timeout_ms=5000",

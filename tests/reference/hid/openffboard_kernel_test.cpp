@@ -3,10 +3,11 @@
 // config/hid-openffboard.yaml: its direction 270 is what makes the firmware's torque
 // (-magnitude * sin(direction)) push the wheel out of the wall. The machine is emulated (TCG)
 // and its USB controller is dummy_hcd (transfers on a 4 ms timer, wake-ups up to 50 ms late),
-// so the loop runs at 100 Hz with a wall the gate allows there, the effect's duration is 1 s
-// and the liveness bound 1 s: above the emulator's stalls on top of the firmware's ~100 ms
-// resend, far below a hang. The emulated controller also stalls output transfers under load:
-// 100 full ticks fault, not 10.
+// so the loop runs at 100 Hz with a wall the gate allows there and the liveness bound 1 s:
+// above the emulator's stalls on top of the firmware's ~100 ms resend, far below a hang. The
+// emulated controller also stalls output transfers under load: 100 full ticks fault, not 10,
+// and the effect lasts 4 s (restarted every 2 s), so a stalled restart cannot let it run out
+// (the reference Arduino board's run faulted so once with 1 s).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -35,7 +36,7 @@ std::vector<std::string> sets(const char* backend, const std::string& serial) {
           // rest within 5 s of enable.
           "safety.direction_check.max_latency_ms=300", "safety.direction_check.duration_ms=100",
           "safety.direction_check.level=0.02", "safety.direction_check.rest_timeout_ms=5000",
-          "wall.stiffness=" + std::to_string(kStiffness), "device.hid.pid.effect_duration_ms=1000",
+          "wall.stiffness=" + std::to_string(kStiffness), "device.hid.pid.effect_duration_ms=4000",
           "device.hid.liveness_ms=" + std::to_string(kLivenessMs),
           "device.hid.limits.out_queue_full_fault=100",
           std::string("device.hid.backend=") + backend, "device.hid.select.serial=" + serial};
