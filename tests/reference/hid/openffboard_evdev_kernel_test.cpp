@@ -23,12 +23,16 @@ constexpr double kPush = 0.5;       // N m: the hand's steady push into the wall
 
 // The emulated machine's thresholds: overruns, stale ticks and late updates (an EVIOCSFF through
 // hid-pidff takes it milliseconds, above the 5 ms that update_latency_ms 0 covers) are counted,
-// not faulted, below its stalls.
+// not faulted, below its stalls. As in the HID tests of this board, the wheel coasts (J/b = 1 s)
+// from whatever moved it last (hid-pidff's probe at bind, a late zero): the direction check
+// waits up to 5 s for rest, not the default 1 s, which a Debian 12 check's run missed ("never
+// at rest before tick 99").
 std::vector<std::string> evdev_sets(const std::string& serial) {
   return {"loop.rate_hz=100",
           "loop.overrun_fault_streak=1000",
           "safety.direction_check.max_latency_ms=300",
           "safety.direction_check.duration_ms=100",
+          "safety.direction_check.rest_timeout_ms=5000",
           "safety.stale_fault_ticks=50",
           "device.evdev.late_update_fault=1000",
           "device.mass=0.05",
