@@ -245,15 +245,16 @@ failure_report() {  # STAGE DIR
 # The sanitizer stages' builds start in the background at the lowest priority (SCHED_IDLE)
 # when the main stage does: they take only what the main stage leaves idle (an emulated guest
 # waiting on its tests' timers leaves more than a core), and the guest's threads preempt them
-# at once, so the tests keep the machine they are timed on. Their stages wait for them, then
-# build what is left (nothing, or what a failed background build stopped at: its errors are
-# printed there).
+# at once, so the tests keep the machine they are timed on. Each sanitizer stage waits for its
+# own build, then builds what is left (nothing, or what a failed background build stopped at:
+# its errors are printed there).
 background_builds() {
   local s
   for s in asan tsan; do
     [[ " $stages " == *" $s "* ]] || continue
     echo "quickstart: === $s build (background, idle priority) ==="
     "build_$s" || echo "quickstart: the $s build failed in the background; its stage builds again"
+    echo "quickstart: === $s built"
   done
 }
 background=
@@ -263,12 +264,17 @@ if [[ " $stages " == *" main "* && " $stages " =~ \ (asan|tsan)\  ]] && command 
     stages='$stages'; background_builds" >build-background.log 2>&1 &
   background=$!
 fi
+# Until the background build of stage $1 is over (or all of them are): the asan stage runs its
+# tests while the tsan build goes on beside them, at idle priority still.
+await_background() {
+  [[ -n $background && " $stages " == *" $1 "* ]] || return 0
+  echo "quickstart: waiting for the background $1 build (build-background.log)"
+  while [[ -n $(jobs -r -p) ]] && ! grep -q "=== $1 built" build-background.log; do sleep 2; done
+}
 run_stage main build stage_main
-if [[ -n $background ]]; then
-  echo "quickstart: waiting for the background builds (build-background.log)"
-  wait "$background" || true
-fi
+await_background asan
 run_stage asan build-asan-clang stage_asan
+await_background tsan
 run_stage tsan build-tsan stage_tsan
 for s in ${failed[@]+"${failed[@]}"}; do
   failure_report $s  # "NAME DIR": no stage name or directory has a space
