@@ -184,17 +184,17 @@ stage_main() {
 # the sanitizers and the fuzz targets (fuzz/README.md), where two builds of the same code
 # took a third of the test command. Line tables are all a sanitizer's report needs (full
 # debug information: 6 % more compile time, objects 6 times larger, e.g. sim/plant.cpp).
-build_asan() {
+build_asan() {  # DIR
   local fuzz=ON
   [[ ${HAPTICD_FUZZ:-1} == 0 ]] && fuzz=OFF
-  CC=clang CXX=clang++ configure_and_build build-asan-clang -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  CC=clang CXX=clang++ configure_and_build "$1" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -gline-tables-only -DNDEBUG" \
     -DHAPTICD_SANITIZE=address -DHAPTICD_FUZZ=$fuzz -DHAPTICD_BUILD_BENCHMARKS=OFF \
     -DHAPTICD_BUILD_KERNEL_TESTS=OFF
 }
 stage_asan() {
   [[ ${HAPTICD_FUZZ:-1} == 0 ]] && echo "quickstart: HAPTICD_FUZZ=0: fuzz targets skipped on purpose"
-  build_asan || return
+  build_asan "$1" || return
   # One boot of the kernel test machine per run: the main stage's; its binaries are not even
   # built here (a sixth of the build). Not the layering probes (they compile, run nothing) nor
   # the plot tool's test (Python drawing what the Cli tests' commands print): the main stage
@@ -204,10 +204,10 @@ stage_asan() {
   cd "$1" && ctest --output-on-failure -j "$(nproc)" -LE "^(layering|plot|design|slow)$"
 }
 # Without the CAN, GPIO, HID and evdev drivers: the loop, telemetry and service tests run the sim
-# device, so those drivers' threads are not exercised here (their own tests run in main and
-# asan), and leaving them out takes a fifth of this stage's build (141 steps to 111).
-build_tsan() {
-  configure_and_build build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+# device, so those drivers' threads are not exercised here (their own tests run in asan and in
+# the kernel test machine), and leaving them out takes a fifth of this stage's build (141 steps to 111).
+build_tsan() {  # DIR
+  configure_and_build "$1" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -g1 -DNDEBUG" -DHAPTICD_SANITIZE=thread \
     -DHAPTICD_BUILD_BENCHMARKS=OFF -DHAPTICD_WITH_CAN=OFF -DHAPTICD_WITH_GPIO=OFF \
     -DHAPTICD_WITH_HID=OFF -DHAPTICD_WITH_EVDEV=OFF \
@@ -215,7 +215,7 @@ build_tsan() {
     hapticd_service_unit_tests
 }
 stage_tsan() {
-  build_tsan || return
+  build_tsan "$1" || return
   # Not the two tests of a signal at start-up: TSan intercepts signals and defers them to its
   # own safe points, and one random-signal trial in three loaded runs lost a start-up signal
   # that way, and one stop during start-up in a Debian 12 check ended the daemon by the
@@ -248,20 +248,22 @@ failure_report() {  # STAGE DIR
 # at once, so the tests keep the machine they are timed on. Each sanitizer stage waits for its
 # own build, then builds what is left (nothing, or what a failed background build stopped at:
 # its errors are printed there).
-background_builds() {
-  local s
-  for s in asan tsan; do
+background_builds() {  # STAGE DIR...
+  while (($#)); do
+    local s=$1 dir=$2
+    shift 2
     [[ " $stages " == *" $s "* ]] || continue
     echo "quickstart: === $s build (background, idle priority) ==="
-    "build_$s" || echo "quickstart: the $s build failed in the background; its stage builds again"
+    "build_$s" "$dir" || echo "quickstart: the $s build failed in the background; its stage builds again"
     echo "quickstart: === $s built"
   done
 }
+dir_asan=build-asan-clang dir_tsan=build-tsan  # each stage's build directory
 background=
 if [[ " $stages " == *" main "* && " $stages " =~ \ (asan|tsan)\  ]] && command -v chrt >/dev/null; then
   echo "quickstart: building the sanitizer stages at idle priority beside main (build-background.log)"
   chrt --idle 0 bash -c "$(declare -f configure_and_build build_asan build_tsan background_builds)
-    stages='$stages'; background_builds" >build-background.log 2>&1 &
+    stages='$stages'; background_builds asan $dir_asan tsan $dir_tsan" >build-background.log 2>&1 &
   background=$!
 fi
 # Until the background build of stage $1 is over (or all of them are): the asan stage runs its
@@ -273,9 +275,9 @@ await_background() {
 }
 run_stage main build stage_main
 await_background asan
-run_stage asan build-asan-clang stage_asan
+run_stage asan "$dir_asan" stage_asan
 await_background tsan
-run_stage tsan build-tsan stage_tsan
+run_stage tsan "$dir_tsan" stage_tsan
 for s in ${failed[@]+"${failed[@]}"}; do
   failure_report $s  # "NAME DIR": no stage name or directory has a space
 done
