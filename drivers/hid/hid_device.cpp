@@ -73,6 +73,7 @@ void HidDevice::await_first_sample() {
 void HidDevice::on_enable() {
   drain_stale();
   queue_full_streak_ = 0;
+  pending_ = {};
   profile_->enable(*transport_);
   transport_->set_safe_reports(profile_->safe_reports());  // now naming the effect it made
   if (settings_->reports_on_change) await_first_sample();
@@ -192,9 +193,10 @@ HidDevice::Drained HidDevice::drain() noexcept {
   return d;
 }
 
-IoStatus HidDevice::send(std::span<const std::uint8_t> report) noexcept {
+IoStatus HidDevice::send(std::span<const std::uint8_t> report, bool& written) noexcept {
   const IoResult r = transport_->write(report);
-  if (r.status == TransportIo::kOk) {
+  written = r.status == TransportIo::kOk;
+  if (written) {
     queue_full_streak_ = 0;
     bump(kOutputReports);
     return IoStatus::kOk;
@@ -216,10 +218,16 @@ IoStatus HidDevice::on_write(double force) noexcept {
     transport_->write_safe();
     return IoStatus::kOk;
   }
-  if (const auto extra = profile_->before_force(); !extra.empty()) {
-    if (const IoStatus s = send(extra); s != IoStatus::kOk) return s;
+  // A report due before the force (an effect's restart) that the full queue could not take is
+  // sent at the next tick that can: dropped, the effect would run out on the device and the
+  // wall with it, however long the queue stays full.
+  if (const auto extra = profile_->before_force(); !extra.empty()) pending_ = extra;
+  bool written = false;
+  if (!pending_.empty()) {
+    if (const IoStatus s = send(pending_, written); s != IoStatus::kOk) return s;
+    if (written) pending_ = {};
   }
-  return send(profile_->force_report(force));
+  return send(profile_->force_report(force), written);
 }
 
 HidCounters HidDevice::hid_counts() const noexcept {

@@ -81,7 +81,9 @@ class HidDevice final : public Device {
   IoStatus hold(PositionSample& out, std::int64_t now) noexcept;
   void await_first_sample();
   void bump(CounterIndex i) noexcept { c_[i].add(); }
-  IoStatus send(std::span<const std::uint8_t> report) noexcept;
+  // RT-safe: called every tick. A report the queue has no room for is lost (`written` false),
+  // counted, and faults the loop after limits.out_queue_full_fault such ticks in a row.
+  IoStatus send(std::span<const std::uint8_t> report, bool& written) noexcept;
   void log_counters() const;
   void drain_stale() noexcept;
 
@@ -98,6 +100,7 @@ class HidDevice final : public Device {
   Decoded decoded_;
   bool active_ = false;  // output enabled: the fault mask applies
   int queue_full_streak_ = 0;
+  std::span<const std::uint8_t> pending_;  // the profile's before_force() report, not yet sent
   using K = base::CounterKind;
   std::array<base::Counter, kCounterCount> c_{{
       {"input_reports", K::kCount, "input reports with a sample"},

@@ -18,7 +18,9 @@ class PidProfile final : public HidProfile {
   PidProfile(const HidSettings& s, double period_s)
       : s_(s.pid), timeout_(static_cast<long>(s.limits.timeout_ms)) {
     if (s_.effect_duration_ms > 0.0) {
-      // Restarted every half duration: a missed restart or two still keeps it playing.
+      // Restarted every half duration; a restart the full OUT queue could not take goes at the
+      // next tick that can (HidDevice::on_write), so the effect runs out only if nothing is
+      // written for half its duration.
       refresh_ticks_ = std::max<std::uint64_t>(
           1, static_cast<std::uint64_t>(s_.effect_duration_ms / 2e3 / period_s));
     }

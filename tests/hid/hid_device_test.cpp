@@ -123,6 +123,42 @@ TEST(HidPid, AFiniteEffectIsRestartedEveryHalfDuration) {
   EXPECT_EQ(starts, 3) << "the start at enable, then one every 50 ticks";
 }
 
+// A restart due while the device takes nothing (its OUT queue full) is not lost: it goes at
+// the first tick the queue takes again, ahead of that tick's force. Dropped, the effect would
+// run out on the device half a duration later and the wall with it (a CI run's held axis went
+// through its wall so, 4 s into a 4 s effect).
+TEST(HidPid, ARestartTheFullQueueDroppedGoesAtTheNextTickThatWrites) {
+  PidRig rig({"device.hid.limits.out_queue_full_fault=100000"});  // 100 ms effect at 1 kHz
+  rig.device->configure();
+  rig.device->enable();
+  rig.fake.wait_for(10);
+  rig.fake.reading.store(false);
+  int ticks = 0;
+  const auto tick = [&] {
+    ASSERT_EQ(rig.device->write(1.0), IoStatus::kOk);
+    ++ticks;
+  };
+  while (rig.device->hid_counts().out_queue_full == 0 && ticks < 100000) tick();
+  ASSERT_GT(rig.device->hid_counts().out_queue_full, 0u) << "the queue never filled";
+  for (int i = 0; i < 50 || (ticks + 1) % 50 == 0; ++i) tick();  // a restart's tick, dropped
+  rig.fake.reading.store(true);
+  const std::uint64_t full = rig.device->hid_counts().out_queue_full;
+  std::size_t have = 0;  // what was queued, all taken: nothing more for 50 ms
+  for (int quiet = 0; quiet < 50;) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    const std::size_t now = rig.fake.received().size();
+    quiet = now == have ? quiet + 1 : 0;
+    have = now;
+  }
+  tick();  // not a restart's own tick
+  rig.fake.wait_for(have + 2);
+  const auto out = rig.fake.outputs();
+  ASSERT_GE(out.size(), 2u);
+  EXPECT_TRUE(is(out[out.size() - 2], rig.layout.eo_start)) << "the dropped restart, sent now";
+  EXPECT_EQ(out.back()[0], rig.layout.set_constant.id) << "then the tick's force";
+  EXPECT_EQ(rig.device->hid_counts().out_queue_full, full) << "the queue took both";
+}
+
 TEST(HidPid, ABlockLoadThatFailsRefusesTheEnableAndLeavesTheDeviceOff) {
   PidRig rig;
   rig.load_status = rig.layout.bl_full;

@@ -6,9 +6,10 @@
 // machine is emulated (TCG) and its USB controller is dummy_hcd, so the loop runs at 100 Hz
 // with a wall the gate allows there (and the reference axis' own inertia and damping), and the
 // stale bound 0.5 s: above the emulator's stalls, far below a hang. The emulated controller
-// also stalls output transfers under load: 100 full ticks fault, not 10, and the effect lasts
-// 4 s (restarted every 2 s): with 1 s, a CI run faulted on time-kept ticks with the held axis
-// pushed through the wall (0.305 rad), as when a stalled restart lets the effect run out. And it
+// also stalls output transfers under load: 100 full ticks fault, not 10. Two CI runs faulted so
+// with the held axis pushed through the wall (0.304 rad) one restart period after a restart the
+// full OUT queue had dropped: the effect ran out on the board. The driver now sends a dropped
+// restart at the next tick that writes (HidPid.ARestartTheFullQueueDropped...). And it
 // hands this board's reports over up to ~150 ms late at times: the direction check's pulse is 100
 // ms a half (10 ticks), not the default 3 ticks, which moves the axis a few encoder counts that a
 // late report can hide.

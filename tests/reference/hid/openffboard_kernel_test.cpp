@@ -5,9 +5,8 @@
 // and its USB controller is dummy_hcd (transfers on a 4 ms timer, wake-ups up to 50 ms late),
 // so the loop runs at 100 Hz with a wall the gate allows there and the liveness bound 1 s:
 // above the emulator's stalls on top of the firmware's ~100 ms resend, far below a hang. The
-// emulated controller also stalls output transfers under load: 100 full ticks fault, not 10,
-// and the effect lasts 4 s (restarted every 2 s), so a stalled restart cannot let it run out
-// (the reference Arduino board's run faulted so once with 1 s).
+// emulated controller also stalls output transfers under load: 100 full ticks fault, not 10;
+// a restart of the 4 s effect that the full queue drops goes at the next tick that writes.
 #include <gtest/gtest.h>
 
 #include <algorithm>
