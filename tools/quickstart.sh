@@ -132,12 +132,19 @@ if ((${#missing[@]})); then
 fi
 
 # configure_and_build DIR CMAKE_ARGS... [-- TARGETS...]
+# Unity builds (CMake's batches of 8 sources a translation unit): the headers (GoogleTest, json,
+# Eigen, the standard library) parsed and their templates compiled once a batch, not once a
+# file, where the three builds' compile time is most of the test command's (BENCHMARKS.md, "The
+# test command's time"). A file's own names then share a batch with its neighbours': a test
+# file's helpers and constants need names (or a header) of their own, and a local build without
+# unity (the default) still proves each file includes what it uses.
 configure_and_build() {
   local dir=$1 args=() targets=()
   shift
   while (($#)) && [[ $1 != -- ]]; do args+=("$1"); shift; done
   (($#)) && shift && targets=("$@")
-  [[ -f $dir/CMakeCache.txt ]] || cmake -S . -B "$dir" -G Ninja -DHAPTICD_WERROR=ON "${args[@]}"
+  [[ -f $dir/CMakeCache.txt ]] ||
+    cmake -S . -B "$dir" -G Ninja -DHAPTICD_WERROR=ON -DCMAKE_UNITY_BUILD=ON "${args[@]}"
   cmake --build "$dir" ${targets[@]+--target "${targets[@]}"}
 }
 

@@ -17,8 +17,14 @@ using config::schema::number;
 using config::schema::Range;
 using config::schema::read_hex;
 
-// In FieldType's order.
-const std::vector<std::string> kTypes{"u8", "i8", "u16", "i16", "u32", "i32", "f32", "u24", "i24"};
+// What `type:` takes, in FieldType's order, named where the types are (report_field.h).
+std::vector<std::string> field_type_names() {
+  std::vector<std::string> names;
+  for (int t = 0; t <= static_cast<int>(FieldType::kI24); ++t) {
+    names.emplace_back(to_string(static_cast<FieldType>(t)));
+  }
+  return names;
+}
 
 // Reading state shared by the helpers: where each sub-key is (for errors found after
 // reading) and whether anything went wrong in this section.
@@ -79,7 +85,8 @@ FieldSpec read_spec(MapReader& m, bool quantity) {
     m.diag().error(bits.key_mark, bits.path,
                    "give type or bits, not both (a type has its width: u16 is 16 bits)");
   } else if (type.present) {
-    if (const auto t = config::schema::read_choice(m.diag(), type, kTypes)) {
+    static const std::vector<std::string> kNames = field_type_names();
+    if (const auto t = config::schema::read_choice(m.diag(), type, kNames)) {
       f = typed(static_cast<FieldType>(*t), f.byte);
     }
   } else {

@@ -13,11 +13,11 @@ namespace hapticd::fuzz {
 namespace {
 
 namespace hid = hapticd::drivers::hid;
+using Bytes = std::vector<std::uint8_t>;
 
 }  // namespace
 
 void check_hid_frame(std::span<const std::uint8_t> m) {
-  using Bytes = std::vector<std::uint8_t>;
   static constexpr std::uint8_t kTypes[] = {0x01, 0x02, 0x03, 0x04, 0x05, 0x83, 0x84, 0x85};
   const std::optional<hid::FrameView> v = hid::parse_frame(m);
   const bool known =

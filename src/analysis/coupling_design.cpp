@@ -8,8 +8,6 @@
 namespace hapticd::analysis {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
-
 bool finite_poly(const Polynomial& p) {
   return !p.empty() && std::all_of(p.begin(), p.end(), [](double v) { return std::isfinite(v); });
 }
@@ -111,10 +109,10 @@ struct Site {
   double lo = 0.0;
 };
 
-class Search {
+class DesignSearch {
  public:
-  Search(const CouplingSpec& spec, const DesignOptions& options, const SdpSolver& solver,
-         const std::function<void(const DesignStep&)>& progress, CouplingDesign& out)
+  DesignSearch(const CouplingSpec& spec, const DesignOptions& options, const SdpSolver& solver,
+               const std::function<void(const DesignStep&)>& progress, CouplingDesign& out)
       : spec_(spec),
         options_(options),
         solver_(solver),
@@ -192,7 +190,7 @@ bool cone_complementarity_stage(const CouplingSpec& spec, const std::vector<Cand
                                 const DesignOptions& options, const SdpSolver& solver,
                                 const std::function<void(const DesignStep&)>& progress,
                                 CouplingDesign& out, Candidate& best) {
-  Search search(spec, options, solver, progress, out);
+  DesignSearch search(spec, options, solver, progress, out);
   std::vector<Site> sites;
   for (const Candidate& c : probes(screened, 4)) {
     if (!search.budget_left()) break;
@@ -207,7 +205,7 @@ bool cone_complementarity_stage(const CouplingSpec& spec, const std::vector<Cand
   const double g = 0.5 * (std::sqrt(5.0) - 1.0);
   const auto probe = [&](double x) {
     const Candidate c = family_at(spec, std::pow(10.0, x));
-    if (!c.verdict.valid() || !search.budget_left()) return kInf;
+    if (!c.verdict.valid() || !search.budget_left()) return std::numeric_limits<double>::infinity();
     sites.push_back(search.open(c));
     search.step(sites.back());
     return sites.back().best.verdict.gamma;

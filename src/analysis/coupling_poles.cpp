@@ -51,10 +51,10 @@ Polynomial other_poles(const TransferFunction& c) {
   return d;
 }
 
-class Search {
+class PoleSearch {
  public:
-  Search(const CouplingSpec& spec, const SdpSolver& solver, const PoleSearchOptions& options,
-         const std::function<void(const PoleSearchStep&)>& progress, PoleSearchResult& out)
+  PoleSearch(const CouplingSpec& spec, const SdpSolver& solver, const PoleSearchOptions& options,
+             const std::function<void(const PoleSearchStep&)>& progress, PoleSearchResult& out)
       : solver_(solver), options_(options), progress_(progress), out_(out), spec_(spec) {}
 
   // One order: the incumbent's poles with one more at z = 0 (when there is room) and its
@@ -198,7 +198,7 @@ PoleSearchResult search_poles(const CouplingSpec& spec, const ShapedCoupling& se
                               const std::function<void(const PoleSearchStep&)>& progress) {
   PoleSearchResult out;
   out.best = seed;
-  Search search(spec, solver, options, progress, out);
+  PoleSearch search(spec, solver, options, progress, out);
   const int from = std::max(1, static_cast<int>(poly_trim(seed.coupling.den).size()) - 1);
   out.converged = true;
   for (int n = from; n <= spec.order && out.converged; ++n) out.converged = search.order(n);

@@ -10,7 +10,6 @@
 namespace hapticd::analysis {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kPi = std::numbers::pi;
 // Re P >= this many T/(2b) on the grid, so that Theorem 1's strict inequality survives between
 // grid points (the exact check decides; a point is added where it does not) with the margin
@@ -148,7 +147,7 @@ std::optional<ShapedCoupling> CouplingShaper::verified(const Polynomial& den, do
 
 double CouplingShaper::slack(const Polynomial& den, double gamma) {
   const std::optional<Solution> s = solve(den, gamma);
-  return s ? s->t : kInf;
+  return s ? s->t : std::numeric_limits<double>::infinity();
 }
 
 std::optional<ShapedCoupling> CouplingShaper::best(const Polynomial& den, double lo, double hi,

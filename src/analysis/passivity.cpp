@@ -11,8 +11,6 @@
 namespace hapticd::analysis {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
-
 // Phi(w) = T H z^-d / (1 - z) with w = z^-1: T/(1 - z) = -T w / (1 - w), so
 // Phi = A / B with A = -T w^(1+d) N and B = (1 - w) D. Poles of Phi at z = +-1 (the
 // integrator of the bound itself, Tustin's pole at -1) make Phi infinite on the circle but
@@ -64,7 +62,7 @@ SplitPhi split_unit_circle_poles(const TransferFunction& h, double t, int d) {
 PassivityBound passivity_bound(const TransferFunction& h, double sample_period, int delay_samples,
                                double passivity_shortage) {
   const SplitPhi s = split_unit_circle_poles(h, sample_period, delay_samples);
-  if (!s.failure.empty()) return {kInf, 0.0, 0.0, s.failure};
+  if (!s.failure.empty()) return {std::numeric_limits<double>::infinity(), 0.0, 0.0, s.failure};
 
   std::vector<double> hints;
   for (const Complex& z : poly_roots_z(s.b))

@@ -8,8 +8,6 @@
 namespace hapticd::config::schema {
 namespace {
 
-std::string quoted(const std::string& text) { return "'" + text + "'"; }
-
 std::string to_lower(std::string_view s) {
   std::string out(s);
   for (char& c : out) {
@@ -40,6 +38,8 @@ std::size_t edit_distance(std::string_view a, std::string_view b) {
 }
 
 }  // namespace
+
+std::string quoted(const std::string& text) { return "'" + text + "'"; }
 
 std::string printable(std::string_view text) {
   std::string out;

@@ -28,6 +28,9 @@ namespace hapticd::config::schema {
 // value echoed in a message cannot move the cursor, clear the screen or forge a line.
 std::string printable(std::string_view text);
 
+// 'text', as a message names a value or a key.
+std::string quoted(const std::string& text);
+
 // "a.b" + "c" -> "a.b.c"; "" + "c" -> "c".
 std::string child_path(const std::string& parent, std::string_view key);
 

@@ -12,8 +12,6 @@
 namespace hapticd::config::schema {
 namespace {
 
-std::string quoted(const std::string& text) { return "'" + text + "'"; }
-
 // Equal but for the case of ASCII letters.
 bool same_letters(std::string_view a, std::string_view b) {
   return std::ranges::equal(a, b, [](char x, char y) {

@@ -45,13 +45,13 @@ FreeMotionData simulate(const Device& dev, const std::vector<double>& u, double 
   return d;
 }
 
-const double kT = 1e-3;
+const double kPeriod = 1e-3;
 std::vector<double> excitation(double amplitude = 4.0) {
-  return multisine(amplitude, 3.0, 60.0, 6.0, kT);
+  return multisine(amplitude, 3.0, 60.0, 6.0, kPeriod);
 }
 
 TEST(FreeMotionFit, RecoversMassAndDampingOfAnIdealEncoder) {
-  const FreeMotionFit f = fit_free_motion(simulate({0.1, 2.0}, excitation(), kT, 0));
+  const FreeMotionFit f = fit_free_motion(simulate({0.1, 2.0}, excitation(), kPeriod, 0));
   EXPECT_NEAR(f.mass.value, 0.1, 1e-4);
   EXPECT_NEAR(f.damping.value, 2.0, 2e-3);
   EXPECT_FALSE(f.coulomb_kept);
@@ -64,7 +64,7 @@ TEST(FreeMotionFit, WithinOnePercentThroughAQuantisingEncoderAndItsIntervalHolds
   for (const Device dev : {Device{0.1, 2.0}, Device{0.35, 0.8}, Device{0.05, 6.0}}) {
     Device q = dev;
     q.counts_per_m = 1e5;  // 10 um counts
-    const FreeMotionFit f = fit_free_motion(simulate(q, excitation(), kT, 0));
+    const FreeMotionFit f = fit_free_motion(simulate(q, excitation(), kPeriod, 0));
     EXPECT_NEAR(f.mass.value, dev.mass, 0.01 * dev.mass) << dev.mass << " " << dev.damping;
     EXPECT_NEAR(f.damping.value, dev.damping, 0.01 * dev.damping) << dev.mass << " " << dev.damping;
     EXPECT_GT(f.mass.ci95, 0.0);
@@ -76,7 +76,7 @@ TEST(FreeMotionFit, WithinOnePercentThroughAQuantisingEncoderAndItsIntervalHolds
 TEST(FreeMotionFit, FindsTheDelayWhenTheDeclaredOneIsWrong) {
   Device dev;
   dev.delay = 2;
-  const FreeMotionFit f = fit_free_motion(simulate(dev, excitation(), kT, 1));
+  const FreeMotionFit f = fit_free_motion(simulate(dev, excitation(), kPeriod, 1));
   EXPECT_EQ(f.delay, 2);
   EXPECT_NEAR(f.mass.value, 0.1, 1e-3);
   EXPECT_NEAR(f.damping.value, 2.0, 0.02);
@@ -85,19 +85,19 @@ TEST(FreeMotionFit, FindsTheDelayWhenTheDeclaredOneIsWrong) {
 TEST(FreeMotionFit, KeepsCoulombFrictionOnlyWhenThereIsSome) {
   Device dev;
   dev.coulomb = 0.3;
-  const FreeMotionFit f = fit_free_motion(simulate(dev, excitation(), kT, 0));
+  const FreeMotionFit f = fit_free_motion(simulate(dev, excitation(), kPeriod, 0));
   ASSERT_TRUE(f.coulomb_kept);
   EXPECT_NEAR(f.coulomb.value, 0.3, 0.05);
   EXPECT_NEAR(f.damping.value, 2.0, 0.1);
   EXPECT_NEAR(f.mass.value, 0.1, 0.005);
   const FreeMotionFit none =
-      fit_free_motion(simulate({0.1, 2.0, 0.0, 0, 1e5}, excitation(), kT, 0));
+      fit_free_motion(simulate({0.1, 2.0, 0.0, 0, 1e5}, excitation(), kPeriod, 0));
   EXPECT_FALSE(none.coulomb_kept);
   EXPECT_EQ(none.coulomb.value, 0.0);
 }
 
 TEST(FreeMotionFit, LeavesOutSamplesThatWereNotFresh) {
-  FreeMotionData d = simulate({0.1, 2.0}, excitation(), kT, 0);
+  FreeMotionData d = simulate({0.1, 2.0}, excitation(), kPeriod, 0);
   for (std::size_t k = 100; k < d.position.size(); k += 7) {
     d.valid[k] = false;
     d.position[k] = 1e3;  // garbage where nothing was read: must not be fitted
@@ -111,7 +111,7 @@ TEST(FreeMotionFit, LeavesOutSamplesThatWereNotFresh) {
 // Issue 32: the force's sign flipped fits a negative mass and damping: the fit says the force is
 // reversed, with the device's own m and b.
 TEST(FreeMotionFit, AReversedForceFitsANegativeDeviceAndSaysSo) {
-  FreeMotionData d = simulate({0.1, 2.0}, excitation(), kT, 0);
+  FreeMotionData d = simulate({0.1, 2.0}, excitation(), kPeriod, 0);
   EXPECT_FALSE(fit_free_motion(d).force_reversed);
   FreeMotionData reversed = d;
   for (double& u : reversed.force) u = -u;
@@ -123,7 +123,7 @@ TEST(FreeMotionFit, AReversedForceFitsANegativeDeviceAndSaysSo) {
 }
 
 TEST(FreeMotionFit, RefusesDataThatIsNoFreeDevice) {
-  FreeMotionData d = simulate({0.1, 2.0}, excitation(), kT, 0);
+  FreeMotionData d = simulate({0.1, 2.0}, excitation(), kPeriod, 0);
   FreeMotionData held = d;  // held still: nothing moved
   for (double& x : held.position) x = 0.01;
   EXPECT_THROW(fit_free_motion(held), std::invalid_argument);
@@ -140,16 +140,16 @@ TEST(FreeMotionFit, RefusesDataThatIsNoFreeDevice) {
 }
 
 TEST(Multisine, PeaksAtTheAmplitudeAndFadesInAndOut) {
-  const std::vector<double> u = multisine(3.0, 2.0, 50.0, 4.0, kT);
+  const std::vector<double> u = multisine(3.0, 2.0, 50.0, 4.0, kPeriod);
   ASSERT_EQ(u.size(), 4000u);
   double peak = 0.0;
   for (const double v : u) peak = std::max(peak, std::abs(v));
   EXPECT_NEAR(peak, 3.0, 1e-12);
   EXPECT_EQ(u.front(), 0.0);
   EXPECT_LT(std::abs(u.back()), 1e-3);
-  EXPECT_THROW(multisine(1.0, 2.0, 600.0, 4.0, kT), std::invalid_argument);  // above Nyquist
-  EXPECT_THROW(multisine(1.0, 0.1, 50.0, 4.0, kT), std::invalid_argument);   // < 1 cycle
-  EXPECT_THROW(multisine(1.0, 50.0, 20.0, 4.0, kT), std::invalid_argument);  // empty band
+  EXPECT_THROW(multisine(1.0, 2.0, 600.0, 4.0, kPeriod), std::invalid_argument);  // above Nyquist
+  EXPECT_THROW(multisine(1.0, 0.1, 50.0, 4.0, kPeriod), std::invalid_argument);   // < 1 cycle
+  EXPECT_THROW(multisine(1.0, 50.0, 20.0, 4.0, kPeriod), std::invalid_argument);  // empty band
 }
 
 }  // namespace

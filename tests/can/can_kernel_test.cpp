@@ -23,7 +23,6 @@ namespace {
 using std::chrono::milliseconds;
 using std::chrono::seconds;
 
-const std::string kBin = HAPTICD_BINARY;
 // The test machine may be emulated (qemu without KVM): it cannot keep a 1 kHz loop, and it
 // stalls for tens of milliseconds now and then. The runs there go at 100 Hz (a softer wall, so
 // the gate still passes with the driver's one sample of delay) and tolerate what the emulator
@@ -74,16 +73,12 @@ nlohmann::json read_json(const std::string& path) {
   return nlohmann::json::parse(in);
 }
 
-std::vector<std::string> run_args(const std::string& profile, double duration,
-                                  const std::string& summary, int cia402_watchdog_ms = 1000) {
-  std::vector<std::string> a = {kBin,
-                                "run",
-                                "--config",
-                                example(profile),
-                                "--duration",
-                                std::to_string(duration),
-                                "--summary-json",
-                                summary};
+std::vector<std::string> summary_run_args(const std::string& profile, double duration,
+                                          const std::string& summary,
+                                          int cia402_watchdog_ms = 1000) {
+  std::vector<std::string> a = {HAPTICD_BINARY,   "run",        "--config",
+                                example(profile), "--duration", std::to_string(duration),
+                                "--summary-json", summary};
   const std::vector<std::string> sets = vm_args(profile, cia402_watchdog_ms);
   a.insert(a.end(), sets.begin(), sets.end());
   return a;
@@ -94,39 +89,29 @@ class CanOnVcan : public ::testing::TestWithParam<std::string> {};
 TEST_P(CanOnVcan, HapticdRunAgainstHapticdPeerRendersTheWallLikeTheSimDriver) {
   kernel_test::VcanInterface bus("vcan0");
   const std::string profile = GetParam();
-  std::vector<std::string> peer_args = {kBin,         "peer",  "--config",   example(profile),
-                                        "--endpoint", "vcan0", "--duration", "60"};
+  std::vector<std::string> peer_args = {HAPTICD_BINARY, "peer",  "--config",   example(profile),
+                                        "--endpoint",   "vcan0", "--duration", "60"};
   const std::vector<std::string> sets = vm_args(profile);
   peer_args.insert(peer_args.end(), sets.begin(), sets.end());
   ChildProcess peer(peer_args, temp("peer-" + profile + ".out"));
   ASSERT_TRUE(peer.started());
   wait_for_peer(peer);
-  ChildProcess run(run_args(profile, 3, temp("run-" + profile + ".json")),
+  ChildProcess run(summary_run_args(profile, 3, temp("run-" + profile + ".json")),
                    temp("run-" + profile + ".out"));
   ASSERT_EQ(run.wait(seconds(60)), 0) << run.output();
   peer.signal(SIGTERM);
   EXPECT_EQ(peer.wait(seconds(10)), 0) << peer.output();
 
-  ChildProcess sim({kBin,
-                    "run",
-                    "--config",
-                    example(profile),
-                    "--set",
-                    "device.driver=sim",
-                    "--set",
-                    "device.can=null",
-                    "--set",
-                    "wall.delay_samples=1",
-                    "--set",
-                    "loop.clock=freerun",
-                    "--set",
-                    "loop.rate_hz=100",
-                    "--set",
-                    "wall.stiffness=100",
-                    "--duration",
-                    "3",
-                    "--summary-json",
-                    temp("sim-" + profile + ".json")},
+  ChildProcess sim({HAPTICD_BINARY,   "run",
+                    "--config",       example(profile),
+                    "--set",          "device.driver=sim",
+                    "--set",          "device.can=null",
+                    "--set",          "wall.delay_samples=1",
+                    "--set",          "loop.clock=freerun",
+                    "--set",          "loop.rate_hz=100",
+                    "--set",          "wall.stiffness=100",
+                    "--duration",     "3",
+                    "--summary-json", temp("sim-" + profile + ".json")},
                    temp("sim-" + profile + ".out"));
   ASSERT_EQ(sim.wait(seconds(60)), 0) << sim.output();
   const nlohmann::json r = read_json(temp("run-" + profile + ".json"));
@@ -171,7 +156,7 @@ TEST_P(CanOnVcan, EachInjectedFaultEndsTheRunWithExit1AndTheCauseNamed) {
     auto peer = wiring::find_driver("can").peer.make_peer_on(cfg, "vcan0");
     sim::PeerRunner runner(*peer);
     const std::string log = temp(profile + "-" + f.name + ".hlog");
-    std::vector<std::string> args = run_args(profile, 30, temp("fault.json"));
+    std::vector<std::string> args = summary_run_args(profile, 30, temp("fault.json"));
     args.insert(args.end(), {"--log", log});
     ChildProcess run(args, temp(profile + "-" + f.name + ".out"));
     // hapticd's start-up (load, gate, SDO set-up) in an emulated guest on a loaded host took
@@ -187,7 +172,7 @@ TEST_P(CanOnVcan, EachInjectedFaultEndsTheRunWithExit1AndTheCauseNamed) {
     EXPECT_NE(run.output().find(named), std::string::npos) << run.output();
     EXPECT_EQ(peer->applied_force(), 0.0);
     // The tick that saw the fault commanded zero: the last record of the log.
-    ChildProcess exported({kBin, "export", log}, temp("export.csv"));
+    ChildProcess exported({HAPTICD_BINARY, "export", log}, temp("export.csv"));
     ASSERT_EQ(exported.wait(seconds(20)), 0);
     std::istringstream csv(exported.output());
     std::string line;
@@ -216,7 +201,8 @@ TEST_P(CanOnVcan, AKilledHapticdLeavesADriveThatSwitchesItselfOff) {
       load_example("can-" + profile + ".yaml", vm_sets(profile, watchdog_ms), false);
   auto peer = wiring::find_driver("can").peer.make_peer_on(cfg, "vcan0");
   sim::PeerRunner runner(*peer);
-  ChildProcess run(run_args(profile, 30, temp("killed.json"), watchdog_ms), temp("killed.out"));
+  ChildProcess run(summary_run_args(profile, 30, temp("killed.json"), watchdog_ms),
+                   temp("killed.out"));
   kernel_test::wait_until([&] { return peer->output_on(); }, milliseconds(30'000),
                           "the drive's output on");
   std::this_thread::sleep_for(milliseconds(800));

@@ -27,12 +27,6 @@ config::Config slow_cia402_config() {
        "device.can.cia402.drive_watchdog_ms=1000", "device.can.heartbeat_timeout_ms=1000"});
 }
 
-reference::PlantParameters axis() {
-  reference::PlantParameters p;
-  p.damping = 10.0;
-  return p;
-}
-
 std::string configure_error(ReferenceRig& rig) {
   try {
     rig.device->configure();
@@ -75,7 +69,7 @@ std::string sync_history(const std::vector<LoggedFrame>& log) {
 TEST(CanReferenceCia402, TpdoCobIdBit30IsKept) {
   Cia402Behaviour b;
   b.tpdo_cob_id_bit30_required = true;
-  Cia402Drive drive(b, axis(), reference::monotonic_ns());
+  Cia402Drive drive(b, damped_axis(), reference::monotonic_ns());
   ReferenceRig rig(cia402_config(), drive);
   EXPECT_EQ(configure_error(rig), "");
   rig.runner->stop();
@@ -87,7 +81,7 @@ TEST(CanReferenceCia402, TpdoCobIdBit30IsKept) {
 TEST(CanReferenceCia402, AModeShownLateIsWaitedFor) {
   Cia402Behaviour b;
   b.mode_display_lag_ms = 40;
-  Cia402Drive drive(b, axis(), reference::monotonic_ns());
+  Cia402Drive drive(b, damped_axis(), reference::monotonic_ns());
   ReferenceRig rig(cia402_config(), drive);
   EXPECT_EQ(configure_error(rig), "");
 }
@@ -98,7 +92,7 @@ TEST(CanReferenceCia402, ADriveWithout1006StartsWithANoticeAnd60C2IsWrittenWhere
   Cia402Behaviour b;
   b.has_1006 = false;
   b.has_60c2 = true;
-  Cia402Drive drive(b, axis(), reference::monotonic_ns());
+  Cia402Drive drive(b, damped_axis(), reference::monotonic_ns());
   ReferenceRig rig(cia402_config({"loop.rate_hz=500"}), drive);  // no 0x1006: no SYNC watch
   ASSERT_EQ(configure_error(rig), "");
   const std::string notices = joined(rig.device->notices());
@@ -113,7 +107,7 @@ TEST(CanReferenceCia402, ADriveWithout1006StartsWithANoticeAnd60C2IsWrittenWhere
 }
 
 TEST(CanReferenceCia402, ADriveWithout60C2IsNamedInANotice) {
-  Cia402Drive drive({}, axis(), reference::monotonic_ns());
+  Cia402Drive drive({}, damped_axis(), reference::monotonic_ns());
   ReferenceRig rig(cia402_config(), drive);
   ASSERT_EQ(configure_error(rig), "");
   const std::string notices = joined(rig.device->notices());
@@ -124,7 +118,7 @@ TEST(CanReferenceCia402, ADriveWithout60C2IsNamedInANotice) {
 TEST(CanReferenceCia402, ADriveLimitBelowMaxTorqueIsRefusedBeforeOutputIsEnabled) {
   Cia402Behaviour b;
   b.max_torque_permille = 500;  // of 100 mN m: 0.05 N m, below max_torque 0.1 N m
-  Cia402Drive drive(b, axis(), reference::monotonic_ns());
+  Cia402Drive drive(b, damped_axis(), reference::monotonic_ns());
   ReferenceRig rig(cia402_config(), drive);
   const std::string why = configure_error(rig);
   EXPECT_NE(why.find("0x6072 = 500 per mille"), std::string::npos) << why;
@@ -136,7 +130,7 @@ TEST(CanReferenceCia402, ADriveLimitBelowMaxTorqueIsRefusedBeforeOutputIsEnabled
 TEST(CanReferenceCia402, TheDrivesInternalLimitIsCounted) {
   Cia402Behaviour b;
   b.internal_limit_permille = 300;  // a derating of its own: 3 N at this transmission
-  Cia402Drive drive(b, axis(), reference::monotonic_ns());
+  Cia402Drive drive(b, damped_axis(), reference::monotonic_ns());
   ReferenceRig rig(slow_cia402_config(), drive);
   rig.device->configure();
   rig.device->enable();
@@ -152,7 +146,7 @@ TEST(CanReferenceCia402, TheDrivesInternalLimitIsCounted) {
 TEST(CanReferenceCia402, CommLossReactionNoneWritesNo6007) {
   Cia402Behaviour b;
   b.has_6007 = false;
-  Cia402Drive drive(b, axis(), reference::monotonic_ns());
+  Cia402Drive drive(b, damped_axis(), reference::monotonic_ns());
   ReferenceRig rig(cia402_config({"device.can.cia402.comm_loss_reaction=none"}), drive);
   EXPECT_EQ(configure_error(rig), "");
   rig.runner->stop();
@@ -162,7 +156,7 @@ TEST(CanReferenceCia402, CommLossReactionNoneWritesNo6007) {
 TEST(CanReferenceCia402, AMissing6007IsExplained) {
   Cia402Behaviour b;
   b.has_6007 = false;
-  Cia402Drive drive(b, axis(), reference::monotonic_ns());
+  Cia402Drive drive(b, damped_axis(), reference::monotonic_ns());
   ReferenceRig rig(cia402_config(), drive);
   const std::string why = configure_error(rig);
   EXPECT_NE(why.find("no 0x6007"), std::string::npos) << why;
@@ -173,7 +167,7 @@ TEST(CanReferenceCia402, AMissing6007IsExplained) {
 // A normal stop: the drive (CANopenNode's SYNC consumer) reports no SYNC loss, and SYNC keeps
 // one per cycle to the end.
 TEST(CanReferenceCia402, ANormalStopRaisesNoSyncLossAndKeepsOneSyncPerCycle) {
-  Cia402Drive drive({}, axis(), reference::monotonic_ns());
+  Cia402Drive drive({}, damped_axis(), reference::monotonic_ns());
   ReferenceRig rig(slow_cia402_config(), drive);
   rig.device->configure();
   rig.device->enable();
@@ -208,7 +202,7 @@ TEST(CanReferenceCia402, ANormalStopRaisesNoSyncLossAndKeepsOneSyncPerCycle) {
 
 // After a fault the run disables the device and then closes it: one stop on the bus.
 TEST(CanReferenceCia402, AfterAFaultTheStopIsSentOnce) {
-  Cia402Drive drive({}, axis(), reference::monotonic_ns());
+  Cia402Drive drive({}, damped_axis(), reference::monotonic_ns());
   ReferenceRig rig(slow_cia402_config(), drive);
   rig.device->configure();
   rig.device->enable();

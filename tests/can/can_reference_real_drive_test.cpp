@@ -31,18 +31,12 @@ config::Config slow_config(std::vector<std::string> sets = {}) {
   return load_example("can-cia402.yaml", sets, false);
 }
 
-reference::PlantParameters axis() {
-  reference::PlantParameters p;
-  p.damping = 10.0;  // 1 N moves it at 0.1 m/s: 10 000 counts/s
-  return p;
-}
-
 // Issue 34, 1: 300 counts below 2^31 - 1 at the start, pushed up across the rollover and back
 // down across it: the samples follow the axis, never a jump of 2^32 counts.
 TEST(CanReferenceRealDrive, A0x6064ThatRollsOverBothWaysIsFollowed) {
   Cia402Behaviour b;
   b.position_offset = 2147483648LL - 300 - kStartCount;
-  Cia402Drive drive(b, axis(), reference::monotonic_ns());
+  Cia402Drive drive(b, damped_axis(), reference::monotonic_ns());
   ReferenceRig rig(slow_config(), drive);
   rig.device->configure();
   rig.device->enable();
@@ -83,7 +77,7 @@ TEST(CanReferenceRealDrive, ADriveWhoseDcLinkChargesAfterMainsOnIsEnabled) {
   Cia402Behaviour b;
   b.mains_on_at_start = false;
   b.dc_link_charge_ms = 800;
-  Cia402Drive drive(b, axis(), reference::monotonic_ns());
+  Cia402Drive drive(b, damped_axis(), reference::monotonic_ns());
   ReferenceRig rig(slow_config(), drive);
   rig.device->configure();
   auto enabled = std::async(std::launch::async, [&] { return enable_error(rig); });
@@ -98,7 +92,7 @@ TEST(CanReferenceRealDrive, ADriveWhoseDcLinkChargesAfterMainsOnIsEnabled) {
 TEST(CanReferenceRealDrive, ADriveWithoutMainsIsRefusedNamingTheDcLink) {
   Cia402Behaviour b;
   b.mains_on_at_start = false;
-  Cia402Drive drive(b, axis(), reference::monotonic_ns());
+  Cia402Drive drive(b, damped_axis(), reference::monotonic_ns());
   ReferenceRig rig(slow_config({"device.can.cia402.dc_link_timeout_ms=700"}), drive);
   rig.device->configure();
   const std::string e = enable_error(rig);

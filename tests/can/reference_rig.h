@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "can_rig.h"
+#include "reference/can/reference_plant.h"
 #include "reference/can/reference_runner.h"
 
 namespace hapticd::drivers::can::testing {
@@ -72,6 +73,14 @@ struct ReferenceRig {
   std::unique_ptr<reference::ReferenceRunner> runner;
   std::vector<PositionSample> samples;
 };
+
+// The reference drive's axis in these tests: damping 10 N s/m, so 1 N moves it at 0.1 m/s
+// (10 000 counts/s).
+inline reference::PlantParameters damped_axis() {
+  reference::PlantParameters p;
+  p.damping = 10.0;
+  return p;
+}
 
 inline void sleep_ms(int ms) { std::this_thread::sleep_for(std::chrono::milliseconds(ms)); }
 

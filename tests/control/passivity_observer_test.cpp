@@ -10,14 +10,14 @@
 namespace hapticd::control {
 namespace {
 
-constexpr double kT = 0.001;
+constexpr double kPeriod = 0.001;
 
 ObserverParams params(config::PassivityControl mode, double b, int delay = 0,
                       double max_damping = 50.0) {
   ObserverParams p;
   p.mode = mode;
   p.device_damping = b;
-  p.sample_period = kT;
+  p.sample_period = kPeriod;
   p.device_delay = delay;
   p.max_damping = max_damping;
   return p;
@@ -49,11 +49,11 @@ TEST(PassivityObserver, CreditsTheDampingAndChargesTheHeldForceExactly) {
   PassivityObserver o(params(config::PassivityControl::kObserve, 2.0));
   tick(o, 0.0, 3.0);     // u = 3 N held over the first period
   tick(o, 0.001, -1.0);  // moved 1 mm under 3 N: the force did 3 mJ of work on the device
-  const double e1 = 2.0 * 0.001 * 0.001 / kT - 3.0 * 0.001;
+  const double e1 = 2.0 * 0.001 * 0.001 / kPeriod - 3.0 * 0.001;
   EXPECT_DOUBLE_EQ(o.energy_j(), e1);
   EXPECT_DOUBLE_EQ(o.wall_work_j(), 3.0 * 0.001);
   tick(o, 0.0005, 0.0);  // back 0.5 mm under -1 N: 0.5 mJ more done on the device
-  EXPECT_DOUBLE_EQ(o.energy_j(), e1 + 2.0 * 0.0005 * 0.0005 / kT - 0.0005);
+  EXPECT_DOUBLE_EQ(o.energy_j(), e1 + 2.0 * 0.0005 * 0.0005 / kPeriod - 0.0005);
   EXPECT_DOUBLE_EQ(o.min_energy_j(), std::min(0.0, o.energy_j()));
   EXPECT_EQ(o.negative_ticks(), o.energy_j() < 0.0 ? 2u : 0u);
 }
@@ -80,7 +80,7 @@ TEST(PassivityObserver, MotionAcrossStaleTicksIsSpreadOverThePeriodsItSpans) {
   const double dx = 0.003, n = 3.0, mean_force = (2.0 + 6.0 + 6.0) / 3.0;
   EXPECT_DOUBLE_EQ(o.wall_work_j(), mean_force * dx);
   // b dx^2 / (n T): the least b can dissipate when the motion takes three periods.
-  EXPECT_DOUBLE_EQ(o.energy_j(), 4.0 * dx * dx / (n * kT) - mean_force * dx);
+  EXPECT_DOUBLE_EQ(o.energy_j(), 4.0 * dx * dx / (n * kPeriod) - mean_force * dx);
 }
 
 TEST(PassivityObserver, OffObservesNoEnergyButStillCountsTheWallsWork) {
@@ -108,7 +108,7 @@ TEST(PassivityObserver, DampAddsTheDampingThatDissipatesTheDeficitAgainstTheMoti
   const double e = o.energy_j();
   ASSERT_DOUBLE_EQ(e, -0.02);
   const Damping d = o.damp(4.0, law(100.0));
-  const double alpha = -e / (1.0 * 1.0 * kT);  // alpha v^2 T = -E
+  const double alpha = -e / (1.0 * 1.0 * kPeriod);  // alpha v^2 T = -E
   EXPECT_DOUBLE_EQ(d.alpha, alpha);
   EXPECT_DOUBLE_EQ(d.command, 4.0 - alpha * 1.0);  // against the motion (+x)
   EXPECT_DOUBLE_EQ(d.added, d.command - 4.0);

@@ -7,28 +7,16 @@
 
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <thread>
 
-#include "config/config_loader.h"
+#include "gpio_example.h"
 #include "sim/peers/gpio/gpio_peer.h"
 #include "sim/peers/peer_runner.h"
-#include "wiring/registry.h"
 
 namespace hapticd::drivers::gpio {
 namespace {
 
 namespace fs = std::filesystem;
-
-config::Config load(const std::vector<std::string>& sets) {
-  std::ifstream in(std::string(HAPTICD_SOURCE_DIR) + "/config/gpio.yaml");
-  std::stringstream text;
-  text << in.rdbuf();
-  std::vector<config::Override> o;
-  for (const auto& s : sets) o.push_back(config::parse_override(s));
-  return config::load_config_text(text.str(), "gpio.yaml", o, HAPTICD_SOURCE_DIR "/config",
-                                  wiring::driver_schemas());
-}
 
 struct FakeChip {
   FakeChip() {
@@ -62,7 +50,7 @@ struct FakeChip {
 
 TEST(GpioKernelPeer, AtRestItPutsTheLevelsOnceAndNothingMore) {
   FakeChip chip;
-  const config::Config cfg = load(
+  const config::Config cfg = load_gpio_example(
       {"loop.rate_hz=200", "device.gpio.counts_per_unit=20000", "device.sim.counts_per_unit=20000",
        "device.gpio.start_count=-400", "device.sim.operator.setpoint.start=4",
        "device.sim.initial_position=-0.020025", "device.sim.operator.setpoint.rest=-0.020025"});

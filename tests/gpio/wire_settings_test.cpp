@@ -3,14 +3,12 @@
 #include <gtest/gtest.h>
 
 #include <array>
-#include <fstream>
-#include <sstream>
 #include <vector>
 
 #include "config/config_loader.h"
 #include "drivers/gpio/gpio_settings.h"
 #include "drivers/gpio/gpio_wire.h"
-#include "wiring/registry.h"
+#include "gpio_example.h"
 
 namespace hapticd::drivers::gpio {
 namespace {
@@ -94,23 +92,9 @@ TEST(GpioWire, HelloAndLevels) {
   EXPECT_FALSE(wire::decode_levels(buf, l)) << "no such line";
 }
 
-std::string example() {
-  std::ifstream in(std::string(HAPTICD_SOURCE_DIR) + "/config/gpio.yaml");
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-config::Config load(const std::vector<std::string>& sets) {
-  std::vector<config::Override> o;
-  for (const auto& s : sets) o.push_back(config::parse_override(s));
-  return config::load_config_text(example(), "gpio.yaml", o, HAPTICD_SOURCE_DIR "/config",
-                                  wiring::driver_schemas());
-}
-
 std::string errors_of(const std::vector<std::string>& sets) {
   try {
-    load(sets);
+    load_gpio_example(sets);
   } catch (const config::ConfigError& e) {
     std::string all;
     for (const auto& m : e.messages()) all += m + "\n";
@@ -120,7 +104,7 @@ std::string errors_of(const std::vector<std::string>& sets) {
 }
 
 TEST(GpioSettings, TheExampleLoads) {
-  const config::Config cfg = load({});
+  const config::Config cfg = load_gpio_example({});
   const GpioSettings& s = gpio_settings(cfg);
   EXPECT_EQ(s.chip, "gpiochip0");
   EXPECT_EQ(s.line_a, 0u);
@@ -161,7 +145,7 @@ TEST(GpioSettings, EveryWrongKeyIsNamedWithItsPlace) {
   EXPECT_NE(unknown.find("device.gpio.chp: unknown key (did you mean 'chip'?)"), std::string::npos)
       << unknown;
   // A file error carries the file and line of the key.
-  std::string text = example();
+  std::string text = gpio_example();
   text.replace(text.find("max_edge_rate: 200000"), 21, "max_edge_rate: fast  ");
   try {
     config::load_config_text(text, "gpio.yaml", {}, HAPTICD_SOURCE_DIR "/config",
@@ -186,7 +170,7 @@ TEST(GpioSettings, DeclaredDelayFollowsThePwmPeriod) {
     EXPECT_EQ(declared_delay_samples(s, t), delay) << period << " ns";
   }
   // `check` analyses it: a slow PWM adds its delay to the gate's loop.
-  const config::Config cfg = load({"device.gpio.pwm.period_ns=2500000"});
+  const config::Config cfg = load_gpio_example({"device.gpio.pwm.period_ns=2500000"});
   EXPECT_EQ(wiring::find_driver("gpio").declared_delay(cfg), 2);
 }
 

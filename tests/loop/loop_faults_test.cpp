@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "control/controller.h"
+#include "freerun.h"
 #include "loop/servo_loop.h"
 #include "scripted_device.h"
 
@@ -28,13 +29,6 @@ LoopResult run(ScriptedDevice& dev, LoopOptions o) {
   ServoLoop loop(dev, ctl, nullptr, o);
   const std::atomic<bool> stop{false};
   return loop.run(stop);
-}
-
-LoopOptions freerun(std::uint64_t ticks = 100) {
-  LoopOptions o;
-  o.realtime = false;
-  o.max_ticks = ticks;
-  return o;
 }
 
 // Issue 7: only the sim device's own finiteness check stopped a NaN force; the loop must fault

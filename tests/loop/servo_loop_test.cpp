@@ -8,6 +8,7 @@
 #include "alloc_counter.h"
 #include "config/config_loader.h"
 #include "control/controller.h"
+#include "freerun.h"
 #include "loop/servo_loop.h"
 #include "sim/sim_device.h"
 
@@ -29,13 +30,6 @@ struct Rig {
   sim::SimDevice device;
   control::Controller controller;
 };
-
-LoopOptions freerun(std::uint64_t ticks) {
-  LoopOptions o;
-  o.realtime = false;
-  o.max_ticks = ticks;
-  return o;
-}
 
 std::vector<TickRecord> drain(SpscRing<TickRecord>& ring) {
   std::vector<TickRecord> out(ring.size_approx());

@@ -15,8 +15,6 @@ namespace {
 
 using nlohmann::json;
 
-std::string example(const std::string& name) { return source_dir() + "/config/" + name; }
-
 // What a run that met nothing unusual shows as zero.
 const char* const kAnomalies[] = {
     "malformed_messages", "wrong_length",   "unknown_ids",    "tx_queue_full",

@@ -13,8 +13,6 @@
 namespace hapticd::testing {
 namespace {
 
-std::string example() { return source_dir() + "/config/coupling-example.yaml"; }
-
 double max_speed_in_last(const std::vector<telemetry::TickRecord>& r, std::size_t n) {
   double v = 0.0;
   for (std::size_t k = r.size() - n; k < r.size(); ++k) v = std::max(v, std::abs(r[k].velocity));
@@ -22,15 +20,15 @@ double max_speed_in_last(const std::vector<telemetry::TickRecord>& r, std::size_
 }
 
 TEST(CouplingExample1, GateRefusesTheBareWallAndPassesTheCoupledOne) {
-  const ProcessResult bare = run_process(
-      {hapticd_binary(), "check", "--json", "--config", example(), "--set", "wall.coupling="});
+  const ProcessResult bare = run_process({hapticd_binary(), "check", "--json", "--config",
+                                          coupling_example(), "--set", "wall.coupling="});
   EXPECT_EQ(bare.exit_code, 3);
   const nlohmann::json b = nlohmann::json::parse(bare.out);
   EXPECT_NEAR(b["passivity"]["required_damping"].get<double>(), 30.0, 1e-9);
   EXPECT_EQ(b["verdict"], "fail");
 
   const ProcessResult coupled =
-      run_process({hapticd_binary(), "check", "--json", "--config", example()});
+      run_process({hapticd_binary(), "check", "--json", "--config", coupling_example()});
   EXPECT_EQ(coupled.exit_code, 0);
   const nlohmann::json c = nlohmann::json::parse(coupled.out);
   EXPECT_EQ(c["verdict"], "pass");
@@ -43,13 +41,14 @@ TEST(CouplingExample1, CoupledWallSettlesBareWallKeepsBouncing) {
   const std::string coupled_log = temp_path("ex1_coupled.hlog"),
                     bare_log = temp_path("ex1_bare.hlog");
   const std::string bare_sum = temp_path("ex1_bare.json");
-  ASSERT_EQ(run_process({hapticd_binary(), "run", "--config", example(), "--duration", "20",
-                         "--log", coupled_log})
+  ASSERT_EQ(run_process({hapticd_binary(), "run", "--config", coupling_example(), "--duration",
+                         "20", "--log", coupled_log})
                 .exit_code,
             0);
-  const ProcessResult bare = run_process(
-      {hapticd_binary(), "run", "--config", example(), "--duration", "20", "--log", bare_log,
-       "--summary-json", bare_sum, "--set", "wall.coupling=", "--set", "safety.gate=warn"});
+  const ProcessResult bare =
+      run_process({hapticd_binary(), "run", "--config", coupling_example(), "--duration", "20",
+                   "--log", bare_log, "--summary-json", bare_sum, "--set",
+                   "wall.coupling=", "--set", "safety.gate=warn"});
   ASSERT_EQ(bare.exit_code, 0) << bare.err;
   const auto coupled = telemetry::read_log(coupled_log).records;
   const auto bouncing = telemetry::read_log(bare_log).records;

@@ -21,8 +21,6 @@ std::string list(const nlohmann::json& a) {
 
 }  // namespace
 
-std::string coupling_example() { return source_dir() + "/config/coupling-example.yaml"; }
-
 nlohmann::json design_coupling_json(const std::vector<std::string>& extra) {
   std::vector<std::string> args{hapticd_binary(), "design-coupling", "--json"};
   args.insert(args.end(), extra.begin(), extra.end());

@@ -6,9 +6,9 @@
 #include <string>
 #include <vector>
 
-namespace hapticd::testing {
+#include "process.h"
 
-std::string coupling_example();  // config/coupling-example.yaml: the paper's Example 1
+namespace hapticd::testing {
 
 // `hapticd design-coupling --json EXTRA...`: its JSON object, with "exit_code" added. Expects
 // exit 0 or 1 and a progress line on stderr per step the JSON reports.

@@ -14,8 +14,6 @@ namespace {
 
 using nlohmann::json;
 
-std::string example(const std::string& name) { return source_dir() + "/config/" + name; }
-
 struct Example {
   std::string config;       // "" for the embedded sim.yaml
   std::string reverse_key;  // the setting the refusal must name

@@ -26,8 +26,6 @@ void expect_recovers(const std::vector<std::string>& args, double mass, double d
   EXPECT_LT(j["travel_m"].get<double>(), 0.1);
 }
 
-std::string example(const std::string& name) { return source_dir() + "/config/" + name; }
-
 TEST(CliIdentify, RecoversTheSimsMassAndDamping) {
   expect_recovers({"--config", example("sim.yaml")}, 0.1, 2.0);
   // Not the defaults by accident: another device, and the operator of the config ignored.

@@ -18,8 +18,8 @@
 namespace hapticd::service {
 namespace {
 
-struct Rig {
-  Rig() : cfg(free_device()), device(cfg.device, cfg.loop.sample_period_s()) {
+struct IdentifyRig {
+  IdentifyRig() : cfg(free_device()), device(cfg.device, cfg.loop.sample_period_s()) {
     device.configure();
     device.enable();
   }
@@ -46,13 +46,13 @@ ExcitationLimits limits(bool realtime, double max_travel) {
   return l;
 }
 
-void expect_safe_end(const Rig& rig) {
+void expect_safe_end(const IdentifyRig& rig) {
   EXPECT_EQ(rig.device.last_command(), 0.0);
   EXPECT_FALSE(rig.device.output_enabled());
 }
 
 TEST(IdentifyRun, RealtimeRecordsEveryTickWithoutAllocating) {
-  Rig rig;
+  IdentifyRig rig;
   const std::vector<double> u = sine(200, 1.0);
   ExcitationRecord rec(u.size());
   const std::atomic<bool> stop{false};
@@ -67,7 +67,7 @@ TEST(IdentifyRun, RealtimeRecordsEveryTickWithoutAllocating) {
 }
 
 TEST(IdentifyRun, TheTravelGuardEndsItAtZeroForce) {
-  Rig rig;
+  IdentifyRig rig;
   const std::vector<double> u(2000, 5.0);  // a steady push: the device runs away
   ExcitationRecord rec(u.size());
   const std::atomic<bool> stop{false};
@@ -79,7 +79,7 @@ TEST(IdentifyRun, TheTravelGuardEndsItAtZeroForce) {
 }
 
 TEST(IdentifyRun, AStopEndsItAtZeroForce) {
-  Rig rig;
+  IdentifyRig rig;
   const std::vector<double> u = sine(100, 1.0);
   ExcitationRecord rec(u.size());
   const std::atomic<bool> stop{true};
@@ -90,7 +90,7 @@ TEST(IdentifyRun, AStopEndsItAtZeroForce) {
 }
 
 TEST(IdentifyRun, ANonFiniteCommandFaultsTheDeviceAndEndsIt) {
-  Rig rig;
+  IdentifyRig rig;
   std::vector<double> u = sine(100, 1.0);
   u[40] = std::numeric_limits<double>::quiet_NaN();  // the device refuses it: zero written, fault
                                                      // latched

@@ -14,8 +14,6 @@ namespace {
 
 using nlohmann::json;
 
-std::string example() { return source_dir() + "/config/coupling-example.yaml"; }
-
 struct LoggedRun {
   ProcessResult process;
   json summary;
@@ -59,8 +57,8 @@ TEST(CliPassivity, AWallTheGateRefusesGoesNegativeAndDampStopsItPumpingEnergyInt
   // Naghshtabrizi and Hespanha's Example 1 without its coupling, forced on with warn: it
   // falls into a Nyquist-rate bounce that hands the hand energy.
   const std::vector<std::string> bare = {
-      "--config", example(),        "--duration", "20",
-      "--set",    "wall.coupling=", "--set",      "safety.gate=warn"};
+      "--config", coupling_example(), "--duration", "20",
+      "--set",    "wall.coupling=",   "--set",      "safety.gate=warn"};
   auto with = [&](const std::string& mode) {
     std::vector<std::string> a = bare;
     a.insert(a.end(), {"--set", "safety.passivity_controller=" + mode});
@@ -102,8 +100,9 @@ TEST(CliPassivity, TheControllersOwnForcesNeverPutEnergyInWhateverTheHandDoes) {
     for (int damp = 0; damp < 2; ++damp) {
       const std::string sum = temp_path(std::string("shake_") + hz + ".json");
       const ProcessResult r = run_process(
-          {hapticd_binary(), "run", "--config", example(), "--duration", "20", "--summary-json",
-           sum, "--set", "wall.coupling=", "--set", "safety.gate=warn", "--set", shake, "--set",
+          {hapticd_binary(), "run", "--config", coupling_example(), "--duration", "20",
+           "--summary-json", sum, "--set", "wall.coupling=", "--set", "safety.gate=warn", "--set",
+           shake, "--set",
            damp ? "safety.passivity_controller=damp" : "safety.passivity_controller=observe"});
       ASSERT_EQ(r.exit_code, 0) << r.err;
       summary[damp] = json::parse(read_file(sum))["passivity"];
@@ -135,8 +134,8 @@ TEST(CliPassivity, ReplayReproducesTheObserverAtARateWithoutWholeNanoseconds) {
 }
 
 TEST(CliPassivity, ReplayReproducesTheControllersForcesBitForBit) {
-  const json j = run_and_replay(
-      "damp_replay", {"--config", example(), "--duration", "5", "--set", "wall.coupling="});
+  const json j = run_and_replay("damp_replay", {"--config", coupling_example(), "--duration", "5",
+                                                "--set", "wall.coupling="});
   EXPECT_EQ(j["reproduced"]["differing"], 0);
   EXPECT_EQ(j["reproduced"]["identical"], true);
   EXPECT_GT(j["logged"]["damped_ticks"].get<int>(), 0);

@@ -24,15 +24,12 @@
 namespace hapticd::service {
 namespace {
 
+using hapticd::testing::example;
 using hapticd::testing::has;
 
 using hapticd::testing::ProcessResult;
 using hapticd::testing::run_process;
 using Kind = EndpointVerdict::Kind;
-
-std::string example(const std::string& name) {
-  return std::string(HAPTICD_SOURCE_DIR) + "/config/" + name;
-}
 
 ProcessResult peer(const std::string& config, const std::string& endpoint,
                    std::vector<std::string> more = {}) {

@@ -186,6 +186,8 @@ std::string wait_ready(NotifySocket& notify, BackgroundProcess& p) {
 
 std::string hapticd_binary() { return HAPTICD_BINARY; }
 std::string source_dir() { return HAPTICD_SOURCE_DIR; }
+std::string example(const std::string& name) { return source_dir() + "/config/" + name; }
+std::string coupling_example() { return example("coupling-example.yaml"); }
 std::string build_dir() { return HAPTICD_BUILD_DIR; }
 
 std::string temp_path(const std::string& name) {

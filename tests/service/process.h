@@ -70,9 +70,11 @@ class NotifySocket {
 // cause instead of a bare time-out.
 std::string wait_ready(NotifySocket& notify, BackgroundProcess& p);
 
-std::string hapticd_binary();                    // path of the built daemon
-std::string source_dir();                        // the project root
-std::string build_dir();                         // the build tree the tests belong to
+std::string hapticd_binary();                  // path of the built daemon
+std::string source_dir();                      // the project root
+std::string example(const std::string& name);  // the shipped config/<name>
+std::string coupling_example();  // config/coupling-example.yaml (Example 1 of the paper)
+std::string build_dir();         // the build tree the tests belong to
 std::string temp_path(const std::string& name);  // a fresh path under the test's temp dir
 std::string read_file(const std::string& path);
 // Whether `text` (a command's output, a file) holds `part`.

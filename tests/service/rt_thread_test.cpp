@@ -16,8 +16,9 @@
 namespace hapticd::service {
 namespace {
 
-struct Rig {
-  Rig() : device(cfg.device, cfg.loop.sample_period_s()), law(control::make_control_law(cfg)) {
+struct ThreadRig {
+  ThreadRig()
+      : device(cfg.device, cfg.loop.sample_period_s()), law(control::make_control_law(cfg)) {
     device.configure();
     device.enable();
   }
@@ -41,7 +42,7 @@ bool eventually(const auto& condition) {
 }
 
 TEST(RtThread, TheLoopWaitsAtTheGateUntilStartThenTicks) {
-  Rig rig;
+  ThreadRig rig;
   RtThread thread(rig.loop, 1, -1, false, rig.rt);
   ASSERT_EQ(thread.wait_ready(), "");
   // A loop that ran early would have ticked thousands of times (freerun) by now.
@@ -58,7 +59,7 @@ TEST(RtThread, TheLoopWaitsAtTheGateUntilStartThenTicks) {
 }
 
 TEST(RtThread, AStopBeforeStartMeansTheLoopNeverRuns) {
-  Rig rig;
+  ThreadRig rig;
   RtThread thread(rig.loop, 1, -1, false, rig.rt);
   ASSERT_EQ(thread.wait_ready(), "");
   thread.request_stop();
@@ -70,7 +71,7 @@ TEST(RtThread, AStopBeforeStartMeansTheLoopNeverRuns) {
 }
 
 TEST(RtThread, ADestroyedUnstartedThreadJoinsWithoutRunningTheLoop) {
-  Rig rig;
+  ThreadRig rig;
   {
     RtThread thread(rig.loop, 1, -1, false, rig.rt);
     ASSERT_EQ(thread.wait_ready(), "");

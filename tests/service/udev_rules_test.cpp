@@ -18,7 +18,7 @@ namespace {
 
 using hapticd::testing::has;
 
-config::Config example(const std::string& name, const std::vector<std::string>& sets = {}) {
+config::Config example_config(const std::string& name, const std::vector<std::string>& sets = {}) {
   return load_config({std::string(HAPTICD_SOURCE_DIR) + "/config/" + name, sets});
 }
 
@@ -48,7 +48,7 @@ TEST(UdevRules, EveryExampleGrantsOnlyGroupHapticdAndMatchesNothingByPattern) {
     SCOPED_TRACE(e.path().string());
     config::Config cfg;
     try {
-      cfg = example(e.path().filename());
+      cfg = example_config(e.path().filename());
     } catch (const config::ConfigError& err) {
       // A build without that driver (the sanitizer stage's) cannot load its example.
       ASSERT_TRUE(has(err.messages().at(0), "device.driver")) << err.messages()[0];
@@ -76,7 +76,7 @@ TEST(UdevRules, EveryExampleGrantsOnlyGroupHapticdAndMatchesNothingByPattern) {
 #if HAPTICD_WITH_CAN
 TEST(UdevRules, CanSetsTheBitrateOfTheConfiguredInterfaceAndNoOther) {
   const std::string text = instance_udev_rules(
-      example("can-cia402.yaml", {"device.can.interface=can1", "device.can.bitrate=500000"}),
+      example_config("can-cia402.yaml", {"device.can.interface=can1", "device.can.bitrate=500000"}),
       "arm");
   const std::vector<std::string> rules = rule_lines(text);
   ASSERT_EQ(rules.size(), 1u) << text;
@@ -84,11 +84,12 @@ TEST(UdevRules, CanSetsTheBitrateOfTheConfiguredInterfaceAndNoOther) {
             "ACTION==\"add\", SUBSYSTEM==\"net\", KERNEL==\"can1\", ATTR{type}==\"280\", "
             "RUN+=\"/sbin/ip link set can1 type can bitrate 500000 restart-ms 100\", "
             "RUN+=\"/sbin/ip link set can1 up\"");
-  EXPECT_TRUE(rule_lines(instance_udev_rules(
-                             example("can-odrive.yaml", {"device.can.interface=vcan0"}), "arm"))
-                  .empty())
+  EXPECT_TRUE(
+      rule_lines(instance_udev_rules(
+                     example_config("can-odrive.yaml", {"device.can.interface=vcan0"}), "arm"))
+          .empty())
       << "a virtual bus has no bitrate";
-  const std::string bad = refusal(example("can-cia402.yaml", {"device.can.interface=can*"}));
+  const std::string bad = refusal(example_config("can-cia402.yaml", {"device.can.interface=can*"}));
   EXPECT_TRUE(has(bad, "device.can.interface: 'can*' cannot go into a udev rule")) << bad;
 }
 #endif
@@ -96,8 +97,8 @@ TEST(UdevRules, CanSetsTheBitrateOfTheConfiguredInterfaceAndNoOther) {
 #if HAPTICD_WITH_GPIO
 TEST(UdevRules, GpioGrantsItsChipAndExportsAndGrantsItsOneChannel) {
   const std::string text = instance_udev_rules(
-      example("gpio.yaml", {"device.gpio.chip=/dev/gpiochip2", "device.gpio.pwm.chip=1",
-                            "device.gpio.pwm.channel=3"}),
+      example_config("gpio.yaml", {"device.gpio.chip=/dev/gpiochip2", "device.gpio.pwm.chip=1",
+                                   "device.gpio.pwm.channel=3"}),
       "arm");
   const std::vector<std::string> rules = rule_lines(text);
   ASSERT_EQ(rules.size(), 2u) << text;
@@ -115,27 +116,30 @@ TEST(UdevRules, GpioGrantsItsChipAndExportsAndGrantsItsOneChannel) {
 }
 
 TEST(UdevRules, AGpioChipGivenByLabelIsRefusedWithTheKeyToChange) {
-  const std::string bad = refusal(example("gpio.yaml", {"device.gpio.chip=pinctrl-bcm2835"}));
+  const std::string bad =
+      refusal(example_config("gpio.yaml", {"device.gpio.chip=pinctrl-bcm2835"}));
   EXPECT_TRUE(has(bad,
                   "--set device.gpio.chip=pinctrl-bcm2835: device.gpio.chip: "
                   "'pinctrl-bcm2835' is not a chip's kernel name"))
       << bad;
   EXPECT_TRUE(has(bad, "gpiochipN")) << bad;
-  const std::string other_root =
-      instance_udev_rules(example("gpio.yaml", {"device.gpio.pwm.sysfs_root=/tmp/pwm"}), "arm");
+  const std::string other_root = instance_udev_rules(
+      example_config("gpio.yaml", {"device.gpio.pwm.sysfs_root=/tmp/pwm"}), "arm");
   EXPECT_EQ(rule_lines(other_root).size(), 1u) << "no PWM rule for a root udev does not manage";
 }
 #endif
 
 #if HAPTICD_WITH_HID
 TEST(UdevRules, HidGrantsTheConfiguredDeviceByVendorProductAndSerial) {
-  std::vector<std::string> rules = rule_lines(instance_udev_rules(example("hid-report.yaml"), "a"));
+  std::vector<std::string> rules =
+      rule_lines(instance_udev_rules(example_config("hid-report.yaml"), "a"));
   ASSERT_EQ(rules.size(), 1u);
   EXPECT_EQ(rules[0],
             "SUBSYSTEM==\"hidraw\", ATTRS{idVendor}==\"1209\", ATTRS{idProduct}==\"ffb0\", "
             "GROUP=\"hapticd\", MODE=\"0660\"");
   rules = rule_lines(instance_udev_rules(
-      example("hid-pid.yaml", {"device.hid.backend=libusb", "device.hid.select.serial=0042"}),
+      example_config("hid-pid.yaml",
+                     {"device.hid.backend=libusb", "device.hid.select.serial=0042"}),
       "a"));
   ASSERT_EQ(rules.size(), 1u);
   EXPECT_EQ(rules[0],
@@ -143,32 +147,34 @@ TEST(UdevRules, HidGrantsTheConfiguredDeviceByVendorProductAndSerial) {
             "ATTR{idProduct}==\"ffb0\", ATTR{serial}==\"0042\", GROUP=\"hapticd\", "
             "MODE=\"0660\"");
   rules = rule_lines(instance_udev_rules(
-      example("hid-report.yaml", {"device.hid.select.path=/dev/hidraw3"}), "a"));
+      example_config("hid-report.yaml", {"device.hid.select.path=/dev/hidraw3"}), "a"));
   ASSERT_EQ(rules.size(), 1u);
   EXPECT_EQ(rules[0],
             "SUBSYSTEM==\"hidraw\", KERNEL==\"hidraw3\", GROUP=\"hapticd\", MODE=\"0660\"");
   const std::string bad =
-      refusal(example("hid-report.yaml", {"device.hid.select.serial=\"00 42*\""}));
+      refusal(example_config("hid-report.yaml", {"device.hid.select.serial=\"00 42*\""}));
   EXPECT_TRUE(has(bad, "device.hid.select.serial: '00 42*' cannot go into a udev rule")) << bad;
 }
 #endif
 
 #if HAPTICD_WITH_EVDEV
 TEST(UdevRules, EvdevGrantsTheConfiguredInputNodeAndNoOther) {
-  std::vector<std::string> rules = rule_lines(instance_udev_rules(example("evdev.yaml"), "a"));
+  std::vector<std::string> rules =
+      rule_lines(instance_udev_rules(example_config("evdev.yaml"), "a"));
   ASSERT_EQ(rules.size(), 1u);
   EXPECT_EQ(rules[0],
             "SUBSYSTEM==\"input\", ATTRS{id/vendor}==\"1209\", "
             "ATTRS{id/product}==\"ffb0\", GROUP=\"hapticd\", MODE=\"0660\"");
   rules = rule_lines(instance_udev_rules(
-      example("evdev.yaml", {"device.evdev.select={path: /dev/input/by-id/usb-X-event-joystick}"}),
+      example_config("evdev.yaml",
+                     {"device.evdev.select={path: /dev/input/by-id/usb-X-event-joystick}"}),
       "a"));
   ASSERT_EQ(rules.size(), 1u);
   EXPECT_EQ(rules[0],
             "SUBSYSTEM==\"input\", SYMLINK==\"input/by-id/usb-X-event-joystick\", "
             "GROUP=\"hapticd\", MODE=\"0660\"");
   const std::string bad =
-      refusal(example("evdev.yaml", {"device.evdev.select={name: \"Open FFBoard\"}"}));
+      refusal(example_config("evdev.yaml", {"device.evdev.select={name: \"Open FFBoard\"}"}));
   EXPECT_TRUE(has(bad, "device.evdev.select.name: 'Open FFBoard' cannot go into a udev rule"))
       << bad;
 }

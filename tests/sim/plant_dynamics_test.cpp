@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "config/config.h"
+#include "plant_numbers.h"
 #include "reference.h"
 #include "sim/plant.h"
 
@@ -18,11 +19,10 @@ namespace {
 
 using config::OperatorSpec;
 using config::ProfileSpec;
+using plant_numbers::kB;
+using plant_numbers::kM;
+using plant_numbers::kT;
 using Points = std::vector<std::pair<double, double>>;
-
-constexpr double kT = 1e-3;
-constexpr double kM = 0.1;
-constexpr double kB = 2.0;
 
 ProfileSpec press(const Points& pts) {
   ProfileSpec p;

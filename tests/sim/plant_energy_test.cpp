@@ -10,20 +10,20 @@
 #include <gtest/gtest.h>
 
 #include "config/config.h"
+#include "plant_numbers.h"
 #include "sim/plant.h"
 
 namespace hapticd::sim {
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr double kInf = std::numeric_limits<double>::infinity();
 using config::OperatorSpec;
 using config::ProfileSpec;
+using plant_numbers::kB;
+using plant_numbers::kInf;
+using plant_numbers::kM;
+using plant_numbers::kNaN;
+using plant_numbers::kT;
 using Kind = OperatorSpec::Kind;
-
-constexpr double kT = 1e-3;
-constexpr double kM = 0.1;
-constexpr double kB = 2.0;
 
 OperatorSpec of_kind(Kind kind) {
   OperatorSpec op;

@@ -9,14 +9,15 @@
 #include <gtest/gtest.h>
 
 #include "config/config.h"
+#include "plant_numbers.h"
 #include "sim/profile.h"
 
 namespace hapticd::sim {
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr double kInf = std::numeric_limits<double>::infinity();
 using config::ProfileSpec;
+using plant_numbers::kInf;
+using plant_numbers::kNaN;
 
 ProfileSpec points(std::vector<config::ProfilePoint> pts) {
   ProfileSpec p;

@@ -10,15 +10,15 @@
 
 #include "alloc_counter.h"
 #include "config/config.h"
+#include "plant_numbers.h"
 #include "sim/sim_device.h"
 
 namespace hapticd::sim {
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 using config::OperatorSpec;
-
-constexpr double kT = 1e-3;
+using plant_numbers::kNaN;
+using plant_numbers::kT;
 
 config::DeviceConfig at_rest(double x0, double counts_per_unit) {
   config::DeviceConfig c;
