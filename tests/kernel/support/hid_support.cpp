@@ -1,6 +1,7 @@
 #include "hid_support.h"
 
 #include <cstdio>
+#include <filesystem>
 #include <sstream>
 
 #include "sysfs.h"
@@ -51,6 +52,18 @@ bool hidraw_listed(std::uint16_t bus, std::uint16_t vendor_id, std::uint16_t pro
                    const std::string& serial) {
   try {
     return find_hidraw(bus, vendor_id, product_id, serial).has_value();
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
+bool hid_bound(std::uint16_t bus, std::uint16_t vendor_id, std::uint16_t product_id,
+               const std::string& serial) {
+  try {
+    const auto node = find_hidraw(bus, vendor_id, product_id, serial);
+    if (!node) return false;
+    const std::string name = std::filesystem::path(*node).filename();
+    return std::filesystem::exists("/sys/class/hidraw/" + name + "/device/driver");
   } catch (const std::exception&) {
     return false;
   }

@@ -26,5 +26,11 @@ std::optional<std::string> find_hidraw(std::uint16_t bus, std::uint16_t vendor_i
 // Whether the kernel lists that node now (one that vanishes while it is being looked at is not).
 bool hidraw_listed(std::uint16_t bus, std::uint16_t vendor_id, std::uint16_t product_id,
                    const std::string& serial);
+// Whether that device's HID driver is bound: its probe is over. The hidraw node appears in the
+// middle of it (hid_connect), before the kernel's own PID host (hid-pidff, the ff_init called
+// last) may reset the device and try an effect: a host that meets the device before the probe
+// returns races that.
+bool hid_bound(std::uint16_t bus, std::uint16_t vendor_id, std::uint16_t product_id,
+               const std::string& serial);
 
 }  // namespace hapticd::kernel_test

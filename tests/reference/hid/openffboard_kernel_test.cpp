@@ -59,9 +59,11 @@ struct Board {
       return kernel_test::hidraw_listed(3, OpenFfboard::kVendor, OpenFfboard::kProduct, serial);
     })) << "the reference OpenFFBoard never appeared";
     // The kernel's own PID host (hid-pidff) binds to it too, resets it and tries one effect
-    // (its autocenter probe): let that pass before hapticd meets the board.
-    std::this_thread::sleep_for(std::chrono::seconds(1));
-    EXPECT_TRUE(wait_until([&] { return board.allocated() == 0; }));
+    // (its autocenter probe): only once the driver's probe is over may hapticd meet the board.
+    EXPECT_TRUE(wait_until([&] {
+      return kernel_test::hid_bound(3, OpenFfboard::kVendor, OpenFfboard::kProduct, serial);
+    })) << "the kernel's HID driver never bound the board";
+    EXPECT_EQ(board.allocated(), 0u) << "an effect left allocated by the kernel's probe";
   }
   ~Board() {
     EXPECT_EQ(board.error(), "") << "the reference device's USB side failed";
