@@ -68,7 +68,18 @@ std::string ArduinoFfb::describe() const {
       std::to_string(outputs_.load()) + " outputs (" + std::to_string(constants_.load()) +
       " Set Constant Force), position " + std::to_string(axis_.position()) + " rad; PWM changes:";
   for (const std::string& c : changes_) s += "\n  " + c;
+  s += "\nSet Constant Force from " + std::to_string(first_constant_ms_ % 100000) + " to " +
+       std::to_string(last_constant_ms_ % 100000) + " ms; the other reports (ms, bytes):";
+  for (const std::string& c : commands_) s += "\n  " + c;
   return s;
+}
+
+// For a test that failed: what the host asked besides the force, in order (m_ held).
+void ArduinoFfb::note_command(std::span<const std::uint8_t> r) {
+  if (commands_.size() >= 60) return;
+  std::string c = std::to_string(now_ms() % 100000) + ":";
+  for (std::size_t i = 0; i < r.size() && i < 14; ++i) c += " " + std::to_string(r[i]);
+  commands_.push_back(c);
 }
 
 bool ArduinoFfb::playing() const {
@@ -149,7 +160,7 @@ int ArduinoFfb::force_calculator(std::int64_t now) {
 
 // For a test that failed: the first PWM changes, each with the effects behind it (m_ held).
 void ArduinoFfb::note_change(std::int64_t now, int pwm) {
-  if (changes_.size() >= 40) return;
+  if (changes_.size() >= 60) changes_.erase(changes_.begin() + 20);  // the first 20, the last 40
   std::string c = std::to_string(now % 100000) + " ms: " + std::to_string(pwm);
   for (int i = 0; i <= kMaxEffects; ++i) {
     const Effect& e = effects_[i];
@@ -175,7 +186,12 @@ std::int32_t ArduinoFfb::effect_force(Effect& e, std::int64_t now) {
     const std::int32_t value = gained != 0 ? gained * e.magnitude / gained : 0;
     force = static_cast<std::int32_t>(static_cast<float>(value * kGain) * ratio);
   }
-  e.elapsed = static_cast<std::uint16_t>(now - e.start_ms);
+  // The board's millis() never runs behind a start its USB interrupt made; here `now` was read
+  // by the loop before it took the lock, and a start the host's thread made since is later:
+  // unclamped, the uint16 wrapped to ~65530 ms, past any duration, and the effect never played
+  // again (the cause of this board's kernel tests failing now and then, at the enable's start
+  // or at a restart).
+  e.elapsed = static_cast<std::uint16_t>(std::max<std::int64_t>(0, now - e.start_ms));
   return force;
 }
 
@@ -184,7 +200,13 @@ void ArduinoFfb::output(std::span<const std::uint8_t> r) {
   if (r.size() < 2) return;
   const std::lock_guard lock(m_);
   outputs_.fetch_add(1);
-  if (r[0] == id::kSetConstant) constants_.fetch_add(1);
+  if (r[0] == id::kSetConstant) {
+    constants_.fetch_add(1);
+    last_constant_ms_ = now_ms();
+    if (first_constant_ms_ < 0) first_constant_ms_ = last_constant_ms_;
+  } else {
+    note_command(r);
+  }
   const std::uint8_t block = r[1];
   // The firmware indexes g_EffectStates with it unchecked; the reference ignores a wild one.
   Effect* e = block <= kMaxEffects ? &effects_[block] : nullptr;
@@ -282,8 +304,10 @@ std::uint8_t ArduinoFfb::next_free_effect() {
 
 // DynamicHID_::SetReport: feature 5 is Create New Effect; every other is taken and dropped.
 bool ArduinoFfb::set_feature(std::span<const std::uint8_t> r) {
-  if (r.empty() || r[0] != id::kCreateNewEffect) return true;
+  if (r.empty()) return true;
   const std::lock_guard lock(m_);
+  note_command(r);
+  if (r[0] != id::kCreateNewEffect) return true;
   load_id_ = id::kBlockLoad;
   load_block_ = next_free_effect();
   load_status_ = load_block_ == 0 ? 2 : 1;  // 1 success, 2 full

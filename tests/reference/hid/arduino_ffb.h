@@ -107,6 +107,7 @@ class ArduinoFfb {
   void sketch_loop();
   int force_calculator(std::int64_t now_ms);
   void note_change(std::int64_t now_ms, int pwm);
+  void note_command(std::span<const std::uint8_t> report);
   std::int32_t effect_force(Effect& e, std::int64_t now_ms);
   void output(std::span<const std::uint8_t> r);
   bool set_feature(std::span<const std::uint8_t> r);
@@ -129,7 +130,9 @@ class ArduinoFfb {
   std::uint8_t load_id_ = 0, load_block_ = 0, load_status_ = 0;
   std::uint16_t ram_available_ = 0;
   std::atomic<int> pwm_{0};
-  std::vector<std::string> changes_;  // describe(): the first PWM changes
+  std::vector<std::string> changes_;   // describe(): the first PWM changes
+  std::vector<std::string> commands_;  // describe(): the first reports but Set Constant Force
+  std::int64_t first_constant_ms_ = -1, last_constant_ms_ = -1;  // describe(): when they came
   std::atomic<std::int64_t> longest_wait_ms_{0};
   std::atomic<bool> hung_{false}, stop_{false};
   std::atomic<std::uint64_t> reports_{0}, block_load_reads_{0}, outputs_{0}, constants_{0},

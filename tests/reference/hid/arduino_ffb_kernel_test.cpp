@@ -6,11 +6,7 @@
 // machine is emulated (TCG) and its USB controller is dummy_hcd, so the loop runs at 100 Hz
 // with a wall the gate allows there (and the reference axis' own inertia and damping), and the
 // stale bound 0.5 s: above the emulator's stalls, far below a hang. The emulated controller
-// also stalls output transfers under load: 100 full ticks fault, not 10. Two CI runs faulted
-// with the held axis pushed through the wall (0.304 rad); a restart the full OUT queue dropped
-// let the effect run out so (the driver now sends it at the next tick that writes), but a run
-// with that fix faulted so too, at tick 1039 over libusb, and another's effect never played:
-// the cause is still open. And it
+// also stalls output transfers under load: 100 full ticks fault, not 10. And it
 // hands this board's reports over up to ~150 ms late at times: the direction check's pulse is 100
 // ms a half (10 ticks), not the default 3 ticks, which moves the axis a few encoder counts that a
 // late report can hide.
@@ -97,7 +93,7 @@ TEST_P(ArduinoFfbUsb, AtRestInTheWallTheShippedConfigurationRendersIt) {
   const HapticdRun r = run_hapticd(shipped("hid-arduino-ffb.yaml"), sets(GetParam(), b.serial),
                                    {"--duration", "12"}, [&](pid_t pid) {
                                      ASSERT_TRUE(wait_until([&] { return b.enabled(); }))
-                                         << "output never enabled";
+                                         << "output never enabled: " << b.board.describe();
                                      ASSERT_FALSE(ended(pid));
                                      b.board.axis().hand(kPush, 1.0);
                                      std::this_thread::sleep_for(std::chrono::seconds(5));
@@ -129,7 +125,8 @@ TEST_P(ArduinoFfbUsb, AHungBoardFaultsOnItsSilence) {
   Board b;
   const HapticdRun r = run_hapticd(shipped("hid-arduino-ffb.yaml"), sets(GetParam(), b.serial),
                                    {"--duration", "30"}, [&](pid_t pid) {
-                                     ASSERT_TRUE(wait_until([&] { return b.enabled(); }));
+                                     ASSERT_TRUE(wait_until([&] { return b.enabled(); }))
+                                         << b.board.describe();
                                      b.board.hang();
                                      ASSERT_TRUE(wait_until([&] { return ended(pid); }));
                                    });
@@ -143,7 +140,8 @@ TEST_P(ArduinoFfbUsb, AnUnpluggedBoardFaultsTheRun) {
   Board b;
   const HapticdRun r = run_hapticd(shipped("hid-arduino-ffb.yaml"), sets(GetParam(), b.serial),
                                    {"--duration", "30"}, [&](pid_t) {
-                                     ASSERT_TRUE(wait_until([&] { return b.enabled(); }));
+                                     ASSERT_TRUE(wait_until([&] { return b.enabled(); }))
+                                         << b.board.describe();
                                      b.board.unplug();
                                    });
   EXPECT_EQ(r.status, 1) << r.log;
@@ -166,7 +164,8 @@ TEST(ArduinoFfbBlocks, EveryEndOfARunFreesItsEffectBlock) {
     const HapticdRun r = run_hapticd(shipped("hid-arduino-ffb.yaml"), sets("hidraw", b.serial),
                                      {"--duration", sig == 0 ? "1" : "30"}, [&](pid_t pid) {
                                        if (sig == 0) return;
-                                       ASSERT_TRUE(wait_until([&] { return b.enabled(); }));
+                                       ASSERT_TRUE(wait_until([&] { return b.enabled(); }))
+                                           << b.board.describe();
                                        ::kill(pid, sig);
                                      });
     EXPECT_EQ(r.status, 0) << "run " << run << ": " << r.log << "\n" << b.board.describe();
