@@ -220,12 +220,14 @@ IoStatus HidDevice::on_write(double force) noexcept {
   }
   // A report due before the force (an effect's restart) that the full queue could not take is
   // sent at the next tick that can: dropped, the effect would run out on the device and the
-  // wall with it, however long the queue stays full.
+  // wall with it, however long the queue stays full. A tick whose queue took not even that
+  // one has no room for its force either: it is one dropped tick, counted once.
   if (const auto extra = profile_->before_force(); !extra.empty()) pending_ = extra;
-  bool written = false;
+  bool written = true;
   if (!pending_.empty()) {
-    if (const IoStatus s = send(pending_, written); s != IoStatus::kOk) return s;
-    if (written) pending_ = {};
+    const IoStatus s = send(pending_, written);
+    if (s != IoStatus::kOk || !written) return s;
+    pending_ = {};
   }
   return send(profile_->force_report(force), written);
 }

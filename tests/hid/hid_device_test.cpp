@@ -140,9 +140,13 @@ TEST(HidPid, ARestartTheFullQueueDroppedGoesAtTheNextTickThatWrites) {
   };
   while (rig.device->hid_counts().out_queue_full == 0 && ticks < 100000) tick();
   ASSERT_GT(rig.device->hid_counts().out_queue_full, 0u) << "the queue never filled";
-  for (int i = 0; i < 50 || (ticks + 1) % 50 == 0; ++i) tick();  // a restart's tick, dropped
+  const std::uint64_t before = rig.device->hid_counts().out_queue_full;
+  int held = 0;
+  for (; held < 50 || (ticks + 1) % 50 == 0; ++held) tick();  // a restart's tick, dropped
   rig.fake.reading.store(true);
   const std::uint64_t full = rig.device->hid_counts().out_queue_full;
+  EXPECT_EQ(full - before, static_cast<std::uint64_t>(held))
+      << "each tick the queue took nothing is one dropped tick, the pending restart's included";
   std::size_t have = 0;  // what was queued, all taken: nothing more for 50 ms
   for (int quiet = 0; quiet < 50;) {
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
