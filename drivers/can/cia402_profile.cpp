@@ -121,9 +121,32 @@ void Cia402Profile::disable(const CanFault&) noexcept {
   } catch (...) {
     link_.send_quietly(canopen::sync_frame());  // no thread to be had: the stop at least
   }
-  stop_keeping_alive();
+  const bool off = confirm_off();
+  if (off) stop_keeping_alive();  // else its watchdogs end the torque once SYNC stops
   keeper_.stop();
+  if (off) confirm_off();  // after the last SYNC: a late RPDO that enabled it again is undone
   link_.send_quietly(canopen::nmt_command(canopen::NmtCommand::kEnterPreOperational, node));
+}
+
+// The shutdown RPDO is a frame nobody answers: a drive that missed it (a frame lost, or taken
+// after the SYNC meant to apply it: over vcan, frames sent from two CPUs can arrive in either
+// order) keeps its last torque. The statusword (SDO) says; a drive still in Operation enabled
+// is given zero torque and the shutdown by SDO, each confirmed, and then asked again. False
+// when it stays enabled past state_timeout_ms or cannot be asked.
+bool Cia402Profile::confirm_off() noexcept {
+  try {
+    std::uint16_t sw = 0;
+    const std::int64_t deadline = base::monotonic_ms() + settings_.state_timeout_ms;
+    while (read_state(sw) == PowerState::kOperationEnabled) {
+      if (base::monotonic_ms() >= deadline) return false;
+      sdo_write(cia402::kTargetTorque, 0, 2, "target torque");
+      sdo_write(cia402::kControlword, cia402::kCwShutdown, 2, "controlword (shutdown)");
+      link_.wait_readable(2);
+    }
+    return true;
+  } catch (...) {
+    return false;  // no answer: the bus or the drive is gone, and its watchdogs stay on
+  }
 }
 
 // While SYNC and hapticd's heartbeat still come: the drive stops watching them, so their end

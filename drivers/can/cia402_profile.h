@@ -16,9 +16,11 @@
 // which the drive samples its position and applies the torque: the force computed from the
 // sample a tick reads acts from the next SYNC on - one sample of delay, declared as such.
 // disable (once per enable, a fault's included): at the next SYNC slot one RPDO with zero
-// torque and controlword 0x06 (shutdown: power stage off); SYNC and hapticd's heartbeat kept
-// going, one per period, until the drive's watchdogs on them (0x1006, 0x1016) are switched
-// off, so a normal stop raises no EMCY; then NMT pre-operational.
+// torque and controlword 0x06 (shutdown: power stage off); the statusword read back by SDO (a
+// drive still enabled is switched off by SDO); SYNC and hapticd's heartbeat kept going, one
+// per period, until the drive's watchdogs on them (0x1006, 0x1016) are switched off, so a
+// normal stop raises no EMCY (a drive not confirmed off keeps them); the statusword read again
+// after the last SYNC; then NMT pre-operational.
 // clear_fault: fault reset (0x80 edge), confirmed.
 #pragma once
 
@@ -85,6 +87,7 @@ class Cia402Profile final : public CanProfile {
   void write_cycle_objects();
   void map_pdos();
   void stop_keeping_alive() noexcept;
+  bool confirm_off() noexcept;
   std::string node_name() const;
   void walk_to_enabled();
   cia402::PowerState take_step(cia402::PowerState from, std::uint16_t cw, std::uint16_t& sw);

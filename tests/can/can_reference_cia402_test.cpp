@@ -200,6 +200,34 @@ TEST(CanReferenceCia402, ANormalStopRaisesNoSyncLossAndKeepsOneSyncPerCycle) {
   EXPECT_FALSE(drive.torque_on());
 }
 
+// A stop whose shutdown RPDO the drive never took (a frame lost on the way in; over vcan one
+// sent from another CPU can also arrive after the SYNC meant to apply it): the statusword read
+// back says Operation enabled, the shutdown goes again by SDO, and the stop ends with the power
+// stage off and only then the drive's watchdogs off. Before, the stop switched the watchdogs
+// off and left the drive enabled at its last torque: seen once in the kernel test machine.
+TEST(CanReferenceCia402, AShutdownTheDriveNeverTookIsSentAgainBySdo) {
+  Cia402Drive drive({}, damped_axis(), reference::monotonic_ns());
+  ReferenceRig rig(slow_cia402_config(), drive);
+  rig.device->configure();
+  rig.device->enable();
+  ASSERT_EQ(rig.run(0.5, 300), IoStatus::kOk) << rig.device->describe_fault();
+  drive.lose_rpdos(1);
+  const std::int64_t stop = reference::monotonic_ns();
+  rig.device->disable();
+  EXPECT_FALSE(drive.torque_on()) << "the stop left the drive enabled";
+  EXPECT_EQ(drive.object(0x6071, 0), 0u) << "target torque";
+  rig.runner->stop();
+  std::vector<std::uint32_t> controlwords;
+  for (const LoggedFrame& l : rig.runner->log()) {
+    const auto& f = l.frame;
+    if (!l.sent && l.time_ns > stop && f.id == 0x601 && (f.data[0] & 0xE0) == 0x20 &&
+        f.u16(1) == 0x6040)
+      controlwords.push_back(f.u32(4));
+  }
+  EXPECT_EQ(controlwords, std::vector<std::uint32_t>{0x06}) << "the shutdown, once, by SDO";
+  EXPECT_EQ(drive.object(0x1006, 0), 0u) << "the SYNC watch switched off once it was off";
+}
+
 // After a fault the run disables the device and then closes it: one stop on the bus.
 TEST(CanReferenceCia402, AfterAFaultTheStopIsSentOnce) {
   Cia402Drive drive({}, damped_axis(), reference::monotonic_ns());

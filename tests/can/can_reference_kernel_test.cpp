@@ -7,7 +7,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <string>
 #include <thread>
+#include <vector>
 
 #include "child_process.h"
 #include "reference/can/cia402_drive.h"
@@ -59,6 +62,25 @@ TEST(CanReferenceOnVcan, Odrive05WithItsWatchdogOnRendersTheWallAndIdlesWhenHapt
   EXPECT_EQ(axis.axis_error(), reference::Odrive056::kWatchdogExpired);
   EXPECT_EQ(axis.motor_force_n(), 0.0);
   runner.stop();
+}
+
+// The drive's last `n` frames, each with its time (ms before the last), received or sent.
+std::string last_frames(const std::vector<reference::LoggedFrame>& log, std::size_t n) {
+  std::string out = "the drive's last frames (ms before the last; rx from the bus, tx its own):\n";
+  const std::size_t from = log.size() > n ? log.size() - n : 0;
+  char line[96];
+  for (std::size_t i = from; i < log.size(); ++i) {
+    const reference::LoggedFrame& l = log[i];
+    int at =
+        std::snprintf(line, sizeof line, "  %8.3f %s %03x", (log.back().time_ns - l.time_ns) * 1e-6,
+                      l.sent ? "tx" : "rx", static_cast<unsigned>(l.frame.id));
+    for (int b = 0; b < l.frame.len && at < 80; ++b)
+      at += std::snprintf(line + at, sizeof line - static_cast<std::size_t>(at), " %02x",
+                          l.frame.data[b]);
+    out += line;
+    out += "\n";
+  }
+  return out;
 }
 
 struct Cia402Case {
@@ -115,7 +137,7 @@ TEST(CanReferenceOnVcan, Cia402DrivesAsTheyAreStartAndRenderTheWall) {
     EXPECT_EQ(run.wait(seconds(60)), 0) << run.output();
     std::this_thread::sleep_for(milliseconds(300));
     runner.stop();
-    EXPECT_FALSE(drive.torque_on());
+    EXPECT_FALSE(drive.torque_on()) << last_frames(runner.log(), 60) << run.output();
     for (const reference::LoggedFrame& l : runner.log()) {
       if (l.sent && l.frame.id == 0x081) {
         EXPECT_EQ(l.frame.u16(0), 0u)

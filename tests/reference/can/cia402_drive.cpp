@@ -184,6 +184,10 @@ void Cia402Drive::on_nmt(std::uint8_t command, std::vector<Frame>& out) {
 }
 
 void Cia402Drive::on_rpdo(const Frame& f) {
+  if (rpdos_to_lose_.load() > 0) {
+    rpdos_to_lose_.fetch_sub(1);
+    return;
+  }
   // Unpacked through 0x1600 when the SYNC comes (synchronous), if its length matches.
   rpdo_frame_ = f;
   rpdo_pending_ = true;

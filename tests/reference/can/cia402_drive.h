@@ -103,6 +103,9 @@ class Cia402Drive final : public ReferenceDevice {
   void press_now() { plant_.press_from(monotonic_ns()); }
   // Any thread: the drive faults at its next service (EMCY `code`, Fault).
   void inject_fault(std::uint16_t code) { injected_fault_.store(code); }
+  // The test's: the next `n` RPDOs are lost on the way in (a receive FIFO overrun, a frame
+  // the bus did not deliver), as CANopenNode never sees a frame its CAN driver dropped.
+  void lose_rpdos(int n) { rpdos_to_lose_.store(n); }
   // Any thread: mains on now (the DC link charges dc_link_charge_ms from here).
   void switch_mains_on() { mains_on_ns_.store(monotonic_ns()); }
   // Any thread: shutdown commands the drive could not take for want of DC-link voltage.
@@ -179,6 +182,7 @@ class Cia402Drive final : public ReferenceDevice {
   std::int64_t heartbeat_sent_ns_ = 0;
   std::uint16_t error_code_ = 0;
   std::atomic<std::uint16_t> injected_fault_{0};
+  std::atomic<int> rpdos_to_lose_{0};
   // The DC link: mains on since (CLOCK_MONOTONIC; -1 off), charged, a shutdown held for it.
   std::atomic<std::int64_t> mains_on_ns_{-1};
   bool dc_link_charged_ = false;
