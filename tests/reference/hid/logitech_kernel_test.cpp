@@ -110,9 +110,11 @@ TEST(LogitechWheel, WhatAConstantForceBecomesOnTheWire) {
   play.value = 1;
   ASSERT_EQ(::write(w.fd, &play, sizeof play), static_cast<ssize_t>(sizeof play));
   std::vector<double> delays_ms;
+  int previous = 0;  // the X the play sent: the zero level's
+  int again = 0;
   std::cout << "logitech: level -> X - centre:";
   for (int level : {0x7fff, 0x4000, 0x2000, 0x0100, 0x0080, 0, -0x0100, -0x4000, -0x7fff}) {
-    const std::int64_t sent = now_ns();
+    std::int64_t sent = now_ns();
     update(w.fd, e, level);
     // A report with the level before's X can still come after this upload: seen once in a
     // Debian 12 run (0x2000 met 0x4000's X first, all reports within 4 ms), whether the
@@ -126,6 +128,19 @@ TEST(LogitechWheel, WhatAConstantForceBecomesOnTheWire) {
       seen = w.xs_after(sent);
       return std::any_of(seen.begin(), seen.end(), is_want);
     };
+    // The kernel's own race: ml_ff_upload (ff-memless.c) restarts a playing effect's timer at
+    // the current jiffy and returns, and only then does input_ff_upload (ff-core.c) store the
+    // new effect; a timer tick in between plays the stored one, the level before, and nothing
+    // plays again. Seen once in a run of this binary (0x7fff met only the play's X 0). Any program
+    // that uploads once is left with the old force; hapticd's evdev driver uploads every tick
+    // (drivers/evdev/update_thread.cpp), as this does once more: only the level before's X,
+    // and the new level then, passes.
+    if (!wait_until(has_want, std::chrono::milliseconds(300)) &&
+        std::all_of(seen.begin(), seen.end(), [&](const auto& r) { return r.first == previous; })) {
+      ++again;
+      sent = now_ns();
+      update(w.fd, e, level);
+    }
     if (!wait_until(has_want, std::chrono::seconds(2))) {
       std::string xs;
       for (const auto& r : seen) xs += " " + std::to_string(r.first);
@@ -133,6 +148,7 @@ TEST(LogitechWheel, WhatAConstantForceBecomesOnTheWire) {
                     << "; the reports after its upload:" << (xs.empty() ? " none" : xs);
       continue;
     }
+    previous = want;
     const auto at = std::find_if(seen.begin(), seen.end(), is_want)->second;
     delays_ms.push_back((at - sent) * 1e-6);
     std::cout << " " << level << "->" << want;
@@ -143,6 +159,7 @@ TEST(LogitechWheel, WhatAConstantForceBecomesOnTheWire) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   std::cout << "\n";
+  std::cout << "logitech: " << again << " of 9 levels uploaded again (played before stored)\n";
   ASSERT_FALSE(delays_ms.empty());
   std::sort(delays_ms.begin(), delays_ms.end());
   std::cout << "logitech: EVIOCSFF to the wheel's report: median "
