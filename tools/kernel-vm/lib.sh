@@ -27,13 +27,14 @@ check_flavour() {
 # and further serial ports.
 # -nodefaults drops the VGA card and the NIC (and the iPXE ROM the firmware would run for it).
 # quiet: the console is a log, read on failure. panic=-1 with -no-reboot makes a panic end qemu
-# at once instead of hanging until the time-out.
+# at once instead of hanging until the time-out. unknown_nmi_panic and panic_print=0x40: an NMI
+# from the monitor (tools/kernel-vm/run, at a time-out) panics with every CPU's backtrace.
 qemu_command() {  # ACCEL VMLINUX INITRAMFS CONSOLE_LOG MEMORY_MB CPUS EXTRA_KERNEL_ARGS
   local accel=$1 vmlinux=$2 initramfs=$3 console=$4 memory=$5 cpus=$6 extra=$7
   qemu_cmd=(qemu-system-x86_64 -machine pc -nodefaults -no-user-config -display none
     -no-reboot -rtc base=utc -m "$memory" -smp "$cpus"
     -kernel "$vmlinux" -initrd "$initramfs"
-    -append "console=ttyS0 quiet loglevel=4 panic=-1 mitigations=off $extra"
+    -append "console=ttyS0 quiet loglevel=4 panic=-1 mitigations=off unknown_nmi_panic panic_print=0x40 $extra"
     -chardev "file,id=console,path=$console" -serial chardev:console)
   case $accel in
     kvm) qemu_cmd+=(-accel kvm -cpu host) ;;
