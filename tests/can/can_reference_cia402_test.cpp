@@ -36,14 +36,14 @@ std::string configure_error(ReferenceRig& rig) {
   return "";
 }
 
-// SDO writes the drive received to index:sub.
+// SDO writes the drive received to index:sub (after `after_ns`, when given).
 std::vector<std::uint32_t> writes_to(const std::vector<LoggedFrame>& log, std::uint16_t index,
-                                     std::uint8_t sub) {
+                                     std::uint8_t sub, std::int64_t after_ns = 0) {
   std::vector<std::uint32_t> out;
   for (const LoggedFrame& l : log) {
     const auto& f = l.frame;
-    if (!l.sent && f.id == 0x601 && (f.data[0] & 0xE0) == 0x20 && f.u16(1) == index &&
-        f.data[3] == sub) {
+    if (!l.sent && l.time_ns > after_ns && f.id == 0x601 && (f.data[0] & 0xE0) == 0x20 &&
+        f.u16(1) == index && f.data[3] == sub) {
       out.push_back(f.u32(4));
     }
   }
@@ -217,14 +217,8 @@ TEST(CanReferenceCia402, AShutdownTheDriveNeverTookIsSentAgainBySdo) {
   EXPECT_FALSE(drive.torque_on()) << "the stop left the drive enabled";
   EXPECT_EQ(drive.object(0x6071, 0), 0u) << "target torque";
   rig.runner->stop();
-  std::vector<std::uint32_t> controlwords;
-  for (const LoggedFrame& l : rig.runner->log()) {
-    const auto& f = l.frame;
-    if (!l.sent && l.time_ns > stop && f.id == 0x601 && (f.data[0] & 0xE0) == 0x20 &&
-        f.u16(1) == 0x6040)
-      controlwords.push_back(f.u32(4));
-  }
-  EXPECT_EQ(controlwords, std::vector<std::uint32_t>{0x06}) << "the shutdown, once, by SDO";
+  EXPECT_EQ(writes_to(rig.runner->log(), 0x6040, 0, stop), std::vector<std::uint32_t>{0x06})
+      << "the shutdown, once, by SDO";
   EXPECT_EQ(drive.object(0x1006, 0), 0u) << "the SYNC watch switched off once it was off";
 }
 
