@@ -14,6 +14,7 @@
 #include "config/driver_schema.h"
 #include "drivers/device.h"
 #include "drivers/io/unique_fd.h"
+#include "drivers/udev_rules.h"
 
 namespace hapticd::drivers {
 
@@ -53,6 +54,11 @@ struct DeviceEntry {
   // Not RT-safe, pure. The setting that reverses this driver's force for `cfg`. Every driver
   // has one (the conformance suite checks it reverses what the device feels).
   ForceReversal (*force_reversal)(const config::Config& cfg) = nullptr;
+  // Not RT-safe, pure. The udev rules `hapticd udev-rules` writes for cfg's device: its
+  // nodes granted to the service's group and what must be set as it appears, each explained
+  // (drivers/udev_rules.h). Throws config::ConfigError naming the key when the configuration
+  // selects the device in a way a rule cannot match exactly. Null for a driver with no device.
+  void (*udev_rules)(const config::Config& cfg, UdevRules& out) = nullptr;
 };
 
 }  // namespace hapticd::drivers

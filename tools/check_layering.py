@@ -72,6 +72,19 @@ ONLY_OF_DRIVERS = {
     "sim": SEAM + SHARED_TRANSPORTS + PURE_CODECS,
 }
 
+# Modules that name no driver (docs/devices.md, the driver registry): they reach a driver only
+# through its registry entry, never a header of drivers/<name>/ or sim/peers/<name>/, and never
+# compare device.driver with a driver's name.
+NAMES_NO_DRIVER = {"src/service"}
+DRIVER_HEADER = re.compile(r"^(drivers|sim/peers)/(?!io/)[^/]+/")
+NAME_COMPARED = re.compile(r'[!=]=\s*"(\w+)"|"(\w+)"\s*[!=]=')
+
+
+def driver_names(root):
+    """sim and each folder of drivers/ with a CMakeLists.txt."""
+    return {"sim"} | {p.parent.name for p in (root / "drivers").glob("*/CMakeLists.txt")}
+
+
 # Where a bare `#include "x.h"` of a module may come from (its target's include paths could
 # reach further): reference devices use the kernel test rig's helpers, never a driver's file.
 BARE_FROM = {"tests/reference": ("tests/reference", "tests/kernel/support", "tests/support")}
@@ -124,9 +137,20 @@ def violations(rel, text):
         only = ONLY_OF_DRIVERS.get(module)
         if first == "drivers" and only is not None and header not in only:
             yield where + f'"{header}": {module} may use of drivers/ only {", ".join(only)}'
+        if module in NAMES_NO_DRIVER and DRIVER_HEADER.match(header):
+            yield where + f'"{header}": {module} names no driver (ask its registry entry)'
         if rel in PURE_CODECS and first not in ("config", "base") and header not in PURE_CODECS:
             yield where + f'"{header}": a pure codec includes only config/, base/ and other ' \
                 'pure codecs (no Device, no transport)'
+
+
+def driver_name_comparisons(rel, text, names):
+    for number, line in enumerate(text.splitlines(), 1):
+        for m in NAME_COMPARED.finditer(line):
+            name = m.group(1) or m.group(2)
+            if name in names:
+                yield f'{rel}:{number}: "{name}": {module_of(rel)} names no driver (ask its ' \
+                    'registry entry)'
 
 
 def name_of(folder):
@@ -198,6 +222,8 @@ def main():
             continue
         text = path.read_text(errors="replace") + "\n" + "\n".join(injected.get(rel, []))
         found.extend(violations(rel, text))
+        if module_of(rel) in NAMES_NO_DRIVER:
+            found.extend(driver_name_comparisons(rel, text, driver_names(root)))
     for header in PURE_CODECS + SEAM + SHARED_TRANSPORTS:
         if not (root / header).exists():
             found.append(f"{header}: listed in tools/check_layering.py, not in the tree")

@@ -87,6 +87,7 @@ std::unique_ptr<Device> make_can_device(const config::Config& cfg,
 
 DeviceEntry device_entry() {
   DeviceEntry e;
+  e.udev_rules = &write_udev_rules;
   e.name = "can";
   e.summary = "SocketCAN: a CiA 402 drive (cyclic synchronous torque) or an ODrive (CAN Simple)";
   e.read_section = &read_can_section;

@@ -84,6 +84,7 @@ ForceReversal force_reversal(const config::Config& cfg) {
 
 DeviceEntry device_entry() {
   DeviceEntry e;
+  e.udev_rules = &write_udev_rules;
   e.name = "evdev";
   e.summary = "an input device with force feedback through the kernel's evdev interface";
   e.read_section = read_evdev_section;

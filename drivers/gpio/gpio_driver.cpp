@@ -33,6 +33,7 @@ ForceReversal force_reversal(const config::Config& cfg) {
 
 DeviceEntry device_entry() {
   DeviceEntry e;
+  e.udev_rules = &write_udev_rules;
   e.name = "gpio";
   e.summary = "quadrature encoder on GPIO lines (libgpiod) and a sysfs PWM motor driver";
   e.read_section = &read_gpio_section;

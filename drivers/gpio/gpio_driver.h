@@ -9,4 +9,7 @@ namespace hapticd::drivers::gpio {
 
 DeviceEntry device_entry();
 
+// The entry's udev_rules: the nodes and settings cfg's device needs, and no other.
+void write_udev_rules(const config::Config& cfg, UdevRules& out);
+
 }  // namespace hapticd::drivers::gpio

@@ -73,6 +73,7 @@ std::string list_devices() {
 
 DeviceEntry device_entry() {
   DeviceEntry e;
+  e.udev_rules = &write_udev_rules;
   e.name = "hid";
   e.summary = "USB HID through hidapi (hidraw or libusb): vendor reports or the PID page";
   e.read_section = read_hid_section;

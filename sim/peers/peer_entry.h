@@ -11,6 +11,7 @@
 
 #include "config/config.h"
 #include "drivers/io/unique_fd.h"
+#include "sim/peers/endpoint_verdict.h"
 #include "sim/peers/loopback_peer.h"
 
 namespace hapticd::sim {
@@ -28,6 +29,16 @@ struct PeerEntry {
   // for a peer without one. Throws DeviceError when the endpoint cannot be used.
   std::unique_ptr<LoopbackPeer> (*make_peer_on)(const config::Config& cfg,
                                                 const std::string& endpoint) = nullptr;
+  // Not RT-safe. Whether `endpoint` is a simulation the kernel provides, real hardware, or no
+  // endpoint of this peer at all, from what the kernel says about it (endpoint_verdict.h).
+  // Throws DeviceError when the kernel cannot be asked. Null: no judgement (real, to be safe).
+  EndpointVerdict (*judge_endpoint)(const config::Config& cfg,
+                                    const std::string& endpoint) = nullptr;
+  // Not RT-safe. On an endpoint the peer may use: refuses (DeviceError) when the device the
+  // peer would play is already there and answers within `listen_s` (a CAN node at its id).
+  // Null for a peer whose endpoint cannot hold a second device.
+  void (*check_endpoint_free)(const config::Config& cfg, const std::string& endpoint,
+                              double listen_s) = nullptr;
 };
 
 }  // namespace hapticd::sim

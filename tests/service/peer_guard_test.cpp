@@ -12,10 +12,18 @@
 #include "drivers/device.h"
 #include "process.h"
 #include "service/commands/peer_endpoint.h"
-#include "service/commands/peer_guard.h"
 #include "service/config_source.h"
+#include "sim/peers/endpoint_verdict.h"
+#include "wiring/registry.h"
 #if HAPTICD_WITH_CAN
-#include "service/commands/peer_can_listen.h"
+#include "sim/peers/can/can_endpoint.h"
+#include "sim/peers/can/can_node_listen.h"
+#endif
+#if HAPTICD_WITH_GPIO
+#include "sim/peers/gpio/gpio_endpoint.h"
+#endif
+#if HAPTICD_WITH_HID
+#include "sim/peers/hid/hid_endpoint.h"
 #endif
 
 namespace hapticd::service {
@@ -24,7 +32,14 @@ namespace {
 using hapticd::testing::has;
 
 namespace fs = std::filesystem;
+using sim::EndpointVerdict;
 using Kind = EndpointVerdict::Kind;
+
+#if HAPTICD_WITH_CAN
+using sim::CanLinkFacts;
+using sim::judge_can_link;
+using sim::kArphrdCan;
+using sim::read_can_link;
 
 TEST(PeerGuard, OnlyVcanAndVxcanAreSimulatedCanBuses) {
   EXPECT_EQ(judge_can_link("vcan0", {true, kArphrdCan, "vcan"}).kind, Kind::kSimulated);
@@ -58,6 +73,13 @@ TEST(PeerGuard, ReadsTheLinkKindFromTheKernel) {
   EXPECT_FALSE(read_can_link(std::string(40, 'x')).exists) << "longer than any interface name";
 }
 
+#endif
+
+#if HAPTICD_WITH_GPIO
+using sim::gpio::GpioChipFacts;
+using sim::gpio::judge_gpio_chip;
+using sim::gpio::read_gpio_chip;
+
 TEST(PeerGuard, OnlyGpioSimIsASimulatedGpioChip) {
   EXPECT_EQ(judge_gpio_chip("/sys/x/gpiochip1", {true, true, "gpio-sim"}).kind, Kind::kSimulated);
   const EndpointVerdict real = judge_gpio_chip("/sys/devices/platform/soc/fe200000.gpio/gpiochip0",
@@ -69,6 +91,13 @@ TEST(PeerGuard, OnlyGpioSimIsASimulatedGpioChip) {
   EXPECT_EQ(judge_gpio_chip("/tmp/x", {true, false, ""}).kind, Kind::kUnusable);
   EXPECT_EQ(judge_gpio_chip("/tmp/none", {}).kind, Kind::kUnusable);
 }
+
+#endif
+
+#if HAPTICD_WITH_HID
+using sim::hid::judge_hid_endpoint;
+using sim::hid::read_udcs;
+using sim::hid::UdcFacts;
 
 TEST(PeerGuard, AGadgetNeedsEveryControllerToBeDummyUdcAndUhidNeedsNone) {
   const std::vector<UdcFacts> dummy = {{"dummy_udc.0", "dummy_udc"}};
@@ -86,6 +115,9 @@ TEST(PeerGuard, AGadgetNeedsEveryControllerToBeDummyUdcAndUhidNeedsNone) {
       << "uhid makes a device on this host only";
 }
 
+#endif
+
+#if HAPTICD_WITH_GPIO
 // A sysfs-like tree: DIR/devices/platform/NAME.0/gpiochip3 on bus gpio, NAME.0 bound to
 // driver NAME; a UDC class directory the same way.
 struct FakeSysfs {
@@ -119,23 +151,29 @@ TEST(PeerGuard, ReadsAChipsBusAndDriverAndEachControllersDriverFromSysfs) {
   EXPECT_TRUE(parent.exists);
   EXPECT_FALSE(parent.is_gpio_chip) << "the platform device is not the chip";
   EXPECT_FALSE(read_gpio_chip((sys.root / "none").string()).exists);
+#if HAPTICD_WITH_HID
   const std::vector<UdcFacts> udcs = read_udcs((sys.root / "class/udc").string());
   ASSERT_EQ(udcs.size(), 1u);
   EXPECT_EQ(udcs[0].name, "pinctrl-bcm2835.0");
   EXPECT_EQ(udcs[0].driver, "pinctrl-bcm2835");
   EXPECT_TRUE(read_udcs((sys.root / "none").string()).empty());
+#endif
 }
 
-#if HAPTICD_WITH_GPIO
 config::Config gpio_config() {
   return load_config({std::string(HAPTICD_SOURCE_DIR) + "/config/gpio.yaml", {}});
+}
+
+// `hapticd peer`'s whole check of the GPIO driver's endpoint, as the command makes it.
+void check_gpio(const std::string& endpoint, const PeerEndpointPolicy& policy) {
+  check_peer_endpoint(wiring::find_driver("gpio").peer, gpio_config(), endpoint, policy);
 }
 
 TEST(PeerGuard, AGpioChipOfAnotherDriverIsRefusedUnlessTheFlagSaysSo) {
   FakeSysfs sys("pinctrl-bcm2835");
   const std::string endpoint = sys.chip.string() + "," + (sys.root / "channel0").string();
   try {
-    check_peer_endpoint(gpio_config(), endpoint, {});
+    check_gpio(endpoint, {});
     FAIL() << "a board's own GPIO chip was taken";
   } catch (const config::ConfigError& e) {
     ASSERT_EQ(e.messages().size(), 1u);
@@ -144,22 +182,25 @@ TEST(PeerGuard, AGpioChipOfAnotherDriverIsRefusedUnlessTheFlagSaysSo) {
   }
   PeerEndpointPolicy told;
   told.impersonate_on_real_hardware = true;
-  EXPECT_NO_THROW(check_peer_endpoint(gpio_config(), endpoint, told));
+  EXPECT_NO_THROW(check_gpio(endpoint, told));
 
   FakeSysfs sim("gpio-sim");
-  EXPECT_NO_THROW(check_peer_endpoint(gpio_config(), sim.chip.string() + ",x", {}));
+  EXPECT_NO_THROW(check_gpio(sim.chip.string() + ",x", {}));
 }
 
 TEST(PeerGuard, ADirectoryThatIsNoGpioChipIsRefusedEvenWithTheFlag) {
   PeerEndpointPolicy told;
   told.impersonate_on_real_hardware = true;
   const std::string dir = fs::temp_directory_path().string();
-  EXPECT_THROW(check_peer_endpoint(gpio_config(), dir + "," + dir + "/x", told),
-               hapticd::DeviceError);
+  EXPECT_THROW(check_gpio(dir + "," + dir + "/x", told), hapticd::DeviceError);
 }
 #endif
 
 #if HAPTICD_WITH_CAN
+using sim::describe_node_frame;
+using sim::node_probe;
+using sim::sent_by_node;
+
 drivers::can::CanFrame frame(std::uint32_t id, std::uint8_t len, bool rtr = false) {
   drivers::can::CanFrame f = drivers::can::make_frame(id, len);
   f.rtr = rtr;

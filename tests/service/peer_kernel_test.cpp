@@ -16,8 +16,9 @@
 #include "gpio_sim_chip.h"
 #include "process.h"
 #include "pwm_sim.h"
-#include "service/commands/peer_endpoint.h"
-#include "service/commands/peer_guard.h"
+#include "sim/peers/can/can_endpoint.h"
+#include "sim/peers/gpio/gpio_endpoint.h"
+#include "sim/peers/hid/hid_endpoint.h"
 #include "slcan_tty.h"
 #include "vcan_interface.h"
 
@@ -29,7 +30,16 @@ using hapticd::testing::has;
 
 using hapticd::testing::ProcessResult;
 using hapticd::testing::run_process;
-using Kind = EndpointVerdict::Kind;
+using Kind = sim::EndpointVerdict::Kind;
+using sim::CanLinkFacts;
+using sim::judge_can_link;
+using sim::kArphrdCan;
+using sim::read_can_link;
+using sim::gpio::GpioChipFacts;
+using sim::gpio::read_gpio_chip;
+using sim::hid::judge_hid_endpoint;
+using sim::hid::read_udcs;
+using sim::hid::UdcFacts;
 
 ProcessResult peer(const std::string& config, const std::string& endpoint,
                    std::vector<std::string> more = {}) {

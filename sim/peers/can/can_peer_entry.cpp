@@ -7,6 +7,8 @@
 #include "drivers/can/can_settings.h"
 #include "drivers/can/canopen.h"
 #include "drivers/can/odrive_protocol.h"
+#include "sim/peers/can/can_endpoint.h"
+#include "sim/peers/can/can_node_listen.h"
 #include "sim/peers/can/cia402_peer.h"
 #include "sim/peers/can/odrive_peer.h"
 
@@ -49,6 +51,8 @@ PeerEntry can_peer_entry() {
   e.driver = "can";
   e.make_peer = &loopback_peer;
   e.make_peer_on = &peer_on;
+  e.judge_endpoint = &judge_can_endpoint;
+  e.check_endpoint_free = &check_can_node_free;
   return e;
 }
 

@@ -1,5 +1,6 @@
 #include "sim/peers/gpio/gpio_peer_entry.h"
 
+#include "sim/peers/gpio/gpio_endpoint.h"
 #include "sim/peers/gpio/gpio_peer.h"
 
 namespace hapticd::sim::gpio {
@@ -13,6 +14,7 @@ PeerEntry peer_entry() {
   e.make_peer_on = [](const config::Config& cfg, const std::string& endpoint) {
     return std::unique_ptr<LoopbackPeer>(make_kernel_peer(cfg, endpoint));
   };
+  e.judge_endpoint = &judge_endpoint;
   return e;
 }
 

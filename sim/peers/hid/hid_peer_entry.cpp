@@ -2,6 +2,7 @@
 
 #include "drivers/device.h"
 #include "drivers/hid/hid_settings.h"
+#include "sim/peers/hid/hid_endpoint.h"
 #include "sim/peers/hid/hid_firmware.h"
 #include "sim/peers/hid/hidg_peer.h"
 #include "sim/peers/hid/raw_gadget_peer.h"
@@ -25,10 +26,6 @@ std::unique_ptr<LoopbackPeer> make_peer(const config::Config& cfg, io::UniqueFd 
   return std::make_unique<SocketHidPeer>(std::move(end), make_firmware(cfg, delay));
 }
 
-bool ends_with(const std::string& s, const std::string& tail) {
-  return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
-}
-
 // /dev/hidgN (a USB HID gadget: usbhid, hidraw and libusb see a USB device, but f_hid answers
 // no feature report), /dev/raw-gadget (a USB device this process answers for entirely,
 // feature reports included) or /dev/uhid (a HID device made by the kernel's uhid: hidraw only,
@@ -41,10 +38,10 @@ std::unique_ptr<LoopbackPeer> make_peer_on(const config::Config& cfg, const std:
   id.vendor_id = s.select.vendor_id.value_or(id.vendor_id);
   id.product_id = s.select.product_id.value_or(id.product_id);
   if (!s.select.serial.empty()) id.serial = s.select.serial;
-  if (ends_with(endpoint, "uhid")) {
+  if (endpoint_is(endpoint, "uhid")) {
     return std::make_unique<UhidPeer>(endpoint, id, std::move(firmware));
   }
-  if (ends_with(endpoint, "raw-gadget")) {
+  if (endpoint_is(endpoint, "raw-gadget")) {
     return std::make_unique<RawGadgetPeer>(endpoint, id, std::move(firmware));
   }
   return std::make_unique<HidgPeer>(endpoint, std::move(firmware));
@@ -57,6 +54,7 @@ PeerEntry peer_entry() {
   e.driver = "hid";
   e.make_peer = &make_peer;
   e.make_peer_on = &make_peer_on;
+  e.judge_endpoint = &judge_endpoint;
   return e;
 }
 

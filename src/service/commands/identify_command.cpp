@@ -218,7 +218,9 @@ std::string to_text(const analysis::FreeMotionFit& f, const Excitation& e,
 
 int identify_command(const IdentifyOptions& options, SignalWatch& signals) {
   config::Config cfg = load_config(options.config);
-  const bool simulated = options.loopback || cfg.device.driver == "sim";
+  // The sim driver has no hardware device: it only simulates.
+  const bool simulated =
+      options.loopback || wiring::find_driver(cfg.device.driver).make_device == nullptr;
   if (!simulated && !options.device_free) {
     throw config::ConfigError(
         {"identify drives device." + cfg.device.driver +

@@ -21,7 +21,7 @@ int peer_command(const PeerOptions& options, SignalWatch& signals) {
     throw DeviceError("device.driver '" + cfg.device.driver +
                       "' has no simulated peer for a kernel endpoint");
   }
-  check_peer_endpoint(cfg, options.endpoint, options.policy);
+  check_peer_endpoint(driver.peer, cfg, options.endpoint, options.policy);
   const std::unique_ptr<sim::LoopbackPeer> peer = driver.peer.make_peer_on(cfg, options.endpoint);
   std::string error;
   {

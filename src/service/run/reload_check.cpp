@@ -2,6 +2,8 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "wiring/registry.h"
+
 namespace hapticd::service {
 namespace {
 
@@ -38,7 +40,9 @@ std::vector<std::string> reload_blockers(const config::Config& running,
           "a new fault check in the loop");
   const std::string& drv = running.device.driver;
   differs(drv != next.device.driver, "device.driver", "a different device");
-  differs(drv == next.device.driver && drv != "sim" &&
+  // A driver without a section of its own (the sim: its plant is device.sim, compared below).
+  const bool has_section = wiring::find_driver(drv).read_section != nullptr;
+  differs(drv == next.device.driver && has_section &&
               section(running.effective_yaml, "device", drv) !=
                   section(next.effective_yaml, "device", drv),
           "device." + drv, "a differently configured device");

@@ -1,6 +1,6 @@
-#include "service/commands/peer_can_listen.h"
+#include "sim/peers/can/can_node_listen.h"
 
-#if HAPTICD_WITH_CAN
+#include <spdlog/spdlog.h>
 
 #include <cerrno>
 #include <chrono>
@@ -13,7 +13,7 @@
 #include "drivers/can/odrive_protocol.h"
 #include "drivers/device.h"
 
-namespace hapticd::service {
+namespace hapticd::sim {
 namespace {
 
 namespace can = drivers::can;
@@ -102,6 +102,16 @@ std::optional<can::CanFrame> listen_for_node(const can::CanSettings& s,
   return std::nullopt;
 }
 
-}  // namespace hapticd::service
+void check_can_node_free(const config::Config& cfg, const std::string& interface, double seconds) {
+  const auto& s = can::can_settings(cfg);
+  spdlog::info("peer: listening {} s on {} for a node {} already there", seconds, interface,
+               s.node_id);
+  if (const auto heard = listen_for_node(s, interface, seconds)) {
+    throw DeviceError("peer: a node already answers at node id " + std::to_string(s.node_id) +
+                      " on " + interface + " (heard " + describe_node_frame(*heard, s) +
+                      "): a simulated drive there would answer beside it. Stop that node, or "
+                      "give the peer another device.can.node_id");
+  }
+}
 
-#endif  // HAPTICD_WITH_CAN
+}  // namespace hapticd::sim

@@ -7,15 +7,14 @@
 // SYNC, RPDOs or torque commands to node N is what the peer is for. Not RT code.
 #pragma once
 
-#if HAPTICD_WITH_CAN
-
 #include <optional>
 #include <string>
 
+#include "config/config.h"
 #include "drivers/can/can_frame.h"
 #include "drivers/can/can_settings.h"
 
-namespace hapticd::service {
+namespace hapticd::sim {
 
 // Pure: whether the node of `s` sent `f`.
 bool sent_by_node(const drivers::can::CanFrame& f, const drivers::can::CanSettings& s);
@@ -30,6 +29,8 @@ drivers::can::CanFrame node_probe(const drivers::can::CanSettings& s);
 std::optional<drivers::can::CanFrame> listen_for_node(const drivers::can::CanSettings& s,
                                                       const std::string& interface, double seconds);
 
-}  // namespace hapticd::service
+// The peer entry's check_endpoint_free: listen_for_node for `seconds` (logged), and a
+// DeviceError naming what was heard.
+void check_can_node_free(const config::Config& cfg, const std::string& interface, double seconds);
 
-#endif  // HAPTICD_WITH_CAN
+}  // namespace hapticd::sim
