@@ -38,7 +38,7 @@ ALLOWED = {
     "sim": {"sim", "drivers", "config", "telemetry", "base"},
     # The composition root: each driver's device joined with its simulated device.
     "wiring": {"wiring", "drivers", "sim", "config", "base"},
-    "src/service": None,  # main() and the commands use everything
+    "service": None,  # main() and the commands use everything
     # Reference devices are written from a firmware's published source or a specification,
     # never from our codecs: a device that shares the driver's reading of a spec cannot find
     # where that reading is wrong (tests/reference/README.md).
@@ -75,7 +75,7 @@ ONLY_OF_DRIVERS = {
 # Modules that name no driver (docs/devices.md, the driver registry): they reach a driver only
 # through its registry entry, never a header of drivers/<name>/ or sim/peers/<name>/, and never
 # compare device.driver with a driver's name.
-NAMES_NO_DRIVER = {"src/service"}
+NAMES_NO_DRIVER = {"service"}
 DRIVER_HEADER = re.compile(r"^(drivers|sim/peers)/(?!io/)[^/]+/")
 NAME_COMPARED = re.compile(r'[!=]=\s*"(\w+)"|"(\w+)"\s*[!=]=')
 

@@ -98,7 +98,7 @@ def fmt(p):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--hapticd", default=os.path.join(ROOT, "build/src/service/hapticd"))
+    ap.add_argument("--hapticd", default=os.path.join(ROOT, "build/service/hapticd"))
     ap.add_argument("--rates", default="1000,2000,5000,10000")
     ap.add_argument("--duration", type=float, default=10.0, help="seconds per run")
     ap.add_argument("--rounds", type=int, default=2, help="A B pairs per rate")

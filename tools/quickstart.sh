@@ -151,8 +151,8 @@ configure_and_build() {
 case $mode in
   demo)
     configure_and_build build -DCMAKE_BUILD_TYPE=Release -- hapticd
-    echo "quickstart: the daemon is build/src/service/hapticd; running the 3 s demo"
-    exec build/src/service/hapticd run --duration 3 --log build/demo.hlog ;;
+    echo "quickstart: the daemon is build/service/hapticd; running the 3 s demo"
+    exec build/service/hapticd run --duration 3 --log build/demo.hlog ;;
   build)
     configure_and_build build -DCMAKE_BUILD_TYPE=Release -- hapticd
     exit 0 ;;
