@@ -93,7 +93,7 @@ void BM_FullTick_SimDevice(benchmark::State& state) {
   hapticd::telemetry::SpscRing<hapticd::telemetry::TickRecord> ring(ticks + 1);
   std::vector<hapticd::telemetry::TickRecord> drained(ticks + 1);
   hapticd::loop::LoopOptions lo;
-  lo.realtime = false;
+  lo.sample.realtime = false;
   lo.max_ticks = ticks;
   lo.observer = hapticd::control::observer_params(cfg, 0);
   lo.observer.mode = state.range(1) == 0 ? hapticd::config::PassivityControl::kOff

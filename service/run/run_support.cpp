@@ -89,15 +89,9 @@ TickLog open_tick_log(const RunOptions& options, const config::Config& cfg, bool
 
 loop::LoopOptions loop_options(const RunOptions& options, const config::Config& cfg,
                                const DeviceInfo& info, bool realtime, bool logging) {
-  const loop::SampleLimits limits = sample_limits(cfg, info, realtime);
   loop::LoopOptions lo;
-  lo.sequence_gap_fault = limits.sequence_gap_fault;
-  lo.sequence_modulus = limits.sequence_modulus;
-  lo.realtime = limits.realtime;
-  lo.period_ns = limits.period_ns;
+  lo.sample = sample_limits(cfg, info, realtime);
   lo.overrun_fault_streak = cfg.loop.overrun_fault_streak;
-  lo.stale_fault_ticks = limits.stale_fault_ticks;
-  lo.max_speed = limits.max_speed;
   lo.wait_for_ring = !realtime && logging;  // a simulation logs every tick
   lo.observer = control::observer_params(cfg, info.transport_delay_samples);
   lo.probe = control::probe_plan(cfg, info.transport_delay_samples);

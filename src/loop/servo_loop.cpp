@@ -27,11 +27,6 @@ control::ObserverParams with_period(control::ObserverParams p, std::int64_t peri
   return p;
 }
 
-SampleLimits sample_limits(const LoopOptions& o) {
-  return {o.realtime,  o.period_ns,          o.stale_fault_ticks,
-          o.max_speed, o.sequence_gap_fault, o.sequence_modulus};
-}
-
 }  // namespace
 
 ServoLoop::ServoLoop(Device& device, control::Controller& controller,
@@ -40,8 +35,7 @@ ServoLoop::ServoLoop(Device& device, control::Controller& controller,
       controller_(&controller),
       ring_(ring),
       options_(options),
-      limits_(sample_limits(options)),
-      observer_(with_period(options.observer, options.period_ns)),
+      observer_(with_period(options.observer, options.sample.period_ns)),
       probe_(options.probe) {}
 
 void ServoLoop::set_fault(Fault f, telemetry::TickRecord& rec, LoopResult& res) const noexcept {
@@ -86,8 +80,9 @@ void ServoLoop::take_reloads(std::uint64_t tick, std::int64_t scheduled_ns,
 void ServoLoop::mark_rearmed(const std::atomic<bool>& stop) noexcept {
   telemetry::TickRecord rearmed;
   rearmed.tick = next_tick_;
-  rearmed.scheduled_ns =
-      options_.realtime ? 0 : static_cast<std::int64_t>(next_tick_) * options_.period_ns;
+  rearmed.scheduled_ns = options_.sample.realtime
+                             ? 0
+                             : static_cast<std::int64_t>(next_tick_) * options_.sample.period_ns;
   rearmed.marker = telemetry::kMarkerRearmed;
   log(rearmed, stop);
 }
@@ -207,8 +202,9 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
   LoopResult res;
   std::array<std::uint64_t, kLoopCounterCount> before{};
   for (std::size_t i = 0; i < before.size(); ++i) before[i] = counters_[i].value();
-  Schedule schedule(options_.realtime, options_.period_ns, options_.overrun_fault_streak);
-  SampleCheck check(limits_);
+  Schedule schedule(options_.sample.realtime, options_.sample.period_ns,
+                    options_.overrun_fault_streak);
+  SampleCheck check(options_.sample);
   observer_.restart();  // nothing in flight from an earlier run
   probe_.restart();     // every arming checks the direction again
   live_.direction.store(probe_.result().state, std::memory_order_relaxed);
@@ -229,7 +225,7 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
     std::int64_t compute_ns = 0;
     const Fault late = schedule.judge(tick, wake, rec, compute_ns);
     compute_time_.record(compute_ns);
-    if (options_.realtime) wake_latency_.record(schedule.latency());
+    if (options_.sample.realtime) wake_latency_.record(schedule.latency());
     if (late.cause != FaultCause::kNone && res.fault.cause == FaultCause::kNone) {
       set_fault(late, rec, res);
       device_.write(0.0);

@@ -25,16 +25,11 @@
 namespace hapticd::loop {
 
 struct LoopOptions {
-  bool realtime = true;  // false: freerun
-  std::int64_t period_ns = 1'000'000;
+  // Realtime or freerun, the period, and what each sample is checked against: held once, here
+  // (sample_check.h).
+  SampleLimits sample;
   int overrun_fault_streak = 10;
-  int stale_fault_ticks = 3;  // ticks without new data (or a sample that old) that fault
-  double max_speed = 10.0;    // m/s; a faster jump between samples is an encoder fault
-  // A gap of this many samples or more in the device's sequence faults; 0: gaps are counted
-  // and logged, never a fault.
-  std::uint32_t sequence_gap_fault = 1;
-  std::uint64_t sequence_modulus = 0;  // DeviceInfo::sequence_modulus: 0 for a 64-bit counter
-  std::uint64_t max_ticks = 0;         // 0: until stop is requested or a fault
+  std::uint64_t max_ticks = 0;  // 0: until stop is requested or a fault
   // Freerun only: wait for room in the ring instead of dropping (a simulation is not real
   // time, and a complete log is what makes it reproducible). Needs a consumer.
   bool wait_for_ring = false;
@@ -181,7 +176,6 @@ class ServoLoop {
   control::Controller* controller_;
   telemetry::SpscRing<telemetry::TickRecord>* ring_;
   LoopOptions options_;
-  SampleLimits limits_;
   control::PassivityObserver observer_;
   control::DirectionProbe probe_;
   LatencyHistogram wake_latency_;

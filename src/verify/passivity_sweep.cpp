@@ -128,9 +128,9 @@ class Sweep {
     const double t = c.loop.sample_period_s();
     sim::SimDevice device(c.device, t);
     loop::LoopOptions lo;
-    lo.realtime = false;
-    lo.period_ns = std::llround(t * 1e9);
-    lo.max_speed = std::numeric_limits<double>::infinity();
+    lo.sample.realtime = false;
+    lo.sample.period_ns = std::llround(t * 1e9);
+    lo.sample.max_speed = std::numeric_limits<double>::infinity();
     lo.max_ticks = static_cast<std::uint64_t>(ticks);
     device.configure();
     device.enable();

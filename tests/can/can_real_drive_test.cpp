@@ -39,11 +39,11 @@ loop::LoopResult run_loop(const config::Config& cfg, CanRig& rig) {
   device.enable();
   control::Controller controller(control::make_control_law(cfg));
   loop::LoopOptions o;
-  o.realtime = false;
-  o.period_ns = std::llround(cfg.loop.sample_period_s() * 1e9);
+  o.sample.realtime = false;
+  o.sample.period_ns = std::llround(cfg.loop.sample_period_s() * 1e9);
   o.max_ticks = 2500;  // the press (0.2 s), its ramp in, the hold, the ramp out
-  o.stale_fault_ticks = cfg.safety.stale_fault_ticks;
-  o.max_speed = cfg.safety.max_speed;
+  o.sample.stale_fault_ticks = cfg.safety.stale_fault_ticks;
+  o.sample.max_speed = cfg.safety.max_speed;
   loop::ServoLoop servo(device, controller, nullptr, o);
   const std::atomic<bool> stop{false};
   const loop::LoopResult r = servo.run(stop);

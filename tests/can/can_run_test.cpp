@@ -16,11 +16,11 @@ namespace {
 
 loop::LoopOptions options(const config::Config& cfg, std::uint64_t ticks) {
   loop::LoopOptions o;
-  o.realtime = false;
-  o.period_ns = std::llround(cfg.loop.sample_period_s() * 1e9);
+  o.sample.realtime = false;
+  o.sample.period_ns = std::llround(cfg.loop.sample_period_s() * 1e9);
   o.max_ticks = ticks;
-  o.stale_fault_ticks = cfg.safety.stale_fault_ticks;
-  o.max_speed = cfg.safety.max_speed;
+  o.sample.stale_fault_ticks = cfg.safety.stale_fault_ticks;
+  o.sample.max_speed = cfg.safety.max_speed;
   return o;
 }
 

@@ -120,12 +120,12 @@ struct Rig {
 loop::LoopResult run_loop(Rig& rig, std::uint64_t ticks, loop::LoopOptions o = {},
                           std::uint64_t* allocations = nullptr) {
   control::Controller controller(control::make_control_law(rig.cfg));
-  o.realtime = false;
-  o.period_ns = std::llround(rig.cfg.loop.sample_period_s() * 1e9);
+  o.sample.realtime = false;
+  o.sample.period_ns = std::llround(rig.cfg.loop.sample_period_s() * 1e9);
   o.max_ticks = ticks;
-  o.stale_fault_ticks = rig.cfg.safety.stale_fault_ticks;
-  o.max_speed = rig.cfg.safety.max_speed;
-  o.sequence_modulus = rig.device.info().sequence_modulus;
+  o.sample.stale_fault_ticks = rig.cfg.safety.stale_fault_ticks;
+  o.sample.max_speed = rig.cfg.safety.max_speed;
+  o.sample.sequence_modulus = rig.device.info().sequence_modulus;
   loop::ServoLoop servo(rig.device, controller, nullptr, o);
   const std::atomic<bool> stop{false};
   const testing::AllocationScope scope;
@@ -230,11 +230,11 @@ TEST_P(Conformance, EveryFaultClassFaultsTheLoopWithZeroForce) {
     rig.device.enable();
     control::Controller controller(control::make_control_law(rig.cfg));
     loop::LoopOptions o;
-    o.realtime = false;
-    o.period_ns = std::llround(rig.cfg.loop.sample_period_s() * 1e9);
+    o.sample.realtime = false;
+    o.sample.period_ns = std::llround(rig.cfg.loop.sample_period_s() * 1e9);
     o.max_ticks = 2'000'000;  // ends by the fault long before
-    o.sequence_gap_fault = 1;
-    o.sequence_modulus = rig.device.info().sequence_modulus;
+    o.sample.sequence_gap_fault = 1;
+    o.sample.sequence_modulus = rig.device.info().sequence_modulus;
     loop::ServoLoop servo(rig.device, controller, nullptr, o);
     const std::atomic<bool> stop{false};
     loop::LoopResult r;

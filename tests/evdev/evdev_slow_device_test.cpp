@@ -72,11 +72,11 @@ struct SlowRig {
   loop::LoopResult run(std::uint64_t ticks) {
     control::Controller controller(control::make_control_law(cfg));
     loop::LoopOptions o;
-    o.realtime = true;
-    o.period_ns = std::llround(cfg.loop.sample_period_s() * 1e9);
+    o.sample.realtime = true;
+    o.sample.period_ns = std::llround(cfg.loop.sample_period_s() * 1e9);
     o.overrun_fault_streak = cfg.loop.overrun_fault_streak;
-    o.stale_fault_ticks = cfg.safety.stale_fault_ticks;
-    o.max_speed = cfg.safety.max_speed;
+    o.sample.stale_fault_ticks = cfg.safety.stale_fault_ticks;
+    o.sample.max_speed = cfg.safety.max_speed;
     o.max_ticks = ticks;
     loop::ServoLoop servo(device(), controller, nullptr, o);
     const std::atomic<bool> stop{false};

@@ -53,12 +53,12 @@ struct Rig {
                        std::optional<sim::PeerFault> fault = std::nullopt) {
     control::Controller controller(control::make_control_law(cfg));
     loop::LoopOptions o;
-    o.realtime = cfg.loop.clock == config::ClockMode::kRealtime;
+    o.sample.realtime = cfg.loop.clock == config::ClockMode::kRealtime;
     o.overrun_fault_streak = cfg.loop.overrun_fault_streak;
-    o.period_ns = std::llround(cfg.loop.sample_period_s() * 1e9);
+    o.sample.period_ns = std::llround(cfg.loop.sample_period_s() * 1e9);
     o.max_ticks = ticks;
-    o.stale_fault_ticks = cfg.safety.stale_fault_ticks;
-    o.max_speed = cfg.safety.max_speed;
+    o.sample.stale_fault_ticks = cfg.safety.stale_fault_ticks;
+    o.sample.max_speed = cfg.safety.max_speed;
     loop::ServoLoop servo(device, controller, nullptr, o);
     const std::atomic<bool> stop{false};
     loop::LoopResult r;

@@ -32,12 +32,12 @@ RunResult run(const config::Config& cfg, double seconds) {
     device.enable();
     control::Controller controller(control::make_control_law(cfg));
     loop::LoopOptions o;
-    o.realtime = false;
-    o.period_ns = std::llround(cfg.loop.sample_period_s() * 1e9);
+    o.sample.realtime = false;
+    o.sample.period_ns = std::llround(cfg.loop.sample_period_s() * 1e9);
     o.max_ticks = static_cast<std::uint64_t>(std::llround(seconds * cfg.loop.rate_hz));
-    o.stale_fault_ticks = cfg.safety.stale_fault_ticks;
-    o.sequence_gap_fault = cfg.safety.sequence_gap_fault;
-    o.sequence_modulus = device.info().sequence_modulus;
+    o.sample.stale_fault_ticks = cfg.safety.stale_fault_ticks;
+    o.sample.sequence_gap_fault = cfg.safety.sequence_gap_fault;
+    o.sample.sequence_modulus = device.info().sequence_modulus;
     loop::ServoLoop servo(device, controller, nullptr, o);
     const std::atomic<bool> stop{false};
     out.result = servo.run(stop);

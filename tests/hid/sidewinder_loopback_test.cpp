@@ -59,11 +59,11 @@ Outcome run(bool sidewinder) {
   device.enable();
   control::Controller controller(control::make_control_law(cfg));
   loop::LoopOptions o;
-  o.realtime = false;
-  o.period_ns = std::llround(cfg.loop.sample_period_s() * 1e9);
+  o.sample.realtime = false;
+  o.sample.period_ns = std::llround(cfg.loop.sample_period_s() * 1e9);
   o.max_ticks = 3000;
-  o.stale_fault_ticks = cfg.safety.stale_fault_ticks;
-  o.sequence_gap_fault = cfg.safety.sequence_gap_fault;
+  o.sample.stale_fault_ticks = cfg.safety.stale_fault_ticks;
+  o.sample.sequence_gap_fault = cfg.safety.sequence_gap_fault;
   o.probe = control::probe_plan(cfg, 1);
   loop::ServoLoop servo(device, controller, nullptr, o);
   const std::atomic<bool> stop{false};

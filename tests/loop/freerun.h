@@ -9,7 +9,7 @@ namespace hapticd::loop {
 
 inline LoopOptions freerun(std::uint64_t ticks = 100) {
   LoopOptions o;
-  o.realtime = false;
+  o.sample.realtime = false;
   o.max_ticks = ticks;
   return o;
 }

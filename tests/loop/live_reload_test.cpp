@@ -41,7 +41,7 @@ struct RtRun {
       : loop(device, law, &ring, options(swap)) {}
   static LoopOptions options(LawSwap& swap) {
     LoopOptions o;
-    o.realtime = false;
+    o.sample.realtime = false;
     o.wait_for_ring = true;  // the consumer below keeps every record
     o.law_swap = &swap;
     return o;
@@ -217,7 +217,7 @@ TEST(LiveReload, AnOfferTakenByTheLoopIsReportedTakenAndTheLoopMarksItsEnd) {
   control::Controller next(control::make_control_law(demo("3000")));
   LawSwap swap;
   LoopOptions o;
-  o.realtime = false;
+  o.sample.realtime = false;
   o.law_swap = &swap;
   o.max_ticks = 2000000;
   ServoLoop loop(device, law, nullptr, o);

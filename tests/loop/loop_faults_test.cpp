@@ -79,7 +79,7 @@ TEST(LoopFaults, StaleDataFaultsAfterTheConfiguredStreak) {
     return k >= 10 ? IoStatus::kNoNewData : IoStatus::kOk;
   };
   LoopOptions o = freerun();
-  o.stale_fault_ticks = 4;
+  o.sample.stale_fault_ticks = 4;
   const LoopResult r = run(dev, o);
   EXPECT_EQ(r.fault.cause, FaultCause::kStaleData);
   EXPECT_EQ(r.fault.tick, 13u);
@@ -119,7 +119,7 @@ TEST(LoopFaults, EncoderJumpFasterThanMaxSpeedFaults) {
     return IoStatus::kOk;
   };
   LoopOptions o = freerun();
-  o.max_speed = 10.0;
+  o.sample.max_speed = 10.0;
   const LoopResult r = run(dev, o);
   EXPECT_EQ(r.fault.cause, FaultCause::kEncoderJump);
   EXPECT_EQ(r.fault.tick, 20u);
@@ -140,8 +140,8 @@ TEST(LoopFaults, OverrunStreakFaults) {
   ScriptedDevice dev;
   dev.read_sleep_ns = 2'000'000;  // every read outlasts a 0.5 ms period, whatever the host
   LoopOptions o;
-  o.realtime = true;
-  o.period_ns = 500'000;
+  o.sample.realtime = true;
+  o.sample.period_ns = 500'000;
   o.overrun_fault_streak = 3;
   o.max_ticks = 50;
   const LoopResult r = run(dev, o);
@@ -155,8 +155,8 @@ TEST(LoopFaults, LongOverrunsSkipWholePeriodsAndCountThem) {
   ScriptedDevice dev;
   dev.read_sleep_ns = 2'000'000;
   LoopOptions o;
-  o.realtime = true;
-  o.period_ns = 500'000;
+  o.sample.realtime = true;
+  o.sample.period_ns = 500'000;
   o.overrun_fault_streak = 1000;
   o.max_ticks = 5;
   const LoopResult r = run(dev, o);
@@ -212,12 +212,12 @@ TEST(LoopFaults, OneCountBetweenEdgesMicrosecondsApartIsNoImpossibleSpeed) {
     return IoStatus::kOk;
   };
   LoopOptions o;
-  o.realtime = true;
-  o.period_ns = 1'000'000;
+  o.sample.realtime = true;
+  o.sample.period_ns = 1'000'000;
   o.max_ticks = 15;
   o.overrun_fault_streak = 1000;  // the host may be slow; only the speed judgement is tested
-  o.stale_fault_ticks = 1000;
-  o.max_speed = 10.0;
+  o.sample.stale_fault_ticks = 1000;
+  o.sample.max_speed = 10.0;
   const LoopResult r = run(dev, o);
   EXPECT_EQ(r.fault.cause, FaultCause::kNone) << r.fault.value;
   EXPECT_EQ(r.ticks, 15u);
@@ -232,7 +232,7 @@ TEST(LoopFaults, AJumpAfterStaleReadsIsJudgedOverTheTimeThatPassed) {
     return (k == 5 || k == 6) ? IoStatus::kNoNewData : IoStatus::kOk;
   };
   LoopOptions o = freerun(10);
-  o.max_speed = 10.0;  // 25 mm / 3 ms = 8.3 m/s: plausible
+  o.sample.max_speed = 10.0;  // 25 mm / 3 ms = 8.3 m/s: plausible
   EXPECT_EQ(run(dev, o).fault.cause, FaultCause::kNone);
 }
 
@@ -248,8 +248,8 @@ TEST(LoopFaults, ReportsReplacedWithinATickAreNoSequenceGap) {
     return IoStatus::kOk;
   };
   LoopOptions o = freerun(200);
-  o.sequence_gap_fault = 1;
-  o.sequence_modulus = 256;
+  o.sample.sequence_gap_fault = 1;
+  o.sample.sequence_modulus = 256;
   const LoopResult r = run(dev, o);
   EXPECT_EQ(r.fault.cause, FaultCause::kNone) << r.fault.value;
   EXPECT_EQ(r.sequence_gaps, 0u);
@@ -267,7 +267,7 @@ TEST(LoopFaults, ADeviceThatSkipsSamplesBeyondThoseTakenInStillFaults) {
     return IoStatus::kOk;
   };
   LoopOptions o = freerun(100);
-  o.sequence_gap_fault = 2;
+  o.sample.sequence_gap_fault = 2;
   const LoopResult r = run(dev, o);
   EXPECT_EQ(r.fault.cause, FaultCause::kSequenceGap);
   EXPECT_EQ(r.fault.tick, 10u);
@@ -286,8 +286,8 @@ TEST(LoopFaults, HeldPositionsAreNotStaleAndTheNextMoveIsJudgedOverTheirTime) {
     return IoStatus::kOk;
   };
   LoopOptions o = freerun(70);
-  o.max_speed = 10.0;  // 25 mm in one period would be 25 m/s
-  o.stale_fault_ticks = 3;
+  o.sample.max_speed = 10.0;  // 25 mm in one period would be 25 m/s
+  o.sample.stale_fault_ticks = 3;
   const LoopResult r = run(dev, o);
   EXPECT_EQ(r.fault.cause, FaultCause::kNone) << describe(r.fault);
   EXPECT_EQ(r.stale_ticks, 0u);

@@ -71,8 +71,8 @@ TEST(ServoLoop, NoHeapAllocationPerTickRealtime) {
   Rig rig(config::load_embedded_default({{"loop.rate_hz", "5000", "--set loop.rate_hz=5000"}}));
   SpscRing<TickRecord> ring(1 << 12);
   LoopOptions o;
-  o.realtime = true;
-  o.period_ns = 200'000;
+  o.sample.realtime = true;
+  o.sample.period_ns = 200'000;
   o.max_ticks = 2000;
   o.overrun_fault_streak = 1 << 30;  // a noisy host must not end the test early
   ServoLoop loop(rig.device, rig.controller, &ring, o);

@@ -158,9 +158,9 @@ TEST(IdentifyRun, FaultsWhereverARunFaultsWithTheSameCauseAtTheSameTick) {
     hapticd::testing::ScriptedDevice for_run;
     for_run.script = m.script;
     loop::LoopOptions o;
-    o.realtime = false;
+    o.sample.realtime = false;
     o.max_ticks = 100;
-    o.stale_fault_ticks = l.samples.stale_fault_ticks;
+    o.sample.stale_fault_ticks = l.samples.stale_fault_ticks;
     config::Config c = config::load_embedded_default();
     control::Controller law(control::make_control_law(c));
     loop::ServoLoop servo(for_run, law, nullptr, o);

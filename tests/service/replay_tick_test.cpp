@@ -34,7 +34,7 @@ telemetry::LogContents run_and_record(const config::Config& cfg) {
   control::Controller law(control::make_control_law(cfg));
   telemetry::SpscRing<TickRecord> ring(8192);
   loop::LoopOptions o;
-  o.realtime = false;
+  o.sample.realtime = false;
   o.max_ticks = 3000;
   o.observer = control::observer_params(cfg, 0);  // the sim driver's declared delay
   loop::ServoLoop servo(device, law, &ring, o);

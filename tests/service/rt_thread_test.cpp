@@ -24,7 +24,7 @@ struct ThreadRig {
   }
   loop::LoopOptions options() const {
     loop::LoopOptions o;
-    o.realtime = false;
+    o.sample.realtime = false;
     return o;
   }
   config::Config cfg = config::load_embedded_default({});
