@@ -1,0 +1,102 @@
+#include "kinematics/delta.h"
+
+#include <cmath>
+
+#include "kinematics/conditioning.h"
+
+namespace hapticd::kinematics {
+namespace {
+
+// One arm at a task position: its joint angle and the derivatives of its closure constraint.
+struct Arm {
+  bool reachable = false;
+  double q = 0.0;
+  Eigen::RowVector3d dg_dx = Eigen::RowVector3d::Zero();
+  double dg_dq = 0.0;
+};
+
+Arm solve_arm(const DeltaParams& p, int i, const Vec3& x) {
+  Arm arm;
+  const double cp = std::cos(p.arm_angle[i]), sp = std::sin(p.arm_angle[i]);
+  const double pu = cp * x.x() + sp * x.y() - p.base_u + p.effector_u;   // P_u + c
+  const double pv = -sp * x.x() + cp * x.y() - p.base_v + p.effector_v;  // P_v + f
+  const double pw = x.z();
+  const double lean = p.shin * p.shin - pv * pv;  // (b sin theta3)^2
+  if (!(lean > 0)) return arm;                    // the shin cannot reach P_v
+  const double b_sin3 = std::sqrt(lean);
+  const double reach = p.knee_joint + p.effector_joint + b_sin3;  // L
+  const double rho = std::hypot(pu, pw);
+  const double a = p.thigh;
+  const double c = (rho * rho + a * a - reach * reach) / (2 * a * rho);
+  if (!(rho > 0) || !(std::abs(c) <= 1)) return arm;  // thigh and shin cannot close
+  arm.q = std::atan2(pw, pu) - std::acos(c);          // libnifalcon's knee (delta.h)
+  arm.reachable = true;
+  // G = (pu - a cos q)^2 + (pw - a sin q)^2 - L(pv)^2, dL/dpv = -pv / (b sin theta3).
+  const double gu = 2 * (pu - a * std::cos(arm.q));
+  const double gv = 2 * reach * pv / b_sin3;
+  const double gw = 2 * (pw - a * std::sin(arm.q));
+  arm.dg_dx << gu * cp - gv * sp, gu * sp + gv * cp, gw;  // through dP/dx = R(-phi)
+  arm.dg_dq = 2 * a * (pu * std::sin(arm.q) - pw * std::cos(arm.q));
+  return arm;
+}
+
+// Every arm at x; false when one cannot reach it.
+bool solve_arms(const DeltaParams& p, const Vec3& x, Vec3& q, Mat3& dg_dx, Vec3& dg_dq) {
+  for (int i = 0; i < 3; ++i) {
+    const Arm arm = solve_arm(p, i, x);
+    if (!arm.reachable) return false;
+    q[i] = arm.q;
+    dg_dx.row(i) = arm.dg_dx;
+    dg_dq[i] = arm.dg_dq;
+  }
+  return true;
+}
+
+}  // namespace
+
+JointSolution delta_inverse(const DeltaParams& p, const Vec3& x) noexcept {
+  JointSolution s;
+  s.n = 3;
+  s.status = Status::kOutsideWorkspace;
+  Vec3 q;
+  Mat3 dg_dx;
+  Vec3 dg_dq;
+  if (!inside(p.workspace, x, 3) || !solve_arms(p, x, q, dg_dx, dg_dq)) return s;
+  s.q = q;
+  s.status = Status::kOk;
+  return s;
+}
+
+Pose delta_forward(const DeltaParams& p, const Vec3& q, const Vec3& guess) noexcept {
+  Pose pose;
+  pose.n = pose.m = 3;
+  pose.status = Status::kNoConvergence;
+  pose.x = guess.allFinite() ? guess : p.home;
+  if (!q.allFinite()) return pose;
+  Vec3 at;
+  Mat3 dg_dx;
+  Vec3 dg_dq;
+  Mat3 J;
+  if (!solve_arms(p, pose.x, at, dg_dx, dg_dq)) return pose;  // a start out of reach
+  for (int step = 0;; ++step) {
+    const bool ok = implicit_jacobian(dg_dx, dg_dq, 3, J);
+    Vec3 residual;
+    for (int i = 0; i < 3; ++i) residual[i] = std::remainder(q[i] - at[i], 2 * std::numbers::pi);
+    if (residual.cwiseAbs().maxCoeff() <= p.tolerance) {
+      pose.J = J;
+      pose.status = judge(p.workspace, pose.x, 3, J, ok, p.min_inverse_condition);
+      return pose;
+    }
+    if (step >= p.max_iterations || !ok) return pose;
+    // theta(x + dx) = theta(x) + J^-1 dx to first order. A step that leaves the arms' reach
+    // (from far away, near its edge) is halved until it does not, each try one of the budget.
+    Vec3 dx = J * residual;
+    while (!solve_arms(p, pose.x + dx, at, dg_dx, dg_dq)) {
+      if (++step >= p.max_iterations) return pose;
+      dx /= 2;
+    }
+    pose.x += dx;
+  }
+}
+
+}  // namespace hapticd::kinematics
