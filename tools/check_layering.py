@@ -2,7 +2,7 @@
 """The layering of docs/architecture.md, checked on every source file of the project.
 
 Each module may include the headers of the modules listed for it and nothing else; the core
-(analysis, config, control, gate) includes no OS header and does no I/O; of drivers/, the loop
+(analysis, kinematics, config, control, gate) includes no OS header and does no I/O; of drivers/, the loop
 and verify see the Device seam alone and the simulator the seam, the fd helpers and each
 driver's pure codecs. The build already refuses what include roots can refuse
 (cmake/modules.cmake; tests/layering/ probes every edge of the picture, with the table this
@@ -27,6 +27,8 @@ ALLOWED = {
     # on nothing.
     "src/base": {"base"},
     "src/analysis": {"analysis", "base"},
+    # Multi-axis kinematics: free functions over fixed-size value types (issue 35).
+    "src/kinematics": {"kinematics", "base"},
     "src/config": {"config", "base"},
     "src/control": {"control", "analysis", "config", "base"},
     "src/gate": {"gate", "analysis", "config", "control", "base"},
@@ -45,7 +47,7 @@ ALLOWED = {
     "tests/reference": {"reference"},
 }
 # The modules of the picture, in its order (tests/reference is no module of the daemon).
-MODULES = ("base", "analysis", "config", "control", "gate", "telemetry", "loop", "verify",
+MODULES = ("base", "analysis", "kinematics", "config", "control", "gate", "telemetry", "loop", "verify",
            "drivers", "sim", "wiring", "service")
 
 # A driver's pure codecs: no OS header, no Device (checked below). A driver's simulated
@@ -91,7 +93,7 @@ BARE_FROM = {"tests/reference": ("tests/reference", "tests/kernel/support", "tes
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 
 # The core does no I/O: no OS, logging or stream headers.
-NO_OS = {"src/analysis", "src/config", "src/control", "src/gate"}
+NO_OS = {"src/analysis", "src/kinematics", "src/config", "src/control", "src/gate"}
 OS_HEADER = re.compile(
     r"^(unistd|fcntl|signal|poll|sched|pthread|dlfcn|termios|time|malloc|errno)\.h$|"
     r"^(sys|linux|net|netinet|arpa|systemd|hidapi|libusb-1\.0|libevdev)/|^(hidapi|gpiod|libusb)|"
