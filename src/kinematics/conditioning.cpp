@@ -9,25 +9,29 @@ namespace hapticd::kinematics {
 namespace {
 
 // The singular values of a 2 x 2 matrix in closed form (its rotation-plus-reflection split).
-double inverse_condition_2(double a, double b, double c, double d) noexcept {
+SingularValues singular_values_2(double a, double b, double c, double d) noexcept {
   const double q = std::hypot((a + d) / 2, (c - b) / 2);
   const double r = std::hypot((a - d) / 2, (c + b) / 2);
-  const double largest = q + r;
-  return largest > 0 ? std::abs(q - r) / largest : 0.0;
+  return SingularValues{q + r, std::abs(q - r)};
 }
 
 }  // namespace
 
-double inverse_condition(const Mat3& J, int n) noexcept {
-  if (!J.allFinite()) return 0.0;
-  if (n == 1) return J(0, 0) != 0 ? 1.0 : 0.0;
-  if (n == 2) return inverse_condition_2(J(0, 0), J(0, 1), J(1, 0), J(1, 1));
-  // 3 x 3: the eigenvalues of J^T J (the squared singular values) in closed form, no iteration.
+SingularValues singular_values(const Mat3& J, int n) noexcept {
+  if (!J.allFinite()) return SingularValues{};
+  if (n == 1) return SingularValues{std::abs(J(0, 0)), std::abs(J(0, 0))};
+  if (n == 2) return singular_values_2(J(0, 0), J(0, 1), J(1, 0), J(1, 1));
+  // 3 x 3: the eigenvalues of J^T J (the squared singular values) in closed form, no iteration;
+  // near zero a singular value is good to about 1e-8 sigma_max, far below any threshold here.
   Eigen::SelfAdjointEigenSolver<Mat3> eig;
   eig.computeDirect(J.transpose() * J, Eigen::EigenvaluesOnly);
   const Vec3& l = eig.eigenvalues();  // ascending
-  if (!(l[2] > 0)) return 0.0;
-  return std::sqrt(std::max(l[0], 0.0) / l[2]);
+  return SingularValues{std::sqrt(std::max(l[2], 0.0)), std::sqrt(std::max(l[0], 0.0))};
+}
+
+double inverse_condition(const Mat3& J, int n) noexcept {
+  const SingularValues s = singular_values(J, n);
+  return s.largest > 0 ? s.smallest / s.largest : 0.0;
 }
 
 bool implicit_jacobian(const Mat3& dg_dx, const Vec3& dg_dq, int n, Mat3& J) noexcept {
@@ -51,9 +55,12 @@ bool implicit_jacobian(const Mat3& dg_dx, const Vec3& dg_dq, int n, Mat3& J) noe
 }
 
 Status judge(const Box& box, const Vec3& x, int m, const Mat3& J, bool jacobian_ok,
-             double min_inverse_condition) noexcept {
+             const SingularityThresholds& near) noexcept {
   if (!inside(box, x, m)) return Status::kOutsideWorkspace;
-  if (!jacobian_ok || inverse_condition(J, m) < min_inverse_condition) {
+  if (!jacobian_ok) return Status::kNearSingularity;
+  const SingularValues s = singular_values(J, m);
+  if (!(s.smallest >= near.min_inverse_condition * s.largest) ||
+      !(s.smallest >= near.min_singular_value)) {
     return Status::kNearSingularity;
   }
   return Status::kOk;

@@ -84,7 +84,7 @@ Pose delta_forward(const DeltaParams& p, const Vec3& q, const Vec3& guess) noexc
     for (int i = 0; i < 3; ++i) residual[i] = std::remainder(q[i] - at[i], 2 * std::numbers::pi);
     if (residual.cwiseAbs().maxCoeff() <= p.tolerance) {
       pose.J = J;
-      pose.status = judge(p.workspace, pose.x, 3, J, ok, p.min_inverse_condition);
+      pose.status = judge(p.workspace, pose.x, 3, J, ok, p.near);
       return pose;
     }
     if (step >= p.max_iterations || !ok) return pose;

@@ -20,6 +20,7 @@
 
 #include <numbers>
 
+#include "kinematics/conditioning.h"
 #include "kinematics/pose.h"
 
 namespace hapticd::kinematics {
@@ -42,10 +43,12 @@ struct DeltaParams {
   // An 8 cm cube about (0, 0, 0.11), where libnifalcon's examples start their guess; every
   // point of it is in reach (every arm's G solvable), the edges of the reach lie about 5 mm out.
   Box workspace{Vec3(-0.04, -0.04, 0.07), Vec3(0.04, 0.04, 0.15)};
-  Vec3 home = Vec3(0.0, 0.0, 0.11);     // forward kinematics' start when given no guess
-  int max_iterations = 8;               // Newton steps of the forward kinematics
-  double tolerance = 1e-10;             // rad, largest joint residual accepted
-  double min_inverse_condition = 0.05;  // kNearSingularity under it (conditioning.h)
+  Vec3 home = Vec3(0.0, 0.0, 0.11);  // forward kinematics' start when given no guess
+  int max_iterations = 8;            // Newton steps of the forward kinematics
+  double tolerance = 1e-10;          // rad, largest joint residual accepted
+  // kNearSingularity (conditioning.h): sigma_min / sigma_max of J under 0.05 (the box keeps
+  // 0.20), or sigma_min under 0.005 m/rad (a twelfth of the thigh: the box keeps 0.017).
+  SingularityThresholds near{0.05, 0.005};
 };
 
 // RT-safe: called every tick. Closed form; kOutsideWorkspace outside the box or the reach.

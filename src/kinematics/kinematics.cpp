@@ -17,6 +17,11 @@ bool box_valid(const Box& b, int m) {
 
 bool size_valid(int n) { return n >= 1 && n <= 3; }
 
+bool thresholds_valid(const SingularityThresholds& t) {
+  return t.min_inverse_condition >= 0 && t.min_inverse_condition <= 1 &&
+         t.min_singular_value >= 0 && std::isfinite(t.min_singular_value);
+}
+
 const char* cartesian_invalid(const CartesianParams& p) {
   if (!size_valid(p.n)) return "cartesian: n must be 1, 2 or 3";
   for (int i = 0; i < p.n; ++i) {
@@ -33,7 +38,7 @@ const char* pantograph_invalid(const PantographParams& p) {
     }
   }
   if (!positive(p.base_separation)) return "pantograph: base separation must be positive";
-  if (!(p.min_inverse_condition >= 0)) return "pantograph: min_inverse_condition must be >= 0";
+  if (!thresholds_valid(p.near)) return "pantograph: singularity thresholds must be >= 0";
   return box_valid(p.workspace, 2) ? nullptr : "pantograph: empty workspace box";
 }
 
@@ -41,7 +46,7 @@ const char* delta_invalid(const DeltaParams& p) {
   if (!positive(p.thigh) || !positive(p.shin)) return "delta: thigh and shin must be positive";
   if (p.max_iterations < 1) return "delta: max_iterations must be at least 1";
   if (!positive(p.tolerance)) return "delta: tolerance must be positive";
-  if (!(p.min_inverse_condition >= 0)) return "delta: min_inverse_condition must be >= 0";
+  if (!thresholds_valid(p.near)) return "delta: singularity thresholds must be >= 0";
   return box_valid(p.workspace, 3) ? nullptr : "delta: empty workspace box";
 }
 

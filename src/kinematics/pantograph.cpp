@@ -48,7 +48,7 @@ Pose pantograph_forward(const PantographParams& p, const Vec3& q) noexcept {
   dg_dq[0] = -2 * r0.dot(arm_rate(p, 0, q[0]));
   dg_dq[1] = -2 * r1.dot(arm_rate(p, 1, q[1]));
   const bool ok = implicit_jacobian(dg_dx, dg_dq, 2, pose.J);
-  pose.status = judge(p.workspace, pose.x, 2, pose.J, ok, p.min_inverse_condition);
+  pose.status = judge(p.workspace, pose.x, 2, pose.J, ok, p.near);
   return pose;
 }
 

@@ -13,6 +13,7 @@
 // and where the two distal links line up (J grows without bound).
 #pragma once
 
+#include "kinematics/conditioning.h"
 #include "kinematics/pose.h"
 
 namespace hapticd::kinematics {
@@ -25,7 +26,9 @@ struct PantographParams {
   double distal[2] = {0.13, 0.13};                               // b_0, b_1 (m)
   double base_separation = 0.05;                                 // d (m)
   Box workspace{Vec3(-0.08, 0.08, 0.0), Vec3(0.08, 0.19, 0.0)};  // on (x, y) (m)
-  double min_inverse_condition = 0.05;  // kNearSingularity under it (conditioning.h)
+  // kNearSingularity (conditioning.h): sigma_min / sigma_max of J under 0.05 (the box keeps
+  // 0.41), or sigma_min under 0.01 m/rad (10 % of the proximal links: the box keeps 0.049).
+  SingularityThresholds near{0.05, 0.01};
 };
 
 // RT-safe: called every tick. Circle intersection, closed form; kOutsideWorkspace with J zero
