@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "alloc_counter.h"
+#include "check.h"
 #include "kinematics/kinematics.h"
 #include "kinematics/saturation.h"
 

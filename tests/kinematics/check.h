@@ -9,7 +9,8 @@
 
 namespace hapticd::kinematics {
 
-// GoogleTest prints a status by its name.
+// GoogleTest prints a status by its name. Every test file that compares statuses includes this
+// (a file without it would instantiate the byte printer for Status, and the linker keeps one).
 inline std::ostream& operator<<(std::ostream& os, Status s) { return os << status_name(s); }
 
 }  // namespace hapticd::kinematics

@@ -127,5 +127,22 @@ TEST(Delta, OutsideTheBoxIsReportedWithThePoint) {
   EXPECT_LT((pose.x - beside).norm(), 1e-9);
 }
 
+TEST(Delta, TheEdgeOfTheReachIsNearASingularity) {
+  DeltaParams p = kFalcon;
+  p.workspace = Box{};
+  // Up the z axis to where the arms stretch straight (bisected), then 1 nm back inside.
+  double in = 0.15, out = 0.25;
+  for (int i = 0; i < 60; ++i) {
+    const double mid = (in + out) / 2;
+    (delta_inverse(p, Vec3(0.0, 0.0, mid)).status == Status::kOk ? in : out) = mid;
+  }
+  const Vec3 edge(0.0, 0.0, in - 1e-9);
+  const Pose pose = delta_forward(p, delta_inverse(p, edge).q, edge);
+  EXPECT_EQ(pose.status, Status::kNearSingularity) << "z " << edge.z();
+  // The Falcon's own box stays clear of it.
+  EXPECT_EQ(delta_forward(kFalcon, delta_inverse(kFalcon, Vec3(0.0, 0.0, 0.149)).q, edge).status,
+            Status::kOk);
+}
+
 }  // namespace
 }  // namespace hapticd::kinematics

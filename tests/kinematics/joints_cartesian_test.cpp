@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "check.h"
 #include "kinematics/kinematics.h"
 
 namespace hapticd::kinematics {
