@@ -41,7 +41,7 @@ struct DeltaParams {
                          -std::numbers::pi / 6 + std::numbers::pi / 12,
                          -5 * std::numbers::pi / 6 + std::numbers::pi / 12};
   // An 8 cm cube about (0, 0, 0.11), where libnifalcon's examples start their guess; every
-  // point of it is in reach (every arm's G solvable), the edges of the reach lie about 5 mm out.
+  // point of it is in reach (every arm's G solvable), the reach ends 5 to 10 mm out.
   Box workspace{Vec3(-0.04, -0.04, 0.07), Vec3(0.04, 0.04, 0.15)};
   Vec3 home = Vec3(0.0, 0.0, 0.11);  // forward kinematics' start when given no guess
   int max_iterations = 8;            // Newton steps of the forward kinematics
