@@ -1,5 +1,6 @@
 #include "kinematics/delta.h"
 
+#include <Eigen/LU>
 #include <cmath>
 
 #include "kinematics/conditioning.h"
@@ -67,31 +68,83 @@ JointSolution delta_inverse(const DeltaParams& p, const Vec3& x) noexcept {
   return s;
 }
 
+namespace {
+
+// Arm i's closure constraint at x for its given joint angle (cos, sin): G_i, its gradient in x
+// and its derivative in q_i. No inverse trigonometry: what a Newton step of the forward
+// kinematics needs, three square roots a step. False when the shin cannot reach P_v.
+// Each arm's angle's cosine and sine, and each joint's: computed once a tick.
+struct Angles {
+  Vec3 arm_cos, arm_sin, q_cos, q_sin;
+};
+
+bool closure(const DeltaParams& p, const Angles& a, const Vec3& x, Vec3& g, Mat3& dg_dx,
+             Vec3& dg_dq) {
+  const Vec3 &cq = a.q_cos, &sq = a.q_sin;
+  for (int i = 0; i < 3; ++i) {
+    const double cp = a.arm_cos[i], sp = a.arm_sin[i];
+    const double pu = cp * x.x() + sp * x.y() - p.base_u + p.effector_u;
+    const double pv = -sp * x.x() + cp * x.y() - p.base_v + p.effector_v;
+    const double pw = x.z();
+    const double lean = p.shin * p.shin - pv * pv;
+    if (!(lean > 0)) return false;
+    const double b_sin3 = std::sqrt(lean);
+    const double reach = p.knee_joint + p.effector_joint + b_sin3;
+    const double du = pu - p.thigh * cq[i], dw = pw - p.thigh * sq[i];
+    g[i] = du * du + dw * dw - reach * reach;
+    const double gu = 2 * du, gv = 2 * reach * pv / b_sin3, gw = 2 * dw;
+    dg_dx.row(i) << gu * cp - gv * sp, gu * sp + gv * cp, gw;
+    dg_dq[i] = 2 * p.thigh * (pu * sq[i] - pw * cq[i]);
+  }
+  return true;
+}
+
+// Whether x is the point of q on libnifalcon's knee, not of the other one: Newton on G alone
+// cannot tell the two apart (for the other knee G is zero too).
+bool same_knee(const DeltaParams& p, const Vec3& q, const Vec3& x) {
+  Vec3 at;
+  Mat3 dg_dx;
+  Vec3 dg_dq;
+  if (!solve_arms(p, x, at, dg_dx, dg_dq)) return false;
+  for (int i = 0; i < 3; ++i) {
+    if (!(std::abs(std::remainder(q[i] - at[i], 2 * std::numbers::pi)) < 1e-6)) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
 Pose delta_forward(const DeltaParams& p, const Vec3& q, const Vec3& guess) noexcept {
   Pose pose;
   pose.n = pose.m = 3;
   pose.status = Status::kNoConvergence;
   pose.x = guess.allFinite() ? guess : p.home;
   if (!q.allFinite()) return pose;
-  Vec3 at;
-  Mat3 dg_dx;
-  Vec3 dg_dq;
-  Mat3 J;
-  if (!solve_arms(p, pose.x, at, dg_dx, dg_dq)) return pose;  // a start out of reach
+  Angles a;
+  for (int i = 0; i < 3; ++i) {
+    a.arm_cos[i] = std::cos(p.arm_angle[i]);
+    a.arm_sin[i] = std::sin(p.arm_angle[i]);
+  }
+  a.q_cos = q.array().cos();
+  a.q_sin = q.array().sin();
+  Vec3 g, dg_dq;
+  Mat3 dg_dx, J;
+  if (!closure(p, a, pose.x, g, dg_dx, dg_dq)) return pose;  // a shin cannot reach the start
   for (int step = 0;; ++step) {
     const bool ok = implicit_jacobian(dg_dx, dg_dq, 3, J);
-    Vec3 residual;
-    for (int i = 0; i < 3; ++i) residual[i] = std::remainder(q[i] - at[i], 2 * std::numbers::pi);
-    if (residual.cwiseAbs().maxCoeff() <= p.tolerance) {
+    // G(x, q(x)) = 0, so G(x, q) = dG/dq (q - q(x)) to first order: the joint residual.
+    const double residual = (g.array() / dg_dq.array()).abs().maxCoeff();
+    if (ok && residual <= p.tolerance) {
+      if (!same_knee(p, q, pose.x)) return pose;
       pose.J = J;
       pose.status = judge(p.workspace, pose.x, 3, J, ok, p.near);
       return pose;
     }
     if (step >= p.max_iterations || !ok) return pose;
-    // theta(x + dx) = theta(x) + J^-1 dx to first order. A step that leaves the arms' reach
-    // (from far away, near its edge) is halved until it does not, each try one of the budget.
-    Vec3 dx = J * residual;
-    while (!solve_arms(p, pose.x + dx, at, dg_dx, dg_dq)) {
+    // x(q) = x - (dG/dx)^-1 G to first order. A step that leaves the arms' reach (from far
+    // away, near its edge) is halved until it does not, each try one of the budget.
+    Vec3 dx = -dg_dx.partialPivLu().solve(g);
+    while (!closure(p, a, pose.x + dx, g, dg_dx, dg_dq)) {
       if (++step >= p.max_iterations) return pose;
       dx /= 2;
     }

@@ -54,11 +54,14 @@ struct DeltaParams {
 // RT-safe: called every tick. Closed form; kOutsideWorkspace outside the box or the reach.
 JointSolution delta_inverse(const DeltaParams& p, const Vec3& x) noexcept;
 
-// RT-safe: called every tick. Newton's iteration on the inverse kinematics from `guess` (the
-// previous tick's x; p.home when not finite): at most p.max_iterations steps, kOk only once
-// every joint's residual is within p.tolerance. Otherwise kNoConvergence, with x the last
-// iterate and J zero. A converged x is then judged against the box and the conditioning. J is
-// that of the closure constraints, J = -(dG/dx)^-1 dG/dq.
+// RT-safe: called every tick. Newton's iteration on the three closure constraints G(x, q) = 0
+// for the given q, from `guess` (the previous tick's x; p.home when not finite): at most
+// p.max_iterations steps, each without inverse trigonometry, kOk only once every joint's
+// residual (G_i / dG_i/dq_i, rad to first order) is within p.tolerance and the inverse
+// kinematics of the answer gives back q (libnifalcon's knee, not the other, which solves G
+// too). Otherwise kNoConvergence, with x the last iterate and J zero. A converged x is then
+// judged against the box and the conditioning. J is that of the closure constraints,
+// J = -(dG/dx)^-1 dG/dq.
 Pose delta_forward(const DeltaParams& p, const Vec3& q, const Vec3& guess) noexcept;
 
 }  // namespace hapticd::kinematics
