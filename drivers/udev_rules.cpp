@@ -32,8 +32,8 @@ void UdevRules::comment(const std::string& text) {
   if (!line.empty()) out_ << "# " << line << "\n";
 }
 
-const std::string& UdevRules::literal(const std::string& key, const std::string& value) const {
-  if (udev_literal(value)) return value;
+void UdevRules::literal(const std::string& key, const std::string& value) const {
+  if (udev_literal(value)) return;
   throw config::ConfigError({cfg_.locate(key) + ": " + key + ": '" + value +
                              "' cannot go into a udev rule as it is (only letters, digits and "
                              "_ - . : are matched literally); write that rule by hand"});

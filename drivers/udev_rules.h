@@ -5,6 +5,7 @@
 
 #include <sstream>
 #include <string>
+#include <utility>
 
 #include "config/config.h"
 
@@ -22,7 +23,7 @@ class UdevRules {
 
   // `value` of `key`, which goes into a rule: it must be matched literally (no udev pattern,
   // quote, substitution or space). Throws config::ConfigError naming the key otherwise.
-  const std::string& literal(const std::string& key, const std::string& value) const;
+  void literal(const std::string& key, const std::string& value) const;
   // `, GROUP="<group>", MODE="0660"`: what ends a rule that grants a node.
   std::string grant() const;
   const std::string& group() const { return group_; }
