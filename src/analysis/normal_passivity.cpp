@@ -51,13 +51,17 @@ bool task_damping(const DeviceDamping& d, Mat3& b_c) noexcept {
 
 double normal_damping(const DeviceDamping& d, const Vec3& normal) noexcept {
   Mat3 w;
-  if (!finite(d) || !normal.allFinite()) return std::numeric_limits<double>::quiet_NaN();
+  if (!finite(d) || !normal.allFinite() || !(normal.squaredNorm() > 0)) {
+    return std::numeric_limits<double>::quiet_NaN();  // no number, and no wall without a normal
+  }
   if (!mobility(d, w)) return 0.0;  // an undamped joint moves along n for free
   const auto n = normal.head(d.m);
   const double mob = n.dot(w.topLeftCorner(d.m, d.m) * n);
   // No joint motion reaches n: the wall can do no work, the device needs no damping there.
   if (!(mob > 0)) return std::numeric_limits<double>::infinity();
-  return n.squaredNorm() / mob;
+  // For the unit normal n / |n|: its components beyond m are directions the device cannot
+  // move in, which take nothing from b_n's denominator and still count in its length.
+  return normal.squaredNorm() / mob;
 }
 
 double contact_margin(const DeviceDamping& d, std::span<const NormalDemand> walls) noexcept {
@@ -65,7 +69,8 @@ double contact_margin(const DeviceDamping& d, std::span<const NormalDemand> wall
   if (!task_damping(d, b_c)) return -std::numeric_limits<double>::infinity();
   Mat3 left = b_c;
   for (const NormalDemand& w : walls) {
-    if (!w.normal.allFinite() || !std::isfinite(w.required_damping)) {
+    if (!w.normal.allFinite() || !(w.normal.squaredNorm() > 0) ||
+        !std::isfinite(w.required_damping)) {
       return -std::numeric_limits<double>::infinity();
     }
     const Vec3 u = w.normal.normalized();  // only its first m components are task axes

@@ -6,8 +6,9 @@
 //   b_n = 1 / (n^T J B_j^-1 J^T n)
 // and walls in contact together (an edge, a corner), each needing b_req_i along its normal
 // n_i, are covered when B_c - sum_i b_req_i n_i n_i^T is positive semidefinite: sufficient,
-// and for one wall at a fixed configuration also necessary. Pure functions of small
-// fixed-size values; nothing allocates.
+// and for one wall at a fixed configuration of a device with as many joints as task axes
+// (J square and invertible) also necessary. Pure functions of small fixed-size values;
+// nothing allocates.
 #pragma once
 
 #include <Eigen/Core>
@@ -40,11 +41,12 @@ bool task_damping(const DeviceDamping& d, Mat3& b_c) noexcept;
 
 // b_n: the device's damping along the normal n (the wall's b; n need not be unit): 0 when a
 // joint has no damping, +inf when no joint motion moves along n (the wall can do no work),
-// NaN for a non-finite input.
+// NaN for a non-finite input or a zero normal (no wall).
 double normal_damping(const DeviceDamping& d, const Vec3& normal) noexcept;
 
 // The smallest eigenvalue of B_c - sum_i b_req_i n_i n_i^T: >= 0 when the walls in contact
-// together are covered by the device's damping. -inf when B_c does not exist.
+// together are covered by the device's damping. -inf when B_c does not exist, or for a wall
+// with a zero or non-finite normal or demand.
 double contact_margin(const DeviceDamping& d, std::span<const NormalDemand> walls) noexcept;
 
 }  // namespace hapticd::analysis

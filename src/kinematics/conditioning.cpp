@@ -59,7 +59,8 @@ Status judge(const Box& box, const Vec3& x, int m, const Mat3& J, bool jacobian_
   if (!inside(box, x, m)) return Status::kOutsideWorkspace;
   if (!jacobian_ok) return Status::kNearSingularity;
   const SingularValues s = singular_values(J, m);
-  if (!(s.smallest >= near.min_inverse_condition * s.largest) ||
+  // A zero (or non-finite) J moves nothing: singular, even with thresholds of zero.
+  if (!(s.largest > 0) || !(s.smallest >= near.min_inverse_condition * s.largest) ||
       !(s.smallest >= near.min_singular_value)) {
     return Status::kNearSingularity;
   }

@@ -112,6 +112,35 @@ bool same_knee(const DeltaParams& p, const Vec3& q, const Vec3& x) {
   return true;
 }
 
+// Newton's iteration from pose.x (its status kNoConvergence on entry). Sets `wrong_knee` when
+// it converged onto the point of q's other knee.
+void iterate(const DeltaParams& p, const Angles& a, const Vec3& q, Pose& pose, bool& wrong_knee) {
+  Vec3 g, dg_dq;
+  Mat3 dg_dx, J;
+  if (!closure(p, a, pose.x, g, dg_dx, dg_dq)) return;  // a shin cannot reach the start
+  for (int step = 0;; ++step) {
+    const bool ok = implicit_jacobian(dg_dx, dg_dq, 3, J);
+    // G(x, q(x)) = 0, so G(x, q) = dG/dq (q - q(x)) to first order: the joint residual.
+    const double residual = (g.array() / dg_dq.array()).abs().maxCoeff();
+    if (ok && residual <= p.tolerance) {
+      wrong_knee = !same_knee(p, q, pose.x);
+      if (wrong_knee) return;
+      pose.J = J;
+      pose.status = judge(p.workspace, pose.x, 3, J, ok, p.near);
+      return;
+    }
+    if (step >= p.max_iterations || !ok) return;
+    // x(q) = x - (dG/dx)^-1 G to first order. A step that leaves the arms' reach (from far
+    // away, near its edge) is halved until it does not, each try one of the budget.
+    Vec3 dx = -dg_dx.partialPivLu().solve(g);
+    while (!closure(p, a, pose.x + dx, g, dg_dx, dg_dq)) {
+      if (++step >= p.max_iterations) return;
+      dx /= 2;
+    }
+    pose.x += dx;
+  }
+}
+
 }  // namespace
 
 Pose delta_forward(const DeltaParams& p, const Vec3& q, const Vec3& guess) noexcept {
@@ -127,29 +156,16 @@ Pose delta_forward(const DeltaParams& p, const Vec3& q, const Vec3& guess) noexc
   }
   a.q_cos = q.array().cos();
   a.q_sin = q.array().sin();
-  Vec3 g, dg_dq;
-  Mat3 dg_dx, J;
-  if (!closure(p, a, pose.x, g, dg_dx, dg_dq)) return pose;  // a shin cannot reach the start
-  for (int step = 0;; ++step) {
-    const bool ok = implicit_jacobian(dg_dx, dg_dq, 3, J);
-    // G(x, q(x)) = 0, so G(x, q) = dG/dq (q - q(x)) to first order: the joint residual.
-    const double residual = (g.array() / dg_dq.array()).abs().maxCoeff();
-    if (ok && residual <= p.tolerance) {
-      if (!same_knee(p, q, pose.x)) return pose;
-      pose.J = J;
-      pose.status = judge(p.workspace, pose.x, 3, J, ok, p.near);
-      return pose;
-    }
-    if (step >= p.max_iterations || !ok) return pose;
-    // x(q) = x - (dG/dx)^-1 G to first order. A step that leaves the arms' reach (from far
-    // away, near its edge) is halved until it does not, each try one of the budget.
-    Vec3 dx = -dg_dx.partialPivLu().solve(g);
-    while (!closure(p, a, pose.x + dx, g, dg_dx, dg_dq)) {
-      if (++step >= p.max_iterations) return pose;
-      dx /= 2;
-    }
-    pose.x += dx;
+  bool wrong_knee = false;
+  iterate(p, a, q, pose, wrong_knee);
+  // The other knee's point solves G too, and would be a fixed point for every later tick that
+  // starts from it: start once more from home, and leave home as the next tick's start.
+  if (wrong_knee) {
+    pose.x = p.home;
+    iterate(p, a, q, pose, wrong_knee);
+    if (pose.status == Status::kNoConvergence) pose.x = p.home;
   }
+  return pose;
 }
 
 }  // namespace hapticd::kinematics

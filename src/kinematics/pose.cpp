@@ -1,5 +1,7 @@
 #include "kinematics/pose.h"
 
+#include <cmath>
+
 namespace hapticd::kinematics {
 
 const char* status_name(Status s) noexcept {
@@ -18,8 +20,9 @@ const char* status_name(Status s) noexcept {
 
 bool inside(const Box& box, const Vec3& x, int m) noexcept {
   for (int i = 0; i < m; ++i) {
-    // Written so that NaN compares outside.
-    if (!(x[i] >= box.lower[i] && x[i] <= box.upper[i])) return false;
+    // Written so that NaN compares outside; an infinite coordinate is outside an unbounded box
+    // too (a joint's overflow is no position).
+    if (!(std::isfinite(x[i]) && x[i] >= box.lower[i] && x[i] <= box.upper[i])) return false;
   }
   return true;
 }

@@ -121,5 +121,34 @@ TEST(NormalPassivity, NonFiniteInputIsNeverANumberThatPasses) {
   EXPECT_EQ(contact_margin(ok, nan_req), -std::numeric_limits<double>::infinity());
 }
 
+// A planar device (m = 2) under a wall tilted out of its plane, and one axis driven by two
+// joints (n > m): b_n and the one-wall margin agree, counting the normal's whole length.
+TEST(NormalPassivity, ATiltedNormalAndARedundantDeviceAgreeWithTheMargin) {
+  DeviceDamping planar = joints(2, Vec3(1.0, 1.0, 0));
+  const Vec3 tilted = Vec3(1, 0, 1) / std::sqrt(2.0);  // half of it along z, where nothing moves
+  EXPECT_NEAR(normal_damping(planar, tilted), 2.0, 1e-12) << "1 / (n^T J B^-1 J^T n) = 1 / 0.5";
+  const std::array<NormalDemand, 1> under{{{tilted, 1.9}}}, over{{{tilted, 2.1}}};
+  EXPECT_GE(contact_margin(planar, under), 0.0);
+  EXPECT_LT(contact_margin(planar, over), 0.0);
+  // Two joints of damping 1 and 3 both moving x (m = 1, n = 2): B_c = 1 / (1/1 + 1/3).
+  DeviceDamping redundant;
+  redundant.m = 1;
+  redundant.n = 2;
+  redundant.jacobian.setZero();
+  redundant.jacobian(0, 0) = redundant.jacobian(0, 1) = 1.0;
+  redundant.joint_damping = Vec3(1.0, 3.0, 0);
+  EXPECT_NEAR(normal_damping(redundant, Vec3(1, 0, 0)), 0.75, 1e-12);
+  const std::array<NormalDemand, 1> at{{{Vec3(1, 0, 0), 0.74}}}, past{{{Vec3(1, 0, 0), 0.76}}};
+  EXPECT_GE(contact_margin(redundant, at), 0.0);
+  EXPECT_LT(contact_margin(redundant, past), 0.0);
+}
+
+TEST(NormalPassivity, AWallWithoutANormalIsNoWallThatPasses) {
+  const DeviceDamping d = joints(2, Vec3(1, 1, 0));
+  EXPECT_TRUE(std::isnan(normal_damping(d, Vec3::Zero())));
+  const std::array<NormalDemand, 1> none{{{Vec3::Zero(), 0.1}}};
+  EXPECT_EQ(contact_margin(d, none), -std::numeric_limits<double>::infinity());
+}
+
 }  // namespace
 }  // namespace hapticd::analysis

@@ -28,6 +28,7 @@ TEST(Allocation, PerTickFunctionsAllocateNothing) {
                                                     : Vec3(0.01, 0.02, 0.03);
     Vec3 guess = centre;
     double checksum = 0.0;
+    int solved = 0;
     hapticd::testing::AllocationScope scope;
     for (int tick = 0; tick < 2000; ++tick) {
       const Vec3 x = centre + 0.02 * Vec3(std::sin(tick * 0.01), std::cos(tick * 0.013), 0.0);
@@ -38,8 +39,10 @@ TEST(Allocation, PerTickFunctionsAllocateNothing) {
       const Saturated sat = saturate(tau, Vec3::Constant(0.05), pose.n);
       checksum += sat.tau.sum() + task_velocity(pose, s.q).sum() +
                   static_cast<double>(pose.status == Status::kOk);
+      solved += pose.status == Status::kOk ? 1 : 0;
     }
     EXPECT_EQ(scope.count(), 0u) << kind_name(kind);
+    EXPECT_EQ(solved, 2000) << kind_name(kind) << ": ticks that returned early prove nothing";
     EXPECT_TRUE(std::isfinite(checksum));
   }
   if (!hapticd::testing::malloc_is_counted()) {

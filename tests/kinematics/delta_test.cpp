@@ -151,5 +151,38 @@ TEST(Delta, TheEdgeOfTheReachIsNearASingularity) {
             Status::kOk);
 }
 
+// The joint angles of x on the other knee of each arm (the second root of the thigh-shin
+// closure, counter-clockwise of the ray to the point): G(x, q) = 0 there as well.
+Vec3 other_knee(const DeltaParams& p, const Vec3& x) {
+  Vec3 q;
+  for (int i = 0; i < 3; ++i) {
+    const double cp = std::cos(p.arm_angle[i]), sp = std::sin(p.arm_angle[i]);
+    const double pu = cp * x.x() + sp * x.y() - p.base_u + p.effector_u;
+    const double pv = -sp * x.x() + cp * x.y() - p.base_v + p.effector_v;
+    const double reach = p.knee_joint + p.effector_joint + std::sqrt(p.shin * p.shin - pv * pv);
+    const double rho = std::hypot(pu, x.z());
+    const double c = (rho * rho + p.thigh * p.thigh - reach * reach) / (2 * p.thigh * rho);
+    q[i] = std::atan2(x.z(), pu) + std::acos(c);
+  }
+  return q;
+}
+
+// Started on the point of q's other knee, the iteration is already converged there: that is
+// never kOk, and the next tick does not start from it again (it would be stuck for good).
+TEST(Delta, ThePointOfTheOtherKneeIsNeverTheAnswerNorTheNextStart) {
+  over_the_box(3, [](const Vec3& x) {
+    const Vec3 q = other_knee(kFalcon, x);
+    const Pose pose = delta_forward(kFalcon, q, x);
+    // The next start is home (which at home itself is the point again: a measure-zero q).
+    if ((x - kFalcon.home).norm() > 1e-9) {
+      EXPECT_GT((pose.x - x).norm(), 1e-6) << x.transpose();
+    }
+    if (pose.status == Status::kOk) {
+      EXPECT_LT((delta_inverse(kFalcon, pose.x).q - q).cwiseAbs().maxCoeff(), 1e-6)
+          << "an answer is a point of q on libnifalcon's knee";
+    }
+  });
+}
+
 }  // namespace
 }  // namespace hapticd::kinematics

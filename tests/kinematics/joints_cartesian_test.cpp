@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "check.h"
+#include "kinematics/conditioning.h"
 #include "kinematics/kinematics.h"
 
 namespace hapticd::kinematics {
@@ -35,6 +36,23 @@ TEST(Joints, RangesAreTheWorkspace) {
             Status::kOutsideWorkspace)
       << "a non-finite joint is never inside";
   EXPECT_EQ(inverse(k, Vec3(-1.5, 0.0, 0.0)).status, Status::kOutsideWorkspace);
+}
+
+// The default box is unbounded: an infinite joint (an overflowed count) is still no position.
+TEST(Joints, AnInfiniteJointIsOutsideEvenAnUnboundedBox) {
+  Kinematics k;
+  const double inf = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(forward(k, Vec3(inf, 0.0, 0.0), Vec3::Zero()).status, Status::kOutsideWorkspace);
+  EXPECT_EQ(forward(k, Vec3(-inf, 0.0, 0.0), Vec3::Zero()).status, Status::kOutsideWorkspace);
+  EXPECT_EQ(inverse(k, Vec3(inf, 0.0, 0.0)).status, Status::kOutsideWorkspace);
+}
+
+// A J that moves nothing is singular whatever the thresholds, zero ones included.
+TEST(Joints, AZeroJacobianIsNearASingularityEvenWithZeroThresholds) {
+  EXPECT_EQ(judge(Box{}, Vec3::Zero(), 2, Mat3::Zero(), true, SingularityThresholds{}),
+            Status::kNearSingularity);
+  EXPECT_EQ(judge(Box{}, Vec3::Zero(), 2, Mat3::Identity(), true, SingularityThresholds{}),
+            Status::kOk);
 }
 
 Kinematics gantry() {
