@@ -19,18 +19,10 @@ bool finite(const DeviceDamping& d) {
 // J B_j^-1 J^T (m x m); false when a joint's damping is not positive.
 bool mobility(const DeviceDamping& d, Mat3& w) {
   w.setZero();
-  for (int j = 0; j < d.n; ++j) {
-    if (!(d.joint_damping[j] > 0)) return false;
-  }
-  for (int r = 0; r < d.m; ++r) {
-    for (int c = 0; c < d.m; ++c) {
-      double s = 0.0;
-      for (int j = 0; j < d.n; ++j) {
-        s += d.jacobian(r, j) * d.jacobian(c, j) / d.joint_damping[j];
-      }
-      w(r, c) = s;
-    }
-  }
+  if (!(d.joint_damping.head(d.n).minCoeff() > 0)) return false;
+  const auto j = d.jacobian.topLeftCorner(d.m, d.n);
+  w.topLeftCorner(d.m, d.m) =
+      j * d.joint_damping.head(d.n).cwiseInverse().asDiagonal() * j.transpose();
   return true;
 }
 

@@ -2,25 +2,32 @@
 
 namespace hapticd::kinematics {
 
-Pose cartesian_forward(const CartesianParams& p, const Vec3& q) noexcept {
+Pose diagonal_forward(int n, const Vec3& gain, const Box& box, const Vec3& q) noexcept {
   Pose pose;
-  pose.n = pose.m = p.n;
-  const Vec3 gain = p.sign.cwiseProduct(p.scale);
-  pose.x.head(p.n) = gain.head(p.n).cwiseProduct(q.head(p.n));
-  pose.J.topLeftCorner(p.n, p.n) = gain.head(p.n).asDiagonal();
-  pose.status = inside(p.workspace, pose.x, p.n) ? Status::kOk : Status::kOutsideWorkspace;
+  pose.n = pose.m = n;
+  pose.x.head(n) = gain.head(n).cwiseProduct(q.head(n));
+  pose.J.topLeftCorner(n, n) = gain.head(n).asDiagonal();
+  pose.status = inside(box, pose.x, n) ? Status::kOk : Status::kOutsideWorkspace;
   return pose;
 }
 
-JointSolution cartesian_inverse(const CartesianParams& p, const Vec3& x) noexcept {
+JointSolution diagonal_inverse(int n, const Vec3& gain, const Box& box, const Vec3& x) noexcept {
   JointSolution s;
-  s.n = p.n;
-  if (!inside(p.workspace, x, p.n)) {
+  s.n = n;
+  if (!inside(box, x, n)) {
     s.status = Status::kOutsideWorkspace;
     return s;
   }
-  s.q.head(p.n) = x.head(p.n).cwiseQuotient(p.sign.head(p.n).cwiseProduct(p.scale.head(p.n)));
+  s.q.head(n) = x.head(n).cwiseQuotient(gain.head(n));
   return s;
+}
+
+Pose cartesian_forward(const CartesianParams& p, const Vec3& q) noexcept {
+  return diagonal_forward(p.n, p.sign.cwiseProduct(p.scale), p.workspace, q);
+}
+
+JointSolution cartesian_inverse(const CartesianParams& p, const Vec3& x) noexcept {
+  return diagonal_inverse(p.n, p.sign.cwiseProduct(p.scale), p.workspace, x);
 }
 
 }  // namespace hapticd::kinematics

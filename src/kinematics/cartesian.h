@@ -18,6 +18,11 @@ struct CartesianParams {
 // RT-safe: called every tick.
 Pose cartesian_forward(const CartesianParams& p, const Vec3& q) noexcept;
 
+// RT-safe: called every tick. Each of n joints its own task axis, x_i = gain_i q_i, judged
+// against `box`: the cartesian kinds and the joints (gain 1) alike.
+Pose diagonal_forward(int n, const Vec3& gain, const Box& box, const Vec3& q) noexcept;
+JointSolution diagonal_inverse(int n, const Vec3& gain, const Box& box, const Vec3& x) noexcept;
+
 // RT-safe: called every tick.
 JointSolution cartesian_inverse(const CartesianParams& p, const Vec3& x) noexcept;
 

@@ -8,104 +8,78 @@
 namespace hapticd::kinematics {
 namespace {
 
-// One arm at a task position: its joint angle and the derivatives of its closure constraint.
-struct Arm {
-  bool reachable = false;
-  double q = 0.0;
-  Eigen::RowVector3d dg_dx = Eigen::RowVector3d::Zero();
-  double dg_dq = 0.0;
-};
-
-Arm solve_arm(const DeltaParams& p, int i, const Vec3& x) {
-  Arm arm;
-  const double cp = std::cos(p.arm_angle[i]), sp = std::sin(p.arm_angle[i]);
-  const double pu = cp * x.x() + sp * x.y() - p.base_u + p.effector_u;   // P_u + c
-  const double pv = -sp * x.x() + cp * x.y() - p.base_v + p.effector_v;  // P_v + f
-  const double pw = x.z();
-  const double lean = p.shin * p.shin - pv * pv;  // (b sin theta3)^2
-  if (!(lean > 0)) return arm;                    // the shin cannot reach P_v
-  const double b_sin3 = std::sqrt(lean);
-  const double reach = p.knee_joint + p.effector_joint + b_sin3;  // L
-  const double rho = std::hypot(pu, pw);
-  const double a = p.thigh;
-  const double c = (rho * rho + a * a - reach * reach) / (2 * a * rho);
-  if (!(rho > 0) || !(std::abs(c) <= 1)) return arm;  // thigh and shin cannot close
-  arm.q = std::atan2(pw, pu) - std::acos(c);          // libnifalcon's knee (delta.h)
-  arm.reachable = true;
-  // G = (pu - a cos q)^2 + (pw - a sin q)^2 - L(pv)^2, dL/dpv = -pv / (b sin theta3).
-  const double gu = 2 * (pu - a * std::cos(arm.q));
-  const double gv = 2 * reach * pv / b_sin3;
-  const double gw = 2 * (pw - a * std::sin(arm.q));
-  arm.dg_dx << gu * cp - gv * sp, gu * sp + gv * cp, gw;  // through dP/dx = R(-phi)
-  arm.dg_dq = 2 * a * (pu * std::sin(arm.q) - pw * std::cos(arm.q));
-  return arm;
-}
-
-// Every arm at x; false when one cannot reach it.
-bool solve_arms(const DeltaParams& p, const Vec3& x, Vec3& q, Mat3& dg_dx, Vec3& dg_dq) {
-  for (int i = 0; i < 3; ++i) {
-    const Arm arm = solve_arm(p, i, x);
-    if (!arm.reachable) return false;
-    q[i] = arm.q;
-    dg_dx.row(i) = arm.dg_dx;
-    dg_dq[i] = arm.dg_dq;
-  }
-  return true;
-}
-
-}  // namespace
-
-JointSolution delta_inverse(const DeltaParams& p, const Vec3& x) noexcept {
-  JointSolution s;
-  s.n = 3;
-  s.status = Status::kOutsideWorkspace;
-  Vec3 q;
-  Mat3 dg_dx;
-  Vec3 dg_dq;
-  if (!inside(p.workspace, x, 3) || !solve_arms(p, x, q, dg_dx, dg_dq)) return s;
-  s.q = q;
-  s.status = Status::kOk;
-  return s;
-}
-
-namespace {
-
-// Arm i's closure constraint at x for its given joint angle (cos, sin): G_i, its gradient in x
-// and its derivative in q_i. No inverse trigonometry: what a Newton step of the forward
-// kinematics needs, three square roots a step. False when the shin cannot reach P_v.
-// Each arm's angle's cosine and sine, and each joint's: computed once a tick.
+// Each arm's angle's cosine and sine, and each joint's (forward kinematics only): computed
+// once a call.
 struct Angles {
   Vec3 arm_cos, arm_sin, q_cos, q_sin;
 };
 
+Angles arm_angles(const DeltaParams& p) {
+  Angles a;
+  for (int i = 0; i < 3; ++i) {
+    a.arm_cos[i] = std::cos(p.arm_angle[i]);
+    a.arm_sin[i] = std::sin(p.arm_angle[i]);
+  }
+  return a;
+}
+
+// Arm i's view of x (delta.h): (P_u + c, P_v + f, P_w) and the shin's reach L from the knee.
+struct ArmPoint {
+  double pu = 0.0, pv = 0.0, pw = 0.0;
+  double b_sin3 = 0.0;  // b sin theta3
+  double reach = 0.0;   // L
+};
+
+// False when the shin cannot reach P_v.
+bool arm_point(const DeltaParams& p, const Angles& a, int i, const Vec3& x, ArmPoint& out) {
+  const double cp = a.arm_cos[i], sp = a.arm_sin[i];
+  out.pu = cp * x.x() + sp * x.y() - p.base_u + p.effector_u;
+  out.pv = -sp * x.x() + cp * x.y() - p.base_v + p.effector_v;
+  out.pw = x.z();
+  const double lean = p.shin * p.shin - out.pv * out.pv;  // (b sin theta3)^2
+  if (!(lean > 0)) return false;
+  out.b_sin3 = std::sqrt(lean);
+  out.reach = p.knee_joint + p.effector_joint + out.b_sin3;
+  return true;
+}
+
+// Every arm's joint angle at x, libnifalcon's knee (delta.h); false when one cannot reach it.
+bool solve_arms(const DeltaParams& p, const Angles& a, const Vec3& x, Vec3& q) {
+  for (int i = 0; i < 3; ++i) {
+    ArmPoint pt;
+    if (!arm_point(p, a, i, x, pt)) return false;
+    const double rho = std::hypot(pt.pu, pt.pw);
+    const double c = (rho * rho + p.thigh * p.thigh - pt.reach * pt.reach) / (2 * p.thigh * rho);
+    if (!(rho > 0) || !(std::abs(c) <= 1)) return false;  // thigh and shin cannot close
+    q[i] = std::atan2(pt.pw, pt.pu) - std::acos(c);
+  }
+  return true;
+}
+
+// Every arm's closure constraint at x for its given joint angle: G_i = (pu - a cos q)^2 +
+// (pw - a sin q)^2 - L(pv)^2, its gradient in x and its derivative in q_i. No inverse
+// trigonometry: what a Newton step of the forward kinematics needs, three square roots a step.
 bool closure(const DeltaParams& p, const Angles& a, const Vec3& x, Vec3& g, Mat3& dg_dx,
              Vec3& dg_dq) {
-  const Vec3 &cq = a.q_cos, &sq = a.q_sin;
   for (int i = 0; i < 3; ++i) {
+    ArmPoint pt;
+    if (!arm_point(p, a, i, x, pt)) return false;
+    const double du = pt.pu - p.thigh * a.q_cos[i], dw = pt.pw - p.thigh * a.q_sin[i];
+    g[i] = du * du + dw * dw - pt.reach * pt.reach;
+    // dL/dpv = -pv / (b sin theta3); dP/dx = R(-phi).
+    const double gu = 2 * du, gv = 2 * pt.reach * pt.pv / pt.b_sin3, gw = 2 * dw;
     const double cp = a.arm_cos[i], sp = a.arm_sin[i];
-    const double pu = cp * x.x() + sp * x.y() - p.base_u + p.effector_u;
-    const double pv = -sp * x.x() + cp * x.y() - p.base_v + p.effector_v;
-    const double pw = x.z();
-    const double lean = p.shin * p.shin - pv * pv;
-    if (!(lean > 0)) return false;
-    const double b_sin3 = std::sqrt(lean);
-    const double reach = p.knee_joint + p.effector_joint + b_sin3;
-    const double du = pu - p.thigh * cq[i], dw = pw - p.thigh * sq[i];
-    g[i] = du * du + dw * dw - reach * reach;
-    const double gu = 2 * du, gv = 2 * reach * pv / b_sin3, gw = 2 * dw;
     dg_dx.row(i) << gu * cp - gv * sp, gu * sp + gv * cp, gw;
-    dg_dq[i] = 2 * p.thigh * (pu * sq[i] - pw * cq[i]);
+    dg_dq[i] = 2 * p.thigh * (pt.pu * a.q_sin[i] - pt.pw * a.q_cos[i]);
   }
   return true;
 }
 
 // Whether x is the point of q on libnifalcon's knee, not of the other one: Newton on G alone
 // cannot tell the two apart (for the other knee G is zero too).
-bool same_knee(const DeltaParams& p, const Vec3& q, const Vec3& x) {
+bool same_knee(const DeltaParams& p, const Angles& a, const Vec3& q, const Vec3& x) {
   Vec3 at;
-  Mat3 dg_dx;
-  Vec3 dg_dq;
-  if (!solve_arms(p, x, at, dg_dx, dg_dq)) return false;
+  if (!solve_arms(p, a, x, at)) return false;
   for (int i = 0; i < 3; ++i) {
     if (!(std::abs(std::remainder(q[i] - at[i], 2 * std::numbers::pi)) < 1e-6)) return false;
   }
@@ -123,7 +97,7 @@ void iterate(const DeltaParams& p, const Angles& a, const Vec3& q, Pose& pose, b
     // G(x, q(x)) = 0, so G(x, q) = dG/dq (q - q(x)) to first order: the joint residual.
     const double residual = (g.array() / dg_dq.array()).abs().maxCoeff();
     if (ok && residual <= p.tolerance) {
-      wrong_knee = !same_knee(p, q, pose.x);
+      wrong_knee = !same_knee(p, a, q, pose.x);
       if (wrong_knee) return;
       pose.J = J;
       pose.status = judge(p.workspace, pose.x, 3, J, ok, p.near);
@@ -143,17 +117,24 @@ void iterate(const DeltaParams& p, const Angles& a, const Vec3& q, Pose& pose, b
 
 }  // namespace
 
+JointSolution delta_inverse(const DeltaParams& p, const Vec3& x) noexcept {
+  JointSolution s;
+  s.n = 3;
+  s.status = Status::kOutsideWorkspace;
+  Vec3 q;
+  if (!inside(p.workspace, x, 3) || !solve_arms(p, arm_angles(p), x, q)) return s;
+  s.q = q;
+  s.status = Status::kOk;
+  return s;
+}
+
 Pose delta_forward(const DeltaParams& p, const Vec3& q, const Vec3& guess) noexcept {
   Pose pose;
   pose.n = pose.m = 3;
   pose.status = Status::kNoConvergence;
   pose.x = guess.allFinite() ? guess : p.home;
   if (!q.allFinite()) return pose;
-  Angles a;
-  for (int i = 0; i < 3; ++i) {
-    a.arm_cos[i] = std::cos(p.arm_angle[i]);
-    a.arm_sin[i] = std::sin(p.arm_angle[i]);
-  }
+  Angles a = arm_angles(p);
   a.q_cos = q.array().cos();
   a.q_sin = q.array().sin();
   bool wrong_knee = false;
