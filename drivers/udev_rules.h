@@ -27,7 +27,6 @@ class UdevRules {
   // `, GROUP="<group>", MODE="0660"`: what ends a rule that grants a node.
   std::string grant() const;
   const std::string& group() const { return group_; }
-  const config::Config& config() const { return cfg_; }
 
   std::string text() const { return out_.str(); }
 
