@@ -16,7 +16,9 @@
 // and write() never block, allocate, lock, log or throw.
 #pragma once
 
+#include <array>
 #include <atomic>
+#include <cstddef>
 #include <cstdint>
 #include <span>
 #include <stdexcept>
@@ -25,6 +27,7 @@
 #include <vector>
 
 #include "base/counters.h"
+#include "base/joints.h"
 
 namespace hapticd {
 
@@ -77,6 +80,9 @@ struct DeviceInfo {
   std::string description;             // "sim", "hid 1209:ffb0 serial 42", "cia402 node 3 on can0"
   int transport_delay_samples = 0;     // whole samples between write() and the force acting
   std::uint64_t sequence_modulus = 0;  // where the device's sequence wraps (2^8, 2^16...); 0: none
+  // Joints the device drives, 1..base::kMaxJoints: read() fills one sample per joint, write()
+  // takes one force per joint, in this order.
+  std::size_t joints = 1;
 };
 
 // Thrown by the non-RT lifecycle calls. The service maps it to exit code 4.
@@ -112,8 +118,10 @@ class Device {
   const DeviceInfo& info() const noexcept { return info_; }
   // The latched fault (class kNone unless FAULTED).
   DeviceFault fault() const noexcept { return fault_; }
-  // The force last handed to the transport (0 after disable, close or a fault).
-  double last_command() const noexcept { return last_command_.load(std::memory_order_relaxed); }
+  // The force last handed to the transport for `joint` (0 after disable, close or a fault).
+  double last_command(std::size_t joint = 0) const noexcept {
+    return joint < base::kMaxJoints ? last_command_[joint].load(std::memory_order_relaxed) : 0.0;
+  }
   // Not RT-safe. One sentence about the latched fault, naming its cause and code.
   std::string describe_fault() const;
   virtual std::string_view driver_name() const noexcept = 0;
@@ -126,14 +134,19 @@ class Device {
   // registry lists them beside the loop's; empty for a driver with nothing to count.
   virtual std::span<const base::Counter> counters() const noexcept { return {}; }
 
-  // RT-safe: called every tick. The newest sample, draining whatever the transport queued.
-  // Allowed in CONFIGURED (output off) and ACTIVE; a fault latches FAULTED and commands zero.
-  IoStatus read(PositionSample& out) noexcept;
-  // RT-safe: called every tick. Force command (N or N m) in the device frame. Only ACTIVE
-  // passes a force on; in FAULTED only zero is passed (returns the latched fault's status);
-  // in any other state it is refused as a transport fault without touching the transport.
-  // A non-finite force is never passed on: zero is written and the device faults.
-  IoStatus write(double force) noexcept;
+  // RT-safe: called every tick. The newest sample of each joint (out.size() == info().joints),
+  // draining whatever the transport queued. Allowed in CONFIGURED (output off) and ACTIVE; a
+  // fault latches FAULTED and commands zero on every joint.
+  IoStatus read(std::span<PositionSample> out) noexcept;
+  // RT-safe: called every tick. One force command per joint (N or N m, device frame;
+  // forces.size() == info().joints). Only ACTIVE passes them on; in FAULTED only zero is passed
+  // (returns the latched fault's status); in any other state it is refused as a transport
+  // fault without touching the transport. A non-finite force on any joint, or a span of the
+  // wrong size, is never passed on: zero is written on every joint and the device faults.
+  IoStatus write(std::span<const double> forces) noexcept;
+  // RT-safe. The same for a device of one joint.
+  IoStatus read(PositionSample& out) noexcept { return read(std::span<PositionSample>(&out, 1)); }
+  IoStatus write(double force) noexcept { return write(std::span<const double>(&force, 1)); }
 
   // RT-safe (it may sleep on a futex; it never allocates). For a driver whose write() hands
   // the command to a thread of its own (evdev's update thread): returns once that thread has
@@ -156,8 +169,9 @@ class Device {
   virtual void on_disable() noexcept = 0;  // zero force, output off; also after a fault
   virtual void on_clear_fault() {}         // device-side reset, then state CONFIGURED
   virtual void on_close() noexcept = 0;
-  virtual IoStatus on_read(PositionSample& out) noexcept = 0;
-  virtual IoStatus on_write(double force) noexcept = 0;
+  // out and forces hold exactly info().joints entries (checked before the call).
+  virtual IoStatus on_read(std::span<PositionSample> out) noexcept = 0;
+  virtual IoStatus on_write(std::span<const double> forces) noexcept = 0;
   // Not RT-safe. The sentence for a fault this driver latched (its code decoded).
   virtual std::string describe(const DeviceFault& fault) const = 0;
 
@@ -167,15 +181,21 @@ class Device {
   void set_fault_code(std::uint32_t code) noexcept { pending_code_ = code; }
 
  private:
+  // What the base refused itself, rather than the driver reporting it.
+  enum class Refusal : std::uint8_t { kNone, kNonFinite, kJointCount };
+
   IoStatus latch(IoStatus status) noexcept;
+  IoStatus refuse(Refusal why) noexcept;
+  void write_zero() noexcept;
+  void clear_commands() noexcept;
   void require(DeviceState expected, const char* call) const;
 
   std::atomic<DeviceState> state_{DeviceState::kUnconfigured};
   DeviceInfo info_;
   DeviceFault fault_;
   std::uint32_t pending_code_ = 0;
-  bool non_finite_command_ = false;  // the latched fault is a refused NaN/inf command
-  std::atomic<double> last_command_{0.0};
+  Refusal refusal_ = Refusal::kNone;  // the latched fault is the base's refusal
+  std::array<std::atomic<double>, base::kMaxJoints> last_command_{};
 };
 
 }  // namespace hapticd

@@ -37,7 +37,8 @@ void SimDevice::on_enable() { axis_.set_output(true); }
 
 void SimDevice::on_disable() noexcept { axis_.set_output(false); }
 
-IoStatus SimDevice::on_read(PositionSample& out) noexcept {
+IoStatus SimDevice::on_read(std::span<PositionSample> samples) noexcept {
+  PositionSample& out = samples.front();  // one joint
   if (faults_.active(PeerFault::kTransportFault)) {
     set_fault_code(ENODEV);
     return IoStatus::kTransportFault;
@@ -61,7 +62,8 @@ IoStatus SimDevice::on_read(PositionSample& out) noexcept {
   return IoStatus::kOk;
 }
 
-IoStatus SimDevice::on_write(double force) noexcept {
+IoStatus SimDevice::on_write(std::span<const double> forces) noexcept {
+  const double force = forces.front();  // one joint
   axis_.hold_force(force);
   return IoStatus::kOk;
 }

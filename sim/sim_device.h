@@ -43,10 +43,10 @@ class SimDevice final : public hapticd::Device {
   void on_close() noexcept override {}
   // RT-safe: called every tick. The first call after configure() samples the initial state;
   // each later one first advances the plant one period with the force last written.
-  IoStatus on_read(PositionSample& out) noexcept override;
+  IoStatus on_read(std::span<PositionSample> samples) noexcept override;
   // RT-safe: called every tick. Stores the command for the next period, unclamped
   // (saturation is the controller's job).
-  IoStatus on_write(double force) noexcept override;
+  IoStatus on_write(std::span<const double> forces) noexcept override;
   std::string describe(const DeviceFault& fault) const override;
 
  private:

@@ -52,7 +52,8 @@ void CanDevice::on_close() noexcept {
   link_.close();
 }
 
-IoStatus CanDevice::on_read(PositionSample& out) noexcept {
+IoStatus CanDevice::on_read(std::span<PositionSample> samples) noexcept {
+  PositionSample& out = samples.front();  // one joint
   const bool active = state() == DeviceState::kActive;
   bool fresh = false;
   if (drain(active, fresh) != IoStatus::kOk) return pending_status_;
@@ -64,7 +65,8 @@ IoStatus CanDevice::on_read(PositionSample& out) noexcept {
   return IoStatus::kOk;
 }
 
-IoStatus CanDevice::on_write(double force) noexcept {
+IoStatus CanDevice::on_write(std::span<const double> forces) noexcept {
+  const double force = forces.front();  // one joint
   for (const CanFrame& f : profile_->tick_frames(force)) {
     if (!send(f)) return pending_status_;
   }

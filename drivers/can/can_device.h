@@ -37,9 +37,9 @@ class CanDevice final : public Device {
   void on_clear_fault() override;
   void on_close() noexcept override;
   // RT-safe: called every tick.
-  IoStatus on_read(PositionSample& out) noexcept override;
+  IoStatus on_read(std::span<PositionSample> samples) noexcept override;
   // RT-safe: called every tick.
-  IoStatus on_write(double force) noexcept override;
+  IoStatus on_write(std::span<const double> forces) noexcept override;
   std::string describe(const DeviceFault& fault) const override;
 
  private:

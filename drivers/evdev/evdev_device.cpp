@@ -238,7 +238,8 @@ void EvdevDevice::take_frame(Drained& d, std::int64_t time_ns) noexcept {
   d.time_ns = time_ns;
 }
 
-IoStatus EvdevDevice::on_read(PositionSample& out) noexcept {
+IoStatus EvdevDevice::on_read(std::span<PositionSample> samples) noexcept {
+  PositionSample& out = samples.front();  // one joint
   const Drained d = drain();
   if (d.error != 0) {
     set_fault_code(static_cast<std::uint32_t>(d.error));
@@ -284,7 +285,8 @@ void EvdevDevice::post(std::int16_t level) noexcept {
 
 // RT-safe: called every tick. A refused update, or late_update_fault late ones in a row, is
 // the run's transport fault at the next write: the level is handed on, never waited for.
-IoStatus EvdevDevice::on_write(double force) noexcept {
+IoStatus EvdevDevice::on_write(std::span<const double> forces) noexcept {
+  const double force = forces.front();  // one joint
   if (state() == DeviceState::kFaulted) {  // nothing but zero, and the effect stopped
     stop_effect();
     return IoStatus::kOk;

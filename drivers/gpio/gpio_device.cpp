@@ -156,7 +156,8 @@ IoStatus GpioDevice::check_faults() noexcept {
 }
 
 // RT-safe: called every tick.
-IoStatus GpioDevice::on_read(PositionSample& out) noexcept {
+IoStatus GpioDevice::on_read(std::span<PositionSample> samples) noexcept {
+  PositionSample& out = samples.front();  // one joint
   const EdgeRead r = transport_->read_edges(edges_);
   const std::uint64_t hits_before = decoder_.index_hits();
   const std::uint64_t ab_before = decoder_.edges();
@@ -194,7 +195,8 @@ IoStatus GpioDevice::on_read(PositionSample& out) noexcept {
 }
 
 // RT-safe: called every tick.
-IoStatus GpioDevice::on_write(double force) noexcept {
+IoStatus GpioDevice::on_write(std::span<const double> forces) noexcept {
+  const double force = forces.front();  // one joint
   const double fraction = std::min(std::abs(force) / max_force_, 1.0);
   const auto duty =
       static_cast<std::uint64_t>(std::llround(fraction * static_cast<double>(s_.pwm_period_ns)));

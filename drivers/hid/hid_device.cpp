@@ -101,7 +101,8 @@ void HidDevice::emergency_stop() noexcept {
   if (HidTransport* t = emergency_.load()) t->emergency();
 }
 
-IoStatus HidDevice::on_read(PositionSample& out) noexcept {
+IoStatus HidDevice::on_read(std::span<PositionSample> samples) noexcept {
+  PositionSample& out = samples.front();  // one joint
   const Drained d = drain();
   if (d.error != 0) {
     set_fault_code(static_cast<std::uint32_t>(d.error));
@@ -213,7 +214,8 @@ IoStatus HidDevice::send(std::span<const std::uint8_t> report, bool& written) no
   return IoStatus::kOk;  // this tick's command is lost; the next one follows
 }
 
-IoStatus HidDevice::on_write(double force) noexcept {
+IoStatus HidDevice::on_write(std::span<const double> forces) noexcept {
+  const double force = forces.front();  // one joint
   if (state() == DeviceState::kFaulted) {  // after a fault nothing but zero, ahead of the queue
     transport_->write_safe();
     return IoStatus::kOk;

@@ -51,8 +51,8 @@ class HidDevice final : public Device {
   void on_enable() override;
   void on_disable() noexcept override;
   void on_close() noexcept override;
-  IoStatus on_read(PositionSample& out) noexcept override;
-  IoStatus on_write(double force) noexcept override;
+  IoStatus on_read(std::span<PositionSample> samples) noexcept override;
+  IoStatus on_write(std::span<const double> forces) noexcept override;
   std::string describe(const DeviceFault& fault) const override;
 
  private:

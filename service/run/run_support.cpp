@@ -111,7 +111,7 @@ std::string describe_fault(const loop::Fault& fault, const Device& device) {
 
 loop::SampleLimits sample_limits(const config::Config& cfg, const DeviceInfo& info, bool realtime) {
   return {realtime,
-          std::llround(1e9 / cfg.loop.rate_hz),
+          cfg.loop.period_ns(),
           cfg.safety.stale_fault_ticks,
           cfg.safety.max_speed,
           cfg.safety.sequence_gap_fault,

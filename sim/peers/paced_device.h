@@ -38,17 +38,19 @@ class PacedDevice final : public Device {
   void on_disable() noexcept override { inner_->disable(); }
   void on_clear_fault() override { inner_->clear_fault(); }
   void on_close() noexcept override { inner_->close(); }
-  IoStatus on_read(PositionSample& out) noexcept override {
-    const IoStatus r = inner_->read(out);
-    out.flags &= static_cast<std::uint8_t>(~kSampleHasTime);
-    out.time_ns = 0;
+  IoStatus on_read(std::span<PositionSample> samples) noexcept override {
+    const IoStatus r = inner_->read(samples);
+    for (PositionSample& out : samples) {
+      out.flags &= static_cast<std::uint8_t>(~kSampleHasTime);
+      out.time_ns = 0;
+    }
     if (r == IoStatus::kTransportFault || r == IoStatus::kDeviceFault) {
       set_fault_code(inner_->fault().code);
     }
     return r;
   }
-  IoStatus on_write(double force) noexcept override {
-    const IoStatus r = inner_->write(force);
+  IoStatus on_write(std::span<const double> forces) noexcept override {
+    const IoStatus r = inner_->write(forces);
     inner_->wait_output();
     runner_.wait_idle();
     if (r == IoStatus::kTransportFault || r == IoStatus::kDeviceFault) {

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cmath>
 #include <cstdint>
 #include <map>
 #include <memory>
@@ -33,6 +34,9 @@ inline constexpr int kMaxDelaySamples = 100;
 // telemetry.ring_capacity: records preallocated and locked between the loop and the writer.
 inline constexpr long long kMaxRingCapacity = 1LL << 22;
 
+// T in seconds for a period of whole nanoseconds.
+constexpr double period_s(std::int64_t period_ns) { return static_cast<double>(period_ns) / 1e9; }
+
 struct LoopConfig {
   double rate_hz = 1000.0;  // sample rate 1/T (Hz), in [1, 100000]
   ClockMode clock = ClockMode::kRealtime;
@@ -40,8 +44,14 @@ struct LoopConfig {
   int cpu = -1;                   // CPU the RT thread is pinned to; -1 = not pinned
   int overrun_fault_streak = 10;  // consecutive overruns that fault the loop, >= 1
 
-  double sample_period_s() const { return 1.0 / rate_hz; }
+  // The sample period, defined once: the loop sleeps whole nanoseconds, so T is the rate's
+  // period rounded to the nanosecond, and every model (controller, gate, observer, plant)
+  // computes with that T. For a rate that divides 1e9 it is 1/rate to the last bit.
+  std::int64_t period_ns() const { return std::llround(1e9 / rate_hz); }
+  double sample_period_s() const;
 };
+
+inline double LoopConfig::sample_period_s() const { return period_s(period_ns()); }
 
 // A time profile used for the hand's set-point (m) and the force operator (N).
 // constant/step/ramp/press are stored as breakpoints of a piecewise-linear function

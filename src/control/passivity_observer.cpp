@@ -22,9 +22,7 @@ ObserverParams observer_params(const config::Config& cfg, int device_delay_sampl
   ObserverParams p;
   p.mode = cfg.safety.passivity_controller;
   p.device_damping = cfg.device.damping;
-  // The period the loop runs at: whole nanoseconds (loop options), so the loop and replay
-  // compute with the same T to the last bit.
-  p.sample_period = static_cast<double>(std::llround(1e9 / cfg.loop.rate_hz)) * 1e-9;
+  p.sample_period = cfg.loop.sample_period_s();
   p.device_delay = device_delay_samples;
   p.max_damping = std::min(cfg.safety.passivity_max_damping,
                            kStableDampingFraction * 2.0 * cfg.device.mass / p.sample_period);

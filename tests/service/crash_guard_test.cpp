@@ -27,8 +27,8 @@ class PipeDevice final : public Device {
   void on_enable() override {}
   void on_disable() noexcept override {}
   void on_close() noexcept override {}
-  IoStatus on_read(PositionSample&) noexcept override { return IoStatus::kOk; }
-  IoStatus on_write(double) noexcept override { return IoStatus::kOk; }
+  IoStatus on_read(std::span<PositionSample>) noexcept override { return IoStatus::kOk; }
+  IoStatus on_write(std::span<const double>) noexcept override { return IoStatus::kOk; }
   std::string describe(const DeviceFault&) const override { return "pipe"; }
 
  private:

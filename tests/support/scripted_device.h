@@ -38,7 +38,8 @@ class ScriptedDevice final : public Device {
   void on_enable() override {}
   void on_disable() noexcept override {}
   void on_close() noexcept override {}
-  IoStatus on_read(PositionSample& out) noexcept override {
+  IoStatus on_read(std::span<PositionSample> samples) noexcept override {
+    PositionSample& out = samples.front();
     if (read_sleep_ns > 0) {
       const timespec ts{0, read_sleep_ns};
       nanosleep(&ts, nullptr);
@@ -47,8 +48,8 @@ class ScriptedDevice final : public Device {
     if (r == IoStatus::kTransportFault || r == IoStatus::kDeviceFault) set_fault_code(fault_code);
     return r;
   }
-  IoStatus on_write(double force) noexcept override {
-    writes.push_back(force);
+  IoStatus on_write(std::span<const double> forces) noexcept override {
+    writes.push_back(forces.front());
     if (writes.size() - 1 != fail_write_at) return IoStatus::kOk;
     set_fault_code(fault_code);
     return write_failure;

@@ -16,7 +16,7 @@ EncoderSim::EncoderSim(const config::Config& cfg, const dg::GpioSettings& s)
     : axis_(cfg.device, cfg.loop.sample_period_s()),
       s_(s),
       max_force_(cfg.device.max_force),
-      period_ns_(std::llround(cfg.loop.sample_period_s() * 1e9)),
+      period_ns_(cfg.loop.period_ns()),
       count_(0),
       queued_levels_(0),
       line_levels_(0) {
