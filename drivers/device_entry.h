@@ -1,6 +1,9 @@
 // A driver's half of its registration (docs/devices.md): what the driver knows of itself - its
 // name, its config section, the transport delay it declares, its device on real hardware and
-// on one end of a loopback socketpair, and what `hapticd check` and `hapticd devices` add. The
+// on one end of a loopback socketpair, and what `hapticd check` and `hapticd devices` add. What
+// builds a device sees a DriverContext (driver_context.h), never the whole configuration; what
+// reads or names configuration keys (the section, the force's sign, udev rules) sees the Config
+// its messages locate. The
 // simulated device at the other end is sim/'s half (sim/peers/peer_entry.h); the composition
 // root, wiring/, joins the two by driver name. A driver never sees its simulated device.
 #pragma once
@@ -13,6 +16,7 @@
 #include "config/config.h"
 #include "config/driver_schema.h"
 #include "drivers/device.h"
+#include "drivers/driver_context.h"
 #include "drivers/io/unique_fd.h"
 #include "drivers/udev_rules.h"
 
@@ -34,19 +38,19 @@ struct DeviceEntry {
   decltype(config::DriverSchema::read_section) read_section;
   // Not RT-safe, pure. Whole samples between write() and the force acting, from the
   // driver's settings and T: what the gate adds to wall.delay_samples.
-  int (*declared_delay)(const config::Config& cfg) = nullptr;
+  int (*declared_delay)(const DriverContext& ctx) = nullptr;
   // Not RT-safe. The device for real hardware, unconfigured (nothing opened yet); null for a
   // driver that only simulates (sim).
-  std::unique_ptr<Device> (*make_device)(const config::Config& cfg) = nullptr;
+  std::unique_ptr<Device> (*make_device)(const DriverContext& ctx) = nullptr;
   // Not RT-safe. The device on `end`, one end of a SOCK_SEQPACKET socketpair
   // (io::seqpacket_pair) whose other end its simulated device answers on; unconfigured. Null
   // for a driver without a transport (sim).
-  std::unique_ptr<Device> (*make_loopback_device)(const config::Config& cfg,
+  std::unique_ptr<Device> (*make_loopback_device)(const DriverContext& ctx,
                                                   io::UniqueFd end) = nullptr;
   // Not RT-safe, pure. Lines `hapticd check` prints after the gate's analysis and lists under
   // "driver_notes" in --json (e.g. the bus load a CAN configuration needs; a line starting
   // "warning:" is one). Null for a driver with nothing to add.
-  std::vector<std::string> (*notes)(const config::Config& cfg) = nullptr;
+  std::vector<std::string> (*notes)(const DriverContext& ctx) = nullptr;
   // Not RT-safe. What of this driver's kind is attached, each with the configuration keys
   // that select it (`hapticd devices`); null for a driver with nothing to list. A system that
   // cannot be asked is said so in the text, not thrown.

@@ -20,8 +20,8 @@ struct DriverContext {
   std::int64_t period_ns = 1'000'000;
   std::size_t joints = 1;
   std::array<double, base::kMaxJoints> max_force{};  // |u| limit of each joint (N or N m)
-  int rt_priority = 80;                               // the RT thread's SCHED_FIFO priority
-  bool realtime = true;                               // loop.clock: realtime (not freerun)
+  int rt_priority = 80;                              // the RT thread's SCHED_FIFO priority
+  bool realtime = true;                              // loop.clock: realtime (not freerun)
 
   DriverContext() = default;
   // Not RT-safe. What `cfg` gives its driver. Implicit on purpose: the service and the tests

@@ -10,7 +10,7 @@
 namespace hapticd::wiring {
 namespace {
 
-int no_delay(const config::Config&) { return 0; }  // in-process: written at k, acts from k
+int no_delay(const drivers::DriverContext&) { return 0; }  // in-process: written at k, acts from k
 
 Loopback sim_loopback(const config::Config& cfg) {
   std::vector<double> replay;

@@ -16,11 +16,7 @@
 namespace hapticd::drivers::can {
 namespace {
 
-bool realtime_clock(const config::Config& cfg) {
-  return cfg.loop.clock == config::ClockMode::kRealtime;
-}
-
-std::unique_ptr<Device> can_loopback_device(const config::Config& cfg, io::UniqueFd end) {
+std::unique_ptr<Device> can_loopback_device(const DriverContext& ctx, io::UniqueFd end) {
   // The device keeps the pair's end and hands its transport a duplicate at each configure,
   // so closing and configuring again works like unplugging and replugging a cable.
   auto kept = std::make_shared<io::UniqueFd>(std::move(end));
@@ -29,20 +25,18 @@ std::unique_ptr<Device> can_loopback_device(const config::Config& cfg, io::Uniqu
     if (fd < 0) throw DeviceError("can: loopback: dup: " + base::errno_text(errno));
     return CanSocket::adopt(io::UniqueFd(fd), "loopback");
   };
-  if (!realtime_clock(cfg)) return make_can_device(cfg, std::move(open));
+  if (!ctx.realtime) return make_can_device(ctx, std::move(open));
   // The simulated drive answers at once unless the host holds its thread up: configure's
   // waits (an SDO answer, a heartbeat, a state) get seconds, not the bus's milliseconds.
-  CanSettings s = can_settings(cfg);
+  CanSettings s = can_settings(ctx);
   s.sdo_timeout_ms = std::max(s.sdo_timeout_ms, 2000);
   s.state_timeout_ms = std::max(s.state_timeout_ms, 5000);
   s.heartbeat_timeout_ms = std::max(s.heartbeat_timeout_ms, 2000);
-  return std::make_unique<CanDevice>(s, cfg.loop.sample_period_s(), std::move(open),
-                                     cfg.loop.rt_priority);
+  return std::make_unique<CanDevice>(s, ctx.sample_period_s(), std::move(open), ctx.rt_priority);
 }
 
-// The frames the driver of cfg's profile needs to see.
-std::vector<IdFilter> receive_filters(const config::Config& cfg) {
-  const CanSettings& s = can_settings(cfg);
+// The frames the driver of a profile needs to see.
+std::vector<IdFilter> receive_filters(const CanSettings& s) {
   const std::uint32_t n = s.node_id;
   if (s.profile == Profile::kOdrive) {
     return {{odrive::frame_id(s.node_id, 0), 0x7E0}};  // the node's 32 command ids
@@ -54,17 +48,17 @@ std::vector<IdFilter> receive_filters(const config::Config& cfg) {
           {canopen::kHeartbeatBase + n}};
 }
 
-std::unique_ptr<Device> can_device(const config::Config& cfg) {
-  const CanSettings& s = can_settings(cfg);
-  const std::vector<IdFilter> filters = receive_filters(cfg);
-  return make_can_device(cfg, [interface = s.interface, filters] {
+std::unique_ptr<Device> can_device(const DriverContext& ctx) {
+  const CanSettings& s = can_settings(ctx);
+  const std::vector<IdFilter> filters = receive_filters(s);
+  return make_can_device(ctx, [interface = s.interface, filters] {
     return CanSocket::open_interface(interface, filters, true);
   });
 }
 
-std::vector<std::string> can_notes(const config::Config& cfg) {
-  std::vector<std::string> notes = bus_load_notes(can_settings(cfg), cfg.loop.rate_hz);
-  if (const std::string v = odrive_speed_note(can_settings(cfg)); !v.empty()) notes.push_back(v);
+std::vector<std::string> can_notes(const DriverContext& ctx) {
+  std::vector<std::string> notes = bus_load_notes(can_settings(ctx), ctx.rate_hz());
+  if (const std::string v = odrive_speed_note(can_settings(ctx)); !v.empty()) notes.push_back(v);
   return notes;
 }
 
@@ -77,11 +71,10 @@ ForceReversal force_reversal(const config::Config& cfg) {
 
 }  // namespace
 
-std::unique_ptr<Device> make_can_device(const config::Config& cfg,
-                                        std::function<CanSocket()> open) {
+std::unique_ptr<Device> make_can_device(const DriverContext& ctx, std::function<CanSocket()> open) {
   // A stop keeps SYNC going on the loop's clock: at its priority where the loop runs in real time.
-  const int keeper = realtime_clock(cfg) ? cfg.loop.rt_priority : 0;
-  return std::make_unique<CanDevice>(can_settings(cfg), cfg.loop.sample_period_s(), std::move(open),
+  const int keeper = ctx.realtime ? ctx.rt_priority : 0;
+  return std::make_unique<CanDevice>(can_settings(ctx), ctx.sample_period_s(), std::move(open),
                                      keeper);
 }
 

@@ -16,8 +16,8 @@ DeviceEntry device_entry();
 // The entry's udev_rules: the nodes and settings cfg's device needs, and no other.
 void write_udev_rules(const config::Config& cfg, UdevRules& out);
 
-// The device of cfg's profile, opening its transport with `open` at configure (the tests
+// The device of ctx's profile, opening its transport with `open` at configure (the tests
 // build their own rigs with it).
-std::unique_ptr<Device> make_can_device(const config::Config& cfg, std::function<CanSocket()> open);
+std::unique_ptr<Device> make_can_device(const DriverContext& ctx, std::function<CanSocket()> open);
 
 }  // namespace hapticd::drivers::can

@@ -141,8 +141,8 @@ std::shared_ptr<const config::DriverSettings> read_can_section(MapReader& m,
   return s;
 }
 
-const CanSettings& can_settings(const config::Config& cfg) {
-  const auto* s = dynamic_cast<const CanSettings*>(cfg.device.settings.get());
+const CanSettings& can_settings(const DriverContext& ctx) {
+  const auto* s = dynamic_cast<const CanSettings*>(ctx.settings.get());
   if (s == nullptr) throw DeviceError("can: the configuration has no device.can section");
   return *s;
 }
@@ -155,8 +155,8 @@ int delay_samples(const CanSettings& s, double rate_hz) {
   return 1;
 }
 
-int declared_delay(const config::Config& cfg) {
-  return delay_samples(can_settings(cfg), cfg.loop.rate_hz);
+int declared_delay(const DriverContext& ctx) {
+  return delay_samples(can_settings(ctx), ctx.rate_hz());
 }
 
 std::string odrive_speed_note(const CanSettings& s) {

@@ -12,6 +12,7 @@
 #include "config/schema_reader.h"
 #include "drivers/can/cia402.h"
 #include "drivers/can/odrive_protocol.h"
+#include "drivers/driver_context.h"
 
 namespace hapticd::drivers::can {
 
@@ -74,12 +75,12 @@ struct CanSettings final : config::DriverSettings {
 std::shared_ptr<const config::DriverSettings> read_can_section(config::schema::MapReader& section,
                                                                const config::Config& cfg);
 // The settings of a loaded config whose device.driver is can. Throws DeviceError otherwise.
-const CanSettings& can_settings(const config::Config& cfg);
+const CanSettings& can_settings(const DriverContext& ctx);
 
 // Whole samples between write() and the force acting (docs/drivers/can.md): 1 for CiA 402 (an RPDO
 // takes effect at the next SYNC) and for ODrive on request (the answer to this tick's request
 // is the position the next tick acts on); ceil(period / T) for ODrive's cyclic message.
-int declared_delay(const config::Config& cfg);
+int declared_delay(const DriverContext& ctx);
 int delay_samples(const CanSettings& s, double rate_hz);
 // ODrive: the speed above which the firmware brakes (and then faults) in torque control, in
 // the axis's own units, as a `check` warning; "" for CiA 402 or with the limit off.

@@ -286,7 +286,7 @@ void EvdevDevice::post(std::int16_t level) noexcept {
 // RT-safe: called every tick. A refused update, or late_update_fault late ones in a row, is
 // the run's transport fault at the next write: the level is handed on, never waited for.
 IoStatus EvdevDevice::on_write(std::span<const double> forces) noexcept {
-  const double force = forces.front();  // one joint
+  const double force = forces.front();     // one joint
   if (state() == DeviceState::kFaulted) {  // nothing but zero, and the effect stopped
     stop_effect();
     return IoStatus::kOk;

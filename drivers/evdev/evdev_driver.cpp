@@ -15,18 +15,18 @@
 namespace hapticd::drivers::evdev {
 namespace {
 
-std::shared_ptr<const EvdevSettings> settings_of(const config::Config& cfg) {
-  auto s = std::dynamic_pointer_cast<const EvdevSettings>(cfg.device.settings);
+std::shared_ptr<const EvdevSettings> settings_of(const DriverContext& ctx) {
+  auto s = std::dynamic_pointer_cast<const EvdevSettings>(ctx.settings);
   if (!s) throw DeviceError("evdev: the configuration has no device.evdev section");
   return s;
 }
 
-int declared_delay(const config::Config& cfg) {
-  return declared_delay_samples(*settings_of(cfg), cfg.loop.sample_period_s());
+int declared_delay(const DriverContext& ctx) {
+  return declared_delay_samples(*settings_of(ctx), ctx.sample_period_s());
 }
 
-std::unique_ptr<Device> make_device(const config::Config& cfg) {
-  auto s = settings_of(cfg);
+std::unique_ptr<Device> make_device(const DriverContext& ctx) {
+  auto s = settings_of(ctx);
   auto open = [s] {
     EvdevDevice::Opened o;
     InputListing listing;
@@ -34,11 +34,11 @@ std::unique_ptr<Device> make_device(const config::Config& cfg) {
     o.listing = listing;
     return o;
   };
-  return std::make_unique<EvdevDevice>(s, std::move(open), cfg.loop.sample_period_s());
+  return std::make_unique<EvdevDevice>(s, std::move(open), ctx.sample_period_s());
 }
 
-std::unique_ptr<Device> make_loopback_device(const config::Config& cfg, io::UniqueFd end) {
-  auto s = settings_of(cfg);
+std::unique_ptr<Device> make_loopback_device(const DriverContext& ctx, io::UniqueFd end) {
+  auto s = settings_of(ctx);
   // The device opens a duplicate at each configure, so it can be closed and configured again.
   auto kept = std::make_shared<io::UniqueFd>(std::move(end));
   auto open = [kept] {
@@ -48,13 +48,13 @@ std::unique_ptr<Device> make_loopback_device(const config::Config& cfg, io::Uniq
     o.transport = std::make_unique<SocketTransport>(std::move(fd), std::chrono::seconds(2));
     return o;
   };
-  return std::make_unique<EvdevDevice>(s, std::move(open), cfg.loop.sample_period_s());
+  return std::make_unique<EvdevDevice>(s, std::move(open), ctx.sample_period_s());
 }
 
-std::vector<std::string> notes(const config::Config& cfg) {
-  const EvdevSettings& s = *settings_of(cfg);
+std::vector<std::string> notes(const DriverContext& ctx) {
+  const EvdevSettings& s = *settings_of(ctx);
   std::string line = "evdev: ff_driver " + std::string(to_string(s.ff_driver)) + ": " +
-                     std::to_string(declared_delay(cfg)) + " samples of delay declared";
+                     std::to_string(declared_delay(ctx)) + " samples of delay declared";
   const double highest = highest_rate_hz(s);
   if (highest > 0.0) {
     line += ", at most " + config::schema::format_number(highest) +

@@ -128,8 +128,8 @@ double highest_rate_hz(const EvdevSettings& s) noexcept {
 }  // namespace hapticd::drivers::evdev
 
 namespace hapticd::drivers::evdev {
-const EvdevSettings& evdev_settings(const config::Config& cfg) {
-  const auto* s = dynamic_cast<const EvdevSettings*>(cfg.device.settings.get());
+const EvdevSettings& evdev_settings(const DriverContext& ctx) {
+  const auto* s = dynamic_cast<const EvdevSettings*>(ctx.settings.get());
   if (s == nullptr) throw std::logic_error("device.driver is not evdev: no device.evdev settings");
   return *s;
 }

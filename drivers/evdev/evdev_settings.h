@@ -12,6 +12,7 @@
 #include <string_view>
 
 #include "config/config.h"
+#include "drivers/driver_context.h"
 
 namespace hapticd::drivers::evdev {
 
@@ -131,5 +132,5 @@ double highest_rate_hz(const EvdevSettings& s) noexcept;
 namespace hapticd::drivers::evdev {
 // The section of a configuration whose device.driver is evdev; throws std::logic_error for
 // another driver's.
-const EvdevSettings& evdev_settings(const config::Config& cfg);
+const EvdevSettings& evdev_settings(const DriverContext& ctx);
 }  // namespace hapticd::drivers::evdev

@@ -7,20 +7,20 @@
 namespace hapticd::drivers::gpio {
 namespace {
 
-int delay(const config::Config& cfg) {
-  return declared_delay_samples(gpio_settings(cfg), cfg.loop.sample_period_s());
+int delay(const DriverContext& ctx) {
+  return declared_delay_samples(gpio_settings(ctx), ctx.sample_period_s());
 }
 
-std::unique_ptr<Device> make_device(const config::Config& cfg) {
-  const GpioSettings& s = gpio_settings(cfg);
-  return std::make_unique<GpioDevice>(s, cfg.device.max_force, std::make_unique<KernelTransport>(s),
-                                      delay(cfg));
+std::unique_ptr<Device> make_device(const DriverContext& ctx) {
+  const GpioSettings& s = gpio_settings(ctx);
+  return std::make_unique<GpioDevice>(s, ctx.max_force[0], std::make_unique<KernelTransport>(s),
+                                      delay(ctx));
 }
 
-std::unique_ptr<Device> make_loopback_device(const config::Config& cfg, io::UniqueFd end) {
-  return std::make_unique<GpioDevice>(gpio_settings(cfg), cfg.device.max_force,
+std::unique_ptr<Device> make_loopback_device(const DriverContext& ctx, io::UniqueFd end) {
+  return std::make_unique<GpioDevice>(gpio_settings(ctx), ctx.max_force[0],
                                       std::make_unique<LoopbackTransport>(std::move(end)),
-                                      delay(cfg));
+                                      delay(ctx));
 }
 
 // The direction line's level for a positive force (docs/drivers/gpio.md).

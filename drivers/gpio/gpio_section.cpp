@@ -158,8 +158,8 @@ std::shared_ptr<const config::DriverSettings> read_gpio_section(MapReader& m,
   return s;
 }
 
-const GpioSettings& gpio_settings(const config::Config& cfg) {
-  const auto* s = dynamic_cast<const GpioSettings*>(cfg.device.settings.get());
+const GpioSettings& gpio_settings(const DriverContext& ctx) {
+  const auto* s = dynamic_cast<const GpioSettings*>(ctx.settings.get());
   if (s == nullptr) throw std::logic_error("device.driver is not gpio: no device.gpio settings");
   return *s;
 }

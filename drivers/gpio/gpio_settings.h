@@ -8,6 +8,7 @@
 #include <string>
 
 #include "config/driver_schema.h"
+#include "drivers/driver_context.h"
 
 namespace hapticd::drivers::gpio {
 
@@ -49,7 +50,7 @@ std::shared_ptr<const config::DriverSettings> read_gpio_section(config::schema::
 
 // The settings of a loaded configuration whose driver is gpio (throws std::logic_error
 // otherwise: the registry only calls the gpio driver for such a configuration).
-const GpioSettings& gpio_settings(const config::Config& cfg);
+const GpioSettings& gpio_settings(const DriverContext& ctx);
 
 // Whole samples between a PWM write and the force acting: the new duty waits for the running
 // PWM period to end, up to one period P later; with P <= T that is within the sample period

@@ -215,7 +215,7 @@ IoStatus HidDevice::send(std::span<const std::uint8_t> report, bool& written) no
 }
 
 IoStatus HidDevice::on_write(std::span<const double> forces) noexcept {
-  const double force = forces.front();  // one joint
+  const double force = forces.front();     // one joint
   if (state() == DeviceState::kFaulted) {  // after a fault nothing but zero, ahead of the queue
     transport_->write_safe();
     return IoStatus::kOk;

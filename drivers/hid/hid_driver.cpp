@@ -14,24 +14,24 @@
 namespace hapticd::drivers::hid {
 namespace {
 
-std::shared_ptr<const HidSettings> settings_of(const config::Config& cfg) {
-  auto s = std::dynamic_pointer_cast<const HidSettings>(cfg.device.settings);
+std::shared_ptr<const HidSettings> settings_of(const DriverContext& ctx) {
+  auto s = std::dynamic_pointer_cast<const HidSettings>(ctx.settings);
   if (!s) throw DeviceError("hid: the configuration has no device.hid section");
   return s;
 }
 
-int declared_delay(const config::Config& cfg) {
-  return declared_delay_samples(settings_of(cfg)->poll_interval_ms, cfg.loop.sample_period_s());
+int declared_delay(const DriverContext& ctx) {
+  return declared_delay_samples(settings_of(ctx)->poll_interval_ms, ctx.sample_period_s());
 }
 
-std::unique_ptr<Device> make_device(const config::Config& cfg) {
-  auto s = settings_of(cfg);
+std::unique_ptr<Device> make_device(const DriverContext& ctx) {
+  auto s = settings_of(ctx);
   return std::make_unique<HidDevice>(
-      s, [s] { return open_hidapi(*s); }, cfg.loop.sample_period_s());
+      s, [s] { return open_hidapi(*s); }, ctx.sample_period_s());
 }
 
-std::unique_ptr<Device> make_loopback_device(const config::Config& cfg, io::UniqueFd end) {
-  auto s = settings_of(cfg);
+std::unique_ptr<Device> make_loopback_device(const DriverContext& ctx, io::UniqueFd end) {
+  auto s = settings_of(ctx);
   // The device opens a duplicate at each configure, so it can be closed and configured again.
   auto kept = std::make_shared<io::UniqueFd>(std::move(end));
   const std::chrono::milliseconds timeout(static_cast<long>(s->limits.timeout_ms));
@@ -40,7 +40,7 @@ std::unique_ptr<Device> make_loopback_device(const config::Config& cfg, io::Uniq
     if (!fd) throw DeviceError("hid loopback: dup: " + base::errno_text(errno));
     return std::make_unique<SocketTransport>(std::move(fd), timeout);
   };
-  return std::make_unique<HidDevice>(s, std::move(open), cfg.loop.sample_period_s());
+  return std::make_unique<HidDevice>(s, std::move(open), ctx.sample_period_s());
 }
 
 // The PID profile's Direction turns by half a turn; the report profile's force field changes

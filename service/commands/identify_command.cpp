@@ -62,13 +62,14 @@ Excitation plan(const IdentifyOptions& o, const config::Config& cfg) {
   bad(!(o.max_travel > 0.0) || !std::isfinite(o.max_travel),
       "--max-travel: must be > 0 m, got " + format_number(o.max_travel));
   if (!errors.empty()) throw config::ConfigError(errors);
-  e.force = analysis::multisine(e.amplitude, e.f_low, e.f_high, e.duration, cfg.loop.sample_period_s());
+  e.force =
+      analysis::multisine(e.amplitude, e.f_low, e.f_high, e.duration, cfg.loop.sample_period_s());
   if (!o.amplitude) {
     // Less force where the configured m and b say the default would take the device past half
     // of --max-travel (a light, little damped device moves far at low frequencies).
     double travel = 0.0;
-    for (const double x :
-         analysis::free_motion_response(e.force, cfg.device.mass, cfg.device.damping, cfg.loop.sample_period_s())) {
+    for (const double x : analysis::free_motion_response(
+             e.force, cfg.device.mass, cfg.device.damping, cfg.loop.sample_period_s())) {
       travel = std::max(travel, std::abs(x));
     }
     if (travel > 0.5 * o.max_travel) {

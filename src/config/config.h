@@ -3,8 +3,8 @@
 // config_loader.h; nothing here knows about YAML.
 #pragma once
 
-#include <cstddef>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <map>
 #include <memory>

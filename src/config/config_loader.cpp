@@ -167,6 +167,15 @@ Config load_config_text(std::string_view yaml, const std::string& source_name,
   return config;
 }
 
+std::string with_setting(std::string_view effective_yaml, const Override& o) {
+  const std::vector<YAML::Node> documents = load_yaml_documents(std::string(effective_yaml));
+  YAML::Node root = documents.empty() ? YAML::Node(YAML::NodeType::Map) : documents.front();
+  schema::Diagnostics diag("effective configuration");
+  apply_overrides(root, {o}, diag);
+  if (!diag.empty()) throw ConfigError(diag.messages());
+  return emit(root);
+}
+
 Config load_embedded_default(const std::vector<Override>& overrides, const DriverSchemas& drivers) {
   return load_config_text(embedded_default_yaml(), "config/sim.yaml (embedded)", overrides, ".",
                           drivers);

@@ -48,6 +48,12 @@ Config load_config_text(std::string_view yaml, const std::string& source_name,
                         const std::string& base_dir = ".",
                         const DriverSchemas& drivers = sim_driver_only());
 
+// Not RT-safe. The configuration document `effective_yaml` (a Config's, already validated)
+// with one key set to `o.value`, as a --set would write it, for a setting the service changed
+// in the typed Config itself (safety.gate: derate): the document a tick log records then holds
+// what ran. Nothing is validated again; throws ConfigError when the key cannot be set.
+std::string with_setting(std::string_view effective_yaml, const Override& o);
+
 // config/sim.yaml as compiled into the binary (source name "config/sim.yaml (embedded)").
 Config load_embedded_default(const std::vector<Override>& overrides = {},
                              const DriverSchemas& drivers = sim_driver_only());

@@ -121,5 +121,29 @@ TEST(Set, ProgrammaticOverrideWithoutTextUsesKeyAndValue) {
             Lines{"--set wall.damping=-1: wall.damping: must be >= 0, got '-1'"});
 }
 
+// What safety.gate: derate records: the validated document with one value changed, read back
+// to the same typed configuration as if it had been set so, and to the same value to the bit.
+TEST(WithSetting, TheDocumentHoldsTheValueAndEverythingElseAsItWas) {
+  const Config c = load_embedded_default(sets({"wall.damping=3"}));
+  const std::string yaml =
+      with_setting(c.effective_yaml, {"wall.stiffness", "1234.5678901234567", {}});
+  const Config back = load_config_text(yaml, "effective");
+  EXPECT_EQ(back.wall.stiffness, 1234.5678901234567);
+  EXPECT_EQ(back.wall.damping, 3.0);
+  EXPECT_EQ(back.loop.rate_hz, c.loop.rate_hz);
+  EXPECT_EQ(back.device.sim.op.kind, c.device.sim.op.kind);
+}
+
+TEST(WithSetting, AKeyThatCannotBeSetIsRefusedByName) {
+  const Config c = load_embedded_default();
+  try {
+    with_setting(c.effective_yaml, {"wall.stiffness.value", "1", {}});
+    FAIL() << "a key below a number was set";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("wall.stiffness"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("not a mapping"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace hapticd::config::testing
