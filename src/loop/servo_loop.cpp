@@ -110,16 +110,8 @@ void ServoLoop::account(const telemetry::TickRecord& rec, const Sensed& sensed,
 
 void ServoLoop::run_counts(const std::array<std::uint64_t, kLoopCounterCount>& before,
                            LoopResult& res) const noexcept {
-  const auto ran = [&](LoopCounter c) { return counters_[c].value() - before[c]; };
-  res.overruns = ran(kCounterOverruns);
-  res.missed_ticks = ran(kCounterMissedTicks);
-  res.stale_ticks = ran(kCounterStaleTicks);
-  res.sequence_gaps = ran(kCounterSequenceGaps);
-  res.samples_missed = ran(kCounterSamplesMissed);
-  res.contact_ticks = ran(kCounterContactTicks);
-  res.saturated_ticks = ran(kCounterSaturatedTicks);
-  res.unarmed_ticks = ran(kCounterUnarmedTicks);
-  res.reloads = ran(kCounterReloads);
+  for (std::size_t c = 0; c < kLoopCounterCount; ++c)
+    res.counts[c] = counters_[c].value() - before[c];
 }
 
 PassivityResult ServoLoop::passivity() const noexcept {

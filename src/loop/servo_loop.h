@@ -86,19 +86,13 @@ struct PassivityResult {
   double damping_work_j = 0.0;       // energy its force took out of the device (J)
 };
 
-// What one run() did. The counts are that run's share of ServoLoop::counters(), which go on
-// over every run.
+// What one run() did.
 struct LoopResult {
   std::uint64_t ticks = 0;
-  std::uint64_t overruns = 0;      // ticks that finished after the next deadline
-  std::uint64_t missed_ticks = 0;  // whole periods skipped after a long overrun
-  std::uint64_t stale_ticks = 0;
-  std::uint64_t contact_ticks = 0;
-  std::uint64_t saturated_ticks = 0;
-  std::uint64_t unarmed_ticks = 0;   // inside the wall before it was first left (zero force)
-  std::uint64_t reloads = 0;         // control laws swapped in at a tick boundary
-  std::uint64_t sequence_gaps = 0;   // times the device's sequence skipped
-  std::uint64_t samples_missed = 0;  // samples those gaps skipped in all
+  // This run's share of each of ServoLoop::counters() (which go on over every run), indexed
+  // by LoopCounter: what each count means is said once, in the counter.
+  std::array<std::uint64_t, kLoopCounterCount> counts{};
+  std::uint64_t count(LoopCounter c) const noexcept { return counts[c]; }
   double max_penetration = 0.0;
   // Work the commanded force did on the device, sum of u (x_k - x_{k-1}) over the ticks with
   // a position, u the force that acted over the period (the ZOH's, written the device's

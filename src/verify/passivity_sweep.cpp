@@ -144,7 +144,7 @@ class Sweep {
     if (r.fault.cause != loop::FaultCause::kNone) {
       throw std::runtime_error("verify: the measurement loop faulted: " + loop::describe(r.fault));
     }
-    in_contact_ = in_contact_ && r.contact_ticks == r.ticks;
+    in_contact_ = in_contact_ && r.count(loop::kCounterContactTicks) == r.ticks;
   }
 
   config::Config cfg_;

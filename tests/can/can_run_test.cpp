@@ -60,8 +60,9 @@ TEST_P(CanRun, RendersTheWallAsTheSimDriverDoesWithTheSameTotalDelay) {
   const loop::LoopResult sim = run_sim(GetParam(), 1);
   ASSERT_EQ(can.fault.cause, loop::FaultCause::kNone) << loop::describe(can.fault);
   ASSERT_EQ(sim.fault.cause, loop::FaultCause::kNone) << loop::describe(sim.fault);
-  EXPECT_GT(can.contact_ticks, 500u) << "the hand presses into the wall";
-  EXPECT_LE(can.stale_ticks, 1u) << "only the first tick, before the first SYNC";
+  EXPECT_GT(can.count(loop::kCounterContactTicks), 500u) << "the hand presses into the wall";
+  EXPECT_LE(can.count(loop::kCounterStaleTicks), 1u)
+      << "only the first tick, before the first SYNC";
   EXPECT_NEAR(can.max_penetration, sim.max_penetration, 0.1 * sim.max_penetration)
       << "can " << can.max_penetration * 1e3 << " mm, sim " << sim.max_penetration * 1e3 << " mm";
   RecordProperty("penetration_can_mm", std::to_string(can.max_penetration * 1e3));
@@ -108,7 +109,7 @@ TEST_P(CanRun, EachInjectedFaultEndsTheLoopWithZeroForceAndItsCauseNamed) {
                             : rig.peer().inject(static_cast<sim::PeerFault>(f.fault)));
     t.join();
     EXPECT_EQ(r.fault.cause, f.cause) << loop::describe(r.fault);
-    EXPECT_GT(r.contact_ticks, 100u);
+    EXPECT_GT(r.count(loop::kCounterContactTicks), 100u);
     rig.settle();
     EXPECT_EQ(rig.peer().applied_force(), 0.0);
     EXPECT_EQ(device.last_command(), 0.0);

@@ -267,7 +267,8 @@ TEST_P(Conformance, EveryFaultClassFaultsTheLoopWithZeroForce) {
     if (!either_direction) {
       EXPECT_EQ(r.fault.cause, cause) << loop::describe(r.fault);
     }
-    EXPECT_GT(r.contact_ticks, 100u) << "the wall was pushing when the fault struck";
+    EXPECT_GT(r.count(loop::kCounterContactTicks), 100u)
+        << "the wall was pushing when the fault struck";
     rig.settle();
     EXPECT_EQ(rig.peer().applied_force(), 0.0);
     EXPECT_EQ(rig.device.last_command(), 0.0);
@@ -297,7 +298,7 @@ TEST_P(Conformance, ReadAndWriteNeverAllocate) {
     const loop::LoopResult r = run_loop(rig, 5000, {}, &allocations);
     EXPECT_EQ(allocations, 0u) << "allocations on the RT path over " << r.ticks << " ticks";
     EXPECT_EQ(r.fault.cause, loop::FaultCause::kNone) << loop::describe(r.fault);
-    EXPECT_GT(r.contact_ticks, 0u) << "the demo presses into the wall";
+    EXPECT_GT(r.count(loop::kCounterContactTicks), 0u) << "the demo presses into the wall";
   }
   Rig rig(load(GetParam()));
   rig.device.configure();
@@ -334,7 +335,7 @@ TEST_P(Conformance, TheDirectionCheckConfirmsTheForceAndRefusesItReversed) {
       EXPECT_EQ(r.direction.state, control::ProbeState::kReversed) << r.direction.gain;
       EXPECT_EQ(r.fault.cause, loop::FaultCause::kForceReversed) << loop::describe(r.fault);
       EXPECT_LT(r.direction.gain, -0.2);
-      EXPECT_EQ(r.contact_ticks, 0u) << "no wall acted";
+      EXPECT_EQ(r.count(loop::kCounterContactTicks), 0u) << "no wall acted";
       rig.settle();
       EXPECT_EQ(rig.peer().applied_force(), 0.0);
       EXPECT_EQ(rig.device.last_command(), 0.0);
@@ -342,7 +343,8 @@ TEST_P(Conformance, TheDirectionCheckConfirmsTheForceAndRefusesItReversed) {
       EXPECT_EQ(r.direction.state, control::ProbeState::kConfirmed) << r.direction.gain;
       EXPECT_EQ(r.fault.cause, loop::FaultCause::kNone) << loop::describe(r.fault);
       EXPECT_GT(r.direction.gain, 0.2);
-      EXPECT_GT(r.contact_ticks, 0u) << "the demo presses into the wall once it is armed";
+      EXPECT_GT(r.count(loop::kCounterContactTicks), 0u)
+          << "the demo presses into the wall once it is armed";
     }
   }
 }

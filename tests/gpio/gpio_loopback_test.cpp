@@ -96,12 +96,12 @@ TEST(GpioLoopback, RendersTheWallLikeTheSimDriverWithTheSamePlant) {
   const loop::LoopResult s = sim.run(3000);
   ASSERT_EQ(r.fault.cause, loop::FaultCause::kNone) << loop::describe(r.fault);
   ASSERT_EQ(s.fault.cause, loop::FaultCause::kNone);
-  EXPECT_GT(r.contact_ticks, 1000u);
+  EXPECT_GT(r.count(loop::kCounterContactTicks), 1000u);
   // The same plant, encoder and wall: the GPIO path adds no delay (20 kHz PWM, T = 1 ms), so
   // the penetration agrees with the in-process sim to about one encoder count.
   EXPECT_NEAR(r.max_penetration, s.max_penetration, 2e-5)
       << "gpio " << r.max_penetration << " m, sim " << s.max_penetration << " m";
-  EXPECT_NEAR(r.contact_ticks, s.contact_ticks, 20.0);
+  EXPECT_NEAR(r.count(loop::kCounterContactTicks), s.count(loop::kCounterContactTicks), 20.0);
 }
 
 // Issue 23, 8: `hapticd run --loopback --config config/gpio.yaml` in real time. The simulated
@@ -122,13 +122,13 @@ TEST(GpioRealTimeLoopback, TheSimulatedDeviceMovesOnlyWithTheDriversTicks) {
   fr.device.enable();
   const loop::LoopResult f = fr.run(1500);
   ASSERT_EQ(r.fault.cause, loop::FaultCause::kNone) << loop::describe(r.fault);
-  EXPECT_EQ(r.stale_ticks, 0u) << "every tick has its period's answer";
+  EXPECT_EQ(r.count(loop::kCounterStaleTicks), 0u) << "every tick has its period's answer";
   EXPECT_EQ(rt.device.counters()[0].value(), 0u) << "no edge missed";
   // Skipped periods (a loaded host) change only the velocity estimate's span: within a count.
   EXPECT_NEAR(r.max_penetration, f.max_penetration, 1e-5)
       << "real time " << r.max_penetration << " m, freerun " << f.max_penetration << " m; "
-      << r.missed_ticks << " periods skipped";
-  EXPECT_GT(r.contact_ticks, 500u);
+      << r.count(loop::kCounterMissedTicks) << " periods skipped";
+  EXPECT_GT(r.count(loop::kCounterContactTicks), 500u);
 }
 
 // The peer's thread held up by its host for 50 ms at every turn (the loaded host of a Debian 12
@@ -186,7 +186,7 @@ void expect_fault(const std::vector<std::string>& sets, std::optional<sim::gpio:
   if (!other) {
     EXPECT_EQ(r.fault.cause, cause) << loop::describe(r.fault);
   }
-  EXPECT_GT(r.contact_ticks, 100u) << "the wall was pushing";
+  EXPECT_GT(r.count(loop::kCounterContactTicks), 100u) << "the wall was pushing";
   EXPECT_NE(rig.device.describe_fault().find(other ? or_named : named), std::string::npos)
       << rig.device.describe_fault();
   EXPECT_EQ(rig.pair.peer->applied_force(), 0.0) << "zero duty written";

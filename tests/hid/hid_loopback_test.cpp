@@ -69,13 +69,13 @@ void expect_same_wall(const char* example) {
   const RunResult sim = sim_twin(example, delay);
   ASSERT_EQ(hid.result.fault.cause, loop::FaultCause::kNone) << hid.fault;
   ASSERT_EQ(sim.result.fault.cause, loop::FaultCause::kNone);
-  EXPECT_GT(hid.result.contact_ticks, 1000u);
+  EXPECT_GT(hid.result.count(loop::kCounterContactTicks), 1000u);
   EXPECT_GT(sim.result.max_penetration, 0.001);
   // The same loop up to the reports' quantisation (1 mN of force, the axis' counts).
   EXPECT_NEAR(hid.result.max_penetration, sim.result.max_penetration,
               0.01 * sim.result.max_penetration);
-  EXPECT_NEAR(static_cast<double>(hid.result.contact_ticks),
-              static_cast<double>(sim.result.contact_ticks), 5.0);
+  EXPECT_NEAR(static_cast<double>(hid.result.count(loop::kCounterContactTicks)),
+              static_cast<double>(sim.result.count(loop::kCounterContactTicks)), 5.0);
   EXPECT_NEAR(hid.operator_work, sim.operator_work, 0.02 * std::abs(sim.operator_work));
   EXPECT_FALSE(hid.peer_on_after) << "disable leaves the simulated amplifier off";
   EXPECT_EQ(hid.peer_force_after, 0.0);
@@ -119,11 +119,11 @@ TEST(HidLoopback, APackedTwelveBitPositionRendersTheSameWall) {
       run(testing::load_example("hid-report.yaml", {"loop.clock=freerun"}), 3.0);
   ASSERT_EQ(packed.result.fault.cause, loop::FaultCause::kNone) << packed.fault;
   ASSERT_EQ(whole.result.fault.cause, loop::FaultCause::kNone) << whole.fault;
-  EXPECT_GT(packed.result.contact_ticks, 1000u);
+  EXPECT_GT(packed.result.count(loop::kCounterContactTicks), 1000u);
   // Within a count: the offset's rounding can put the wall's edge a count apart.
   EXPECT_NEAR(packed.result.max_penetration, whole.result.max_penetration, 1.01e-5);
-  EXPECT_NEAR(static_cast<double>(packed.result.contact_ticks),
-              static_cast<double>(whole.result.contact_ticks), 2.0);
+  EXPECT_NEAR(static_cast<double>(packed.result.count(loop::kCounterContactTicks)),
+              static_cast<double>(whole.result.count(loop::kCounterContactTicks)), 2.0);
 }
 
 // Issue 34 item 1: an 8-bit position of 0.1 mm counts (+-12.8 mm) on an axis pushed 25 mm out,
@@ -146,7 +146,7 @@ TEST(HidLoopback, AWrappingPositionIsUnwrappedIntoTheRealMotion) {
   const RunResult sim = run(testing::load_example("hid-report.yaml", sim_sets), 3.0);
   ASSERT_EQ(hid.result.fault.cause, loop::FaultCause::kNone) << hid.fault;
   ASSERT_EQ(sim.result.fault.cause, loop::FaultCause::kNone) << sim.fault;
-  EXPECT_GT(hid.result.contact_ticks, 1000u);
+  EXPECT_GT(hid.result.count(loop::kCounterContactTicks), 1000u);
   EXPECT_NEAR(hid.result.max_penetration, sim.result.max_penetration,
               0.01 * sim.result.max_penetration);
 }
@@ -160,7 +160,7 @@ TEST(HidLoopback, FeatureReportsDriveTheSimulatedAmplifier) {
        "value: 255}"});
   const RunResult hid = run(cfg, 2.0);
   EXPECT_EQ(hid.result.fault.cause, loop::FaultCause::kNone) << hid.fault;
-  EXPECT_GT(hid.result.contact_ticks, 500u);
+  EXPECT_GT(hid.result.count(loop::kCounterContactTicks), 500u);
   EXPECT_FALSE(hid.peer_on_after);
 }
 
@@ -173,7 +173,7 @@ TEST(HidLoopback, FiniteAndInfiniteEffectsBothHoldTheWall) {
         {"loop.clock=freerun", std::string("device.hid.pid.effect_duration_ms=") + duration});
     const RunResult hid = run(cfg, 3.0);
     EXPECT_EQ(hid.result.fault.cause, loop::FaultCause::kNone) << duration << ": " << hid.fault;
-    EXPECT_GT(hid.result.contact_ticks, 1000u) << duration;
+    EXPECT_GT(hid.result.count(loop::kCounterContactTicks), 1000u) << duration;
   }
 }
 

@@ -86,7 +86,7 @@ TEST(HidPidSideWinder, ALibraryClassDeviceRendersTheSimDriversWall) {
   ASSERT_EQ(sim.result.fault.cause, loop::FaultCause::kNone) << sim.fault;
   EXPECT_EQ(hid.result.direction.state, control::ProbeState::kConfirmed)
       << "direction_deg 90 pushes toward +X on a +sin firmware";
-  EXPECT_GT(hid.result.contact_ticks, 1000u);
+  EXPECT_GT(hid.result.count(loop::kCounterContactTicks), 1000u);
   EXPECT_NEAR(hid.result.max_penetration, sim.result.max_penetration,
               0.01 * sim.result.max_penetration);
   EXPECT_EQ(hid.state_reports, 0u) << "it never sends PID State";

@@ -103,7 +103,7 @@ TEST(LiveReload, TheNewLawGovernsFromOneTickBoundaryWithoutAllocatingOnTheRtThre
   EXPECT_EQ(rt.allocations, 0u) << "the RT thread allocated during a run with a live reload";
   EXPECT_EQ(swap.retire(), &first);  // the replaced law comes back to be destroyed off-RT
   EXPECT_EQ(&rt.loop.controller(), second.get());
-  EXPECT_EQ(rt.result.reloads, 1u);
+  EXPECT_EQ(rt.result.count(loop::kCounterReloads), 1u);
 
   const std::uint64_t at = swap.last_swap_tick();
   // The reference: the old law up to the boundary, the new one continuing it from there.
@@ -230,7 +230,7 @@ TEST(LiveReload, AnOfferTakenByTheLoopIsReportedTakenAndTheLoopMarksItsEnd) {
   EXPECT_EQ(swap.retire(), &law);
   stop = true;
   rt.join();
-  EXPECT_EQ(result.reloads, 1u);
+  EXPECT_EQ(result.count(loop::kCounterReloads), 1u);
   EXPECT_TRUE(swap.ended());
 }
 

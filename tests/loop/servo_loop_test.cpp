@@ -46,8 +46,8 @@ TEST(ServoLoop, NoHeapAllocationPerTickFreerun) {
   const LoopResult r = loop.run(stop);
   EXPECT_EQ(scope.count(), 0u) << "allocations on the RT path over " << r.ticks << " ticks";
   EXPECT_EQ(r.ticks, 20000u);
-  EXPECT_GT(r.contact_ticks, 1000u);          // the demo really pressed into the wall
-  EXPECT_EQ(ring.dropped(), 20000u - 4096u);  // a full ring counts losses, never blocks
+  EXPECT_GT(r.count(loop::kCounterContactTicks), 1000u);  // the demo really pressed into the wall
+  EXPECT_EQ(ring.dropped(), 20000u - 4096u);              // a full ring counts losses, never blocks
 }
 
 TEST(ServoLoop, NoHeapAllocationWhileThePassivityControllerDamps) {
@@ -126,7 +126,7 @@ TEST(ServoLoop, RecordsCarryTheControllerOutput) {
       EXPECT_LT(t.force_commanded, 0.0);  // pushes back toward -x
     }
   }
-  EXPECT_EQ(contact, r.contact_ticks);
+  EXPECT_EQ(contact, r.count(loop::kCounterContactTicks));
   EXPECT_DOUBLE_EQ(r.max_penetration,
                    std::max_element(rec.begin(), rec.end(), [](auto& a, auto& b) {
                      return a.penetration < b.penetration;
