@@ -27,19 +27,21 @@ ALLOWED = {
     # on nothing.
     "src/base": {"base"},
     "src/analysis": {"analysis", "base"},
-    # Multi-axis kinematics: free functions over fixed-size value types (issue 35).
+    # Multi-axis kinematics: free functions over fixed-size value types. The configuration
+    # holds its parameters (device.kinematics), so whatever sees the configuration sees them.
     "src/kinematics": {"kinematics", "base"},
-    "src/config": {"config", "base"},
-    "src/control": {"control", "analysis", "config", "base"},
-    "src/gate": {"gate", "analysis", "config", "control", "base"},
+    "src/config": {"config", "kinematics", "base"},
+    "src/control": {"control", "analysis", "config", "kinematics", "base"},
+    "src/gate": {"gate", "analysis", "config", "kinematics", "control", "base"},
     "src/telemetry": {"telemetry", "base"},
-    "src/loop": {"loop", "control", "analysis", "config", "telemetry", "drivers", "base"},
-    "src/verify": {"verify", "loop", "control", "analysis", "config", "sim", "drivers",
-                   "telemetry", "base"},
-    "drivers": {"drivers", "config", "base"},
-    "sim": {"sim", "drivers", "config", "telemetry", "base"},
+    "src/loop": {"loop", "control", "analysis", "config", "kinematics", "telemetry", "drivers",
+                 "base"},
+    "src/verify": {"verify", "loop", "control", "analysis", "config", "kinematics", "sim",
+                   "drivers", "telemetry", "base"},
+    "drivers": {"drivers", "config", "kinematics", "base"},
+    "sim": {"sim", "drivers", "config", "kinematics", "telemetry", "base"},
     # The composition root: each driver's device joined with its simulated device.
-    "wiring": {"wiring", "drivers", "sim", "config", "base"},
+    "wiring": {"wiring", "drivers", "sim", "config", "kinematics", "base"},
     "service": None,  # main() and the commands use everything
     # Reference devices are written from a firmware's published source or a specification,
     # never from our codecs: a device that shares the driver's reading of a spec cannot find

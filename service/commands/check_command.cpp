@@ -31,12 +31,15 @@ int check_command(const ConfigOptions& options, bool json) {
   // What the driver adds about its own transport (e.g. the CAN bus load).
   const std::vector<std::string> notes =
       driver.notes != nullptr ? driver.notes(cfg) : std::vector<std::string>{};
+  // A designed coupling answers a wall the passivity bound or the coupling check refuses,
+  // not what else the gate refuses.
+  const bool hint = !r.passivity.passive || (r.coupling.present && !r.coupling.admissible);
   std::string text;
   if (json) {
     nlohmann::json j = gate::gate_to_json(r);
     j["driver"] = cfg.device.driver;
     j["driver_notes"] = notes;
-    if (!r.pass) j["design_coupling"] = kDesignHint;
+    if (hint) j["design_coupling"] = kDesignHint;
     j["derated"] = derated
                        ? nlohmann::json{{"configured", derated->first}, {"ran", derated->second}}
                        : nlohmann::json(nullptr);
@@ -44,7 +47,7 @@ int check_command(const ConfigOptions& options, bool json) {
   } else {
     text = gate::gate_to_text(r, cfg);
     for (const std::string& line : notes) text += line + "\n";
-    if (!r.pass) text += std::string(kDesignHint) + "\n";
+    if (hint) text += std::string(kDesignHint) + "\n";
     if (derated) {
       text += "safety.gate: derate: `run` would run wall.stiffness at " +
               gate::format_number(derated->second, 10) + " N/m, the largest that passes\n";

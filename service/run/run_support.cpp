@@ -237,6 +237,13 @@ bool configure_and_gate(config::Config& cfg, DeviceSession& session, RunSummary&
   s.device_description = device.info().description;
   s.device_notices = device.notices();
   for (const std::string& n : s.device_notices) spdlog::warn("{}", n);
+  const auto joints = static_cast<std::size_t>(kinematics::joint_count(cfg.device.kinematics));
+  if (device.info().joints != joints) {
+    throw DeviceError(std::string(device.driver_name()) + ": the device drives " +
+                      std::to_string(device.info().joints) + " joint(s) but device.kinematics (" +
+                      kinematics::kind_name(cfg.device.kinematics.kind) + ") has " +
+                      std::to_string(joints));
+  }
   const int declared = session.driver().declared_delay(cfg);
   if (device.info().transport_delay_samples != declared) {
     throw DeviceError(std::string(device.driver_name()) + ": the device declares " +

@@ -12,6 +12,8 @@
 #include <string_view>
 #include <vector>
 
+#include "kinematics/kinematics.h"
+
 namespace hapticd::config {
 
 enum class ClockMode { kRealtime, kFreerun };
@@ -118,8 +120,10 @@ struct DeviceConfig {
   std::string driver = "sim";  // a registered driver's name
   double mass = 0.1;           // m (kg), > 0
   double damping = 2.0;        // b (N s/m), > 0: the device's own physical damping
-  double max_force = 10.0;     // |u| saturation (N), > 0
-  SimDeviceConfig sim;         // the simulated plant: the sim driver, and every loopback peer
+  double max_force = 10.0;     // |u| saturation of each joint (N or N m), > 0
+  // device.kinematics: the mechanism the joints drive (one joint, today's axis, by default).
+  kinematics::Kinematics kinematics;
+  SimDeviceConfig sim;  // the simulated plant: the sim driver, and every loopback peer
   // device.<driver>; null for a driver without a section of its own (sim).
   std::shared_ptr<const DriverSettings> settings;
 };

@@ -207,6 +207,7 @@ void read_device(MapReader& top, std::optional<double> rate_hz, const std::strin
   number(m, "mass", Range::greater_than(0.0), cfg.device.mass);
   number(m, "damping", Range::greater_than(0.0), cfg.device.damping);
   number(m, "max_force", Range::greater_than(0.0), cfg.device.max_force);
+  read_kinematics(m, cfg.device.kinematics);
   read_plant(m, rate_hz, base_dir, cfg.device.sim);
   read_driver_section(m, drivers, index.has_value() || !driver.present, cfg);
   m.finish();

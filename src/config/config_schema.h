@@ -40,6 +40,9 @@ const std::string& name_of(const Options<E>& options, E value) {
       ->first;
 }
 
+// Reads device.kinematics of `device` (kinematics_schema.cpp); absent: one joint.
+void read_kinematics(MapReader& device, kinematics::Kinematics& k);
+
 // Reads the section `safety` of `top` (safety_schema.cpp).
 void read_safety(MapReader& top, SafetyConfig& safety);
 

@@ -9,6 +9,7 @@
 #include "control/control_law.h"
 #include "gate/curves.h"
 #include "gate/number_format.h"
+#include "kinematics/kinematics.h"
 
 namespace hapticd::gate {
 namespace {
@@ -168,6 +169,16 @@ GateReport evaluate_gate(const config::Config& cfg, int device_delay_samples) {
   // Verdict: passivity decides; the other checks inform.
   if (!r.passivity.passive) r.reasons.push_back(passivity_reason(cfg, r));
   if (c && !r.coupling.admissible) r.reasons.push_back("coupling: " + r.coupling.note);
+  // The bounds above are one joint's. Several joints need them along each wall's normal over
+  // the workspace (docs/math.md, several axes), which this gate does not check yet: unproven
+  // is refused, never passed.
+  if (const int n = kinematics::joint_count(cfg.device.kinematics); n != 1) {
+    r.reasons.push_back(std::string("device.kinematics: kind ") +
+                        kinematics::kind_name(cfg.device.kinematics.kind) + " drives " +
+                        std::to_string(n) +
+                        " joints; the gate proves a wall for one joint and cannot yet prove one "
+                        "over a workspace of several");
+  }
   r.pass = r.reasons.empty();
   add_warnings(cfg, c.has_value(), r);
   return r;

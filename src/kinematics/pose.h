@@ -8,8 +8,11 @@
 #include <Eigen/Core>
 #include <limits>
 
+#include "base/joints.h"
+
 namespace hapticd::kinematics {
 
+static_assert(base::kMaxJoints == 3, "the kinematics' fixed vectors hold every joint");
 using Vec3 = Eigen::Matrix<double, 3, 1>;
 using Mat3 = Eigen::Matrix<double, 3, 3>;
 

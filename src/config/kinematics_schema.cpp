@@ -1,0 +1,161 @@
+// The section device.kinematics: which mechanism the joints drive and its numbers
+// (docs/kinematics.md). Each kind reads only its own keys; another kind's key is refused, not
+// ignored, and what the numbers describe is checked by the kinematics' own rule
+// (kinematics::invalid_reason), so the file and the code cannot disagree on what is valid.
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "base/joints.h"
+#include "config/config_schema.h"
+
+namespace hapticd::config::schema {
+namespace {
+
+using kinematics::Kind;
+using kinematics::Vec3;
+
+const Options<Kind> kKinds{{"joints", Kind::kJoints},
+                           {"cartesian", Kind::kCartesian},
+                           {"pantograph", Kind::kPantograph},
+                           {"delta", Kind::kDelta}};
+
+// Each kind's keys; a key of another kind is refused by name.
+const std::vector<std::pair<Kind, std::vector<std::string>>> kKeysOf{
+    {Kind::kJoints, {"joints", "workspace"}},
+    {Kind::kCartesian, {"joints", "scale", "sign", "workspace"}},
+    {Kind::kPantograph, {"proximal", "distal", "base_separation", "workspace"}},
+    {Kind::kDelta,
+     {"thigh", "shin", "effector_u", "effector_v", "effector_joint", "knee_joint", "base_u",
+      "base_v", "arm_angle_deg", "home", "workspace"}},
+};
+
+// Exactly n numbers, each in `range`, into the first n entries of `out`. A wrong list leaves
+// `out` as it was and says why.
+void numbers(MapReader& m, std::string_view key, int n, const Range& range, double* out) {
+  const Field f = m.take(key);
+  const auto list = read_number_list(m.diag(), f);
+  if (!list) return;
+  if (static_cast<int>(list->size()) != n) {
+    m.diag().error(
+        f.key_mark, f.path,
+        "must hold " + std::to_string(n) + " numbers, got " + std::to_string(list->size()));
+    return;
+  }
+  for (int i = 0; i < n; ++i) {
+    if (!range.contains((*list)[static_cast<std::size_t>(i)])) {
+      m.diag().error(f.key_mark, f.path + "[" + std::to_string(i) + "]",
+                     "must be " + range.describe() + ", got " +
+                         format_number((*list)[static_cast<std::size_t>(i)]));
+      return;
+    }
+  }
+  for (int i = 0; i < n; ++i) out[i] = (*list)[static_cast<std::size_t>(i)];
+}
+
+void vector(MapReader& m, std::string_view key, int n, const Range& range, Vec3& out) {
+  numbers(m, key, n, range, out.data());
+}
+
+// The workspace: a box on the task coordinates (m), or on the joints' own for `joints`.
+void read_workspace(MapReader& parent, int m, kinematics::Box& box) {
+  const Field f = parent.take("workspace");
+  if (!f.present) return;
+  MapReader w(parent.diag(), f);
+  vector(w, "lower", m, Range::any(), box.lower);
+  vector(w, "upper", m, Range::any(), box.upper);
+  w.finish();
+}
+
+// cartesian.sign: +1 or -1 per joint.
+void read_signs(MapReader& m, int n, Vec3& sign) {
+  const Field f = m.take("sign");
+  const auto list = read_number_list(m.diag(), f);
+  if (!list) return;
+  if (static_cast<int>(list->size()) != n) {
+    m.diag().error(
+        f.key_mark, f.path,
+        "must hold " + std::to_string(n) + " signs, got " + std::to_string(list->size()));
+    return;
+  }
+  for (int i = 0; i < n; ++i) {
+    const double s = (*list)[static_cast<std::size_t>(i)];
+    if (s != 1.0 && s != -1.0) {
+      m.diag().error(f.key_mark, f.path + "[" + std::to_string(i) + "]",
+                     "must be +1 or -1, got " + format_number(s));
+      return;
+    }
+    sign[i] = s;
+  }
+}
+
+void read_delta(MapReader& m, kinematics::DeltaParams& d) {
+  const Range length = Range::greater_than(0.0);
+  number(m, "thigh", length, d.thigh);
+  number(m, "shin", length, d.shin);
+  number(m, "effector_u", Range::any(), d.effector_u);
+  number(m, "effector_v", Range::any(), d.effector_v);
+  number(m, "effector_joint", Range::any(), d.effector_joint);
+  number(m, "knee_joint", Range::any(), d.knee_joint);
+  number(m, "base_u", Range::any(), d.base_u);
+  number(m, "base_v", Range::any(), d.base_v);
+  double deg[3];
+  for (int i = 0; i < 3; ++i) deg[i] = d.arm_angle[i] * 180.0 / std::numbers::pi;
+  numbers(m, "arm_angle_deg", 3, Range::any(), deg);
+  for (int i = 0; i < 3; ++i) d.arm_angle[i] = deg[i] * std::numbers::pi / 180.0;
+  vector(m, "home", 3, Range::any(), d.home);
+  read_workspace(m, 3, d.workspace);
+}
+
+}  // namespace
+
+void read_kinematics(MapReader& device, kinematics::Kinematics& k) {
+  const Field f = device.take("kinematics");
+  if (!f.present) return;  // one joint: today's axis
+  MapReader m(device.diag(), f);
+  if (!m.ok()) return;
+  if (const auto kind = choice(m.diag(), m.take("kind"), kKinds)) k.kind = *kind;
+  const std::size_t errors_before = m.diag().messages().size();
+  const std::vector<std::string>* own = nullptr;
+  for (const auto& [kind, keys] : kKeysOf) {
+    if (kind == k.kind) own = &keys;
+  }
+  for (const auto& [kind, keys] : kKeysOf) {
+    for (const std::string& key : keys) {
+      if (std::find(own->begin(), own->end(), key) == own->end()) {
+        m.not_used(key, "device.kinematics.kind " + name_of(kKinds, k.kind));
+      }
+    }
+  }
+  const IntRange joints = IntRange::between(1, static_cast<long long>(base::kMaxJoints));
+  switch (k.kind) {
+    case Kind::kJoints:
+      integer(m, "joints", joints, k.joints.n);
+      read_workspace(m, k.joints.n, k.joints.workspace);
+      break;
+    case Kind::kCartesian:
+      integer(m, "joints", joints, k.cartesian.n);
+      vector(m, "scale", k.cartesian.n, Range::greater_than(0.0), k.cartesian.scale);
+      read_signs(m, k.cartesian.n, k.cartesian.sign);
+      read_workspace(m, k.cartesian.n, k.cartesian.workspace);
+      break;
+    case Kind::kPantograph:
+      numbers(m, "proximal", 2, Range::greater_than(0.0), k.pantograph.proximal);
+      numbers(m, "distal", 2, Range::greater_than(0.0), k.pantograph.distal);
+      number(m, "base_separation", Range::greater_than(0.0), k.pantograph.base_separation);
+      read_workspace(m, 2, k.pantograph.workspace);
+      break;
+    case Kind::kDelta:
+      read_delta(m, k.delta);
+      break;
+  }
+  m.finish();
+  if (m.diag().messages().size() != errors_before) return;
+  if (const char* why = kinematics::invalid_reason(k)) {
+    m.diag().error(f.key_mark, f.path, std::string("describes no mechanism: ") + why);
+  }
+}
+
+}  // namespace hapticd::config::schema

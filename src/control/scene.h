@@ -1,0 +1,66 @@
+// Walls in task space (docs/kinematics.md, walls in task space): each wall a half-space, a point
+// p and a unit normal n pointing into it, with its own contact law along n. Its law is the
+// one-joint law of controller.h run on the coordinate s = n . (x - p) (a wall at 0 occupying
+// s > 0), so every wall keeps what one axis has: the filters, the coupling, the delay, no_pull,
+// arming and the runaway guard. The walls' forces add in task space, map to the joints through
+// J^T, and are saturated by one factor for every joint, so the force keeps its direction.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "control/controller.h"
+#include "kinematics/pose.h"
+#include "kinematics/saturation.h"
+
+namespace hapticd::control {
+
+// Walls one scene holds at most: a box is six, and the RT thread's arrays are this long.
+inline constexpr std::size_t kMaxWalls = 8;
+
+struct WallGeometry {
+  kinematics::Vec3 point = kinematics::Vec3::Zero();   // on the wall's face (m), first m entries
+  kinematics::Vec3 normal = kinematics::Vec3::Zero();  // unit, into the wall
+};
+
+struct SceneStep {
+  std::array<ControlOutput, kMaxWalls> walls{};       // each wall's step (its own coordinate s)
+  std::size_t count = 0;                              // walls stepped
+  kinematics::Vec3 force = kinematics::Vec3::Zero();  // sum of the walls' forces (task, N)
+  kinematics::Vec3 tau = kinematics::Vec3::Zero();    // J^T force, saturated (joints)
+  kinematics::SaturationStatus saturation = kinematics::SaturationStatus::kWithin;
+  double scale = 1.0;       // what the joint saturation multiplied tau by
+  std::uint32_t flags = 0;  // ControlFlag bits of every wall, or-ed
+  bool pose_ok = true;      // false: the pose was not kinematics::Status::kOk, zero torque
+};
+
+class Scene {
+ public:
+  // Not RT-safe: builds each wall's controller (its delay line). `laws[i]` is wall i's law
+  // along its normal, with wall_position 0 and normal +1 (control_law.h). Throws
+  // std::invalid_argument for more than kMaxWalls walls, sizes that differ, or a normal that is
+  // not unit (within 1e-9) or not finite.
+  Scene(std::span<const WallGeometry> geometry, std::span<const ControlLaw> laws);
+
+  // RT-safe: called every tick. Steps every wall on the task position of `pose` and maps the
+  // sum through its Jacobian; `limit` holds each joint's force limit. A pose that is not kOk,
+  // a non-finite torque or limit gives zero torque (kControlNonFinite for the latter, for the
+  // loop to fault on); the walls are stepped all the same, so their histories stay whole.
+  SceneStep step(const kinematics::Pose& pose, const kinematics::Vec3& limit) noexcept;
+
+  // RT-safe. Every wall's filters cleared and disarmed (as at construction).
+  void reset() noexcept;
+
+  std::size_t size() const noexcept { return walls_.size(); }
+  const WallGeometry& geometry(std::size_t i) const noexcept { return geometry_[i]; }
+
+ private:
+  std::array<WallGeometry, kMaxWalls> geometry_{};
+  std::vector<Controller> walls_;                       // built once, never resized
+  kinematics::Vec3 last_x_ = kinematics::Vec3::Zero();  // the last finite task position
+};
+
+}  // namespace hapticd::control
