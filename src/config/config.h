@@ -145,6 +145,19 @@ struct WallConfig {
   CouplingConfig coupling;
 };
 
+// walls: at most this many (a box is six); the RT thread's per-wall arrays are this long.
+inline constexpr std::size_t kMaxWalls = 8;
+
+// One of `walls`: a half-space in task space (docs/kinematics.md, walls in task space), the
+// task coordinates where a point p satisfies n . (x - p) > 0. Its law acts along n.
+struct TaskWallConfig {
+  kinematics::Vec3 point = kinematics::Vec3::Zero();   // on the face (m), first m entries
+  kinematics::Vec3 normal = kinematics::Vec3::Zero();  // unit (normalised as read), into the wall
+  // stiffness, damping, discretization, delay_samples, no_pull, coupling along n; its
+  // position and normal are the one-joint law's 0 and +1 on the coordinate n . (x - p).
+  WallConfig law;
+};
+
 // safety.direction_check: before the wall is armed, a small force pulse and the sign of the
 // motion it causes (docs/devices.md, the direction check; docs/math.md, its fit).
 enum class DirectionCheckMode { kEnforce, kOff };
@@ -217,7 +230,9 @@ struct Config {
   std::map<std::string, std::string, std::less<>> key_locations;
   LoopConfig loop;
   DeviceConfig device;
-  WallConfig wall;
+  WallConfig wall;  // the wall of a device of one joint
+  // The walls of a device with several task axes (device.kinematics); none by default.
+  std::vector<TaskWallConfig> walls;
   SafetyConfig safety;
   AnalysisConfig analysis;
   TelemetryConfig telemetry;

@@ -277,18 +277,7 @@ void read_wall(MapReader& top, WallConfig& wall) {
       d.error(normal.key_mark, normal.path, "must be +1 or -1, got " + describe_value(normal.node));
     }
   }
-  number(m, "stiffness", Range::at_least(0.0), wall.stiffness);
-  number(m, "damping", Range::at_least(0.0), wall.damping);
-  if (const auto v = choice(d, m.take("discretization"), kDiscretizations)) {
-    wall.discretization = *v;
-  }
-  // Beyond 100 samples no useful wall is passive (b_req grows like K T d), and the analysis
-  // of the delayed loop must stay well under a second.
-  integer(m, "delay_samples", IntRange::between(0, kMaxDelaySamples), wall.delay_samples);
-  if (const auto v = read_bool(d, m.take("no_pull"))) wall.no_pull = *v;
-  if (auto c = read_rational(m, "coupling", "C(z)", true)) {
-    wall.coupling = {true, std::move(c->first), std::move(c->second)};
-  }
+  read_wall_law(m, wall);
   m.finish();
 }
 
@@ -343,12 +332,37 @@ void read_telemetry(MapReader& top, TelemetryConfig& telemetry) {
 
 }  // namespace
 
+void read_wall_law(MapReader& m, WallConfig& wall) {
+  Diagnostics& d = m.diag();
+  number(m, "stiffness", Range::at_least(0.0), wall.stiffness);
+  number(m, "damping", Range::at_least(0.0), wall.damping);
+  if (const auto v = choice(d, m.take("discretization"), kDiscretizations)) {
+    wall.discretization = *v;
+  }
+  // Beyond 100 samples no useful wall is passive (b_req grows like K T d), and the analysis
+  // of the delayed loop must stay well under a second.
+  integer(m, "delay_samples", IntRange::between(0, kMaxDelaySamples), wall.delay_samples);
+  if (const auto v = read_bool(d, m.take("no_pull"))) wall.no_pull = *v;
+  if (auto c = read_rational(m, "coupling", "C(z)", true)) {
+    wall.coupling = {true, std::move(c->first), std::move(c->second)};
+  }
+}
+
 void read_config(Diagnostics& diag, const YAML::Node& root, const std::string& base_dir,
                  const DriverSchemas& drivers, Config& config) {
   MapReader top(diag, {"", root, root.Mark(), true});
   const LoopResult loop = read_loop(top, config.loop);
   read_device(top, loop.rate_hz, base_dir, drivers, config);
-  read_wall(top, config.wall);
+  // One joint has its `wall`; several task axes have `walls`, and each refuses the other.
+  const int task_axes = kinematics::joint_count(config.device.kinematics);
+  const std::string kind = kinematics::kind_name(config.device.kinematics.kind);
+  if (task_axes == 1) {
+    top.not_used("walls", "a device of one joint (its wall is `wall`)");
+    read_wall(top, config.wall);
+  } else {
+    top.not_used("wall", "device.kinematics kind " + kind + " (its walls are `walls`)");
+    read_walls(top, task_axes, config.walls);
+  }
   read_safety(top, config.safety);
   read_analysis(top, config.analysis);
   read_telemetry(top, config.telemetry);

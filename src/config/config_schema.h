@@ -40,6 +40,13 @@ const std::string& name_of(const Options<E>& options, E value) {
       ->first;
 }
 
+// Reads a wall's contact law (stiffness, damping, discretization, delay_samples, no_pull,
+// coupling) from its mapping: `wall`'s and each of `walls`'.
+void read_wall_law(MapReader& m, WallConfig& wall);
+
+// Reads `walls` of `top` for a device of `task_axes` task coordinates (walls_schema.cpp).
+void read_walls(MapReader& top, int task_axes, std::vector<TaskWallConfig>& walls);
+
 // Reads device.kinematics of `device` (kinematics_schema.cpp); absent: one joint.
 void read_kinematics(MapReader& device, kinematics::Kinematics& k);
 

@@ -60,4 +60,18 @@ SceneStep Scene::step(const kinematics::Pose& pose, const kinematics::Vec3& limi
   return out;
 }
 
+Scene make_scene(const config::Config& cfg) {
+  std::vector<WallGeometry> geometry;
+  std::vector<ControlLaw> laws;
+  for (const config::TaskWallConfig& w : cfg.walls) {
+    config::Config one = cfg;
+    one.wall = w.law;
+    one.wall.position = 0.0;  // the law runs on s = n . (x - p): its wall is at s = 0,
+    one.wall.normal = 1;      // occupying s > 0
+    laws.push_back(make_control_law(one));
+    geometry.push_back({w.point, w.normal});
+  }
+  return Scene(geometry, laws);
+}
+
 }  // namespace hapticd::control

@@ -18,8 +18,7 @@
 
 namespace hapticd::control {
 
-// Walls one scene holds at most: a box is six, and the RT thread's arrays are this long.
-inline constexpr std::size_t kMaxWalls = 8;
+using config::kMaxWalls;
 
 struct WallGeometry {
   kinematics::Vec3 point = kinematics::Vec3::Zero();   // on the wall's face (m), first m entries
@@ -62,5 +61,9 @@ class Scene {
   std::vector<Controller> walls_;                       // built once, never resized
   kinematics::Vec3 last_x_ = kinematics::Vec3::Zero();  // the last finite task position
 };
+
+// Not RT-safe. The scene of cfg's `walls` (none for a device of one joint): each wall's law is
+// make_control_law of its own section, on its coordinate along the normal.
+Scene make_scene(const config::Config& cfg);
 
 }  // namespace hapticd::control

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "alloc_counter.h"
+#include "config/config_loader.h"
 #include "kinematics/kinematics.h"
 
 namespace hapticd::control {
@@ -181,6 +182,29 @@ TEST(Scene, ABoxOnADeltaStepsWithoutAllocating) {
   // 1 mm into the +x face: 1 N out along -x, through the arms.
   EXPECT_NEAR(s.force.x(), -1.0, 1e-9);
   EXPECT_NEAR(s.force.y(), 0.0, 1e-12);
+}
+
+// From the file a user writes to the force at a box's corner: each face its own K, each force
+// along its own normal at K times the depth along it.
+TEST(Scene, ABoxFromTheConfigurationHoldsACornerAtKTimesTheDepthAlongEachNormal) {
+  const config::Config cfg = config::load_config_text(R"(device:
+  max_force: 100
+  kinematics: {kind: cartesian, joints: 3}
+walls:
+  - {point: [0.05, 0, 0], normal: [1, 0, 0], stiffness: 1000, damping: 2}
+  - {point: [0, 0.05, 0], normal: [0, 1, 0], stiffness: 2000}
+  - {point: [0, 0, -0.05], normal: [0, 0, -1], stiffness: 500}
+)",
+                                                      "box.yaml");
+  Scene scene = make_scene(cfg);
+  ASSERT_EQ(scene.size(), 3u);
+  // Outside first (the walls arm once the device has been outside), then into the corner.
+  hold(scene, gantry(3), Vec3::Zero(), 2);
+  const SceneStep s = hold(scene, gantry(3), Vec3(0.052, 0.051, -0.054));
+  EXPECT_NEAR(s.force.x(), -1000.0 * 0.002, 1e-9);
+  EXPECT_NEAR(s.force.y(), -2000.0 * 0.001, 1e-9);
+  EXPECT_NEAR(s.force.z(), +500.0 * 0.004, 1e-9);
+  EXPECT_EQ(s.saturation, kinematics::SaturationStatus::kWithin);
 }
 
 }  // namespace

@@ -89,10 +89,12 @@ TEST(CliHelp, EverySubcommandDocumentsItsOptions) {
 
 // Several joints are read and checked but not yet proven: the gate refuses them by name (and
 // says no coupling will help), and a run whose device drives another number of joints than
-// device.kinematics describes never enables output, even with the gate only warning.
+// device.kinematics describes never enables output, even with the gate only warning. (A delta
+// has `walls`, not the one joint's `wall`, which the embedded file sets: null switches it off.)
 TEST(CliCheck, SeveralJointsAreRefusedUntilTheGateProvesAWorkspace) {
   const ProcessResult c =
-      run_process({hapticd_binary(), "check", "--set", "device.kinematics.kind=delta"});
+      run_process({hapticd_binary(), "check", "--set", "device.kinematics.kind=delta", "--set",
+                   "wall=null"});
   EXPECT_EQ(c.exit_code, 3) << c.out << c.err;
   EXPECT_NE(c.out.find("fail: device.kinematics: kind delta drives 3 joints"), std::string::npos)
       << c.out;
@@ -100,7 +102,8 @@ TEST(CliCheck, SeveralJointsAreRefusedUntilTheGateProvesAWorkspace) {
 
   const ProcessResult r =
       run_process({hapticd_binary(), "run", "--duration", "1", "--set",
-                   "device.kinematics.kind=delta", "--set", "safety.gate=warn"});
+                   "device.kinematics.kind=delta", "--set", "wall=null", "--set",
+                   "safety.gate=warn"});
   EXPECT_EQ(r.exit_code, 4) << r.out << r.err;
   EXPECT_NE(r.err.find("sim: the device drives 1 joint(s) but device.kinematics (delta) has 3"),
             std::string::npos)

@@ -1,0 +1,83 @@
+// The section `walls`: the task-space walls of a device with several task axes
+// (docs/kinematics.md, walls in task space). Each is a point, a normal into the wall and the
+// contact law `wall` has; a list of at most kMaxWalls.
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "config/config_schema.h"
+
+namespace hapticd::config::schema {
+namespace {
+
+// Exactly `m` finite numbers into the first m entries of `out`.
+bool task_vector(MapReader& w, std::string_view key, int m, kinematics::Vec3& out) {
+  const Field f = w.take(key);
+  if (!f.present) {
+    w.missing(key, "every wall has a point and a normal");
+    return false;
+  }
+  const auto list = read_number_list(w.diag(), f);
+  if (!list) return false;
+  if (static_cast<int>(list->size()) != m) {
+    w.diag().error(f.key_mark, f.path,
+                   "must hold " + std::to_string(m) + " numbers (one per task axis), got " +
+                       std::to_string(list->size()));
+    return false;
+  }
+  for (int i = 0; i < m; ++i) out[i] = (*list)[static_cast<std::size_t>(i)];
+  return true;
+}
+
+}  // namespace
+
+void read_walls(MapReader& top, int task_axes, std::vector<TaskWallConfig>& walls) {
+  const Field f = top.take("walls");
+  if (!f.present || f.node.IsNull()) return;
+  Diagnostics& d = top.diag();
+  if (!f.node.IsSequence()) {
+    d.error(f.key_mark, f.path, "must be a list of walls, got " + describe_value(f.node));
+    return;
+  }
+  if (f.node.size() > kMaxWalls) {
+    d.error(f.key_mark, f.path,
+            "at most " + std::to_string(kMaxWalls) + " walls, got " +
+                std::to_string(f.node.size()));
+    return;
+  }
+  for (std::size_t i = 0; i < f.node.size(); ++i) {
+    const YAML::Node node = f.node[i];
+    const Field entry{f.path + "[" + std::to_string(i) + "]", node, node.Mark(), true};
+    MapReader w(d, entry);
+    if (!w.ok()) continue;
+    TaskWallConfig wall;
+    const bool point = task_vector(w, "point", task_axes, wall.point);
+    const Field normal_field = w.take("normal");
+    bool normal = false;
+    if (!normal_field.present) {
+      w.missing("normal", "every wall has a point and a normal");
+    } else if (const auto n = read_number_list(d, normal_field)) {
+      if (static_cast<int>(n->size()) != task_axes) {
+        d.error(normal_field.key_mark, normal_field.path,
+                "must hold " + std::to_string(task_axes) +
+                    " numbers (one per task axis), got " + std::to_string(n->size()));
+      } else {
+        for (int a = 0; a < task_axes; ++a) wall.normal[a] = (*n)[static_cast<std::size_t>(a)];
+        const double length = wall.normal.norm();
+        if (!(length > 0.0) || !std::isfinite(length)) {
+          d.error(normal_field.key_mark, normal_field.path,
+                  "must point somewhere (a direction into the wall), got length " +
+                      format_number(length));
+        } else {
+          wall.normal /= length;  // a direction: only where it points counts (the docs say so)
+          normal = true;
+        }
+      }
+    }
+    read_wall_law(w, wall.law);
+    w.finish();
+    if (point && normal) walls.push_back(std::move(wall));
+  }
+}
+
+}  // namespace hapticd::config::schema
