@@ -2,13 +2,18 @@
 // mapped to joint torques (tau = J^T F), for today's one-axis device (joints, n = 1) and the
 // Falcon's delta (3 joints, Newton from the previous tick's answer). The joint positions
 // follow a circle through the workspace at about 0.3 m/s at 1 kHz, so each tick starts 0.3 mm
-// from its answer, as on a device. Reports ns per tick and heap allocations per tick.
+// from its answer, as on a device. And the same delta with a box of six walls in task space
+// (control/scene.h): each wall's law along its normal, the sum through J^T and the joint
+// saturation, on a circle that runs into four of the faces. Reports ns per tick and heap
+// allocations per tick.
 #include <benchmark/benchmark.h>
 
 #include <array>
 #include <cmath>
+#include <vector>
 
 #include "alloc_counter.h"
+#include "control/scene.h"
 #include "kinematics/kinematics.h"
 
 namespace {
@@ -51,9 +56,51 @@ void fk_jacobian_torques(benchmark::State& state, Kind kind) {
 void BM_Kinematics_Joints1(benchmark::State& state) { fk_jacobian_torques(state, Kind::kJoints); }
 void BM_Kinematics_Delta(benchmark::State& state) { fk_jacobian_torques(state, Kind::kDelta); }
 
+// A box of six walls, 2 cm from the delta's home each way (the 3 cm circle presses into the
+// x and y faces), K 1000 N/m, B 1 N s/m.
+hapticd::control::Scene delta_box() {
+  std::vector<hapticd::control::WallGeometry> box;
+  for (int a = 0; a < 3; ++a) {
+    Vec3 n = Vec3::Zero();
+    n[a] = 1.0;
+    box.push_back({Vec3(0, 0, 0.11) + 0.02 * n, n});
+    box.push_back({Vec3(0, 0, 0.11) - 0.02 * n, -n});
+  }
+  hapticd::config::Config c;
+  c.wall.stiffness = 1000.0;
+  c.wall.damping = 1.0;
+  c.device.max_force = 5.0;
+  const std::vector<hapticd::control::ControlLaw> laws(6, hapticd::control::make_control_law(c));
+  return hapticd::control::Scene(box, laws);
+}
+
+void BM_Scene_DeltaBox(benchmark::State& state) {
+  hapticd::kinematics::Kinematics k;
+  k.kind = Kind::kDelta;
+  const auto q = circle(k, k.delta.home);
+  hapticd::control::Scene scene = delta_box();
+  const Vec3 limit = Vec3::Constant(2.0);
+  Vec3 guess = k.delta.home;
+  std::size_t i = 0;
+  int contact = 0;
+  hapticd::testing::AllocationScope allocs;
+  for (auto _ : state) {
+    const hapticd::kinematics::Pose pose = forward(k, q[i++ % q.size()], guess);
+    guess = pose.x;
+    const hapticd::control::SceneStep s = scene.step(pose, limit);
+    contact += (s.flags & hapticd::control::kControlContact) != 0;
+    benchmark::DoNotOptimize(s.tau);
+  }
+  state.counters["allocs_per_tick"] =
+      benchmark::Counter(static_cast<double>(allocs.count()), benchmark::Counter::kAvgIterations);
+  state.counters["contact_fraction"] =
+      benchmark::Counter(static_cast<double>(contact), benchmark::Counter::kAvgIterations);
+}
+
 }  // namespace
 
 BENCHMARK(BM_Kinematics_Joints1);
 BENCHMARK(BM_Kinematics_Delta);
+BENCHMARK(BM_Scene_DeltaBox);
 
 BENCHMARK_MAIN();

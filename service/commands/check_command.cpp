@@ -31,9 +31,10 @@ int check_command(const ConfigOptions& options, bool json) {
   // What the driver adds about its own transport (e.g. the CAN bus load).
   const std::vector<std::string> notes =
       driver.notes != nullptr ? driver.notes(cfg) : std::vector<std::string>{};
-  // A designed coupling answers a wall the passivity bound or the coupling check refuses,
-  // not what else the gate refuses.
-  const bool hint = !r.passivity.passive || (r.coupling.present && !r.coupling.admissible);
+  // A designed coupling answers the one joint's wall the passivity bound or the coupling check
+  // refuses; design-coupling designs for that wall, not for the walls of several axes.
+  const bool hint =
+      !r.workspace && (!r.passivity.passive || (r.coupling.present && !r.coupling.admissible));
   std::string text;
   if (json) {
     nlohmann::json j = gate::gate_to_json(r);

@@ -11,7 +11,11 @@ namespace hapticd::service {
 std::optional<std::pair<double, double>> derate_stiffness(config::Config& cfg,
                                                           int device_delay_samples,
                                                           gate::GateReport& report) {
-  if (report.pass || cfg.safety.gate != config::GateMode::kDerate) return std::nullopt;
+  // A wall of several (report.workspace) is not derated: each has its own largest K in the
+  // report, and which to lower is the user's choice.
+  if (report.pass || cfg.safety.gate != config::GateMode::kDerate || report.workspace) {
+    return std::nullopt;
+  }
   const analysis::StiffnessLimit& limit = report.passivity.max_stiffness;
   if (report.passivity.passive || limit.kind != analysis::StiffnessLimit::Kind::kBounded ||
       !(limit.value < cfg.wall.stiffness)) {

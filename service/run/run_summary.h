@@ -17,8 +17,9 @@ namespace hapticd::service {
 
 // The shape of --summary-json (and of `hapticctl status`, which shares its objects). Each
 // change of shape is a new version, listed in docs/operations.md: 1 had no schema_version
-// key; 2 added it, direction_check, and the status answer's direction_check.
-inline constexpr int kSummarySchemaVersion = 2;
+// key; 2 added it, direction_check, and the status answer's direction_check; 3 added the
+// gate's workspace (several task axes).
+inline constexpr int kSummarySchemaVersion = 3;
 
 struct RunSummary {
   bool realtime = true;

@@ -9,6 +9,7 @@
 
 #include "analysis/passivity.h"
 #include "config/config.h"
+#include "gate/workspace_gate.h"
 
 namespace hapticd::gate {
 
@@ -52,6 +53,9 @@ struct GateReport {
   PassivityReport passivity;
   OscillationReport oscillation;
   CouplingReport coupling;
+  // A device with several task axes: its walls over the workspace, in place of the one joint's
+  // passivity, oscillation and coupling above (which are then not analysed).
+  std::optional<WorkspaceReport> workspace;
   bool pass = false;
   std::vector<std::string> reasons;   // why it fails, with the numbers to fix it
   std::vector<std::string> warnings;  // true statements that do not fail the gate

@@ -63,6 +63,7 @@ json gate_to_json(const GateReport& r) {
       {"transparency_gamma", c.present ? finite_or_null(c.transparency_gamma) : json(nullptr)},
       {"static_stiffness", r.static_stiffness},
       {"note", c.note}};
+  j["workspace"] = r.workspace ? workspace_to_json(*r.workspace) : json(nullptr);
   j["verdict"] = r.pass ? "pass" : "fail";
   j["reasons"] = r.reasons;
   j["warnings"] = r.warnings;
@@ -139,11 +140,19 @@ std::string gate_to_text(const GateReport& r, const config::Config& cfg) {
       format_number(r.sample_period_s * 1e3) + " ms (" + format_number(1.0 / r.sample_period_s) +
           " Hz)");
   row(os, "delay",
-      std::to_string(r.delay_samples) + " samples (wall " + std::to_string(r.wall_delay_samples) +
-          " + driver " + std::to_string(r.device_delay_samples) + ")");
-  row(os, "device damping b", format_number(r.device_damping) + " N s/m");
-  passivity_rows(r, cfg, os);
-  oscillation_and_coupling_rows(r, cfg, os);
+      r.workspace ? "driver " + std::to_string(r.device_delay_samples) +
+                        " samples + each wall's delay_samples"
+                  : std::to_string(r.delay_samples) + " samples (wall " +
+                        std::to_string(r.wall_delay_samples) + " + driver " +
+                        std::to_string(r.device_delay_samples) + ")");
+  row(os, "device damping b",
+      format_number(r.device_damping) + (r.workspace ? " per joint (its own units)" : " N s/m"));
+  if (r.workspace) {
+    workspace_rows(*r.workspace, cfg, os);
+  } else {
+    passivity_rows(r, cfg, os);
+    oscillation_and_coupling_rows(r, cfg, os);
+  }
   os << "verdict                     " << (r.pass ? "PASS" : "FAIL") << "\n";
   for (const std::string& s : r.reasons) os << "  fail: " << s << "\n";
   for (const std::string& s : r.warnings) os << "  note: " << s << "\n";

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <nlohmann/json.hpp>
+#include <ostream>
 #include <string>
 
 #include "gate/gate.h"
@@ -14,5 +15,10 @@ namespace hapticd::gate {
 nlohmann::json gate_to_json(const GateReport& r);
 
 std::string gate_to_text(const GateReport& r, const config::Config& cfg);
+
+// The `workspace` member and the table's rows for a device with several task axes
+// (workspace_report_format.cpp).
+nlohmann::json workspace_to_json(const WorkspaceReport& w);
+void workspace_rows(const WorkspaceReport& w, const config::Config& cfg, std::ostream& os);
 
 }  // namespace hapticd::gate

@@ -87,23 +87,46 @@ TEST(CliHelp, EverySubcommandDocumentsItsOptions) {
   EXPECT_EQ(run_process({hapticd_binary(), "run", "--duration", "-1"}).exit_code, 2);
 }
 
-// Several joints are read and checked but not yet proven: the gate refuses them by name (and
-// says no coupling will help), and a run whose device drives another number of joints than
-// device.kinematics describes never enables output, even with the gate only warning. (A delta
-// has `walls`, not the one joint's `wall`, which the embedded file sets: null switches it off.)
-TEST(CliCheck, SeveralJointsAreRefusedUntilTheGateProvesAWorkspace) {
-  const ProcessResult c =
-      run_process({hapticd_binary(), "check", "--set", "device.kinematics.kind=delta", "--set",
-                   "wall=null"});
-  EXPECT_EQ(c.exit_code, 3) << c.out << c.err;
-  EXPECT_NE(c.out.find("fail: device.kinematics: kind delta drives 3 joints"), std::string::npos)
-      << c.out;
-  EXPECT_EQ(c.out.find("design-coupling"), std::string::npos) << c.out;
+// A delta's box of walls, each proven along its normal over the workspace: `check` says where
+// each wall is weakest and how stiff it may be, refuses a wall too stiff for the device's
+// damping there by name, and a run whose device drives another number of joints than
+// device.kinematics describes never enables output. (A delta has `walls`, not the one joint's
+// `wall`, which the embedded file sets: null switches it off.)
+TEST(CliCheck, ADeltasBoxIsProvenWallByWallOverItsWorkspace) {
+  const std::string box =
+      "--set=walls=[{point: [0.03, 0, 0.11], normal: [1, 0, 0], stiffness: 500}, "
+      "{point: [0, 0, 0.08], normal: [0, 0, -1], stiffness: STIFF}]";
+  auto check = [&](const std::string& stiff, bool json) {
+    std::string b = box;
+    b.replace(b.find("STIFF"), 5, stiff);
+    std::vector<std::string> args{hapticd_binary(),
+                                  "check",
+                                  "--set",
+                                  "device.kinematics.kind=delta",
+                                  "--set",
+                                  "device.damping=0.05",
+                                  "--set",
+                                  "wall=null",
+                                  b};
+    if (json) args.push_back("--json");
+    return run_process(args);
+  };
+  const ProcessResult ok = check("500", true);
+  EXPECT_EQ(ok.exit_code, 0) << ok.out << ok.err;
+  const nlohmann::json j = nlohmann::json::parse(ok.out);
+  ASSERT_EQ(j["workspace"]["walls"].size(), 2u);
+  EXPECT_GT(j["workspace"]["walls"][0]["normal_damping"].get<double>(), 1.0);
+  EXPECT_EQ(j["workspace"]["samples"], 17 * 17 * 17);
 
-  const ProcessResult r =
-      run_process({hapticd_binary(), "run", "--duration", "1", "--set",
-                   "device.kinematics.kind=delta", "--set", "wall=null", "--set",
-                   "safety.gate=warn"});
+  const ProcessResult stiff = check("60000", false);
+  EXPECT_EQ(stiff.exit_code, 3) << stiff.out << stiff.err;
+  EXPECT_NE(stiff.out.find("fail: walls[1]: b_req 30 exceeds"), std::string::npos) << stiff.out;
+  EXPECT_NE(stiff.out.find("walls[1].stiffness must be <= "), std::string::npos) << stiff.out;
+  EXPECT_EQ(stiff.out.find("design-coupling"), std::string::npos) << stiff.out;
+
+  const ProcessResult r = run_process(
+      {hapticd_binary(), "run", "--duration", "1", "--set", "device.kinematics.kind=delta", "--set",
+       "device.damping=0.05", "--set", "wall=null", "--set", "safety.gate=warn"});
   EXPECT_EQ(r.exit_code, 4) << r.out << r.err;
   EXPECT_NE(r.err.find("sim: the device drives 1 joint(s) but device.kinematics (delta) has 3"),
             std::string::npos)

@@ -1,0 +1,273 @@
+#include "gate/workspace_gate.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "analysis/normal_passivity.h"
+#include "analysis/wall_model.h"
+#include "control/control_law.h"
+#include "gate/number_format.h"
+#include "kinematics/kinematics.h"
+
+namespace hapticd::gate {
+namespace {
+
+using kinematics::Vec3;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+const kinematics::Box& workspace_of(const kinematics::Kinematics& k) {
+  switch (k.kind) {
+    case kinematics::Kind::kJoints:
+      return k.joints.workspace;
+    case kinematics::Kind::kCartesian:
+      return k.cartesian.workspace;
+    case kinematics::Kind::kPantograph:
+      return k.pantograph.workspace;
+    case kinematics::Kind::kDelta:
+      return k.delta.workspace;
+  }
+  return k.joints.workspace;
+}
+
+// The device at task position x (its pose through inverse, then forward kinematics): false
+// where it is not a pose of the mechanism (the loop gives zero force there).
+bool device_at(const config::Config& cfg, const Vec3& x, analysis::DeviceDamping& d) {
+  const kinematics::Kinematics& k = cfg.device.kinematics;
+  const kinematics::JointSolution q = kinematics::inverse(k, x);
+  if (q.status != kinematics::Status::kOk) return false;
+  const kinematics::Pose p = kinematics::forward(k, q.q, x);
+  if (p.status != kinematics::Status::kOk) return false;
+  d.jacobian = p.J;
+  d.joint_damping = Vec3::Constant(cfg.device.damping);  // device.damping: each joint's
+  d.m = p.m;
+  d.n = p.n;
+  return true;
+}
+
+// The configuration that runs wall w's law: its own section on the coordinate along n.
+config::Config wall_config(const config::Config& cfg, const config::TaskWallConfig& w) {
+  config::Config c = cfg;
+  c.wall = w.law;
+  c.wall.position = 0.0;
+  c.wall.normal = 1;
+  return c;
+}
+
+analysis::TransferFunction contact(const config::Config& c, double k) {
+  return analysis::contact_map(analysis::environment_filter(control::wall_params(c, k)),
+                               control::coupling_filter(c));
+}
+
+std::string point_text(const Vec3& x, int m) {
+  std::string s = "(";
+  for (int i = 0; i < m; ++i) s += (i ? ", " : "") + format_number(x[i]);
+  return s + ") m";
+}
+
+// The sampled workspace: every grid point's device, or none where it is not a pose.
+struct Grid {
+  int m = 1;
+  int per_axis = 1;
+  Vec3 lower = Vec3::Zero();
+  Vec3 cell = Vec3::Zero();
+  double reach = 0.0;  // a cell's diagonal: how far from a face a sample still counts
+  std::vector<Vec3> x;
+  std::vector<bool> ok;
+  std::vector<analysis::DeviceDamping> device;
+};
+
+Grid sample(const config::Config& cfg, const kinematics::Box& box, int m) {
+  Grid g;
+  g.m = m;
+  g.per_axis = kWorkspaceSamples;
+  int total = 1;
+  for (int a = 0; a < m; ++a) total *= g.per_axis;
+  for (int a = 0; a < m; ++a) {
+    g.lower[a] = box.lower[a];
+    g.cell[a] = (box.upper[a] - box.lower[a]) / (g.per_axis - 1);
+  }
+  g.reach = g.cell.head(m).norm();
+  for (int i = 0; i < total; ++i) {
+    Vec3 x = Vec3::Zero();
+    for (int a = 0, r = i; a < m; ++a, r /= g.per_axis)
+      x[a] = g.lower[a] + (r % g.per_axis) * g.cell[a];
+    analysis::DeviceDamping d;
+    g.ok.push_back(device_at(cfg, x, d));
+    g.x.push_back(x);
+    g.device.push_back(d);
+  }
+  return g;
+}
+
+double depth(const config::TaskWallConfig& w, const Vec3& x) { return w.normal.dot(x - w.point); }
+
+// Where to sample a mechanism whose Jacobian is the same everywhere and whose workspace is
+// unbounded: only which walls act together depends on x, so a box around the walls' points,
+// grown by their extent (at least 1 cm) each way, holds every edge and corner they make.
+kinematics::Box around_walls(const std::vector<config::TaskWallConfig>& walls, int m) {
+  kinematics::Box b;
+  b.lower = Vec3::Constant(kInf);
+  b.upper = Vec3::Constant(-kInf);
+  for (const config::TaskWallConfig& w : walls) {
+    b.lower = b.lower.cwiseMin(w.point);
+    b.upper = b.upper.cwiseMax(w.point);
+  }
+  for (int a = 0; a < m; ++a) {
+    if (walls.empty()) b.lower[a] = b.upper[a] = 0.0;
+    const double grow = std::max(b.upper[a] - b.lower[a], 0.01);
+    b.lower[a] -= grow;
+    b.upper[a] += grow;
+  }
+  return b;
+}
+
+// Pattern search from `best` for a lower b_n where wall w acts: each axis both ways, the step
+// halved when nothing is lower, down to 1e-4 of a cell.
+void refine(const config::Config& cfg, const config::TaskWallConfig& w, const Grid& g,
+            WallVerdict& v) {
+  const Vec3 upper = g.lower + (g.per_axis - 1) * g.cell;
+  Vec3 step = 0.5 * g.cell;
+  const Vec3 stop = 1e-4 * g.cell;
+  for (int evaluations = 0;
+       evaluations < 2000 && (step.head(g.m).array() > stop.head(g.m).array()).any();) {
+    bool moved = false;
+    for (int a = 0; a < g.m && !moved; ++a) {
+      for (const double sign : {-1.0, 1.0}) {
+        Vec3 y = v.worst_position;
+        y[a] += sign * step[a];
+        ++evaluations;
+        analysis::DeviceDamping d;
+        if (y[a] < g.lower[a] || y[a] > upper[a] || depth(w, y) < -g.reach ||
+            !device_at(cfg, y, d)) {
+          continue;
+        }
+        const double b = analysis::normal_damping(d, w.normal);
+        if (b < v.worst_damping) {
+          v.worst_damping = b;
+          v.worst_position = y;
+          moved = true;
+          break;
+        }
+      }
+    }
+    if (!moved) step *= 0.5;
+  }
+}
+
+// Wall i alone: its b_req and the least b_n where it acts.
+WallVerdict judge_wall(const config::Config& cfg, const config::TaskWallConfig& w, int delay,
+                       const Grid& g, double& neighbour_change) {
+  WallVerdict v;
+  const config::Config c = wall_config(cfg, w);
+  const double t = cfg.loop.sample_period_s(), eta = cfg.safety.operator_passivity_shortage;
+  const int d = w.law.delay_samples + delay;
+  v.required_damping =
+      analysis::passivity_bound(contact(c, w.law.stiffness), t, d, eta).required_damping;
+  v.worst_damping = kInf;
+  std::vector<double> b(g.x.size(), kInf);
+  for (std::size_t i = 0; i < g.x.size(); ++i) {
+    if (!g.ok[i] || depth(w, g.x[i]) < -g.reach) continue;
+    v.reached = true;
+    b[i] = analysis::normal_damping(g.device[i], w.normal);
+    if (b[i] < v.worst_damping) {
+      v.worst_damping = b[i];
+      v.worst_position = g.x[i];
+    }
+  }
+  v.grid_worst_damping = v.worst_damping;
+  if (v.reached) {
+    for (std::size_t i = 0; i < g.x.size(); ++i) {
+      for (int a = 0, stride = 1; a < g.m; ++a, stride *= g.per_axis) {
+        const std::size_t j = i + static_cast<std::size_t>(stride);
+        if ((static_cast<int>(i) / stride) % g.per_axis == g.per_axis - 1) continue;
+        if (std::isfinite(b[i]) && std::isfinite(b[j]) && std::min(b[i], b[j]) > 0.0) {
+          neighbour_change =
+              std::max(neighbour_change, std::abs(b[i] - b[j]) / std::min(b[i], b[j]));
+        }
+      }
+    }
+    refine(cfg, w, g, v);
+  }
+  v.available_damping = (1.0 - cfg.safety.passivity_margin) * v.worst_damping;
+  v.passive = !v.reached ||
+              (std::isfinite(v.required_damping) && v.required_damping <= v.available_damping);
+  if (v.reached && std::isfinite(v.available_damping)) {
+    v.max_stiffness = analysis::max_stiffness([&](double k) { return contact(c, k); }, t, d, eta,
+                                              v.available_damping);
+  }
+  return v;
+}
+
+// Walls acting together: the least matrix margin over the samples where two or more act.
+void judge_corners(const config::Config& cfg, const Grid& g, WorkspaceReport& r) {
+  r.corner_margin = kInf;
+  const double keep = 1.0 - cfg.safety.passivity_margin;
+  std::vector<analysis::NormalDemand> demands;
+  for (std::size_t i = 0; i < g.x.size(); ++i) {
+    if (!g.ok[i]) continue;
+    demands.clear();
+    for (std::size_t w = 0; w < cfg.walls.size(); ++w) {
+      if (depth(cfg.walls[w], g.x[i]) < -g.reach) continue;
+      demands.push_back({cfg.walls[w].normal, r.walls[w].required_damping / keep});
+    }
+    if (demands.size() < 2) continue;
+    const double margin = analysis::contact_margin(g.device[i], demands);
+    if (!(margin >= r.corner_margin)) {
+      r.corner_margin = margin;
+      r.corner_position = g.x[i];
+    }
+  }
+}
+
+}  // namespace
+
+WorkspaceReport evaluate_workspace(const config::Config& cfg, int device_delay_samples) {
+  WorkspaceReport r;
+  const kinematics::Kinematics& k = cfg.device.kinematics;
+  const int m = kinematics::joint_count(k);
+  const kinematics::Box& box = workspace_of(k);
+  r.configuration_independent =
+      k.kind == kinematics::Kind::kJoints || k.kind == kinematics::Kind::kCartesian;
+  bool finite = true;
+  for (int a = 0; a < m; ++a) {
+    finite = finite && std::isfinite(box.lower[a]) && std::isfinite(box.upper[a]);
+  }
+  if (!r.configuration_independent && !finite) {
+    r.reasons.push_back("device.kinematics.workspace: a " +
+                        std::string(kinematics::kind_name(k.kind)) +
+                        "'s damping along a normal depends on where it is: its workspace must be "
+                        "a finite box to be proven over");
+    return r;
+  }
+  const Grid g = sample(cfg, finite ? box : around_walls(cfg.walls, m), m);
+  r.samples = static_cast<int>(g.x.size());
+  r.outside = static_cast<int>(std::count(g.ok.begin(), g.ok.end(), false));
+  for (std::size_t i = 0; i < cfg.walls.size(); ++i) {
+    r.walls.push_back(judge_wall(cfg, cfg.walls[i], device_delay_samples, g, r.neighbour_change));
+    const WallVerdict& v = r.walls.back();
+    if (v.passive) continue;
+    const std::string wall = "walls[" + std::to_string(i) + "]";
+    std::string why = wall + ": b_req " + format_number(v.required_damping) + " exceeds (1 - " +
+                      format_number(cfg.safety.passivity_margin) +
+                      ") b_n = " + format_number(v.available_damping) +
+                      ", b_n = " + format_number(v.worst_damping) +
+                      " the least damping the device has along its normal (at x = " +
+                      point_text(v.worst_position, m) + ")";
+    if (v.max_stiffness.kind == analysis::StiffnessLimit::Kind::kBounded) {
+      why += "; " + wall + ".stiffness must be <= " + format_number(v.max_stiffness.value) +
+             " to pass (now " + format_number(cfg.walls[i].law.stiffness) + ")";
+    }
+    r.reasons.push_back(why);
+  }
+  judge_corners(cfg, g, r);
+  if (r.corner_margin < 0.0 || std::isnan(r.corner_margin)) {
+    r.reasons.push_back("walls acting together at x = " + point_text(r.corner_position, m) +
+                        ": B_c - sum b_req_i / (1 - margin) n_i n_i^T has least eigenvalue " +
+                        format_number(r.corner_margin) + " < 0 (docs/math.md, several axes)");
+  }
+  r.pass = r.reasons.empty();
+  return r;
+}
+
+}  // namespace hapticd::gate
