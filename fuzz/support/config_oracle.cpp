@@ -7,6 +7,7 @@
 #include <unordered_set>
 
 #include "control/control_law.h"
+#include "control/scene.h"
 #include "gate/gate.h"
 #include "gate/gate_report_format.h"
 #include "support/check.h"
@@ -29,6 +30,41 @@ void require_finite_taps(const control::FilterCoefficients& f, std::string_view 
   for (std::size_t i = 0; i < f.den_taps; ++i) require_finite(f.den[i], what);
 }
 
+// The law one wall runs must be real numbers throughout: a pass that `run` could not start, or
+// would start on a NaN, escapes here.
+void check_law(const control::ControlLaw& law) {
+  require(law.sample_period > 0.0 && std::isfinite(law.inv_sample_period),
+          "pass with a control law whose 1/T is not finite", show(law.inv_sample_period));
+  require_finite_taps(law.environment, "pass with a non-finite E(z) coefficient");
+  if (law.has_coupling)
+    require_finite_taps(law.coupling, "pass with a non-finite C(z) coefficient");
+  require_finite(law.e0, "pass with a non-finite feed-through e0");
+  require_finite(law.c0, "pass with a non-finite feed-through c0");
+  require(std::isfinite(law.inv_one_plus_e0c0) && law.inv_one_plus_e0c0 > 0.0,
+          "pass with 1/(1 + e0 c0) not finite and > 0", show(law.inv_one_plus_e0c0));
+  require(law.max_force > 0.0 && std::isfinite(law.max_force),
+          "pass with a saturation that is not finite and > 0", show(law.max_force));
+}
+
+// A pass over a workspace: every wall the device can reach compared finite numbers, walls that
+// meet were covered together, and the scene `run` would build from them is real numbers.
+void check_workspace_pass(const config::Config& cfg, const gate::WorkspaceReport& w) {
+  require(w.pass, "a gate pass on a workspace that failed");
+  require(w.walls.size() == cfg.walls.size(), "a workspace report without a verdict per wall");
+  for (const gate::WallVerdict& v : w.walls) {
+    if (!v.reached) continue;
+    require(v.passive, "pass with a wall that is not passive");
+    require_finite(v.required_damping, "pass on a wall's non-finite b_req");
+    require(v.required_damping <= v.available_damping, "pass with a wall's b_req above b_n",
+            show(v.required_damping) + " > " + show(v.available_damping));
+    require(v.worst_damping <= v.grid_worst_damping, "the refinement went above the grid's worst");
+  }
+  require(!(w.corner_margin < 0.0) && !std::isnan(w.corner_margin),
+          "pass with walls that meet uncovered", show(w.corner_margin));
+  const control::Scene scene = control::make_scene(cfg);  // throws: a pass run cannot start
+  require(scene.size() == cfg.walls.size(), "a scene without every wall");
+}
+
 // A pass enables the motor: everything the verdict compared, and everything the controller
 // will compute with, must be a real number.
 void check_pass(const config::Config& cfg, const gate::GateReport& r) {
@@ -40,6 +76,10 @@ void check_pass(const config::Config& cfg, const gate::GateReport& r) {
   require(r.delay_samples >= 0 && r.delay_samples == r.wall_delay_samples + r.device_delay_samples,
           "pass with an inconsistent delay", std::to_string(r.delay_samples));
 
+  if (r.workspace) {
+    check_workspace_pass(cfg, *r.workspace);
+    return;
+  }
   const gate::PassivityReport& p = r.passivity;
   require(p.passive, "pass while the passivity check failed");
   require_finite(p.required_damping, "pass on a non-finite required damping b_req");
@@ -57,18 +97,7 @@ void check_pass(const config::Config& cfg, const gate::GateReport& r) {
   }
 
   // make_control_law throwing here would be a pass that `run` cannot start: it escapes.
-  const control::ControlLaw law = control::make_control_law(cfg);
-  require(law.sample_period > 0.0 && std::isfinite(law.inv_sample_period),
-          "pass with a control law whose 1/T is not finite", show(law.inv_sample_period));
-  require_finite_taps(law.environment, "pass with a non-finite E(z) coefficient");
-  if (law.has_coupling)
-    require_finite_taps(law.coupling, "pass with a non-finite C(z) coefficient");
-  require_finite(law.e0, "pass with a non-finite feed-through e0");
-  require_finite(law.c0, "pass with a non-finite feed-through c0");
-  require(std::isfinite(law.inv_one_plus_e0c0) && law.inv_one_plus_e0c0 > 0.0,
-          "pass with 1/(1 + e0 c0) not finite and > 0", show(law.inv_one_plus_e0c0));
-  require(law.max_force > 0.0 && std::isfinite(law.max_force),
-          "pass with a saturation that is not finite and > 0", show(law.max_force));
+  check_law(control::make_control_law(cfg));
 }
 
 // evaluate_gate is a pure function of the Config, and the loader determines a Config by its
