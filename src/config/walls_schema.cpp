@@ -40,9 +40,9 @@ void read_walls(MapReader& top, int task_axes, std::vector<TaskWallConfig>& wall
     return;
   }
   if (f.node.size() > kMaxWalls) {
-    d.error(f.key_mark, f.path,
-            "at most " + std::to_string(kMaxWalls) + " walls, got " +
-                std::to_string(f.node.size()));
+    d.error(
+        f.key_mark, f.path,
+        "at most " + std::to_string(kMaxWalls) + " walls, got " + std::to_string(f.node.size()));
     return;
   }
   for (std::size_t i = 0; i < f.node.size(); ++i) {
@@ -59,17 +59,19 @@ void read_walls(MapReader& top, int task_axes, std::vector<TaskWallConfig>& wall
     } else if (const auto n = read_number_list(d, normal_field)) {
       if (static_cast<int>(n->size()) != task_axes) {
         d.error(normal_field.key_mark, normal_field.path,
-                "must hold " + std::to_string(task_axes) +
-                    " numbers (one per task axis), got " + std::to_string(n->size()));
+                "must hold " + std::to_string(task_axes) + " numbers (one per task axis), got " +
+                    std::to_string(n->size()));
       } else {
         for (int a = 0; a < task_axes; ++a) wall.normal[a] = (*n)[static_cast<std::size_t>(a)];
-        const double length = wall.normal.norm();
-        if (!(length > 0.0) || !std::isfinite(length)) {
+        // A direction: only where it points counts (the docs say so). Scaled by its largest
+        // entry first, so neither 1e300 nor 1e-320 over- or underflows on the way to unit.
+        const double largest = wall.normal.cwiseAbs().maxCoeff();
+        if (!(largest > 0.0)) {
           d.error(normal_field.key_mark, normal_field.path,
-                  "must point somewhere (a direction into the wall), got length " +
-                      format_number(length));
+                  "must point somewhere (a direction into the wall), got all zeros");
         } else {
-          wall.normal /= length;  // a direction: only where it points counts (the docs say so)
+          wall.normal /= largest;
+          wall.normal /= wall.normal.norm();
           normal = true;
         }
       }

@@ -30,19 +30,23 @@ const kinematics::Box& workspace_of(const kinematics::Kinematics& k) {
   return k.joints.workspace;
 }
 
-// The device at task position x (its pose through inverse, then forward kinematics): false
-// where it is not a pose of the mechanism (the loop gives zero force there).
-bool device_at(const config::Config& cfg, const Vec3& x, analysis::DeviceDamping& d) {
+// The device at task position x (its pose through inverse, then forward kinematics): the
+// status of the first that is not kOk, where x is not a pose of the mechanism.
+kinematics::Status pose_at(const config::Config& cfg, const Vec3& x, analysis::DeviceDamping& d) {
   const kinematics::Kinematics& k = cfg.device.kinematics;
   const kinematics::JointSolution q = kinematics::inverse(k, x);
-  if (q.status != kinematics::Status::kOk) return false;
+  if (q.status != kinematics::Status::kOk) return q.status;
   const kinematics::Pose p = kinematics::forward(k, q.q, x);
-  if (p.status != kinematics::Status::kOk) return false;
+  if (p.status != kinematics::Status::kOk) return p.status;
   d.jacobian = p.J;
   d.joint_damping = Vec3::Constant(cfg.device.damping);  // device.damping: each joint's
   d.m = p.m;
   d.n = p.n;
-  return true;
+  return kinematics::Status::kOk;
+}
+
+bool device_at(const config::Config& cfg, const Vec3& x, analysis::DeviceDamping& d) {
+  return pose_at(cfg, x, d) == kinematics::Status::kOk;
 }
 
 // The configuration that runs wall w's law: its own section on the coordinate along n.
@@ -75,6 +79,8 @@ struct Grid {
   std::vector<Vec3> x;
   std::vector<bool> ok;
   std::vector<analysis::DeviceDamping> device;
+  std::size_t first_bad = 0;  // the first sample that is not a pose, if any
+  kinematics::Status first_bad_status = kinematics::Status::kOk;
 };
 
 Grid sample(const config::Config& cfg, const kinematics::Box& box, int m) {
@@ -84,8 +90,11 @@ Grid sample(const config::Config& cfg, const kinematics::Box& box, int m) {
   int total = 1;
   for (int a = 0; a < m; ++a) total *= g.per_axis;
   for (int a = 0; a < m; ++a) {
-    g.lower[a] = box.lower[a];
-    g.cell[a] = (box.upper[a] - box.lower[a]) / (g.per_axis - 1);
+    // The outermost samples sit a billionth of the box inside its faces: a point exactly on a
+    // face can come back from inverse and forward kinematics a rounding error outside it.
+    const double extent = box.upper[a] - box.lower[a], inset = 1e-9 * extent;
+    g.lower[a] = box.lower[a] + inset;
+    g.cell[a] = (extent - 2.0 * inset) / (g.per_axis - 1);
   }
   g.reach = g.cell.head(m).norm();
   for (int i = 0; i < total; ++i) {
@@ -93,7 +102,12 @@ Grid sample(const config::Config& cfg, const kinematics::Box& box, int m) {
     for (int a = 0, r = i; a < m; ++a, r /= g.per_axis)
       x[a] = g.lower[a] + (r % g.per_axis) * g.cell[a];
     analysis::DeviceDamping d;
-    g.ok.push_back(device_at(cfg, x, d));
+    const kinematics::Status st = pose_at(cfg, x, d);
+    if (st != kinematics::Status::kOk && g.first_bad_status == kinematics::Status::kOk) {
+      g.first_bad = g.x.size();
+      g.first_bad_status = st;
+    }
+    g.ok.push_back(st == kinematics::Status::kOk);
     g.x.push_back(x);
     g.device.push_back(d);
   }
@@ -243,6 +257,19 @@ WorkspaceReport evaluate_workspace(const config::Config& cfg, int device_delay_s
   const Grid g = sample(cfg, finite ? box : around_walls(cfg.walls, m), m);
   r.samples = static_cast<int>(g.x.size());
   r.outside = static_cast<int>(std::count(g.ok.begin(), g.ok.end(), false));
+  // The workspace is where the device renders: a box that claims configurations the mechanism
+  // cannot take (out of reach, near a singularity) is a wrong box, and a grid mostly outside
+  // the mechanism would prove nothing of it.
+  if (r.outside > 0) {
+    r.reasons.push_back("device.kinematics.workspace: " + std::to_string(r.outside) + " of " +
+                        std::to_string(r.samples) +
+                        " sampled configurations are not a pose of the mechanism (the first at x "
+                        "= " +
+                        point_text(g.x[g.first_bad], m) + ": " +
+                        kinematics::status_name(g.first_bad_status) +
+                        "); the workspace must lie where the mechanism works to be proven over");
+    return r;
+  }
   for (std::size_t i = 0; i < cfg.walls.size(); ++i) {
     r.walls.push_back(judge_wall(cfg, cfg.walls[i], device_delay_samples, g, r.neighbour_change));
     const WallVerdict& v = r.walls.back();

@@ -34,7 +34,7 @@ struct WallVerdict {
 struct WorkspaceReport {
   std::vector<WallVerdict> walls;  // one per config walls entry
   int samples = 0;                 // grid configurations examined
-  int outside = 0;                 // of them, not a pose of the mechanism (no force there)
+  int outside = 0;  // of them, not a pose of the mechanism: refused (a wrong workspace box)
   // Least lambda_min(B_c - sum b_req_i / (1 - margin) n_i n_i^T) over the samples where two or
   // more walls act (+inf when nowhere), and where (N s/m).
   double corner_margin = 0.0;

@@ -47,12 +47,22 @@ TEST(WallsConfig, APointOrNormalOfTheWrongSizeOrNoDirectionIsNamed) {
   ASSERT_EQ(e.size(), 4u);
   EXPECT_EQ(e[0], "t.yaml:4: walls[0].point: must hold 2 numbers (one per task axis), got 3");
   EXPECT_EQ(e[1],
-            "t.yaml:5: walls[1].normal: must point somewhere (a direction into the wall), got "
-            "length 0");
+            "t.yaml:5: walls[1].normal: must point somewhere (a direction into the wall), got all "
+            "zeros");
   EXPECT_NE(e[2].find("walls[2].point: missing"), std::string::npos) << e[2];
   EXPECT_NE(e[3].find("walls[2].stifness: unknown key (did you mean 'stiffness'?)"),
             std::string::npos)
       << e[3];
+}
+
+TEST(WallsConfig, ANormalOfHugeOrTinyNumbersIsStillItsDirection) {
+  const Config c = load_config_text(std::string(kGantry) + R"(walls:
+  - {point: [0, 0], normal: [1e300, 1e300]}
+  - {point: [0, 0], normal: [0, -1e-320]}
+)",
+                                    "t.yaml");
+  EXPECT_NEAR(c.walls[0].normal.x(), std::sqrt(0.5), 1e-15);
+  EXPECT_EQ(c.walls[1].normal.y(), -1.0);
 }
 
 TEST(WallsConfig, MoreWallsThanTheLoopHoldsAreRefused) {

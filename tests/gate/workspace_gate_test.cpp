@@ -126,6 +126,35 @@ TEST(WorkspaceGate, ADeltaWithoutAFiniteWorkspaceCannotBeProven) {
   EXPECT_NE(r.reasons[0].find("its workspace must be a finite box"), std::string::npos);
 }
 
+// A box bigger than the mechanism's reach would be sampled mostly where the device cannot be:
+// refused by name, with the first configuration that is not a pose.
+TEST(WorkspaceGate, AWorkspaceBeyondTheMechanismsReachIsRefused) {
+  config::Config c = falcon_box();
+  c.device.kinematics.delta.workspace.lower = Vec3(-1, -1, -1);
+  c.device.kinematics.delta.workspace.upper = Vec3(1, 1, 1);
+  const WorkspaceReport r = evaluate_workspace(c, 0);
+  EXPECT_FALSE(r.pass);
+  EXPECT_GT(r.outside, 4000);
+  ASSERT_EQ(r.reasons.size(), 1u);
+  EXPECT_NE(r.reasons[0].find("sampled configurations are not a pose of the mechanism (the first "
+                              "at x = (-1, -1, -1) m: outside workspace)"),
+            std::string::npos)
+      << r.reasons[0];
+}
+
+// The default boxes lie where their mechanisms work, faces included: a sample exactly on a
+// face comes back from inverse and forward kinematics a rounding error outside it, and the
+// pantograph's x faces did, until the grid's outermost samples moved a billionth inside.
+TEST(WorkspaceGate, EveryDefaultWorkspaceIsPosesToItsFaces) {
+  for (const char* kind : {"pantograph", "delta"}) {
+    const config::Config c = config::load_config_text(
+        std::string("device: {kinematics: {kind: ") + kind + "}}\nwalls: []\n", "t.yaml");
+    const WorkspaceReport r = evaluate_workspace(c, 0);
+    EXPECT_EQ(r.outside, 0) << kind << ": " << (r.reasons.empty() ? "" : r.reasons[0]);
+    EXPECT_TRUE(r.pass) << kind;
+  }
+}
+
 TEST(WorkspaceGate, TheGateUsesItForSeveralAxesAndNotTheOneJointsWall) {
   const GateReport g = evaluate_gate(falcon_box(), 1);
   ASSERT_TRUE(g.workspace.has_value());
