@@ -47,6 +47,17 @@ config::Config load_config_text_checked(const std::string& text, const std::stri
   return cfg;
 }
 
+void require_one_joint(const config::Config& cfg, const std::string& command) {
+  const int n = kinematics::joint_count(cfg.device.kinematics);
+  if (n == 1) return;
+  throw config::ConfigError(
+      {cfg.locate("device.kinematics") + ": device.kinematics: `hapticd " + command +
+       "` works on the wall of one joint; kind " +
+       kinematics::kind_name(cfg.device.kinematics.kind) + " has " + std::to_string(n) +
+       " (for several axes `hapticd check` proves the walls; the loop that drives them is not "
+       "built yet: docs/kinematics.md)"});
+}
+
 config::Config load_config(const ConfigOptions& options) {
   std::vector<config::Override> overrides;
   overrides.reserve(options.sets.size());

@@ -23,6 +23,11 @@ config::Config load_config_text_checked(const std::string& text, const std::stri
                                         const std::string& base_dir,
                                         const std::vector<std::string>& sets = {});
 
+// Throws config::ConfigError (exit code 2) naming device.kinematics when it describes several
+// joints: `command` works on one joint's wall (verify, curves, design-coupling, identify), and
+// the loop and its measurements for several axes are not built yet (docs/kinematics.md).
+void require_one_joint(const config::Config& cfg, const std::string& command);
+
 // A configuration file's text. Throws config::ConfigError "PATH: cannot read: REASON".
 std::string read_config_file(const std::string& path);
 

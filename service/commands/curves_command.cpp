@@ -109,6 +109,7 @@ json nyquist_json(const config::Config& cfg, int delay, const gate::GateReport& 
 
 int curves_command(const ConfigOptions& options, bool measure) {
   const config::Config cfg = load_config(options);
+  require_one_joint(cfg, "curves");
   const int delay = wiring::find_driver(cfg.device.driver).declared_delay(cfg);
   const gate::GateReport report = gate::evaluate_gate(cfg, delay);
   const json j{

@@ -81,6 +81,7 @@ void print_step(const analysis::DesignStep& s, int max_steps) {
 
 int design_coupling_command(const DesignCouplingOptions& o) {
   const config::Config cfg = load_config(o.config);
+  require_one_joint(cfg, "design-coupling");
   const int device_delay = wiring::find_driver(cfg.device.driver).declared_delay(cfg);
   const analysis::CouplingSpec spec = spec_of(cfg, o, cfg.wall.delay_samples + device_delay);
   analysis::DesignOptions options;

@@ -219,6 +219,7 @@ std::string to_text(const analysis::FreeMotionFit& f, const Excitation& e,
 
 int identify_command(const IdentifyOptions& options, SignalWatch& signals) {
   config::Config cfg = load_config(options.config);
+  require_one_joint(cfg, "identify");
   // The sim driver has no hardware device: it only simulates.
   const bool simulated =
       options.loopback || wiring::find_driver(cfg.device.driver).make_device == nullptr;

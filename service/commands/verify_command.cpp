@@ -14,6 +14,7 @@ namespace hapticd::service {
 
 int verify_command(const ConfigOptions& options, bool json) {
   const config::Config cfg = load_config(options);
+  require_one_joint(cfg, "verify");
   verify::VerifyResult r;
   try {
     r = verify::verify_passivity(cfg, wiring::find_driver(cfg.device.driver).declared_delay(cfg));

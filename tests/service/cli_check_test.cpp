@@ -133,5 +133,20 @@ TEST(CliCheck, ADeltasBoxIsProvenWallByWallOverItsWorkspace) {
       << r.err;
 }
 
+// What measures or designs for one joint's wall refuses several joints by name rather than
+// answering about a wall the configuration does not have.
+TEST(CliCheck, OneJointCommandsRefuseSeveralJointsByName) {
+  for (const char* command : {"verify", "curves", "design-coupling", "identify"}) {
+    const ProcessResult r =
+        run_process({hapticd_binary(), command, "--set", "device.kinematics.kind=delta", "--set",
+                     "wall=null"});
+    EXPECT_EQ(r.exit_code, 2) << command << r.out << r.err;
+    EXPECT_NE(r.err.find(std::string("device.kinematics: `hapticd ") + command +
+                         "` works on the wall of one joint; kind delta has 3"),
+              std::string::npos)
+        << command << ": " << r.err;
+  }
+}
+
 }  // namespace
 }  // namespace hapticd::testing
