@@ -14,27 +14,27 @@
 namespace hapticd::config::schema {
 namespace {
 
-using kinematics::Kind;
 using kinematics::Vec3;
+using KinematicsKind = kinematics::Kind;
 
-const Options<Kind> kKinds{{"joints", Kind::kJoints},
-                           {"cartesian", Kind::kCartesian},
-                           {"pantograph", Kind::kPantograph},
-                           {"delta", Kind::kDelta}};
+const Options<KinematicsKind> kKinematicsKinds{{"joints", KinematicsKind::kJoints},
+                                               {"cartesian", KinematicsKind::kCartesian},
+                                               {"pantograph", KinematicsKind::kPantograph},
+                                               {"delta", KinematicsKind::kDelta}};
 
 // Each kind's keys; a key of another kind is refused by name.
-const std::vector<std::pair<Kind, std::vector<std::string>>> kKeysOf{
-    {Kind::kJoints, {"joints", "workspace"}},
-    {Kind::kCartesian, {"joints", "scale", "sign", "workspace"}},
-    {Kind::kPantograph, {"proximal", "distal", "base_separation", "workspace"}},
-    {Kind::kDelta,
+const std::vector<std::pair<KinematicsKind, std::vector<std::string>>> kKinematicsKeys{
+    {KinematicsKind::kJoints, {"joints", "workspace"}},
+    {KinematicsKind::kCartesian, {"joints", "scale", "sign", "workspace"}},
+    {KinematicsKind::kPantograph, {"proximal", "distal", "base_separation", "workspace"}},
+    {KinematicsKind::kDelta,
      {"thigh", "shin", "effector_u", "effector_v", "effector_joint", "knee_joint", "base_u",
       "base_v", "arm_angle_deg", "home", "workspace"}},
 };
 
 // Exactly n numbers, each in `range`, into the first n entries of `out`. A wrong list leaves
 // `out` as it was and says why.
-void numbers(MapReader& m, std::string_view key, int n, const Range& range, double* out) {
+void read_numbers(MapReader& m, std::string_view key, int n, const Range& range, double* out) {
   const Field f = m.take(key);
   const auto list = read_number_list(m.diag(), f);
   if (!list) return;
@@ -55,8 +55,8 @@ void numbers(MapReader& m, std::string_view key, int n, const Range& range, doub
   for (int i = 0; i < n; ++i) out[i] = (*list)[static_cast<std::size_t>(i)];
 }
 
-void vector(MapReader& m, std::string_view key, int n, const Range& range, Vec3& out) {
-  numbers(m, key, n, range, out.data());
+void read_vec3(MapReader& m, std::string_view key, int n, const Range& range, Vec3& out) {
+  read_numbers(m, key, n, range, out.data());
 }
 
 // The workspace: a box on the task coordinates (m), or on the joints' own for `joints`.
@@ -64,8 +64,8 @@ void read_workspace(MapReader& parent, int m, kinematics::Box& box) {
   const Field f = parent.take("workspace");
   if (!f.present) return;
   MapReader w(parent.diag(), f);
-  vector(w, "lower", m, Range::any(), box.lower);
-  vector(w, "upper", m, Range::any(), box.upper);
+  read_vec3(w, "lower", m, Range::any(), box.lower);
+  read_vec3(w, "upper", m, Range::any(), box.upper);
   w.finish();
 }
 
@@ -103,9 +103,9 @@ void read_delta(MapReader& m, kinematics::DeltaParams& d) {
   number(m, "base_v", Range::any(), d.base_v);
   double deg[3];
   for (int i = 0; i < 3; ++i) deg[i] = d.arm_angle[i] * 180.0 / std::numbers::pi;
-  numbers(m, "arm_angle_deg", 3, Range::any(), deg);
+  read_numbers(m, "arm_angle_deg", 3, Range::any(), deg);
   for (int i = 0; i < 3; ++i) d.arm_angle[i] = deg[i] * std::numbers::pi / 180.0;
-  vector(m, "home", 3, Range::any(), d.home);
+  read_vec3(m, "home", 3, Range::any(), d.home);
   read_workspace(m, 3, d.workspace);
 }
 
@@ -116,38 +116,38 @@ void read_kinematics(MapReader& device, kinematics::Kinematics& k) {
   if (!f.present) return;  // one joint: today's axis
   MapReader m(device.diag(), f);
   if (!m.ok()) return;
-  if (const auto kind = choice(m.diag(), m.take("kind"), kKinds)) k.kind = *kind;
+  if (const auto kind = choice(m.diag(), m.take("kind"), kKinematicsKinds)) k.kind = *kind;
   const std::size_t errors_before = m.diag().messages().size();
   const std::vector<std::string>* own = nullptr;
-  for (const auto& [kind, keys] : kKeysOf) {
+  for (const auto& [kind, keys] : kKinematicsKeys) {
     if (kind == k.kind) own = &keys;
   }
-  for (const auto& [kind, keys] : kKeysOf) {
+  for (const auto& [kind, keys] : kKinematicsKeys) {
     for (const std::string& key : keys) {
       if (std::find(own->begin(), own->end(), key) == own->end()) {
-        m.not_used(key, "device.kinematics.kind " + name_of(kKinds, k.kind));
+        m.not_used(key, "device.kinematics.kind " + name_of(kKinematicsKinds, k.kind));
       }
     }
   }
   const IntRange joints = IntRange::between(1, static_cast<long long>(base::kMaxJoints));
   switch (k.kind) {
-    case Kind::kJoints:
+    case KinematicsKind::kJoints:
       integer(m, "joints", joints, k.joints.n);
       read_workspace(m, k.joints.n, k.joints.workspace);
       break;
-    case Kind::kCartesian:
+    case KinematicsKind::kCartesian:
       integer(m, "joints", joints, k.cartesian.n);
-      vector(m, "scale", k.cartesian.n, Range::greater_than(0.0), k.cartesian.scale);
+      read_vec3(m, "scale", k.cartesian.n, Range::greater_than(0.0), k.cartesian.scale);
       read_signs(m, k.cartesian.n, k.cartesian.sign);
       read_workspace(m, k.cartesian.n, k.cartesian.workspace);
       break;
-    case Kind::kPantograph:
-      numbers(m, "proximal", 2, Range::greater_than(0.0), k.pantograph.proximal);
-      numbers(m, "distal", 2, Range::greater_than(0.0), k.pantograph.distal);
+    case KinematicsKind::kPantograph:
+      read_numbers(m, "proximal", 2, Range::greater_than(0.0), k.pantograph.proximal);
+      read_numbers(m, "distal", 2, Range::greater_than(0.0), k.pantograph.distal);
       number(m, "base_separation", Range::greater_than(0.0), k.pantograph.base_separation);
       read_workspace(m, 2, k.pantograph.workspace);
       break;
-    case Kind::kDelta:
+    case KinematicsKind::kDelta:
       read_delta(m, k.delta);
       break;
   }

@@ -10,8 +10,6 @@ namespace {
 
 using nlohmann::json;
 
-json finite_or_null(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
-
 std::string stiffness_note(const analysis::StiffnessLimit& lim) {
   switch (lim.kind) {
     case analysis::StiffnessLimit::Kind::kBounded:
@@ -25,6 +23,8 @@ std::string stiffness_note(const analysis::StiffnessLimit& lim) {
 }
 
 }  // namespace
+
+json finite_or_null(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
 
 json gate_to_json(const GateReport& r) {
   const PassivityReport& p = r.passivity;

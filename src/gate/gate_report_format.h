@@ -16,6 +16,9 @@ nlohmann::json gate_to_json(const GateReport& r);
 
 std::string gate_to_text(const GateReport& r, const config::Config& cfg);
 
+// A number for JSON, or null where it is not finite (JSON has no infinity).
+nlohmann::json finite_or_null(double v);
+
 // The `workspace` member and the table's rows for a device with several task axes
 // (workspace_report_format.cpp).
 nlohmann::json workspace_to_json(const WorkspaceReport& w);

@@ -12,8 +12,6 @@ namespace {
 
 using json = nlohmann::json;
 
-json finite_or_null(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
-
 json position(const kinematics::Vec3& x, int m) {
   json a = json::array();
   for (int i = 0; i < m; ++i) a.push_back(x[i]);
