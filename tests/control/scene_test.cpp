@@ -19,7 +19,7 @@ namespace {
 
 using kinematics::Vec3;
 
-ControlLaw law(double k, double b = 0.0, double max_force = 1e9) {
+ControlLaw wall_law(double k, double b = 0.0, double max_force = 1e9) {
   config::Config c;
   c.loop.rate_hz = 1000.0;
   c.wall.stiffness = k;
@@ -30,7 +30,7 @@ ControlLaw law(double k, double b = 0.0, double max_force = 1e9) {
   return l;
 }
 
-kinematics::Kinematics gantry(int n, Vec3 scale = Vec3::Ones(), Vec3 sign = Vec3::Ones()) {
+kinematics::Kinematics cartesian_of(int n, Vec3 scale = Vec3::Ones(), Vec3 sign = Vec3::Ones()) {
   kinematics::Kinematics k;
   k.kind = kinematics::Kind::kCartesian;
   k.cartesian.n = n;
@@ -39,11 +39,11 @@ kinematics::Kinematics gantry(int n, Vec3 scale = Vec3::Ones(), Vec3 sign = Vec3
   return k;
 }
 
-const Vec3 kNoLimit = Vec3::Constant(1e9);
+const Vec3 kUnlimited = Vec3::Constant(1e9);
 
 // Steps the scene `ticks` times at joint position q; returns the last step.
-SceneStep hold(Scene& scene, const kinematics::Kinematics& k, const Vec3& q, int ticks = 5,
-               const Vec3& limit = kNoLimit) {
+SceneStep hold_at(Scene& scene, const kinematics::Kinematics& k, const Vec3& q, int ticks = 5,
+               const Vec3& limit = kUnlimited) {
   SceneStep s;
   for (int i = 0; i < ticks; ++i) s = scene.step(kinematics::forward(k, q, Vec3::Zero()), limit);
   return s;
@@ -52,11 +52,11 @@ SceneStep hold(Scene& scene, const kinematics::Kinematics& k, const Vec3& q, int
 TEST(Scene, ADiagonalWallPushesAlongItsNormalOutOfTheWall) {
   const Vec3 n = Vec3(1.0, 1.0, 0.0).normalized();
   const std::vector<WallGeometry> g{{Vec3::Zero(), n}};
-  const std::vector<ControlLaw> l{law(1000.0, 2.0)};
+  const std::vector<ControlLaw> l{wall_law(1000.0, 2.0)};
   Scene scene(g, l);
   // 2 mm into the wall along n, 5 mm along the face: at rest the force is K d, along -n.
   const Vec3 x = 0.002 * n + 0.005 * Vec3(-n.y(), n.x(), 0.0);
-  const SceneStep s = hold(scene, gantry(2), x);
+  const SceneStep s = hold_at(scene, cartesian_of(2), x);
   EXPECT_NEAR(s.force.x(), -2.0 * n.x(), 1e-12);
   EXPECT_NEAR(s.force.y(), -2.0 * n.y(), 1e-12);
   EXPECT_NEAR(s.tau.x(), s.force.x(), 1e-12);  // a unit gantry: tau = F
@@ -69,15 +69,15 @@ TEST(Scene, ADiagonalWallPushesAlongItsNormalOutOfTheWall) {
 TEST(Scene, LeavingAWallPullsOnlyWhatTheContactLawDoesAndNoPullNotEvenThat) {
   const std::vector<WallGeometry> g{{Vec3(0.01, 0.0, 0.0), Vec3(1.0, 0.0, 0.0)}};
   for (const bool no_pull : {false, true}) {
-    ControlLaw l = law(1000.0, 5.0);
+    ControlLaw l = wall_law(1000.0, 5.0);
     l.no_pull = no_pull;
     const std::vector<ControlLaw> laws{l};
     Scene scene(g, laws);
-    hold(scene, gantry(1), Vec3(0.012, 0, 0), 3);
-    const SceneStep exit = hold(scene, gantry(1), Vec3(0.005, 0, 0), 1);
+    hold_at(scene, cartesian_of(1), Vec3(0.012, 0, 0), 3);
+    const SceneStep exit = hold_at(scene, cartesian_of(1), Vec3(0.005, 0, 0), 1);
     // f = K 0 + B (0 - 0.002) / T = -10 N: towards the wall (+x) unless no_pull.
     EXPECT_NEAR(exit.force.x(), no_pull ? 0.0 : 10.0, 1e-9) << no_pull;
-    const SceneStep after = hold(scene, gantry(1), Vec3(0.005, 0, 0), 1);
+    const SceneStep after = hold_at(scene, cartesian_of(1), Vec3(0.005, 0, 0), 1);
     EXPECT_EQ(after.force.x(), 0.0) << no_pull;
     EXPECT_FALSE(after.flags & kControlContact);
   }
@@ -87,9 +87,9 @@ TEST(Scene, ACornerPushesAlongBothFacesAtOnce) {
   // Two faces of a box, x <= 0.02 and y <= 0.01 (normals into the walls: +x, +y).
   const std::vector<WallGeometry> g{{Vec3(0.02, 0, 0), Vec3::UnitX()},
                                     {Vec3(0, 0.01, 0), Vec3::UnitY()}};
-  const std::vector<ControlLaw> l{law(1000.0), law(500.0)};
+  const std::vector<ControlLaw> l{wall_law(1000.0), wall_law(500.0)};
   Scene scene(g, l);
-  const SceneStep s = hold(scene, gantry(2), Vec3(0.023, 0.014, 0.0));
+  const SceneStep s = hold_at(scene, cartesian_of(2), Vec3(0.023, 0.014, 0.0));
   EXPECT_NEAR(s.force.x(), -1000.0 * 0.003, 1e-12);
   EXPECT_NEAR(s.force.y(), -500.0 * 0.004, 1e-12);
   EXPECT_NEAR(s.walls[1].penetration, 0.004, 1e-15);
@@ -97,11 +97,11 @@ TEST(Scene, ACornerPushesAlongBothFacesAtOnce) {
 
 TEST(Scene, JointTorquesAreJTransposedForceThroughTheGantrysScaleAndSign) {
   const std::vector<WallGeometry> g{{Vec3::Zero(), Vec3::UnitY()}};
-  const std::vector<ControlLaw> l{law(1000.0)};
+  const std::vector<ControlLaw> l{wall_law(1000.0)};
   Scene scene(g, l);
   // Joint 1 at -2 units of 0.001 m with sign -1: y = +2 mm, 2 N out of the wall (-y).
-  const auto k = gantry(2, Vec3(0.001, 0.001, 1.0), Vec3(1.0, -1.0, 1.0));
-  const SceneStep s = hold(scene, k, Vec3(0.0, -2.0, 0.0));
+  const auto k = cartesian_of(2, Vec3(0.001, 0.001, 1.0), Vec3(1.0, -1.0, 1.0));
+  const SceneStep s = hold_at(scene, k, Vec3(0.0, -2.0, 0.0));
   EXPECT_NEAR(s.force.y(), -2.0, 1e-9);
   // tau_1 = J_11 F_y = (-1)(0.001 m/unit)(-2 N) = +0.002 N m per unit: it drives q_1 up, y down.
   EXPECT_NEAR(s.tau.y(), 0.002, 1e-12);
@@ -111,11 +111,11 @@ TEST(Scene, JointTorquesAreJTransposedForceThroughTheGantrysScaleAndSign) {
 TEST(Scene, SaturationScalesEveryJointByOneFactorSoTheForceKeepsItsDirection) {
   const Vec3 n = Vec3(2.0, 1.0, 0.0).normalized();
   const std::vector<WallGeometry> g{{Vec3::Zero(), n}};
-  const std::vector<ControlLaw> l{law(1000.0)};
+  const std::vector<ControlLaw> l{wall_law(1000.0)};
   Scene scene(g, l);
-  const SceneStep free = hold(scene, gantry(2), 0.01 * n);  // 10 N along -n
+  const SceneStep free = hold_at(scene, cartesian_of(2), 0.01 * n);  // 10 N along -n
   Scene limited(g, l);
-  const SceneStep s = hold(limited, gantry(2), 0.01 * n, 5, Vec3(2.0, 2.0, 2.0));
+  const SceneStep s = hold_at(limited, cartesian_of(2), 0.01 * n, 5, Vec3(2.0, 2.0, 2.0));
   EXPECT_EQ(s.saturation, kinematics::SaturationStatus::kSaturated);
   EXPECT_TRUE(s.flags & kControlSaturated);
   EXPECT_NEAR(std::abs(s.tau.x()), 2.0, 1e-12);  // the larger joint lands on its limit
@@ -124,35 +124,35 @@ TEST(Scene, SaturationScalesEveryJointByOneFactorSoTheForceKeepsItsDirection) {
 
 TEST(Scene, APoseThatIsNotOkGivesZeroTorque) {
   const std::vector<WallGeometry> g{{Vec3(0, 0, 0.11), Vec3::UnitZ()}};
-  const std::vector<ControlLaw> l{law(1000.0)};
+  const std::vector<ControlLaw> l{wall_law(1000.0)};
   Scene scene(g, l);
   kinematics::Kinematics delta;
   delta.kind = kinematics::Kind::kDelta;
-  kinematics::Pose p = kinematics::forward(delta, Vec3(0.3, 0.3, 0.3), Vec3::Constant(NAN));
+  kinematics::Pose p = kinematics::forward(delta, Vec3(0.3, 0.3, 0.3), Vec3::Constant(std::numeric_limits<double>::quiet_NaN()));
   p.status = kinematics::Status::kNearSingularity;
-  const SceneStep s = scene.step(p, kNoLimit);
+  const SceneStep s = scene.step(p, kUnlimited);
   EXPECT_FALSE(s.pose_ok);
   EXPECT_EQ(s.tau, Vec3::Zero());
 }
 
 TEST(Scene, ANonFiniteLimitIsNamedForTheLoopToFaultOn) {
   const std::vector<WallGeometry> g{{Vec3::Zero(), Vec3::UnitX()}};
-  const std::vector<ControlLaw> l{law(1000.0)};
+  const std::vector<ControlLaw> l{wall_law(1000.0)};
   Scene scene(g, l);
-  const SceneStep s = hold(scene, gantry(1), Vec3(0.001, 0, 0), 3,
+  const SceneStep s = hold_at(scene, cartesian_of(1), Vec3(0.001, 0, 0), 3,
                            Vec3::Constant(std::numeric_limits<double>::quiet_NaN()));
   EXPECT_TRUE(s.flags & kControlNonFinite);
   EXPECT_EQ(s.tau, Vec3::Zero());
 }
 
 TEST(Scene, WhatCannotBeAWallIsRefusedBeforeTheFirstTick) {
-  const std::vector<ControlLaw> one{law(1000.0)};
+  const std::vector<ControlLaw> one{wall_law(1000.0)};
   const std::vector<WallGeometry> not_unit{{Vec3::Zero(), Vec3(1.0, 1.0, 0.0)}};
   EXPECT_THROW(Scene(not_unit, one), std::invalid_argument);
   const std::vector<WallGeometry> two{{Vec3::Zero(), Vec3::UnitX()}, {Vec3::Zero(), Vec3::UnitY()}};
   EXPECT_THROW(Scene(two, one), std::invalid_argument);
   const std::vector<WallGeometry> many(kMaxWalls + 1, {Vec3::Zero(), Vec3::UnitX()});
-  const std::vector<ControlLaw> laws(kMaxWalls + 1, law(1000.0));
+  const std::vector<ControlLaw> laws(kMaxWalls + 1, wall_law(1000.0));
   EXPECT_THROW(Scene(many, laws), std::invalid_argument);
 }
 
@@ -164,13 +164,13 @@ TEST(Scene, ABoxOnADeltaStepsWithoutAllocating) {
     box.push_back({Vec3(0, 0, 0.11) + 0.03 * n, n});
     box.push_back({Vec3(0, 0, 0.11) - 0.03 * n, -n});
   }
-  const std::vector<ControlLaw> laws(6, law(1000.0, 1.0));
+  const std::vector<ControlLaw> laws(6, wall_law(1000.0, 1.0));
   Scene scene(box, laws);
   kinematics::Kinematics delta;
   delta.kind = kinematics::Kind::kDelta;
   const kinematics::JointSolution q = kinematics::inverse(delta, Vec3(0.031, 0.0, 0.11));
   ASSERT_EQ(q.status, kinematics::Status::kOk);
-  Vec3 guess = Vec3::Constant(NAN);
+  Vec3 guess = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
   testing::AllocationScope scope;
   SceneStep s;
   for (int i = 0; i < 2000; ++i) {
@@ -199,8 +199,8 @@ walls:
   Scene scene = make_scene(cfg);
   ASSERT_EQ(scene.size(), 3u);
   // Outside first (the walls arm once the device has been outside), then into the corner.
-  hold(scene, gantry(3), Vec3::Zero(), 2);
-  const SceneStep s = hold(scene, gantry(3), Vec3(0.052, 0.051, -0.054));
+  hold_at(scene, cartesian_of(3), Vec3::Zero(), 2);
+  const SceneStep s = hold_at(scene, cartesian_of(3), Vec3(0.052, 0.051, -0.054));
   EXPECT_NEAR(s.force.x(), -1000.0 * 0.002, 1e-9);
   EXPECT_NEAR(s.force.y(), -2000.0 * 0.001, 1e-9);
   EXPECT_NEAR(s.force.z(), +500.0 * 0.004, 1e-9);

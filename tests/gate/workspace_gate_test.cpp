@@ -18,7 +18,7 @@ namespace {
 
 using kinematics::Vec3;
 
-config::Config gantry(const std::string& walls, const std::string& extra = "") {
+config::Config gantry_walls(const std::string& walls, const std::string& extra = "") {
   return config::load_config_text(R"(device:
   damping: 2
   kinematics: {kind: cartesian, joints: 2, scale: [0.5, 2])" +
@@ -29,7 +29,7 @@ walls:
 }
 
 TEST(WorkspaceGate, AGantrysDampingAlongANormalIsWhatItsScalesMakeIt) {
-  const config::Config c = gantry(
+  const config::Config c = gantry_walls(
       "  - {point: [0.01, 0], normal: [1, 0], stiffness: 100}\n"
       "  - {point: [0, 0.01], normal: [1, 1], stiffness: 100}\n");
   const WorkspaceReport r = evaluate_workspace(c, 0);
@@ -47,7 +47,7 @@ TEST(WorkspaceGate, ATooStiffWallIsRefusedWithTheStiffnessThatPassesAndThatOnePa
   auto with = [&](const std::string& k) {
     std::string w = wall;
     w.replace(w.find("STIFF"), 5, k);
-    return gantry(w);
+    return gantry_walls(w);
   };
   // Along y, x = 2 q: b_n = 2 / 4 = 0.5 N s/m; backward Euler at T = 1 ms: b_req = K T / 2.
   const WorkspaceReport r = evaluate_workspace(with("2000"), 0);
@@ -62,7 +62,7 @@ TEST(WorkspaceGate, ATooStiffWallIsRefusedWithTheStiffnessThatPassesAndThatOnePa
 TEST(WorkspaceGate, AnEdgeWhoseWallsEachPassAloneCanStillFailTogether) {
   // Two walls at 10 degrees to each other along y: each demands b_req = 0.25 N s/m of the
   // 0.5 the gantry has along y; together, near-parallel, they demand almost twice that.
-  const config::Config c = gantry(
+  const config::Config c = gantry_walls(
       "  - {point: [0, 0.01], normal: [0, 1], stiffness: 500}\n"
       "  - {point: [0, 0.01], normal: [0.17364817766693, 0.98480775301221], stiffness: 500}\n");
   const WorkspaceReport r = evaluate_workspace(c, 0);
@@ -72,14 +72,14 @@ TEST(WorkspaceGate, AnEdgeWhoseWallsEachPassAloneCanStillFailTogether) {
   EXPECT_FALSE(r.pass);
   // Opposite faces of a slab never act together.
   const WorkspaceReport slab =
-      evaluate_workspace(gantry("  - {point: [0, 0.01], normal: [0, 1], stiffness: 500}\n"
+      evaluate_workspace(gantry_walls("  - {point: [0, 0.01], normal: [0, 1], stiffness: 500}\n"
                                 "  - {point: [0, -0.01], normal: [0, -1], stiffness: 500}\n"),
                          0);
   EXPECT_TRUE(std::isinf(slab.corner_margin)) << slab.corner_margin;
   EXPECT_TRUE(slab.pass);
 }
 
-config::Config falcon_box() {
+config::Config falcon_walls() {
   std::string walls;
   for (const char* w :
        {"[0.03, 0, 0.11], normal: [1, 0, 0]", "[-0.03, 0, 0.11], normal: [-1, 0, 0]",
@@ -92,7 +92,7 @@ config::Config falcon_box() {
 }
 
 TEST(WorkspaceGate, OnTheDeltaNoPointTheGridMissedHasLessDampingThanItsWorst) {
-  const config::Config c = falcon_box();
+  const config::Config c = falcon_walls();
   const WorkspaceReport r = evaluate_workspace(c, 0);
   ASSERT_EQ(r.walls.size(), 6u);
   EXPECT_FALSE(r.configuration_independent);
@@ -118,7 +118,7 @@ TEST(WorkspaceGate, OnTheDeltaNoPointTheGridMissedHasLessDampingThanItsWorst) {
 }
 
 TEST(WorkspaceGate, ADeltaWithoutAFiniteWorkspaceCannotBeProven) {
-  config::Config c = falcon_box();
+  config::Config c = falcon_walls();
   c.device.kinematics.delta.workspace.upper.z() = std::numeric_limits<double>::infinity();
   const WorkspaceReport r = evaluate_workspace(c, 0);
   EXPECT_FALSE(r.pass);
@@ -129,7 +129,7 @@ TEST(WorkspaceGate, ADeltaWithoutAFiniteWorkspaceCannotBeProven) {
 // A box bigger than the mechanism's reach would be sampled mostly where the device cannot be:
 // refused by name, with the first configuration that is not a pose.
 TEST(WorkspaceGate, AWorkspaceBeyondTheMechanismsReachIsRefused) {
-  config::Config c = falcon_box();
+  config::Config c = falcon_walls();
   c.device.kinematics.delta.workspace.lower = Vec3(-1, -1, -1);
   c.device.kinematics.delta.workspace.upper = Vec3(1, 1, 1);
   const WorkspaceReport r = evaluate_workspace(c, 0);
@@ -156,7 +156,7 @@ TEST(WorkspaceGate, EveryDefaultWorkspaceIsPosesToItsFaces) {
 }
 
 TEST(WorkspaceGate, TheGateUsesItForSeveralAxesAndNotTheOneJointsWall) {
-  const GateReport g = evaluate_gate(falcon_box(), 1);
+  const GateReport g = evaluate_gate(falcon_walls(), 1);
   ASSERT_TRUE(g.workspace.has_value());
   EXPECT_TRUE(g.pass) << (g.reasons.empty() ? "" : g.reasons[0]);
   EXPECT_EQ(g.delay_samples, 1);  // the driver's; each wall adds its own
