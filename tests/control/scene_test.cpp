@@ -43,7 +43,7 @@ const Vec3 kUnlimited = Vec3::Constant(1e9);
 
 // Steps the scene `ticks` times at joint position q; returns the last step.
 SceneStep hold_at(Scene& scene, const kinematics::Kinematics& k, const Vec3& q, int ticks = 5,
-               const Vec3& limit = kUnlimited) {
+                  const Vec3& limit = kUnlimited) {
   SceneStep s;
   for (int i = 0; i < ticks; ++i) s = scene.step(kinematics::forward(k, q, Vec3::Zero()), limit);
   return s;
@@ -128,7 +128,8 @@ TEST(Scene, APoseThatIsNotOkGivesZeroTorque) {
   Scene scene(g, l);
   kinematics::Kinematics delta;
   delta.kind = kinematics::Kind::kDelta;
-  kinematics::Pose p = kinematics::forward(delta, Vec3(0.3, 0.3, 0.3), Vec3::Constant(std::numeric_limits<double>::quiet_NaN()));
+  kinematics::Pose p = kinematics::forward(
+      delta, Vec3(0.3, 0.3, 0.3), Vec3::Constant(std::numeric_limits<double>::quiet_NaN()));
   p.status = kinematics::Status::kNearSingularity;
   const SceneStep s = scene.step(p, kUnlimited);
   EXPECT_FALSE(s.pose_ok);
@@ -140,7 +141,7 @@ TEST(Scene, ANonFiniteLimitIsNamedForTheLoopToFaultOn) {
   const std::vector<ControlLaw> l{wall_law(1000.0)};
   Scene scene(g, l);
   const SceneStep s = hold_at(scene, cartesian_of(1), Vec3(0.001, 0, 0), 3,
-                           Vec3::Constant(std::numeric_limits<double>::quiet_NaN()));
+                              Vec3::Constant(std::numeric_limits<double>::quiet_NaN()));
   EXPECT_TRUE(s.flags & kControlNonFinite);
   EXPECT_EQ(s.tau, Vec3::Zero());
 }

@@ -73,7 +73,7 @@ TEST(WorkspaceGate, AnEdgeWhoseWallsEachPassAloneCanStillFailTogether) {
   // Opposite faces of a slab never act together.
   const WorkspaceReport slab =
       evaluate_workspace(gantry_walls("  - {point: [0, 0.01], normal: [0, 1], stiffness: 500}\n"
-                                "  - {point: [0, -0.01], normal: [0, -1], stiffness: 500}\n"),
+                                      "  - {point: [0, -0.01], normal: [0, -1], stiffness: 500}\n"),
                          0);
   EXPECT_TRUE(std::isinf(slab.corner_margin)) << slab.corner_margin;
   EXPECT_TRUE(slab.pass);

@@ -137,9 +137,8 @@ TEST(CliCheck, ADeltasBoxIsProvenWallByWallOverItsWorkspace) {
 // answering about a wall the configuration does not have.
 TEST(CliCheck, OneJointCommandsRefuseSeveralJointsByName) {
   for (const char* command : {"verify", "curves", "design-coupling", "identify"}) {
-    const ProcessResult r =
-        run_process({hapticd_binary(), command, "--set", "device.kinematics.kind=delta", "--set",
-                     "wall=null"});
+    const ProcessResult r = run_process(
+        {hapticd_binary(), command, "--set", "device.kinematics.kind=delta", "--set", "wall=null"});
     EXPECT_EQ(r.exit_code, 2) << command << r.out << r.err;
     EXPECT_NE(r.err.find(std::string("device.kinematics: `hapticd ") + command +
                          "` works on the wall of one joint; kind delta has 3"),
