@@ -31,26 +31,38 @@ std::array<Vec3, 628> circle(const hapticd::kinematics::Kinematics& k, const Vec
   return q;
 }
 
-void fk_jacobian_torques(benchmark::State& state, Kind kind) {
+// Each tick: the forward kinematics of the next point of the circle about the kind's centre
+// (from the previous tick's answer), then `rest` on its pose; counts, per tick, the ticks
+// `rest` returns true for (as `counted`) and the heap allocations.
+template <class Rest>
+void each_tick(benchmark::State& state, Kind kind, const char* counted, Rest rest) {
   hapticd::kinematics::Kinematics k;
   k.kind = kind;
   const Vec3 centre = kind == Kind::kDelta ? k.delta.home : Vec3::Zero();
   const auto q = circle(k, centre);
-  const Vec3 force(1.0, -2.0, 0.5);
   Vec3 guess = centre;
   std::size_t i = 0;
-  int not_ok = 0;
+  int n = 0;
   hapticd::testing::AllocationScope allocs;
   for (auto _ : state) {
     const hapticd::kinematics::Pose pose = forward(k, q[i++ % q.size()], guess);
     guess = pose.x;
-    not_ok += pose.status != hapticd::kinematics::Status::kOk;
-    Vec3 tau = joint_torques(pose, force);
-    benchmark::DoNotOptimize(tau);
+    n += rest(pose) ? 1 : 0;
   }
   state.counters["allocs_per_tick"] =
       benchmark::Counter(static_cast<double>(allocs.count()), benchmark::Counter::kAvgIterations);
-  state.counters["not_ok"] = not_ok;
+  state.counters[counted] =
+      benchmark::Counter(static_cast<double>(n), benchmark::Counter::kAvgIterations);
+}
+
+// The force mapped to joint torques; counts the poses that are not ok.
+void fk_jacobian_torques(benchmark::State& state, Kind kind) {
+  const Vec3 force(1.0, -2.0, 0.5);
+  each_tick(state, kind, "not_ok", [&](const hapticd::kinematics::Pose& pose) {
+    Vec3 tau = joint_torques(pose, force);
+    benchmark::DoNotOptimize(tau);
+    return pose.status != hapticd::kinematics::Status::kOk;
+  });
 }
 
 void BM_Kinematics_Joints1(benchmark::State& state) { fk_jacobian_torques(state, Kind::kJoints); }
@@ -74,27 +86,15 @@ hapticd::control::Scene delta_box() {
   return hapticd::control::Scene(box, laws);
 }
 
+// The box's walls on each pose, through J^T and the joint saturation; counts contact.
 void BM_Scene_DeltaBox(benchmark::State& state) {
-  hapticd::kinematics::Kinematics k;
-  k.kind = Kind::kDelta;
-  const auto q = circle(k, k.delta.home);
   hapticd::control::Scene scene = delta_box();
   const Vec3 limit = Vec3::Constant(2.0);
-  Vec3 guess = k.delta.home;
-  std::size_t i = 0;
-  int contact = 0;
-  hapticd::testing::AllocationScope allocs;
-  for (auto _ : state) {
-    const hapticd::kinematics::Pose pose = forward(k, q[i++ % q.size()], guess);
-    guess = pose.x;
+  each_tick(state, Kind::kDelta, "contact_fraction", [&](const hapticd::kinematics::Pose& pose) {
     const hapticd::control::SceneStep s = scene.step(pose, limit);
-    contact += (s.flags & hapticd::control::kControlContact) != 0;
     benchmark::DoNotOptimize(s.tau);
-  }
-  state.counters["allocs_per_tick"] =
-      benchmark::Counter(static_cast<double>(allocs.count()), benchmark::Counter::kAvgIterations);
-  state.counters["contact_fraction"] =
-      benchmark::Counter(static_cast<double>(contact), benchmark::Counter::kAvgIterations);
+    return (s.flags & hapticd::control::kControlContact) != 0;
+  });
 }
 
 }  // namespace

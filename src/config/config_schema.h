@@ -44,6 +44,17 @@ const std::string& name_of(const Options<E>& options, E value) {
 // coupling) from its mapping: `wall`'s and each of `walls`'.
 void read_wall_law(MapReader& m, WallConfig& wall);
 
+// Exactly n numbers in `f` (a field of `m`), each accepted by `ok` (`what` says what it must
+// be: "> 0", "+1 or -1"), into the first n entries of `out`; `entries` names them in the
+// count's message ("numbers", "numbers (one per task axis)"). Absent: false and no message. A
+// wrong list: false, `out` as it was, and one message saying why.
+bool read_fixed_numbers(MapReader& m, const Field& f, int n, bool (*ok)(double, const Range&),
+                        const Range& range, const std::string& what, double* out,
+                        const std::string& entries = "numbers");
+// The same with each number in `range`, for the key `key` of `m`.
+bool read_fixed_numbers(MapReader& m, std::string_view key, int n, const Range& range, double* out,
+                        const std::string& entries = "numbers");
+
 // Reads `walls` of `top` for a device of `task_axes` task coordinates (walls_schema.cpp).
 void read_walls(MapReader& top, int task_axes, std::vector<TaskWallConfig>& walls);
 

@@ -32,31 +32,8 @@ const std::vector<std::pair<KinematicsKind, std::vector<std::string>>> kKinemati
       "base_v", "arm_angle_deg", "home", "workspace"}},
 };
 
-// Exactly n numbers, each in `range`, into the first n entries of `out`. A wrong list leaves
-// `out` as it was and says why.
-void read_numbers(MapReader& m, std::string_view key, int n, const Range& range, double* out) {
-  const Field f = m.take(key);
-  const auto list = read_number_list(m.diag(), f);
-  if (!list) return;
-  if (static_cast<int>(list->size()) != n) {
-    m.diag().error(
-        f.key_mark, f.path,
-        "must hold " + std::to_string(n) + " numbers, got " + std::to_string(list->size()));
-    return;
-  }
-  for (int i = 0; i < n; ++i) {
-    if (!range.contains((*list)[static_cast<std::size_t>(i)])) {
-      m.diag().error(f.key_mark, f.path + "[" + std::to_string(i) + "]",
-                     "must be " + range.describe() + ", got " +
-                         format_number((*list)[static_cast<std::size_t>(i)]));
-      return;
-    }
-  }
-  for (int i = 0; i < n; ++i) out[i] = (*list)[static_cast<std::size_t>(i)];
-}
-
 void read_vec3(MapReader& m, std::string_view key, int n, const Range& range, Vec3& out) {
-  read_numbers(m, key, n, range, out.data());
+  read_fixed_numbers(m, key, n, range, out.data());
 }
 
 // The workspace: a box on the task coordinates (m), or on the joints' own for `joints`.
@@ -69,27 +46,7 @@ void read_workspace(MapReader& parent, int m, kinematics::Box& box) {
   w.finish();
 }
 
-// cartesian.sign: +1 or -1 per joint.
-void read_signs(MapReader& m, int n, Vec3& sign) {
-  const Field f = m.take("sign");
-  const auto list = read_number_list(m.diag(), f);
-  if (!list) return;
-  if (static_cast<int>(list->size()) != n) {
-    m.diag().error(
-        f.key_mark, f.path,
-        "must hold " + std::to_string(n) + " signs, got " + std::to_string(list->size()));
-    return;
-  }
-  for (int i = 0; i < n; ++i) {
-    const double s = (*list)[static_cast<std::size_t>(i)];
-    if (s != 1.0 && s != -1.0) {
-      m.diag().error(f.key_mark, f.path + "[" + std::to_string(i) + "]",
-                     "must be +1 or -1, got " + format_number(s));
-      return;
-    }
-    sign[i] = s;
-  }
-}
+bool is_sign(double v, const Range&) { return v == 1.0 || v == -1.0; }
 
 void read_delta(MapReader& m, kinematics::DeltaParams& d) {
   const Range length = Range::greater_than(0.0);
@@ -103,13 +60,43 @@ void read_delta(MapReader& m, kinematics::DeltaParams& d) {
   number(m, "base_v", Range::any(), d.base_v);
   double deg[3];
   for (int i = 0; i < 3; ++i) deg[i] = d.arm_angle[i] * 180.0 / std::numbers::pi;
-  read_numbers(m, "arm_angle_deg", 3, Range::any(), deg);
+  read_fixed_numbers(m, "arm_angle_deg", 3, Range::any(), deg);
   for (int i = 0; i < 3; ++i) d.arm_angle[i] = deg[i] * std::numbers::pi / 180.0;
   read_vec3(m, "home", 3, Range::any(), d.home);
   read_workspace(m, 3, d.workspace);
 }
 
 }  // namespace
+
+bool read_fixed_numbers(MapReader& m, const Field& f, int n, bool (*ok)(double, const Range&),
+                        const Range& range, const std::string& what, double* out,
+                        const std::string& entries) {
+  const auto list = read_number_list(m.diag(), f);
+  if (!list) return false;
+  if (static_cast<int>(list->size()) != n) {
+    m.diag().error(
+        f.key_mark, f.path,
+        "must hold " + std::to_string(n) + " " + entries + ", got " + std::to_string(list->size()));
+    return false;
+  }
+  for (int i = 0; i < n; ++i) {
+    const double v = (*list)[static_cast<std::size_t>(i)];
+    if (!ok(v, range)) {
+      m.diag().error(f.key_mark, f.path + "[" + std::to_string(i) + "]",
+                     "must be " + what + ", got " + format_number(v));
+      return false;
+    }
+  }
+  for (int i = 0; i < n; ++i) out[i] = (*list)[static_cast<std::size_t>(i)];
+  return true;
+}
+
+bool read_fixed_numbers(MapReader& m, std::string_view key, int n, const Range& range, double* out,
+                        const std::string& entries) {
+  return read_fixed_numbers(
+      m, m.take(key), n, [](double v, const Range& r) { return r.contains(v); }, range,
+      range.describe(), out, entries);
+}
 
 void read_kinematics(MapReader& device, kinematics::Kinematics& k) {
   const Field f = device.take("kinematics");
@@ -138,12 +125,13 @@ void read_kinematics(MapReader& device, kinematics::Kinematics& k) {
     case KinematicsKind::kCartesian:
       integer(m, "joints", joints, k.cartesian.n);
       read_vec3(m, "scale", k.cartesian.n, Range::greater_than(0.0), k.cartesian.scale);
-      read_signs(m, k.cartesian.n, k.cartesian.sign);
+      read_fixed_numbers(m, m.take("sign"), k.cartesian.n, &is_sign, Range::any(), "+1 or -1",
+                         k.cartesian.sign.data());
       read_workspace(m, k.cartesian.n, k.cartesian.workspace);
       break;
     case KinematicsKind::kPantograph:
-      read_numbers(m, "proximal", 2, Range::greater_than(0.0), k.pantograph.proximal);
-      read_numbers(m, "distal", 2, Range::greater_than(0.0), k.pantograph.distal);
+      read_fixed_numbers(m, "proximal", 2, Range::greater_than(0.0), k.pantograph.proximal);
+      read_fixed_numbers(m, "distal", 2, Range::greater_than(0.0), k.pantograph.distal);
       number(m, "base_separation", Range::greater_than(0.0), k.pantograph.base_separation);
       read_workspace(m, 2, k.pantograph.workspace);
       break;

@@ -10,23 +10,16 @@
 namespace hapticd::config::schema {
 namespace {
 
-// Exactly `m` finite numbers into the first m entries of `out`.
-bool task_vector(MapReader& w, std::string_view key, int m, kinematics::Vec3& out) {
-  const Field f = w.take(key);
-  if (!f.present) {
-    w.missing(key, "every wall has a point and a normal");
-    return false;
+constexpr const char* kPerAxis = "numbers (one per task axis)";
+
+// `point` or `normal` of a wall (`f`, its field `key`): both are needed.
+bool task_vector(MapReader& w, const Field& f, std::string_view key, int m, kinematics::Vec3& out) {
+  if (f.present) {
+    return read_fixed_numbers(
+        w, f, m, [](double, const Range&) { return true; }, Range::any(), "", out.data(), kPerAxis);
   }
-  const auto list = read_number_list(w.diag(), f);
-  if (!list) return false;
-  if (static_cast<int>(list->size()) != m) {
-    w.diag().error(f.key_mark, f.path,
-                   "must hold " + std::to_string(m) + " numbers (one per task axis), got " +
-                       std::to_string(list->size()));
-    return false;
-  }
-  for (int i = 0; i < m; ++i) out[i] = (*list)[static_cast<std::size_t>(i)];
-  return true;
+  w.missing(key, "every wall has a point and a normal");
+  return false;
 }
 
 }  // namespace
@@ -51,30 +44,19 @@ void read_walls(MapReader& top, int task_axes, std::vector<TaskWallConfig>& wall
     MapReader w(d, entry);
     if (!w.ok()) continue;
     TaskWallConfig wall;
-    const bool point = task_vector(w, "point", task_axes, wall.point);
+    const bool point = task_vector(w, w.take("point"), "point", task_axes, wall.point);
     const Field normal_field = w.take("normal");
-    bool normal = false;
-    if (!normal_field.present) {
-      w.missing("normal", "every wall has a point and a normal");
-    } else if (const auto n = read_number_list(d, normal_field)) {
-      if (static_cast<int>(n->size()) != task_axes) {
-        d.error(normal_field.key_mark, normal_field.path,
-                "must hold " + std::to_string(task_axes) + " numbers (one per task axis), got " +
-                    std::to_string(n->size()));
-      } else {
-        for (int a = 0; a < task_axes; ++a) wall.normal[a] = (*n)[static_cast<std::size_t>(a)];
-        // A direction: only where it points counts (the docs say so). Scaled by its largest
-        // entry first, so neither 1e300 nor 1e-320 over- or underflows on the way to unit.
-        const double largest = wall.normal.cwiseAbs().maxCoeff();
-        if (!(largest > 0.0)) {
-          d.error(normal_field.key_mark, normal_field.path,
-                  "must point somewhere (a direction into the wall), got all zeros");
-        } else {
-          wall.normal /= largest;
-          wall.normal /= wall.normal.norm();
-          normal = true;
-        }
-      }
+    bool normal = task_vector(w, normal_field, "normal", task_axes, wall.normal);
+    // A direction: only where it points counts (the docs say so). Scaled by its largest entry
+    // first, so neither 1e300 nor 1e-320 over- or underflows on the way to unit.
+    const double largest = wall.normal.cwiseAbs().maxCoeff();
+    if (normal && !(largest > 0.0)) {
+      d.error(normal_field.key_mark, normal_field.path,
+              "must point somewhere (a direction into the wall), got all zeros");
+      normal = false;
+    } else if (normal) {
+      wall.normal /= largest;
+      wall.normal /= wall.normal.norm();
     }
     read_wall_law(w, wall.law);
     w.finish();
