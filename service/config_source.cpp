@@ -54,8 +54,8 @@ void require_one_joint(const config::Config& cfg, const std::string& command) {
       {cfg.locate("device.kinematics") + ": device.kinematics: `hapticd " + command +
        "` works on the wall of one joint; kind " +
        kinematics::kind_name(cfg.device.kinematics.kind) + " has " + std::to_string(n) +
-       " (for several axes `hapticd check` proves the walls; the loop that drives them is not "
-       "built yet: docs/kinematics.md)"});
+       " (for several axes `hapticd check` proves the walls and `hapticd run` drives them: "
+       "docs/kinematics.md)"});
 }
 
 config::Config load_config(const ConfigOptions& options) {

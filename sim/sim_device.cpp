@@ -1,6 +1,8 @@
 #include "sim/sim_device.h"
 
 #include <cerrno>
+#include <cmath>
+#include <string>
 #include <utility>
 
 #include "base/errno_text.h"
@@ -24,38 +26,82 @@ std::string_view to_string(PeerFault fault) noexcept {
 
 SimDevice::SimDevice(const config::DeviceConfig& config, double sample_period_s,
                      std::vector<double> replay_positions)
-    : axis_(config, sample_period_s, std::move(replay_positions)) {}
+    : axis_(config, sample_period_s, std::move(replay_positions)),
+      motor_sign_(config.sim.force_reversed ? -1.0 : 1.0),
+      sim_(config.sim) {
+  if (kinematics::joint_count(config.kinematics) > 1) {
+    joints_ = std::make_unique<JointPlant>(config, sample_period_s);
+  }
+}
 
 DeviceInfo SimDevice::on_configure() {
   axis_.reset();
+  if (joints_) joints_->reset();
+  rng_.seed(sim_.seed);
+  noise_.reset();
+  torque_.setZero();
   first_read_ = true;
   sequence_ = 0;
+  if (joints_) {
+    return {"sim (" + std::to_string(joints_->joints()) + " joints, in-process)", 0, 0,
+            static_cast<std::size_t>(joints_->joints())};
+  }
   return {"sim (exact plant, in-process)", 0, 0};
 }
 
-void SimDevice::on_enable() { axis_.set_output(true); }
+void SimDevice::on_enable() {
+  axis_.set_output(true);
+  output_on_ = true;
+  torque_.setZero();
+}
 
-void SimDevice::on_disable() noexcept { axis_.set_output(false); }
+void SimDevice::on_disable() noexcept {
+  axis_.set_output(false);
+  output_on_ = false;
+  torque_.setZero();
+}
+
+double SimDevice::encoder(double position) noexcept {
+  const config::SimDeviceConfig& c = sim_;
+  if (c.counts_per_unit == 0.0) return position;  // ideal encoder
+  double counts = position * c.counts_per_unit;
+  if (c.seed != 0 && c.noise_counts > 0.0) counts += c.noise_counts * noise_(rng_);
+  return std::floor(counts) / c.counts_per_unit;
+}
+
+void SimDevice::read_joints(std::span<PositionSample> samples) noexcept {
+  if (!first_read_) joints_->step(kinematics::Vec3((output_on_ ? motor_sign_ : 0.0) * torque_));
+  first_read_ = false;
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    samples[i].position = encoder(joints_->joint_positions()[static_cast<int>(i)]);
+  }
+}
 
 IoStatus SimDevice::on_read(std::span<PositionSample> samples) noexcept {
-  PositionSample& out = samples.front();  // one joint
   if (faults_.active(PeerFault::kTransportFault)) {
     set_fault_code(ENODEV);
     return IoStatus::kTransportFault;
   }
   if (faults_.active(PeerFault::kStopAnswering)) return IoStatus::kNoNewData;
-  if (first_read_) {
+  if (joints_) {
+    read_joints(samples);
+  } else if (first_read_) {
     first_read_ = false;
+    samples.front().position = axis_.encoder_position();
   } else {
     axis_.step();
+    samples.front().position = axis_.encoder_position();
   }
   if (faults_.take(PeerFault::kSkipSequence)) sequence_ += 3;
-  out.position = axis_.encoder_position();
-  out.sequence = sequence_++;
-  out.status = axis_.output_on() ? kStatusOutputEnabled : 0u;
-  out.flags = kSampleHasSequence;
-  if (faults_.active(PeerFault::kDeviceFault)) {
-    out.status |= kStatusFault;
+  std::uint32_t status = axis_.output_on() ? kStatusOutputEnabled : 0u;
+  if (faults_.active(PeerFault::kDeviceFault)) status |= kStatusFault;
+  for (PositionSample& out : samples) {  // every joint measured at the same instant
+    out.sequence = sequence_;
+    out.status = status;
+    out.flags = kSampleHasSequence;
+  }
+  ++sequence_;
+  if (status & kStatusFault) {
     set_fault_code(kStatusFault);
     return IoStatus::kDeviceFault;
   }
@@ -63,8 +109,11 @@ IoStatus SimDevice::on_read(std::span<PositionSample> samples) noexcept {
 }
 
 IoStatus SimDevice::on_write(std::span<const double> forces) noexcept {
-  const double force = forces.front();  // one joint
-  axis_.hold_force(force);
+  if (joints_) {
+    for (std::size_t i = 0; i < forces.size(); ++i) torque_[static_cast<int>(i)] = forces[i];
+  } else {
+    axis_.hold_force(forces.front());  // one joint
+  }
   return IoStatus::kOk;
 }
 

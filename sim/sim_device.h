@@ -7,12 +7,15 @@
 
 #include <atomic>
 #include <cstdint>
+#include <memory>
+#include <random>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "config/config.h"
 #include "drivers/device.h"
+#include "sim/joint_plant.h"
 #include "sim/peers/loopback_peer.h"
 #include "sim/peers/peer_state.h"
 #include "sim/sim_axis.h"
@@ -32,6 +35,8 @@ class SimDevice final : public hapticd::Device {
 
   std::string_view driver_name() const noexcept override { return "sim"; }
   const SimAxis& axis() const noexcept { return axis_; }
+  // The mechanism of a device of several joints (device.kinematics); null for one joint.
+  const JointPlant* joint_plant() const noexcept { return joints_.get(); }
   // Any thread: make the next reads or writes fail the way `fault` says.
   bool inject(PeerFault fault) noexcept { return faults_.inject(fault); }
 
@@ -50,7 +55,19 @@ class SimDevice final : public hapticd::Device {
   std::string describe(const DeviceFault& fault) const override;
 
  private:
+  // RT-safe: called every tick. The joint plant's read: one period on with the torques held,
+  // then each joint's encoder.
+  void read_joints(std::span<PositionSample> samples) noexcept;
+  double encoder(double position) noexcept;
+
   SimAxis axis_;
+  std::unique_ptr<JointPlant> joints_;                  // several joints: the mechanism, else null
+  kinematics::Vec3 torque_ = kinematics::Vec3::Zero();  // held on each joint (zero while off)
+  bool output_on_ = false;
+  double motor_sign_;
+  config::SimDeviceConfig sim_;  // the joints' encoders: resolution, noise, seed
+  std::mt19937_64 rng_;          // the joints' encoder noise
+  std::normal_distribution<double> noise_{0.0, 1.0};
   bool first_read_ = true;
   std::uint64_t sequence_ = 0;
   FaultFlags<PeerFault> faults_{PeerFault::kStopAnswering, PeerFault::kSkipSequence,

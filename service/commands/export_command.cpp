@@ -24,14 +24,15 @@ void write_rows(const telemetry::LogContents& log, std::ostream& out) {
          "force_computed,force_commanded,contact,saturated,fault,overrun,no_pull_clamped,stale,"
          "unarmed,non_finite,sequence_gap,no_position,device_status,sample_time_s,sequence,"
          "fault_cause,fault_class,fault_code,marker,observer_energy_j,passivity_damping,"
-         "passivity_damped,stepped,held,runaway,probe\n";
-  char row[512];
+         "passivity_damped,stepped,held,runaway,probe,joints,joint2_position,joint3_position,"
+         "joint2_force,joint3_force,task_x,task_y,task_z,deepest_wall,wall_contact,pose_status\n";
+  char row[768];
   for (const telemetry::TickRecord& r : log.records) {
     const auto bit = [&](std::uint32_t f) { return (r.flags & f) ? 1 : 0; };
     std::snprintf(
         row, sizeof row,
         "%llu,%.9f,%.3f,%.3f,%.17g,%.17g,%.17g,%.17g,%.17g,%d,%d,%d,%d,%d,%d,%d,%d,%d,%d,%u,"
-        "%.9f,%u,%u,%u,%u,%u,%.17g,%.17g,%d,%d,%d,%d,%d\n",
+        "%.9f,%u,%u,%u,%u,%u,%.17g,%.17g,%d,%d,%d,%d,%d",
         static_cast<unsigned long long>(r.tick), static_cast<double>(r.scheduled_ns) * 1e-9,
         r.wake_latency_ns * 1e-3, r.compute_ns * 1e-3, r.position, r.penetration, r.velocity,
         r.force_computed, r.force_commanded, bit(telemetry::kFlagContact),
@@ -43,6 +44,13 @@ void write_rows(const telemetry::LogContents& log, std::ostream& out) {
         unsigned{r.fault_class}, r.fault_code, r.marker, r.observer_energy_j, r.passivity_damping,
         bit(telemetry::kFlagPassivityDamped), bit(telemetry::kFlagStepped),
         bit(telemetry::kFlagHeld), bit(telemetry::kFlagRunaway), bit(telemetry::kFlagProbe));
+    out << row;
+    // Format 4's fields (a device of several joints; `joints` 1 for a log before it).
+    std::snprintf(row, sizeof row, ",%u,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%u,%u,%u\n",
+                  r.joints == 0 ? 1u : unsigned{r.joints}, r.joint_position[0], r.joint_position[1],
+                  r.joint_force[0], r.joint_force[1], r.task_position[0], r.task_position[1],
+                  r.task_position[2], unsigned{r.deepest_wall}, unsigned{r.wall_contact},
+                  unsigned{r.pose_status});
     out << row;
   }
 }

@@ -8,8 +8,11 @@
 #include "control/controller.h"
 #include "control/direction_probe.h"
 #include "control/passivity_observer.h"
+#include "gate/gate.h"
+#include "loop/scene_tick.h"
 #include "loop/tick.h"
 #include "service/config_source.h"
+#include "service/run/run_support.h"
 #include "wiring/registry.h"
 
 namespace hapticd::service {
@@ -42,9 +45,20 @@ struct Walker {
   std::unique_ptr<control::Controller> law;
   std::unique_ptr<control::PassivityObserver> observer;  // built once: it spans re-armings
   std::unique_ptr<control::DirectionProbe> probe;        // each arming's direction check
+  SceneParts scene;  // a device of several joints: its walls and their observers, built once
   ForceSeries series;
 
   void restart(const config::Config& cfg) {
+    if (kinematics::joint_count(cfg.device.kinematics) > 1) {
+      // The loop's own scene, its observers crediting what the gate found along each normal.
+      if (!scene.state) {
+        DeviceInfo info;
+        info.transport_delay_samples = device_delay(cfg);
+        scene = make_scene_parts(cfg, info, gate::evaluate_gate(cfg, device_delay(cfg)));
+      }
+      scene.state->restart();
+      return;
+    }
     law = std::make_unique<control::Controller>(control::make_control_law(cfg));
     probe = std::make_unique<control::DirectionProbe>(control::probe_plan(cfg, device_delay(cfg)));
     if (!observer) {
@@ -54,6 +68,7 @@ struct Walker {
     observer->restart();
   }
   void swap_to(const config::Config& cfg) {
+    if (scene.state) return;  // a run of several joints refuses every reload (reload_check)
     auto next = std::make_unique<control::Controller>(control::make_control_law(cfg));
     next->continue_from(*law);
     law = std::move(next);
@@ -61,8 +76,31 @@ struct Walker {
   // One ordinary record: the loop's tick on its position when the loop stepped it, then what
   // was written (zero on a tick that faulted). The record this law makes of it, for a tick
   // stepped without a fault (the ones whose forces the log must reproduce).
+  // The same for a device of several joints: the loop's scene tick.
+  std::optional<TickRecord> step_scene(const TickRecord& logged, bool stepped, bool faulted,
+                                       std::uint32_t periods) {
+    TickRecord rec;
+    loop::JointCommand c;
+    if (stepped) {
+      c = loop::step_scene_tick(*scene.state, loop::JointInput::recorded(logged, periods), rec);
+    }
+    const bool zero = faulted || c.non_finite || c.runaway || c.pose_fault;
+    loop::end_scene_tick(*scene.state, zero ? nullptr : &c, rec);
+    series.commanded.push_back(rec.force_commanded);
+    series.wall_energy_j = 0.0;
+    for (const control::PassivityObserver& o : scene.state->walls) {
+      series.wall_energy_j += o.wall_work_j();
+    }
+    series.min_observer_energy_j = std::min(series.min_observer_energy_j, rec.observer_energy_j);
+    series.damped_ticks += (rec.flags & telemetry::kFlagPassivityDamped) ? 1 : 0;
+    if (!stepped || faulted) return std::nullopt;
+    add(rec.force_commanded, rec.penetration, (rec.flags & telemetry::kFlagContact) != 0,
+        (rec.flags & telemetry::kFlagSaturated) != 0);
+    return rec;
+  }
   std::optional<TickRecord> step(const TickRecord& logged, bool stepped, bool faulted,
                                  std::uint32_t periods) {
+    if (scene.state) return step_scene(logged, stepped, faulted, periods);
     TickRecord rec;
     loop::TickCommand c;
     const bool checking = (logged.flags & telemetry::kFlagProbe) != 0;
@@ -99,9 +137,14 @@ bool same_bits(double a, double b) {
 // an observer fed the logged commands, the observer's figures as recorded.
 void log_tick(ForceSeries& s, control::PassivityObserver& work, const TickRecord& r, bool stepped,
               std::uint32_t periods) {
-  if (stepped) work.observe(r.position, loop::TickInput::recorded(r, periods).fresh, periods);
-  work.commanded(r.force_commanded, 0.0);
-  s.wall_energy_j = work.wall_work_j();
+  if (r.joints > 1) {
+    // Each wall's work needs its own force, which a record of several joints does not hold.
+    s.wall_energy_j = std::nan("");
+  } else {
+    if (stepped) work.observe(r.position, loop::TickInput::recorded(r, periods).fresh, periods);
+    work.commanded(r.force_commanded, 0.0);
+    s.wall_energy_j = work.wall_work_j();
+  }
   s.min_observer_energy_j = std::min(s.min_observer_energy_j, r.observer_energy_j);
   s.damped_ticks += (r.flags & telemetry::kFlagPassivityDamped) ? 1 : 0;
   s.commanded.push_back(r.force_commanded);
@@ -153,13 +196,16 @@ bool take_marker(State& st, const TickRecord& r, ReplayResult& out) {
   return true;
 }
 
-// Forces bit for bit; from format 3 on, the observer's energy and damping too.
+// Forces bit for bit; from format 3 on, the observer's energy and damping too; from format 4
+// on, every joint's torque.
 void compare(const TickRecord& r, const TickRecord& s, std::uint32_t version, ReplayResult& out) {
   ++out.compared;
   const bool observer_same = version < 3 || (same_bits(s.observer_energy_j, r.observer_energy_j) &&
                                              same_bits(s.passivity_damping, r.passivity_damping));
+  const bool joints_same = version < 4 || (same_bits(s.joint_force[0], r.joint_force[0]) &&
+                                           same_bits(s.joint_force[1], r.joint_force[1]));
   if (same_bits(s.force_computed, r.force_computed) &&
-      same_bits(s.force_commanded, r.force_commanded) && observer_same) {
+      same_bits(s.force_commanded, r.force_commanded) && observer_same && joints_same) {
     return;
   }
   if (out.differing++ == 0) out.first_difference = r.tick;

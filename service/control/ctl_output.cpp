@@ -50,8 +50,16 @@ std::string status_text(const json& s) {
   out << "  device        " << text(dev["description"]) << ": " << text(dev["state"])
       << (dev.value("output_enabled", false) ? ", output enabled" : ", output disabled")
       << ", last command " << num(dev["last_command"]) << " N\n";
-  out << "  wall          K " << num(s["wall"]["stiffness"]) << " N/m  B "
-      << num(s["wall"]["damping"]) << " N s/m\n";
+  if (s.contains("walls") && s["walls"].is_array()) {  // a device of several joints
+    for (std::size_t i = 0; i < s["walls"].size(); ++i) {
+      const json& w = s["walls"][i];
+      out << "  walls[" << i << "]      K " << num(w["stiffness"]) << " N/m  B "
+          << num(w["damping"]) << " N s/m\n";
+    }
+  } else {
+    out << "  wall          K " << num(s["wall"]["stiffness"]) << " N/m  B "
+        << num(s["wall"]["damping"]) << " N s/m\n";
+  }
   out << "  gate          " << gate_line(s["gate"]) << "\n";
   if (s.contains("direction_check") && s["direction_check"].is_object()) {
     const json& d = s["direction_check"];
@@ -64,6 +72,15 @@ std::string status_text(const json& s) {
   }
   out << "  position      " << num(s["position"], 1e3) << " mm, penetration "
       << num(s["penetration"], 1e3) << " mm, force " << num(s["force_commanded"]) << " N\n";
+  if (s.contains("joints") && s["joints"].is_array()) {
+    for (std::size_t i = 0; i < s["joints"].size(); ++i) {
+      out << "  joint " << i + 1 << "       position " << num(s["joints"][i]["position"])
+          << ", torque " << num(s["joints"][i]["force_commanded"]) << "\n";
+    }
+    const json& x = s["task_position"];
+    out << "  task position (" << num(x[0], 1e3) << ", " << num(x[1], 1e3) << ", " << num(x[2], 1e3)
+        << ") mm\n";
+  }
   out << "  wall energy   " << num(s["wall_energy_j"]) << " J (work the wall did on the device)\n";
   if (s.contains("observer_energy_j")) {
     out << "  passivity     observed energy " << num(s["observer_energy_j"]) << " J, damped "

@@ -31,6 +31,10 @@ std::vector<std::string> reload_blockers(const config::Config& running,
   const auto differs = [&](bool changed, const std::string& key, const std::string& why) {
     if (changed) out.push_back(key + ": " + why + "; that needs a restart");
   };
+  // The loop of several joints steps a scene built at start-up; a reload swaps one law.
+  differs(kinematics::joint_count(running.device.kinematics) > 1 ||
+              kinematics::joint_count(next.device.kinematics) > 1,
+          "walls", "the walls of a device of several joints are built as output is enabled");
   const config::LoopConfig &a = running.loop, &b = next.loop;
   differs(a.rate_hz != b.rate_hz, "loop.rate_hz", "a new sample rate");
   differs(a.clock != b.clock, "loop.clock", "a new clock");

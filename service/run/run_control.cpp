@@ -85,7 +85,18 @@ json RunSession::status() const {
   const std::vector<base::CounterReading> counters = read_run_counters(servo_.get(), d);
   j["counters"] = counters_json(counters);
   j["anomalies"] = anomalies_json(counters);
-  j["wall"] = {{"stiffness", cfg_.wall.stiffness}, {"damping", cfg_.wall.damping}};
+  const int joints = kinematics::joint_count(cfg_.device.kinematics);
+  if (joints > 1) {
+    json walls = json::array();
+    for (const config::TaskWallConfig& w : cfg_.walls) {
+      walls.push_back({{"stiffness", w.law.stiffness}, {"damping", w.law.damping}});
+    }
+    j["wall"] = nullptr;
+    j["walls"] = walls;
+  } else {
+    j["wall"] = {{"stiffness", cfg_.wall.stiffness}, {"damping", cfg_.wall.damping}};
+    j["walls"] = nullptr;
+  }
   j["derated"] =
       derated_ ? json{{"configured", derated_->first}, {"ran", derated_->second}} : json(nullptr);
   j["fault"] = fault_.empty() ? json(nullptr) : json(fault_);
@@ -96,6 +107,20 @@ json RunSession::status() const {
     j["tick"] = servo_->ticks_done();
     j["reloads"] = reloads_;
     j["position"] = live.position.load(r);
+    if (joints > 1) {  // schema 4: every joint and the pose
+      json each = json::array();
+      for (int i = 0; i < joints; ++i) {
+        each.push_back(
+            {{"position", live.joint_position[static_cast<std::size_t>(i)].load(r)},
+             {"force_commanded", live.joint_force[static_cast<std::size_t>(i)].load(r)}});
+      }
+      j["joints"] = each;
+      j["task_position"] = {live.task_position[0].load(r), live.task_position[1].load(r),
+                            live.task_position[2].load(r)};
+    } else {
+      j["joints"] = nullptr;
+      j["task_position"] = nullptr;
+    }
     j["penetration"] = live.penetration.load(r);
     j["force_commanded"] = live.force_commanded.load(r);
     j["wall_energy_j"] = live.wall_energy_j.load(r);

@@ -130,6 +130,10 @@ bool RunSession::start_up(gate::GateReport& report) {
   loop::LoopOptions lo =
       loop_options(options_, cfg_, session_->device().info(), realtime_, log_.writer != nullptr);
   lo.law_swap = &swap_;
+  if (session_->device().info().joints > 1) {
+    scene_ = make_scene_parts(cfg_, session_->device().info(), report);
+    lo.scene = scene_.state.get();
+  }
   auto servo = std::make_unique<loop::ServoLoop>(session_->device(), *active_, log_.ring.get(), lo);
   summary_.wake_latency = &servo->wake_latency();
   summary_.compute_time = &servo->compute_time();
@@ -227,9 +231,14 @@ loop::LoopResult RunSession::arm() {
     rt.wait_running();
     const bool first = !summary_.output_was_enabled;
     summary_.output_was_enabled = true;
-    spdlog::info("output enabled: {} at {} Hz ({}), wall K {} N/m B {} N s/m",
-                 device.info().description, cfg.loop.rate_hz, realtime_ ? "realtime" : "freerun",
-                 cfg.wall.stiffness, cfg.wall.damping);
+    if (device.info().joints > 1) {
+      spdlog::info("output enabled: {} at {} Hz ({}), {} walls", device.info().description,
+                   cfg.loop.rate_hz, realtime_ ? "realtime" : "freerun", cfg.walls.size());
+    } else {
+      spdlog::info("output enabled: {} at {} Hz ({}), wall K {} N/m B {} N s/m",
+                   device.info().description, cfg.loop.rate_hz, realtime_ ? "realtime" : "freerun",
+                   cfg.wall.stiffness, cfg.wall.damping);
+    }
     if (realtime_ && first) announce_rt(rt_);
     supervise(rt);  // running (READY=1) once the direction check has armed the wall
     result = rt.join();

@@ -86,6 +86,7 @@ class RunSession final : public ControlHandler {
   std::optional<loop::CpuDmaLatencyRequest> pm_qos_;
   loop::LawSwap swap_;
   std::unique_ptr<control::Controller> active_;  // the law the loop runs
+  SceneParts scene_;  // a device of several joints: the walls the loop steps instead
   std::unique_ptr<loop::ServoLoop> servo_;
   std::unique_ptr<ControlServer> server_;
   int wake_fd_ = -1;  // eventfd: the control thread wakes the supervisor (stop, clear-fault)

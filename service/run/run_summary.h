@@ -19,7 +19,7 @@ namespace hapticd::service {
 // change of shape is a new version, listed in docs/operations.md: 1 had no schema_version
 // key; 2 added it, direction_check, and the status answer's direction_check; 3 added the
 // gate's workspace (several task axes).
-inline constexpr int kSummarySchemaVersion = 3;
+inline constexpr int kSummarySchemaVersion = 4;
 
 struct RunSummary {
   bool realtime = true;

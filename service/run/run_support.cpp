@@ -32,7 +32,10 @@ std::int64_t unix_now_ns() {
 }  // namespace
 
 bool announce_gate(const gate::GateReport& report, const config::Config& cfg) {
-  if (report.pass) {
+  if (report.pass && report.workspace) {
+    spdlog::info("gate: pass ({} walls, each along its normal over the workspace's {} samples)",
+                 report.workspace->walls.size(), report.workspace->samples);
+  } else if (report.pass) {
     spdlog::info("gate: pass (b_req {:.4g} N s/m <= {:.4g} allowed, delay {} samples)",
                  report.passivity.required_damping, report.passivity.available_damping,
                  report.delay_samples);
@@ -101,6 +104,27 @@ loop::LoopOptions loop_options(const RunOptions& options, const config::Config& 
         1, static_cast<std::uint64_t>(std::llround(*options.duration_s * cfg.loop.rate_hz)));
   }
   return lo;
+}
+
+SceneParts make_scene_parts(const config::Config& cfg, const DeviceInfo& info,
+                            const gate::GateReport& report) {
+  SceneParts parts;
+  parts.scene = std::make_unique<control::Scene>(control::make_scene(cfg));
+  std::vector<control::ObserverParams> observers;
+  for (std::size_t i = 0; i < cfg.walls.size(); ++i) {
+    control::ObserverParams p = control::observer_params(cfg, info.transport_delay_samples);
+    // A wall the device cannot reach (+inf, or no report) is credited nothing: its observer
+    // only ever errs towards damping.
+    const double b = report.workspace && i < report.workspace->walls.size()
+                         ? report.workspace->walls[i].worst_damping
+                         : 0.0;
+    p.device_damping = std::isfinite(b) ? b : 0.0;
+    observers.push_back(p);
+  }
+  parts.state = std::make_unique<loop::SceneState>(cfg.device.kinematics, *parts.scene,
+                                                   kinematics::Vec3::Constant(cfg.device.max_force),
+                                                   observers);
+  return parts;
 }
 
 std::string describe_fault(const loop::Fault& fault, const Device& device) {
@@ -195,7 +219,8 @@ void summarise_peer(DeviceSession& session, RunSummary& s) {
   s.loopback = true;
   s.peer_applied_force = peer->applied_force();
   s.peer_output_on = peer->output_on();
-  s.operator_work_j = peer->plant().operator_work_j();
+  // The peer's plant is one joint's: a device of several has no operator work to report.
+  if (session.device().info().joints == 1) s.operator_work_j = peer->plant().operator_work_j();
   if (const std::string e = session.peer_error(); !e.empty()) {
     s.faults.push_back("loopback peer: " + e);
   }
@@ -243,6 +268,15 @@ bool configure_and_gate(config::Config& cfg, DeviceSession& session, RunSummary&
                       std::to_string(device.info().joints) + " joint(s) but device.kinematics (" +
                       kinematics::kind_name(cfg.device.kinematics.kind) + ") has " +
                       std::to_string(joints));
+  }
+  if (joints > 1 && cfg.safety.direction_check.mode != config::DirectionCheckMode::kOff) {
+    // Said, not skipped: the check pushes one joint and fits one response.
+    throw config::ConfigError(
+        {cfg.locate("safety.direction_check") +
+         ": safety.direction_check: the direction check pushes one joint; a device of " +
+         std::to_string(joints) +
+         " joints runs with `mode: off` (each joint's sign is then the configuration's: "
+         "docs/kinematics.md)"});
   }
   const int declared = session.driver().declared_delay(cfg);
   if (device.info().transport_delay_samples != declared) {

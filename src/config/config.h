@@ -94,6 +94,11 @@ struct OperatorSpec {
   ProfileSpec force;         // force: operator force (N)
   MotionSpec motion;         // motion
   std::string replay_log;    // replay: tick log whose positions are imposed (absolute path)
+  // hand or none, on a device of several task axes (docs/kinematics.md, the simulated
+  // mechanism): the device starts at rest at `origin` (m; the workspace's centre by default),
+  // and the hand's set-point is origin + setpoint(t) direction (unit, normalised as read).
+  kinematics::Vec3 origin = kinematics::Vec3::Zero();
+  kinematics::Vec3 direction = kinematics::Vec3::Zero();
   friend bool operator==(const OperatorSpec&, const OperatorSpec&) = default;
 };
 

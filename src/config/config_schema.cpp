@@ -23,9 +23,14 @@ const Options<Kind> kKinds{{"hand", Kind::kHand},
 
 const std::vector<std::string> kOperatorKeys{"kind",  "stiffness", "damping",   "setpoint",
                                              "force", "offset",    "amplitude", "frequency_hz",
-                                             "phase", "log"};
+                                             "phase", "log",       "origin",    "direction"};
 
-std::vector<std::string> operator_keys_of(Kind kind) {
+// The keys of `kind`; on several task axes a hand or none also has its place in task space.
+std::vector<std::string> operator_keys_of(Kind kind, int task_axes) {
+  if (task_axes > 1 && kind == Kind::kNone) return {"kind", "origin"};
+  if (task_axes > 1 && kind == Kind::kHand) {
+    return {"kind", "stiffness", "damping", "setpoint", "origin", "direction"};
+  }
   switch (kind) {
     case Kind::kForce:
       return {"kind", "force"};
@@ -81,8 +86,41 @@ void read_motion(MapReader& m, const std::string& reason, std::optional<double> 
   if (ok) out = spec;
 }
 
+// A hand or none on several task axes: where the device starts, and which way the hand's
+// set-point moves (a hand needs one). Another kind drives one joint and is refused.
+void read_task_operator(MapReader& m, const Field& kind_field, Kind kind,
+                        const kinematics::Kinematics& k, OperatorSpec& op) {
+  Diagnostics& d = m.diag();
+  const int n = kinematics::joint_count(k);
+  if (kind != Kind::kHand && kind != Kind::kNone) {
+    d.error(kind_field.key_mark, kind_field.path,
+            "drives one joint; a device of " + std::to_string(n) +
+                " joints (device.kinematics) takes 'hand' or 'none'");
+    return;
+  }
+  const Field origin = m.take("origin");
+  if (origin.present && read_fixed_numbers(
+                            m, origin, n, [](double, const Range&) { return true; }, Range::any(),
+                            "", op.origin.data(), "numbers (one per task axis)")) {
+    const kinematics::Status st = kinematics::inverse(k, op.origin).status;
+    if (st != kinematics::Status::kOk) {
+      d.error(origin.key_mark, origin.path,
+              std::string("is not a pose of the mechanism: ") + kinematics::status_name(st));
+    }
+  }
+  if (kind != Kind::kHand) return;
+  const Field dir = m.take("direction");
+  if (!dir.present) {
+    m.missing("direction", "a hand on several task axes pushes along it");
+  } else if (read_fixed_numbers(
+                 m, dir, n, [](double, const Range&) { return true; }, Range::any(), "",
+                 op.direction.data(), "numbers (one per task axis)")) {
+    unit_direction(d, dir, "the way the hand's set-point moves", op.direction);
+  }
+}
+
 void read_operator(MapReader& sim, std::optional<double> rate_hz, const std::string& base_dir,
-                   OperatorSpec& op) {
+                   const kinematics::Kinematics& mechanism, OperatorSpec& op) {
   const Field field = sim.take("operator");
   // Absent: the defaults of OperatorSpec stand.
   if (!field.present) return;
@@ -131,7 +169,9 @@ void read_operator(MapReader& sim, std::optional<double> rate_hz, const std::str
     case Kind::kNone:
       break;
   }
-  const std::vector<std::string> used = operator_keys_of(kind);
+  const int task_axes = kinematics::joint_count(mechanism);
+  if (task_axes > 1) read_task_operator(m, kind_field, kind, mechanism, op);
+  const std::vector<std::string> used = operator_keys_of(kind, task_axes);
   for (const std::string& key : kOperatorKeys) {
     if (std::find(used.begin(), used.end(), key) == used.end()) m.not_used(key, reason);
   }
@@ -159,7 +199,7 @@ LoopResult read_loop(MapReader& top, LoopConfig& loop) {
 }
 
 void read_plant(MapReader& device, std::optional<double> rate_hz, const std::string& base_dir,
-                SimDeviceConfig& sim_cfg) {
+                const kinematics::Kinematics& k, SimDeviceConfig& sim_cfg) {
   MapReader sim(device.diag(), device.take("sim"));
   Diagnostics& d = sim.diag();
   number(sim, "counts_per_unit", Range::at_least(0.0), sim_cfg.counts_per_unit);
@@ -167,10 +207,18 @@ void read_plant(MapReader& device, std::optional<double> rate_hz, const std::str
   if (const auto v = read_integer(d, sim.take("seed"), IntRange::at_least(0, LLONG_MAX))) {
     sim_cfg.seed = static_cast<std::uint64_t>(*v);
   }
-  number(sim, "initial_position", Range::any(), sim_cfg.initial_position);
-  number(sim, "initial_velocity", Range::any(), sim_cfg.initial_velocity);
+  if (kinematics::joint_count(k) > 1) {
+    // Several joints start at rest at the operator's origin (in task space).
+    sim_cfg.op.origin = kinematics::workspace_centre(k);
+    for (const char* key : {"initial_position", "initial_velocity"}) {
+      sim.not_used(key, "a device of several joints (it starts at rest at operator.origin)");
+    }
+  } else {
+    number(sim, "initial_position", Range::any(), sim_cfg.initial_position);
+    number(sim, "initial_velocity", Range::any(), sim_cfg.initial_velocity);
+  }
   if (const auto v = read_bool(d, sim.take("force_reversed"))) sim_cfg.force_reversed = *v;
-  read_operator(sim, rate_hz, base_dir, sim_cfg.op);
+  read_operator(sim, rate_hz, base_dir, k, sim_cfg.op);
   sim.finish();
 }
 
@@ -208,7 +256,7 @@ void read_device(MapReader& top, std::optional<double> rate_hz, const std::strin
   number(m, "damping", Range::greater_than(0.0), cfg.device.damping);
   number(m, "max_force", Range::greater_than(0.0), cfg.device.max_force);
   read_kinematics(m, cfg.device.kinematics);
-  read_plant(m, rate_hz, base_dir, cfg.device.sim);
+  read_plant(m, rate_hz, base_dir, cfg.device.kinematics, cfg.device.sim);
   read_driver_section(m, drivers, index.has_value() || !driver.present, cfg);
   m.finish();
 }

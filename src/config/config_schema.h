@@ -55,6 +55,9 @@ bool read_fixed_numbers(MapReader& m, const Field& f, int n, bool (*ok)(double, 
 bool read_fixed_numbers(MapReader& m, std::string_view key, int n, const Range& range, double* out,
                         const std::string& entries = "numbers");
 
+// Makes `v`, read from `f`, unit; all zeros is an error ("must point somewhere (WHAT)").
+bool unit_direction(Diagnostics& d, const Field& f, const std::string& what, kinematics::Vec3& v);
+
 // Reads `walls` of `top` for a device of `task_axes` task coordinates (walls_schema.cpp).
 void read_walls(MapReader& top, int task_axes, std::vector<TaskWallConfig>& walls);
 

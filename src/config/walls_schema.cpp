@@ -24,6 +24,19 @@ bool task_vector(MapReader& w, const Field& f, std::string_view key, int m, kine
 
 }  // namespace
 
+bool unit_direction(Diagnostics& d, const Field& f, const std::string& what, kinematics::Vec3& v) {
+  // Only where it points counts (the docs say so). Scaled by its largest entry first, so
+  // neither 1e300 nor 1e-320 over- or underflows on the way to unit.
+  const double largest = v.cwiseAbs().maxCoeff();
+  if (!(largest > 0.0)) {
+    d.error(f.key_mark, f.path, "must point somewhere (" + what + "), got all zeros");
+    return false;
+  }
+  v /= largest;
+  v /= v.norm();
+  return true;
+}
+
 void read_walls(MapReader& top, int task_axes, std::vector<TaskWallConfig>& walls) {
   const Field f = top.take("walls");
   if (!f.present || f.node.IsNull()) return;
@@ -46,18 +59,8 @@ void read_walls(MapReader& top, int task_axes, std::vector<TaskWallConfig>& wall
     TaskWallConfig wall;
     const bool point = task_vector(w, w.take("point"), "point", task_axes, wall.point);
     const Field normal_field = w.take("normal");
-    bool normal = task_vector(w, normal_field, "normal", task_axes, wall.normal);
-    // A direction: only where it points counts (the docs say so). Scaled by its largest entry
-    // first, so neither 1e300 nor 1e-320 over- or underflows on the way to unit.
-    const double largest = wall.normal.cwiseAbs().maxCoeff();
-    if (normal && !(largest > 0.0)) {
-      d.error(normal_field.key_mark, normal_field.path,
-              "must point somewhere (a direction into the wall), got all zeros");
-      normal = false;
-    } else if (normal) {
-      wall.normal /= largest;
-      wall.normal /= wall.normal.norm();
-    }
+    const bool normal = task_vector(w, normal_field, "normal", task_axes, wall.normal) &&
+                        unit_direction(d, normal_field, "a direction into the wall", wall.normal);
     read_wall_law(w, wall.law);
     w.finish();
     if (point && normal) walls.push_back(std::move(wall));

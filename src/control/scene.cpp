@@ -1,6 +1,7 @@
 #include "control/scene.h"
 
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -30,25 +31,31 @@ void Scene::reset() noexcept {
   for (Controller& c : walls_) c.reset();
 }
 
-SceneStep Scene::step(const kinematics::Pose& pose, const kinematics::Vec3& limit) noexcept {
-  SceneStep out;
+void Scene::step_walls(const kinematics::Pose& pose, SceneStep& out) noexcept {
   out.count = walls_.size();
   out.pose_ok = pose.status == kinematics::Status::kOk && pose.x.allFinite();
   // A pose without a position (no assembly, no convergence) steps the walls where the
   // mechanism was last: the walls' histories must not jump, and no torque is written anyway.
   if (pose.x.allFinite()) last_x_ = pose.x;
-  const kinematics::Vec3& x = last_x_;
+  out.force.setZero();
   for (std::size_t i = 0; i < walls_.size(); ++i) {
-    const WallGeometry& g = geometry_[i];
-    const double s = g.normal.dot(x - g.point);
-    out.walls[i] = walls_[i].step(s);
+    out.walls[i] = walls_[i].step(coordinate(i, last_x_));
     out.flags |= out.walls[i].flags;
     // u is along s, the normal's direction: it pushes out of the wall where it is negative.
-    out.force += out.walls[i].force_commanded * g.normal;
+    out.force += out.walls[i].force_commanded * geometry_[i].normal;
   }
+}
+
+void Scene::map(const kinematics::Pose& pose, std::span<const double> commands,
+                const kinematics::Vec3& limit, SceneStep& out) const noexcept {
+  out.force.setZero();
+  for (std::size_t i = 0; i < walls_.size() && i < commands.size(); ++i) {
+    out.force += commands[i] * geometry_[i].normal;
+  }
+  out.tau.setZero();
   if (!out.pose_ok) {
     out.scale = 0.0;
-    return out;
+    return;
   }
   const kinematics::Saturated sat =
       kinematics::saturate(kinematics::joint_torques(pose, out.force), limit, pose.n);
@@ -57,6 +64,14 @@ SceneStep Scene::step(const kinematics::Pose& pose, const kinematics::Vec3& limi
   out.scale = sat.scale;
   if (sat.status == kinematics::SaturationStatus::kNonFinite) out.flags |= kControlNonFinite;
   if (sat.status == kinematics::SaturationStatus::kSaturated) out.flags |= kControlSaturated;
+}
+
+SceneStep Scene::step(const kinematics::Pose& pose, const kinematics::Vec3& limit) noexcept {
+  SceneStep out;
+  step_walls(pose, out);
+  std::array<double, kMaxWalls> commands{};
+  for (std::size_t i = 0; i < out.count; ++i) commands[i] = out.walls[i].force_commanded;
+  map(pose, std::span<const double>(commands.data(), out.count), limit, out);
   return out;
 }
 
@@ -68,7 +83,16 @@ Scene make_scene(const config::Config& cfg) {
     one.wall = w.law;
     one.wall.position = 0.0;  // the law runs on s = n . (x - p): its wall is at s = 0,
     one.wall.normal = 1;      // occupying s > 0
-    laws.push_back(make_control_law(one));
+    ControlLaw law = make_control_law(one);
+    // device.max_force limits each joint, not a wall: the joints' saturation, which keeps the
+    // force's direction, is the only limit, so a wall never saturates alone and its runaway
+    // guard is the scene's (loop/scene_tick.h), which reads runaway_penetration: an explicit
+    // safety.max_penetration, or none (the margin on the joints' saturation instead).
+    law.max_force = std::numeric_limits<double>::infinity();
+    if (!(cfg.safety.max_penetration > 0.0)) {
+      law.runaway_penetration = std::numeric_limits<double>::infinity();
+    }
+    laws.push_back(law);
     geometry.push_back({w.point, w.normal});
   }
   return Scene(geometry, laws);

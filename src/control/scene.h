@@ -50,6 +50,20 @@ class Scene {
   // loop to fault on); the walls are stepped all the same, so their histories stay whole.
   SceneStep step(const kinematics::Pose& pose, const kinematics::Vec3& limit) noexcept;
 
+  // The two halves of step(), for a loop that adds to each wall's force in between (the
+  // passivity controller along each normal). RT-safe: called every tick. step_walls steps
+  // every wall (out.walls, flags, pose_ok, their summed force); map puts `commands` (one per
+  // wall, along its normal) through J^T and the saturation into out.force and out.tau.
+  void step_walls(const kinematics::Pose& pose, SceneStep& out) noexcept;
+  void map(const kinematics::Pose& pose, std::span<const double> commands,
+           const kinematics::Vec3& limit, SceneStep& out) const noexcept;
+  // RT-safe. Wall i's coordinate s = n . (x - p) at the task position x.
+  double coordinate(std::size_t i, const kinematics::Vec3& x) const noexcept {
+    return geometry_[i].normal.dot(x - geometry_[i].point);
+  }
+  // RT-safe. Wall i's law (a live reload does not reach a scene yet).
+  const ControlLaw& law(std::size_t i) const noexcept { return walls_[i].law(); }
+
   // RT-safe. Every wall's filters cleared and disarmed (as at construction).
   void reset() noexcept;
 

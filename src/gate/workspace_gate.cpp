@@ -16,20 +16,6 @@ namespace {
 using kinematics::Vec3;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-const kinematics::Box& workspace_of(const kinematics::Kinematics& k) {
-  switch (k.kind) {
-    case kinematics::Kind::kJoints:
-      return k.joints.workspace;
-    case kinematics::Kind::kCartesian:
-      return k.cartesian.workspace;
-    case kinematics::Kind::kPantograph:
-      return k.pantograph.workspace;
-    case kinematics::Kind::kDelta:
-      return k.delta.workspace;
-  }
-  return k.joints.workspace;
-}
-
 // The device at task position x (its pose through inverse, then forward kinematics): the
 // status of the first that is not kOk, where x is not a pose of the mechanism.
 kinematics::Status pose_at(const config::Config& cfg, const Vec3& x, analysis::DeviceDamping& d) {
@@ -240,7 +226,7 @@ WorkspaceReport evaluate_workspace(const config::Config& cfg, int device_delay_s
   WorkspaceReport r;
   const kinematics::Kinematics& k = cfg.device.kinematics;
   const int m = kinematics::joint_count(k);
-  const kinematics::Box& box = workspace_of(k);
+  const kinematics::Box& box = kinematics::workspace(k);
   r.configuration_independent =
       k.kind == kinematics::Kind::kJoints || k.kind == kinematics::Kind::kCartesian;
   bool finite = true;

@@ -80,6 +80,30 @@ int joint_count(const Kinematics& k) noexcept {
   return 0;
 }
 
+const Box& workspace(const Kinematics& k) noexcept {
+  switch (k.kind) {
+    case Kind::kJoints:
+      return k.joints.workspace;
+    case Kind::kCartesian:
+      return k.cartesian.workspace;
+    case Kind::kPantograph:
+      return k.pantograph.workspace;
+    case Kind::kDelta:
+      return k.delta.workspace;
+  }
+  return k.joints.workspace;
+}
+
+Vec3 workspace_centre(const Kinematics& k) noexcept {
+  const Box& b = workspace(k);
+  Vec3 c = Vec3::Zero();
+  for (int i = 0; i < joint_count(k); ++i) {
+    if (std::isfinite(b.lower[i]) && std::isfinite(b.upper[i]))
+      c[i] = 0.5 * (b.lower[i] + b.upper[i]);
+  }
+  return c;
+}
+
 const char* invalid_reason(const Kinematics& k) noexcept {
   switch (k.kind) {
     case Kind::kJoints:

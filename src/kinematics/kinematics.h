@@ -27,6 +27,11 @@ struct Kinematics {
 // Joints n and task dimension m of the kind (equal for every kind here).
 int joint_count(const Kinematics& k) noexcept;
 
+// The kind's workspace box (on the joints' own coordinates for `joints`).
+const Box& workspace(const Kinematics& k) noexcept;
+// Its centre on each coordinate the box bounds on both sides, 0 on the others.
+Vec3 workspace_centre(const Kinematics& k) noexcept;
+
 // Why these parameters describe no mechanism (a size out of 1..3, a length, scale or limit
 // that is not positive and finite, a sign not +-1, an empty box), or nullptr when they do.
 const char* invalid_reason(const Kinematics& k) noexcept;

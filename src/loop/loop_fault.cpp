@@ -2,6 +2,8 @@
 
 #include <cstdio>
 
+#include "kinematics/pose.h"
+
 namespace hapticd::loop {
 
 std::string describe(const Fault& f) {
@@ -78,6 +80,12 @@ std::string describe(const Fault& f) {
                     "the direction check found the device never at rest before tick %llu "
                     "(safety.direction_check.rest_timeout_ms): it was being moved",
                     tick);
+      break;
+    case FaultCause::kPose:
+      std::snprintf(buf, sizeof buf,
+                    "the device's pose at tick %llu: %s (device.kinematics): zero torque on "
+                    "every joint",
+                    tick, kinematics::status_name(static_cast<kinematics::Status>(f.value)));
       break;
   }
   return buf;

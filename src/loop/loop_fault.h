@@ -28,6 +28,9 @@ enum class FaultCause : std::uint8_t {
   kForceReversed,
   kNoProbeMotion,
   kNeverAtRest,
+  // A device of several joints whose pose was not ok (value: its kinematics::Status): outside
+  // device.kinematics.workspace or no assembly, near a singularity, or no convergence.
+  kPose,
 };
 
 // Whether the cause is the direction check's refusal (exit 3, as the gate's).

@@ -12,6 +12,7 @@
 #include <sched.h>
 
 #include <algorithm>
+#include <cmath>
 
 #include "base/clock.h"
 #include "loop/rt_setup.h"
@@ -103,9 +104,26 @@ void ServoLoop::account(const telemetry::TickRecord& rec, const Sensed& sensed,
   live_.position.store(rec.position, r);
   live_.penetration.store(rec.penetration, r);
   live_.force_commanded.store(rec.force_commanded, r);
-  live_.wall_energy_j.store(observer_.wall_work_j(), r);
-  live_.observer_energy_j.store(observer_.energy_j(), r);
-  live_.damped_ticks.store(observer_.damped_ticks(), r);
+  if (rec.joints > 1) {
+    const double q[] = {rec.position, rec.joint_position[0], rec.joint_position[1]};
+    const double tau[] = {rec.force_commanded, rec.joint_force[0], rec.joint_force[1]};
+    for (std::size_t j = 0; j < base::kMaxJoints; ++j) {
+      live_.joint_position[j].store(q[j], r);
+      live_.joint_force[j].store(tau[j], r);
+      live_.task_position[j].store(rec.task_position[j], r);
+    }
+  }
+  const PassivityResult p = passivity();
+  live_.wall_energy_j.store(wall_work_j(), r);
+  live_.observer_energy_j.store(p.energy_j, r);
+  live_.damped_ticks.store(p.damped_ticks, r);
+}
+
+double ServoLoop::wall_work_j() const noexcept {
+  if (options_.scene == nullptr) return observer_.wall_work_j();
+  double work = 0.0;
+  for (const control::PassivityObserver& o : options_.scene->walls) work += o.wall_work_j();
+  return work;
 }
 
 void ServoLoop::run_counts(const std::array<std::uint64_t, kLoopCounterCount>& before,
@@ -115,6 +133,7 @@ void ServoLoop::run_counts(const std::array<std::uint64_t, kLoopCounterCount>& b
 }
 
 PassivityResult ServoLoop::passivity() const noexcept {
+  if (options_.scene != nullptr) return scene_passivity();
   PassivityResult p;
   p.observed = observer_.enabled();
   p.energy_j = observer_.energy_j();
@@ -126,12 +145,97 @@ PassivityResult ServoLoop::passivity() const noexcept {
   return p;
 }
 
+void ServoLoop::write_zero() noexcept {
+  const std::array<double, base::kMaxJoints> zero{};
+  device_.write(std::span<const double>(zero.data(), device_.info().joints));
+}
+
+Sensed ServoLoop::read_joints(std::uint64_t tick, std::int64_t wake, std::span<SampleCheck> checks,
+                              kinematics::Vec3& q, telemetry::TickRecord& rec) noexcept {
+  std::array<PositionSample, base::kMaxJoints> samples{};
+  const std::size_t n = device_.info().joints;
+  const IoStatus rs = device_.read(std::span<PositionSample>(samples.data(), n));
+  Sensed all = checks[0].check(tick, wake, rs, samples[0], rec);
+  q[0] = all.position;
+  for (std::size_t i = 1; i < n; ++i) {
+    telemetry::TickRecord joint;  // the first joint's sample fields are the record's
+    const Sensed s = checks[i].check(tick, wake, rs, samples[i], joint);
+    rec.flags |= joint.flags;
+    q[static_cast<int>(i)] = s.position;
+    all.has_position = all.has_position && s.has_position;
+    all.fresh = all.fresh && s.fresh;
+    all.stale = all.stale || s.stale;
+    all.gap = std::max(all.gap, s.gap);
+    if (all.fault.cause == FaultCause::kNone) all.fault = s.fault;
+  }
+  rec.joints = static_cast<std::uint8_t>(n);
+  return all;
+}
+
+void ServoLoop::scene_tick(std::uint64_t tick, const Sensed& sensed, const kinematics::Vec3& q,
+                           std::uint32_t periods, telemetry::TickRecord& rec,
+                           LoopResult& res) noexcept {
+  SceneState& st = *options_.scene;
+  JointCommand c;
+  if (sensed.has_position) {
+    c = step_scene_tick(st, {q, sensed.fresh, periods}, rec);
+    if (c.non_finite) set_fault({FaultCause::kNonFiniteForce, tick, rec.force_computed}, rec, res);
+    if (c.runaway) {
+      // What the walls can hold: the penetration at which they ask kRunawayMargin times what
+      // the saturated joints render, or the explicit bound.
+      const double bound = st.scene->law(rec.deepest_wall).runaway_penetration;
+      set_fault({FaultCause::kRunaway, tick, rec.penetration,
+                 std::isfinite(bound) ? bound : config::kRunawayMargin * c.scale * rec.penetration},
+                rec, res);
+    }
+    if (c.pose_fault) set_fault({FaultCause::kPose, tick, double(rec.pose_status)}, rec, res);
+  }
+  if (res.fault.cause == FaultCause::kNone) {
+    const IoStatus ws = device_.write(std::span<const double>(c.tau.data(), device_.info().joints));
+    if (ws == IoStatus::kTransportFault || ws == IoStatus::kDeviceFault) {
+      set_fault(
+          {ws == IoStatus::kDeviceFault ? FaultCause::kDeviceReported : FaultCause::kTransportWrite,
+           tick, 0.0},
+          rec, res);
+    }
+  }
+  const bool faulted = res.fault.cause != FaultCause::kNone;
+  if (faulted) write_zero();  // zero on every joint at once; the service disables output
+  end_scene_tick(st, faulted ? nullptr : &c, rec);
+}
+
+PassivityResult ServoLoop::scene_passivity() const noexcept {
+  // The walls' observers together: energies and works add, each minimum adds into a bound
+  // below the sum's, and the ticks and damping are the most any wall had.
+  PassivityResult p;
+  p.observed = observer_.enabled();
+  for (const control::PassivityObserver& o : options_.scene->walls) {
+    p.energy_j += o.energy_j();
+    p.min_energy_j += o.min_energy_j();
+    p.negative_ticks = std::max(p.negative_ticks, o.negative_ticks());
+    p.damped_ticks = std::max(p.damped_ticks, o.damped_ticks());
+    p.max_damping = std::max(p.max_damping, o.max_alpha());
+    p.damping_work_j += o.damping_work_j();
+  }
+  return p;
+}
+
 Sensed ServoLoop::device_tick(std::uint64_t tick, std::int64_t wake, std::uint32_t periods,
-                              SampleCheck& check, telemetry::TickRecord& rec,
+                              std::span<SampleCheck> checks, telemetry::TickRecord& rec,
                               LoopResult& res) noexcept {
+  if (options_.scene != nullptr) {
+    kinematics::Vec3 q = kinematics::Vec3::Zero();
+    const Sensed sensed = read_joints(tick, wake, checks, q, rec);
+    if (sensed.fault.cause != FaultCause::kNone) set_fault(sensed.fault, rec, res);
+    if (!sensed.has_position && res.fault.cause == FaultCause::kNone) {
+      rec.flags |= telemetry::kFlagNoPosition;
+    }
+    scene_tick(tick, sensed, q, periods, rec, res);
+    return sensed;
+  }
   PositionSample sample;
   const IoStatus rs = device_.read(sample);
-  const Sensed sensed = check.check(tick, wake, rs, sample, rec);
+  const Sensed sensed = checks[0].check(tick, wake, rs, sample, rec);
   if (sensed.fault.cause != FaultCause::kNone) set_fault(sensed.fault, rec, res);
   if (!sensed.has_position && res.fault.cause == FaultCause::kNone) {
     rec.flags |= telemetry::kFlagNoPosition;
@@ -196,13 +300,15 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
   for (std::size_t i = 0; i < before.size(); ++i) before[i] = counters_[i].value();
   Schedule schedule(options_.sample.realtime, options_.sample.period_ns,
                     options_.overrun_fault_streak);
-  SampleCheck check(options_.sample);
+  std::array<SampleCheck, base::kMaxJoints> checks{
+      SampleCheck(options_.sample), SampleCheck(options_.sample), SampleCheck(options_.sample)};
   observer_.restart();  // nothing in flight from an earlier run
   probe_.restart();     // every arming checks the direction again
+  if (options_.scene != nullptr) options_.scene->restart();
   live_.direction.store(probe_.result().state, std::memory_order_relaxed);
   live_.direction_gain.store(0.0, std::memory_order_relaxed);
   live_.armed.store(probe_.ended(), std::memory_order_release);
-  const double work_before = observer_.wall_work_j();
+  const double work_before = wall_work_j();
   if (next_tick_ > 0) mark_rearmed(stop);  // enabled again after a fault
 
   for (std::uint64_t n = 0;; ++n) {
@@ -213,15 +319,16 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
     rec.tick = tick;
     const std::int64_t wake = schedule.wait(tick, rec);
     take_reloads(tick, rec.scheduled_ns, stop);
-    const Sensed sensed = device_tick(tick, wake, schedule.periods(), check, rec, res);
+    const Sensed sensed = device_tick(tick, wake, schedule.periods(), checks, rec, res);
     std::int64_t compute_ns = 0;
     const Fault late = schedule.judge(tick, wake, rec, compute_ns);
     compute_time_.record(compute_ns);
     if (options_.sample.realtime) wake_latency_.record(schedule.latency());
     if (late.cause != FaultCause::kNone && res.fault.cause == FaultCause::kNone) {
       set_fault(late, rec, res);
-      device_.write(0.0);
+      write_zero();
       rec.force_commanded = 0.0;
+      rec.joint_force[0] = rec.joint_force[1] = 0.0;
     }
     account(rec, sensed, res);
     log(rec, stop);
@@ -230,13 +337,13 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
     if (res.fault.cause != FaultCause::kNone) break;
     const std::int64_t skipped = schedule.advance();
     counters_[kCounterMissedTicks].add(static_cast<std::uint64_t>(skipped));
-    check.skipped(skipped);
+    for (SampleCheck& c : checks) c.skipped(skipped);
   }
-  device_.write(0.0);  // the last command must not outlive the loop that was servoing it
+  write_zero();  // the last command must not outlive the loop that was servoing it
   if (options_.law_swap != nullptr) options_.law_swap->loop_ended();  // no more takes
   next_tick_ += res.ticks;
   run_counts(before, res);
-  res.wall_energy_j = observer_.wall_work_j() - work_before;
+  res.wall_energy_j = wall_work_j() - work_before;
   res.passivity = passivity();
   res.direction = probe_.result();
   return res;

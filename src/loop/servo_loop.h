@@ -18,6 +18,7 @@
 #include "loop/law_swap.h"
 #include "loop/loop_fault.h"
 #include "loop/sample_check.h"
+#include "loop/scene_tick.h"
 #include "loop/schedule.h"
 #include "telemetry/spsc_ring.h"
 #include "telemetry/tick_record.h"
@@ -43,6 +44,10 @@ struct LoopOptions {
   // What a device that did not move under the check gets: refused (a fault ends the run) or
   // its wall armed unchecked (safety.direction_check.on_no_motion).
   bool refuse_no_motion = true;
+  // A device of several joints (docs/kinematics.md, the loop at several joints): its walls,
+  // kinematics and observers, stepped in place of the one-joint law, which is then unused, as
+  // are `observer`, `probe` and `law_swap` (null: a device of one joint). Owned by the caller.
+  SceneState* scene = nullptr;
 };
 
 // What the loop is doing, readable from any thread while it runs (relaxed atomics, stored
@@ -59,6 +64,11 @@ struct LiveStatus {
   std::atomic<control::ProbeState> direction{control::ProbeState::kOff};
   std::atomic<double> direction_gain{0.0};
   std::atomic<bool> armed{false};
+  // A device of several joints: each joint's position and torque, and the pose (`position`
+  // and `force_commanded` are joint 1's); left zero for one joint.
+  std::array<std::atomic<double>, base::kMaxJoints> joint_position{};
+  std::array<std::atomic<double>, base::kMaxJoints> joint_force{};
+  std::array<std::atomic<double>, 3> task_position{};
 };
 
 // The loop's counters (ServoLoop::counters()), in this order.
@@ -143,7 +153,17 @@ class ServoLoop {
   // One tick's device work: read, check, step the law, write (zero after a fault). Returns
   // what the checks made of the read. RT-safe: called every tick.
   Sensed device_tick(std::uint64_t tick, std::int64_t wake, std::uint32_t periods,
-                     SampleCheck& check, telemetry::TickRecord& rec, LoopResult& res) noexcept;
+                     std::span<SampleCheck> checks, telemetry::TickRecord& rec,
+                     LoopResult& res) noexcept;
+  // device_tick's read for several joints: each joint's sample checked, `q` what the scene
+  // acts on; the Sensed of them all (a position only when every joint has one). RT-safe.
+  Sensed read_joints(std::uint64_t tick, std::int64_t wake, std::span<SampleCheck> checks,
+                     kinematics::Vec3& q, telemetry::TickRecord& rec) noexcept;
+  // device_tick's step and write for several joints. RT-safe: called every tick.
+  void scene_tick(std::uint64_t tick, const Sensed& sensed, const kinematics::Vec3& q,
+                  std::uint32_t periods, telemetry::TickRecord& rec, LoopResult& res) noexcept;
+  // Zero force on every joint. RT-safe.
+  void write_zero() noexcept;
   // Records a fault on this tick (the device's class and code for device and transport ones).
   void set_fault(Fault f, telemetry::TickRecord& rec, LoopResult& res) const noexcept;
   // Hands one record to the ring (freerun waits for room). RT-safe: called every tick.
@@ -161,6 +181,9 @@ class ServoLoop {
   void run_counts(const std::array<std::uint64_t, kLoopCounterCount>& before,
                   LoopResult& res) const noexcept;
   PassivityResult passivity() const noexcept;
+  PassivityResult scene_passivity() const noexcept;
+  // The work the commanded force did on the device (the walls' together). RT-safe.
+  double wall_work_j() const noexcept;
   // The direction check's tick while it has not ended: its force, its verdict once it has
   // (a refusal is this tick's fault). RT-safe: called every tick until the wall is armed.
   double probe_tick(std::uint64_t tick, double position, std::uint32_t periods,

@@ -1,11 +1,11 @@
-// The binary tick log, format version 3. Everything is little-endian, with no padding and
-// no alignment between fields; offsets below are in bytes. Versions 1 and 2 differ only in
-// their records: 72 and 96 bytes, the first bytes of version 3's (record_size says which).
+// The binary tick log, format version 4. Everything is little-endian, with no padding and
+// no alignment between fields; offsets below are in bytes. Versions 1, 2 and 3 differ only in
+// their records: 72, 96 and 112 bytes, the first bytes of version 4's (record_size says which).
 //
 // File header (44 + config_len bytes):
 //   0   u8[8]  magic "HAPTLOG\0" (48 41 50 54 4C 4F 47 00)
-//   8   u32    version = 3 (1 and 2 are still read)
-//   12  u32    record_size = 112 (72 in version 1, 96 in version 2)
+//   8   u32    version = 4 (1, 2 and 3 are still read)
+//   12  u32    record_size = 176 (72 in version 1, 96 in version 2, 112 in version 3)
 //   16  f64    sample_period_s (IEEE-754 binary64)
 //   24  i64    start_unix_ns: wall-clock time of tick 0 in ns since the Unix epoch, 0 = unknown
 //   32  u32    clock_mode: 0 = realtime, 1 = freerun
@@ -13,7 +13,7 @@
 //   40  u8[config_len]  the whole effective configuration as UTF-8 YAML (not NUL-terminated)
 //   40+config_len  u32  CRC-32 of bytes [0, 40+config_len)
 //
-// Then zero or more blocks, back to back until the end of the file. Block (28 + 112*n bytes):
+// Then zero or more blocks, back to back until the end of the file. Block (28 + 176*n bytes):
 //   0   u8[4]  magic "HBLK" (48 42 4C 4B)
 //   4   u32    record_count n, 0..kMaxBlockRecords
 //   8   u64    first_tick: the tick of the first record. In a block with n = 0 it is the tick
@@ -21,8 +21,8 @@
 //   16  u64    dropped_before: records the RT ring dropped (or that failed to reach the
 //              disk) between the previous block's last record and this block's first one.
 //              A block with n = 0 and dropped_before > 0 is a pure loss marker.
-//   24  u32    CRC-32 of block bytes [0, 24) followed by the n*112 record bytes
-//   28  n records of 112 bytes:
+//   24  u32    CRC-32 of block bytes [0, 24) followed by the n*176 record bytes
+//   28  n records of 176 bytes:
 //        0 u64 tick, 8 i64 scheduled_ns, 16 i32 wake_latency_ns, 20 i32 compute_ns,
 //        24 f64 position, 32 f64 penetration, 40 f64 velocity, 48 f64 force_computed,
 //        56 f64 force_commanded, 64 u32 flags (TickFlag bits), 68 u32 device_status,
@@ -30,7 +30,13 @@
 //        86 u16 sequence_gap, 88 u32 fault_code, 92 u32 marker (TickMarker: 0 for a tick,
 //        1 reload accepted, 2 reload refused, 3 re-armed after a cleared fault: an event at a
 //        tick boundary, not a tick), 96 f64 observer_energy_j (the passivity observer's
-//        energy, J), 104 f64 passivity_damping (N s/m the passivity controller added)
+//        energy, J), 104 f64 passivity_damping (N s/m the passivity controller added),
+//        version 4 (a device of several joints; zero for one): 112 f64[2] joint_position
+//        (joints 2 and 3; position is joint 1's), 128 f64[2] joint_force (likewise
+//        force_commanded), 144 f64[3] task_position (m), 168 u8 joints (0: one), 169 u8
+//        deepest_wall (penetration, velocity and force_computed are that wall's), 170 u8
+//        wall_contact (bit per wall), 171 u8 pose_status (0 ok, 1 outside workspace, 2 near
+//        singularity, 3 no convergence), 172 u32 reserved (0)
 //
 // A live reload that swapped a new control law in (marker 1), and a re-arming (marker 3, a
 // law started afresh), add a config block right after the block holding their marker record,
@@ -92,10 +98,11 @@ V load_field(const std::byte* at) noexcept {
 }
 
 inline constexpr std::array<char, 8> kFileMagic = {'H', 'A', 'P', 'T', 'L', 'O', 'G', '\0'};
-inline constexpr std::uint32_t kFormatVersion = 3;
-inline constexpr std::uint32_t kRecordSize = 112;
+inline constexpr std::uint32_t kFormatVersion = 4;
+inline constexpr std::uint32_t kRecordSize = 176;
 inline constexpr std::uint32_t kRecordSizeV1 = 72;       // version 1: the first 72 bytes
 inline constexpr std::uint32_t kRecordSizeV2 = 96;       // version 2: the first 96 bytes
+inline constexpr std::uint32_t kRecordSizeV3 = 112;      // version 3: the first 112 bytes
 inline constexpr std::size_t kFileHeaderFixedSize = 40;  // bytes before the config text
 inline constexpr std::size_t kCrcSize = 4;
 inline constexpr std::uint32_t kMaxConfigBytes = 16u << 20;  // a sanity bound, not a YAML limit
@@ -112,18 +119,21 @@ inline constexpr std::uint32_t kClockModeFreerun = 1;
 
 // The record layout documented above; a change here is a new format version.
 static_assert(sizeof(TickRecord) == kRecordSize);
-static_assert(offsetof(TickRecord, scheduled_ns) == 8 &&
-              offsetof(TickRecord, wake_latency_ns) == 16 &&
-              offsetof(TickRecord, compute_ns) == 20 && offsetof(TickRecord, position) == 24 &&
-              offsetof(TickRecord, penetration) == 32 && offsetof(TickRecord, velocity) == 40 &&
-              offsetof(TickRecord, force_computed) == 48 &&
-              offsetof(TickRecord, force_commanded) == 56 && offsetof(TickRecord, flags) == 64 &&
-              offsetof(TickRecord, device_status) == 68 &&
-              offsetof(TickRecord, sample_time_ns) == 72 && offsetof(TickRecord, sequence) == 80 &&
-              offsetof(TickRecord, fault_cause) == 84 && offsetof(TickRecord, fault_class) == 85 &&
-              offsetof(TickRecord, sequence_gap) == 86 && offsetof(TickRecord, fault_code) == 88 &&
-              offsetof(TickRecord, marker) == 92 && offsetof(TickRecord, observer_energy_j) == 96 &&
-              offsetof(TickRecord, passivity_damping) == 104);
+static_assert(
+    offsetof(TickRecord, scheduled_ns) == 8 && offsetof(TickRecord, wake_latency_ns) == 16 &&
+    offsetof(TickRecord, compute_ns) == 20 && offsetof(TickRecord, position) == 24 &&
+    offsetof(TickRecord, penetration) == 32 && offsetof(TickRecord, velocity) == 40 &&
+    offsetof(TickRecord, force_computed) == 48 && offsetof(TickRecord, force_commanded) == 56 &&
+    offsetof(TickRecord, flags) == 64 && offsetof(TickRecord, device_status) == 68 &&
+    offsetof(TickRecord, sample_time_ns) == 72 && offsetof(TickRecord, sequence) == 80 &&
+    offsetof(TickRecord, fault_cause) == 84 && offsetof(TickRecord, fault_class) == 85 &&
+    offsetof(TickRecord, sequence_gap) == 86 && offsetof(TickRecord, fault_code) == 88 &&
+    offsetof(TickRecord, marker) == 92 && offsetof(TickRecord, observer_energy_j) == 96 &&
+    offsetof(TickRecord, passivity_damping) == 104 && offsetof(TickRecord, joint_position) == 112 &&
+    offsetof(TickRecord, joint_force) == 128 && offsetof(TickRecord, task_position) == 144 &&
+    offsetof(TickRecord, joints) == 168 && offsetof(TickRecord, deepest_wall) == 169 &&
+    offsetof(TickRecord, wall_contact) == 170 && offsetof(TickRecord, pose_status) == 171 &&
+    offsetof(TickRecord, reserved) == 172);
 
 // What the file header carries besides the constants.
 struct LogHeader {
@@ -145,6 +155,7 @@ struct BlockHeader {
 constexpr std::size_t record_size_of_version(std::uint32_t version) {
   return version == 1                ? kRecordSizeV1
          : version == 2              ? kRecordSizeV2
+         : version == 3              ? kRecordSizeV3
          : version == kFormatVersion ? kRecordSize
                                      : 0;
 }

@@ -1,7 +1,7 @@
 // One fixed-size record per tick, written by the RT thread into the SPSC ring and appended
-// to the binary log by the writer thread. The layout is part of the log format (version 3):
-// little-endian, no padding, 112 bytes. Version 1 and 2 logs (72- and 96-byte records, the
-// first bytes of this layout) are still read, with the later fields zero.
+// to the binary log by the writer thread. The layout is part of the log format (version 4):
+// little-endian, no padding, 176 bytes. Version 1, 2 and 3 logs (72-, 96- and 112-byte records,
+// the first bytes of this layout) are still read, with the later fields zero.
 #pragma once
 
 #include <cstdint>
@@ -65,9 +65,21 @@ struct TickRecord {
   // Version 3.
   double observer_energy_j = 0.0;  // the passivity observer's energy E_k (J), 0 when off
   double passivity_damping = 0.0;  // damping the passivity controller added (N s/m), 0: none
+  // Version 4: a device of several joints (docs/kinematics.md). `position` and
+  // `force_commanded` are joint 1's; penetration, velocity and force_computed the deepest
+  // wall's (its coordinate n . (x - p)); observer_energy_j the sum of the walls' observers,
+  // passivity_damping the most any of them added.
+  double joint_position[2] = {0.0, 0.0};      // joints 2 and 3 as read (0 beyond the device's)
+  double joint_force[2] = {0.0, 0.0};         // the torques written to joints 2 and 3
+  double task_position[3] = {0.0, 0.0, 0.0};  // x = fk(q) (m), 0 for a device of one joint
+  std::uint8_t joints = 0;        // the device's joints; 0 in logs before version 4 (one)
+  std::uint8_t deepest_wall = 0;  // the wall penetration, velocity and force_computed describe
+  std::uint8_t wall_contact = 0;  // bit i: wall i in contact
+  std::uint8_t pose_status = 0;   // kinematics::Status of the tick's pose, 0: ok
+  std::uint32_t reserved = 0;
 };
 
 static_assert(std::is_trivially_copyable_v<TickRecord>);
-static_assert(sizeof(TickRecord) == 112, "TickRecord is part of the log format");
+static_assert(sizeof(TickRecord) == 176, "TickRecord is part of the log format");
 
 }  // namespace hapticd::telemetry

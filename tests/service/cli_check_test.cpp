@@ -92,6 +92,8 @@ TEST(CliHelp, EverySubcommandDocumentsItsOptions) {
 // damping there by name, and a run whose device drives another number of joints than
 // device.kinematics describes never enables output. (A delta has `walls`, not the one joint's
 // `wall`, which the embedded file sets: null switches it off.)
+std::string delta_yaml() { return source_dir() + "/config/sim-delta.yaml"; }
+
 TEST(CliCheck, ADeltasBoxIsProvenWallByWallOverItsWorkspace) {
   const std::string box =
       "--set=walls=[{point: [0.03, 0, 0.11], normal: [1, 0, 0], stiffness: 500}, "
@@ -99,15 +101,8 @@ TEST(CliCheck, ADeltasBoxIsProvenWallByWallOverItsWorkspace) {
   auto check = [&](const std::string& stiff, bool json) {
     std::string b = box;
     b.replace(b.find("STIFF"), 5, stiff);
-    std::vector<std::string> args{hapticd_binary(),
-                                  "check",
-                                  "--set",
-                                  "device.kinematics.kind=delta",
-                                  "--set",
-                                  "device.damping=0.05",
-                                  "--set",
-                                  "wall=null",
-                                  b};
+    std::vector<std::string> args{hapticd_binary(),      "check", "--config", delta_yaml(), "--set",
+                                  "device.damping=0.05", b};
     if (json) args.push_back("--json");
     return run_process(args);
   };
@@ -123,22 +118,39 @@ TEST(CliCheck, ADeltasBoxIsProvenWallByWallOverItsWorkspace) {
   EXPECT_NE(stiff.out.find("fail: walls[1]: b_req 30 exceeds"), std::string::npos) << stiff.out;
   EXPECT_NE(stiff.out.find("walls[1].stiffness must be <= "), std::string::npos) << stiff.out;
   EXPECT_EQ(stiff.out.find("design-coupling"), std::string::npos) << stiff.out;
+}
 
-  const ProcessResult r = run_process(
-      {hapticd_binary(), "run", "--duration", "1", "--set", "device.kinematics.kind=delta", "--set",
-       "device.damping=0.05", "--set", "wall=null", "--set", "safety.gate=warn"});
-  EXPECT_EQ(r.exit_code, 4) << r.out << r.err;
-  EXPECT_NE(r.err.find("sim: the device drives 1 joint(s) but device.kinematics (delta) has 3"),
+// The example configuration of several joints passes its gate, and the direction check, which
+// pushes one joint, is refused by name for several rather than skipped.
+TEST(CliCheck, TheDeltaExamplePassesAndADirectionCheckOnSeveralJointsIsRefused) {
+  const ProcessResult ok = run_process({hapticd_binary(), "check", "--config", delta_yaml()});
+  EXPECT_EQ(ok.exit_code, 0) << ok.out << ok.err;
+  const ProcessResult r =
+      run_process({hapticd_binary(), "run", "--duration", "1", "--config", delta_yaml(), "--set",
+                   "safety.direction_check.mode=enforce"});
+  EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find("safety.direction_check: the direction check pushes one joint; a device "
+                       "of 3 joints runs with `mode: off`"),
             std::string::npos)
       << r.err;
+  // The one joint's start and the operators that move one joint have no meaning here.
+  const ProcessResult start = run_process({hapticd_binary(), "check", "--config", delta_yaml(),
+                                           "--set", "device.sim.initial_position=0.01"});
+  EXPECT_EQ(start.exit_code, 2);
+  EXPECT_NE(start.err.find("device.sim.initial_position"), std::string::npos) << start.err;
+  const ProcessResult origin = run_process({hapticd_binary(), "check", "--config", delta_yaml(),
+                                            "--set", "device.sim.operator.origin=[0, 0, 0.5]"});
+  EXPECT_EQ(origin.exit_code, 2);
+  EXPECT_NE(origin.err.find("device.sim.operator.origin: is not a pose of the mechanism"),
+            std::string::npos)
+      << origin.err;
 }
 
 // What measures or designs for one joint's wall refuses several joints by name rather than
 // answering about a wall the configuration does not have.
 TEST(CliCheck, OneJointCommandsRefuseSeveralJointsByName) {
   for (const char* command : {"verify", "curves", "design-coupling", "identify"}) {
-    const ProcessResult r = run_process(
-        {hapticd_binary(), command, "--set", "device.kinematics.kind=delta", "--set", "wall=null"});
+    const ProcessResult r = run_process({hapticd_binary(), command, "--config", delta_yaml()});
     EXPECT_EQ(r.exit_code, 2) << command << r.out << r.err;
     EXPECT_NE(r.err.find(std::string("device.kinematics: `hapticd ") + command +
                          "` works on the wall of one joint; kind delta has 3"),

@@ -215,6 +215,35 @@ TEST(ControlSocket, ClearFaultIsRefusedWhileTheDeviceIsInsideTheWall) {
   EXPECT_EQ(json::parse(read_file(d.summary()))["device"]["output_enabled"], false);
 }
 
+// A device of several joints: the status names each wall, each joint and the pose (schema 4),
+// and refuses a reload (its walls are built as output is enabled).
+TEST(ControlSocket, StatusOfADeltaShowsEveryJointAndThePose) {
+  Daemon d({"--config", source_dir() + "/config/sim-delta.yaml", "--duration", "120", "--set",
+            "loop.clock=realtime", "--set", "device.sim.operator.setpoint.hold=200"});
+  ASSERT_TRUE(d.ready());
+  const json s = d.wait_status(
+      [](const json& j) { return j["counters"]["loop"]["contact_ticks"].get<int>() > 300; });
+  EXPECT_EQ(s["schema_version"], 4);
+  ASSERT_TRUE(s["wall"].is_null()) << s.dump();
+  ASSERT_EQ(s["walls"].size(), 6u);
+  EXPECT_EQ(s["walls"][5]["stiffness"], 500.0);
+  ASSERT_EQ(s["joints"].size(), 3u);
+  EXPECT_EQ(s["joints"][0]["position"], s["position"]);
+  // Pressed into the corner: beyond the +x, +y and -z faces (20 mm out, 85 mm up).
+  EXPECT_GT(s["task_position"][0].get<double>(), 0.02) << s.dump();
+  EXPECT_GT(s["task_position"][1].get<double>(), 0.02);
+  EXPECT_LT(s["task_position"][2].get<double>(), 0.085);
+  const ProcessResult human = d.ctl({"status"});
+  EXPECT_EQ(human.exit_code, 0) << human.err;
+  EXPECT_TRUE(has(human.out, "walls[5]      K 500 N/m")) << human.out;
+  EXPECT_TRUE(has(human.out, "joint 3       position")) << human.out;
+  EXPECT_TRUE(has(human.out, "task position (")) << human.out;
+  const ProcessResult reload = d.ctl({"reload", source_dir() + "/config/sim-delta.yaml"});
+  EXPECT_NE(reload.exit_code, 0);
+  EXPECT_TRUE(has(reload.out + reload.err, "walls: the walls of a device of several joints"))
+      << reload.out << reload.err;
+}
+
 TEST(ControlSocket, HapticctlSaysWhenNoDaemonAnswers) {
   const ProcessResult r =
       run_process({hapticctl_binary(), "--socket", temp_path("nobody.sock"), "status"});

@@ -61,7 +61,7 @@ TEST(CliDirectionCheck, EveryPeerWithItsForceReversedIsRefusedNamingTheSettingTh
     EXPECT_TRUE(has(r.out, "stopped by direction check")) << r.out;
     EXPECT_TRUE(has(r.out, "direction      REVERSED")) << r.out;
     const json j = json::parse(read_file(summary));
-    EXPECT_EQ(j["schema_version"], 3);
+    EXPECT_EQ(j["schema_version"], 4);
     EXPECT_EQ(j["direction_check"]["state"], "reversed");
     EXPECT_LT(j["direction_check"]["gain"].get<double>(), -0.2);
     EXPECT_EQ(j["counters"]["loop"]["contact_ticks"], 0) << "no wall ever acted";
@@ -146,7 +146,8 @@ TEST(CliDirectionCheck, TheCheckIsInTheTickLogAndReplayReproducesTheRunBitForBit
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::string rows = read_file(csv);
   EXPECT_TRUE(has(rows.substr(0, rows.find('\n')), ",runaway,probe")) << "the check's columns";
-  EXPECT_TRUE(has(rows, ",0,1\n")) << "ticks of the check are marked";
+  // runaway 0, probe 1, then format 4's columns of one joint.
+  EXPECT_TRUE(has(rows, ",0,1,1,0,0,0,0,0,0,0,0,0,0\n")) << "ticks of the check are marked";
   r = run_process({hapticd_binary(), "replay", log, "--json"});
   ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
   const json j = json::parse(r.out);

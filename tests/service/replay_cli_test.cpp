@@ -11,6 +11,7 @@
 #include <string>
 
 #include "daemon.h"
+#include "older_log.h"
 #include "process.h"
 #include "telemetry/log_reader.h"
 #include "telemetry/log_writer.h"
@@ -110,7 +111,7 @@ TEST(CliReplay, ALogThatReArmedAfterAClearedFaultIsReproduced) {
 TEST(CliReplay, ARotatedLogIsReplayedAcrossItsSegments) {
   const std::string log = temp_path("replay_rot.hlog");
   std::vector<std::string> args{hapticd_binary(), "run",
-                                "--duration",     "25",
+                                "--duration",     "15",
                                 "--log",          log,
                                 "--set",          "loop.clock=freerun",
                                 "--set",          "telemetry.max_segment_mb=1",
@@ -118,8 +119,8 @@ TEST(CliReplay, ARotatedLogIsReplayedAcrossItsSegments) {
   args.insert(args.end(), kCoupledDelayed.begin(), kCoupledDelayed.end());
   ASSERT_EQ(run_process(args).exit_code, 0);
   const json j = replay_json(log);
-  EXPECT_EQ(j["segments"].size(), 3u);
-  expect_reproduced(j, 25000);
+  EXPECT_EQ(j["segments"].size(), 3u);  // 15000 records of 176 bytes: 2.5 MB
+  expect_reproduced(j, 15000);
 }
 
 TEST(CliReplay, ATamperedForceIsCaught) {
@@ -181,6 +182,75 @@ TEST(CliReplay, AnotherConfigurationGetsItsVerdictItsSummaryAndItsSeries) {
   }
   EXPECT_EQ(n, 2000u);
   EXPECT_GT(differ, 500u) << "the stiffer wall commands other forces in contact";
+}
+
+// A device of several joints: the delta of config/sim-delta.yaml pressed into its corner. Its
+// log (format 4) carries every joint and the pose, replays every joint's torque bit for bit,
+// and exports them.
+TEST(CliReplay, ADeltaLogIsReproducedOnEveryJointAndExported) {
+  const std::string log = temp_path("replay_delta.hlog"), sum = temp_path("replay_delta.json");
+  const std::string csv = temp_path("replay_delta.csv");
+  const ProcessResult run =
+      run_process({hapticd_binary(), "run", "--config", source_dir() + "/config/sim-delta.yaml",
+                   "--duration", "3", "--log", log, "--summary-json", sum});
+  ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+  const json s = json::parse(read_file(sum));
+  EXPECT_GT(s["counters"]["loop"]["contact_ticks"].get<int>(), 1000);
+  EXPECT_GE(s["passivity"]["energy_j"].get<double>(), 0.0) << s.dump(2);
+  const json j = replay_json(log);
+  expect_reproduced(j, 3000);
+  EXPECT_EQ(j["reproduced"]["compared"], 3000);
+  EXPECT_EQ(j["replayed"]["contact_ticks"], s["counters"]["loop"]["contact_ticks"]);
+
+  ASSERT_EQ(run_process({hapticd_binary(), "export", log, "--out", csv}).exit_code, 0);
+  std::istringstream rows(read_file(csv));
+  std::string header, row;
+  std::getline(rows, header);
+  EXPECT_TRUE(has(header,
+                  ",joints,joint2_position,joint3_position,joint2_force,joint3_force,"
+                  "task_x,task_y,task_z,deepest_wall,wall_contact,pose_status"))
+      << header;
+  unsigned contact = 0;
+  std::size_t rows_read = 0;
+  while (std::getline(rows, row)) {
+    std::vector<std::string> cells;
+    std::istringstream fields(row);
+    for (std::string c; std::getline(fields, c, ',');) cells.push_back(c);
+    ASSERT_GE(cells.size(), 11u);
+    const std::size_t first = cells.size() - 11;  // the format 4 columns, the last eleven
+    EXPECT_EQ(cells[first], "3") << row;
+    contact |= static_cast<unsigned>(std::stoul(cells[first + 9]));
+    ++rows_read;
+  }
+  EXPECT_EQ(rows_read, 3000u);
+  EXPECT_EQ(contact, 0b100101u) << "the corner's walls: +x, +y and -z (0, 2 and 5)";
+}
+
+// A log of format 3 (before several joints: 112-byte records) is still replayed bit for bit
+// and exported, its joints column 1.
+TEST(CliReplay, AVersion3LogIsStillReplayedAndExported) {
+  const std::string log = temp_path("replay_now.hlog"), old = temp_path("replay_v3.hlog");
+  const std::string csv = temp_path("replay_v3.csv");
+  ASSERT_EQ(run_process({hapticd_binary(), "run", "--duration", "1", "--log", log, "--set",
+                         "loop.clock=freerun"})
+                .exit_code,
+            0);
+  const std::string bytes = read_file(log);
+  const telemetry::LogContents now =
+      telemetry::read_log_bytes(std::as_bytes(std::span(bytes)), log);
+  ASSERT_EQ(now.version, 4u);
+  const std::vector<std::byte> v3 = older_log(3, now.header, now.records);
+  std::ofstream(old, std::ios::binary)
+      .write(reinterpret_cast<const char*>(v3.data()), static_cast<std::streamsize>(v3.size()));
+  expect_reproduced(replay_json(old), 1000);
+  ASSERT_EQ(run_process({hapticd_binary(), "export", old, "--out", csv}).exit_code, 0);
+  std::istringstream rows(read_file(csv));
+  std::string header, row;
+  std::getline(rows, header);
+  std::getline(rows, row);
+  const std::string one_joint = ",1,0,0,0,0,0,0,0,0,0,0";  // joints 1, the rest zero
+  ASSERT_GT(row.size(), one_joint.size());
+  EXPECT_EQ(row.substr(row.size() - one_joint.size()), one_joint) << row;
 }
 
 }  // namespace

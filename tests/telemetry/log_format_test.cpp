@@ -42,8 +42,8 @@ TEST(LogFormat, FileMatchesTheDocumentedLayout) {
 
   const std::size_t len = header.config_text.size();
   const std::size_t header_size = 44 + len;
-  const std::size_t block0 = header_size, block1 = block0 + 28 + 3 * 112;
-  ASSERT_EQ(b.size(), block1 + 28 + 2 * 112);
+  const std::size_t block0 = header_size, block1 = block0 + 28 + 3 * kRecordSize;
+  ASSERT_EQ(b.size(), block1 + 28 + 2 * kRecordSize);
 
   EXPECT_EQ(std::memcmp(b.data(), "HAPTLOG\0", 8), 0);
   EXPECT_EQ(at<std::uint32_t>(b, 8), 3u);
@@ -64,10 +64,10 @@ TEST(LogFormat, FileMatchesTheDocumentedLayout) {
     EXPECT_EQ(at<std::uint32_t>(b, o + 4), n);
     EXPECT_EQ(at<std::uint64_t>(b, o + 8), records[k * 3].tick);  // first_tick
     EXPECT_EQ(at<std::uint64_t>(b, o + 16), 0u);                  // dropped_before
-    const std::uint32_t crc = zlib_crc(b, o + 28, n * 112, zlib_crc(b, o, 24));
+    const std::uint32_t crc = zlib_crc(b, o + 28, n * kRecordSize, zlib_crc(b, o, 24));
     EXPECT_EQ(at<std::uint32_t>(b, o + 24), crc) << "block " << k;
     for (std::uint32_t i = 0; i < n; ++i) {
-      const std::size_t r = o + 28 + i * 112;
+      const std::size_t r = o + 28 + i * kRecordSize;
       const TickRecord& want = records[k * 3 + i];
       // A few fields at their documented offsets, then the whole record bytewise.
       EXPECT_EQ(at<std::uint64_t>(b, r + 0), want.tick);
@@ -82,7 +82,7 @@ TEST(LogFormat, FileMatchesTheDocumentedLayout) {
       EXPECT_EQ(at<std::uint32_t>(b, r + 88), want.fault_code);
       EXPECT_EQ(at<double>(b, r + 96), want.observer_energy_j);
       EXPECT_EQ(at<double>(b, r + 104), want.passivity_damping);
-      EXPECT_EQ(std::memcmp(b.data() + r, &want, 112), 0);
+      EXPECT_EQ(std::memcmp(b.data() + r, &want, kRecordSize), 0);
     }
   }
 }

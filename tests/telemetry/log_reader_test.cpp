@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "older_log.h"
 #include "telemetry/log_writer.h"
 #include "telemetry_test_util.h"
 
@@ -34,7 +35,7 @@ struct FiveBlockLog {
   LogHeader header = sample_header();
   std::vector<TickRecord> records = make_records(1000, kBlocks* kPerBlock);
   std::size_t header_size = 44 + header.config_text.size();
-  std::size_t block_bytes = 28 + kPerBlock * 112;
+  std::size_t block_bytes = 28 + kPerBlock * 176;
   std::vector<std::byte> bytes;
 
   FiveBlockLog() {
@@ -190,38 +191,10 @@ TEST(LogReader, ALogWhoseFirstBlockIsALossMarkerReads) {
   EXPECT_EQ(c.trailing_reason, "");
 }
 
-// An older version's log (version 1: 72-byte records, before the sample time, sequence and
-// fault fields; version 2: 96 bytes, before the passivity observer's) as the daemon wrote it.
-std::vector<std::byte> older_log(std::uint32_t version, const LogHeader& header,
-                                 const std::vector<TickRecord>& rs) {
-  const std::uint32_t rsize = version == 1 ? 72 : 96;
-  std::vector<std::byte> b = encode_file_header(header);
-  const std::size_t crc_at = b.size() - 4;
-  const auto put32 = [&](std::size_t at, std::uint32_t v) { std::memcpy(b.data() + at, &v, 4); };
-  put32(8, version);
-  put32(12, rsize);
-  put32(crc_at, crc32_update(0, std::span(b).first(crc_at)));
-  const std::size_t block = b.size();
-  b.resize(block + 28 + rsize * rs.size());
-  std::memcpy(b.data() + block, "HBLK", 4);
-  const std::uint32_t n = static_cast<std::uint32_t>(rs.size());
-  const std::uint64_t first = rs.front().tick, dropped = 0;
-  std::memcpy(b.data() + block + 4, &n, 4);
-  std::memcpy(b.data() + block + 8, &first, 8);
-  std::memcpy(b.data() + block + 16, &dropped, 8);
-  for (std::size_t i = 0; i < rs.size(); ++i) {
-    std::memcpy(b.data() + block + 28 + rsize * i, &rs[i], rsize);
-  }
-  const auto all = std::span<const std::byte>(b);
-  const std::uint32_t crc =
-      crc32_update(crc32_update(0, all.subspan(block, 24)), all.subspan(block + 28, rsize * n));
-  put32(block + 24, crc);
-  return b;
-}
-
 TEST(LogReader, ReadsVersion1LogsWithTheNewFieldsZero) {
   const std::vector<TickRecord> rs = make_records(40, 6);
-  const LogContents c = read_log_bytes(older_log(1, sample_header(), rs), "v1.htl");
+  const LogContents c =
+      read_log_bytes(hapticd::testing::older_log(1, sample_header(), rs), "v1.htl");
   EXPECT_EQ(c.version, 1u);
   ASSERT_EQ(c.records.size(), rs.size());
   for (std::size_t i = 0; i < rs.size(); ++i) {
@@ -236,7 +209,8 @@ TEST(LogReader, ReadsVersion1LogsWithTheNewFieldsZero) {
 
 TEST(LogReader, ReadsVersion2LogsWithTheObserverZero) {
   const std::vector<TickRecord> rs = make_records(40, 6);
-  const LogContents c = read_log_bytes(older_log(2, sample_header(), rs), "v2.htl");
+  const LogContents c =
+      read_log_bytes(hapticd::testing::older_log(2, sample_header(), rs), "v2.htl");
   EXPECT_EQ(c.version, 2u);
   ASSERT_EQ(c.records.size(), rs.size());
   for (std::size_t i = 0; i < rs.size(); ++i) {
@@ -244,6 +218,24 @@ TEST(LogReader, ReadsVersion2LogsWithTheObserverZero) {
     EXPECT_NE(rs[i].observer_energy_j, 0.0);  // make_records fills it: the zero is the reader's
     EXPECT_EQ(c.records[i].observer_energy_j, 0.0);
     EXPECT_EQ(c.records[i].passivity_damping, 0.0);
+  }
+  EXPECT_EQ(c.trailing_reason, "");
+}
+
+TEST(LogReader, ReadsVersion3LogsWithTheJointsZero) {
+  std::vector<TickRecord> rs = make_records(40, 6);
+  for (TickRecord& r : rs) {
+    r.joints = 3;  // what a version 4 record would carry, and version 3's cannot
+    r.task_position[2] = 0.1;
+  }
+  const LogContents c =
+      read_log_bytes(hapticd::testing::older_log(3, sample_header(), rs), "v3.htl");
+  EXPECT_EQ(c.version, 3u);
+  ASSERT_EQ(c.records.size(), rs.size());
+  for (std::size_t i = 0; i < rs.size(); ++i) {
+    EXPECT_EQ(std::memcmp(&c.records[i], &rs[i], 112), 0) << i;
+    EXPECT_EQ(c.records[i].joints, 0u);
+    EXPECT_EQ(c.records[i].task_position[2], 0.0);
   }
   EXPECT_EQ(c.trailing_reason, "");
 }
@@ -256,7 +248,7 @@ TEST(LogReader, RejectsFilesThatAreNotTickLogs) {
     return format_error(b);
   };
   EXPECT_EQ(damaged(0, std::byte{'h'}), "mem.htl: not a hapticd tick log (bad magic)");
-  EXPECT_EQ(damaged(8, std::byte{4}), "mem.htl: unsupported log version 4");
+  EXPECT_EQ(damaged(8, std::byte{5}), "mem.htl: unsupported log version 5");
   EXPECT_EQ(damaged(41, std::byte{'#'}), "mem.htl: header CRC mismatch");   // config text
   EXPECT_EQ(damaged(17, std::byte{0x11}), "mem.htl: header CRC mismatch");  // sample period
   EXPECT_EQ(damaged(39, std::byte{0x7f}),

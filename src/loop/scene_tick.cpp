@@ -1,0 +1,121 @@
+#include "loop/scene_tick.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace hapticd::loop {
+
+using kinematics::Vec3;
+
+SceneState::SceneState(const kinematics::Kinematics& k, control::Scene& s, const Vec3& lim,
+                       const std::vector<control::ObserverParams>& observers)
+    : kinematics(k), scene(&s), limit(lim), guess(Vec3::Constant(std::nan(""))) {
+  if (observers.size() != s.size()) {
+    throw std::invalid_argument("a scene's loop needs one passivity observer per wall");
+  }
+  walls.reserve(observers.size());
+  for (const control::ObserverParams& p : observers) walls.emplace_back(p);
+}
+
+void SceneState::restart() noexcept {
+  for (control::PassivityObserver& o : walls) o.restart();
+  scene->reset();
+  guess = Vec3::Constant(std::nan(""));
+  deepest.fill(0.0);
+  stepped = 0;
+}
+
+namespace {
+
+// The runaway guard on the deepest wall (scene_tick.h). RT-safe.
+bool running_away(SceneState& st, const control::SceneStep& step, double s,
+                  std::size_t wall) noexcept {
+  for (std::size_t i = st.deepest.size() - 1; i > 0; --i) st.deepest[i] = st.deepest[i - 1];
+  st.deepest[0] = s;
+  ++st.stepped;
+  const bool saturated = step.saturation == kinematics::SaturationStatus::kSaturated;
+  const double explicit_bound = step.count > 0 ? st.scene->law(wall).runaway_penetration : 0.0;
+  const bool deeper = std::isfinite(explicit_bound)
+                          ? s > explicit_bound
+                          : step.scale * config::kRunawayMargin < 1.0 && s > 0.0;
+  if (!saturated || !deeper || st.stepped < st.deepest.size()) return false;
+  constexpr std::size_t w = control::Controller::kRunawayWindow;
+  const double last = st.deepest[0] - st.deepest[w - 1];
+  const double before = st.deepest[w - 1] - st.deepest[2 * w - 1];
+  return last >= before;  // not braked: pulled in, pushed through, or held there
+}
+
+// The record's fields of the walls' step: the deepest wall's, the contact bits, the flags.
+void record_walls(const control::SceneStep& step, telemetry::TickRecord& rec) noexcept {
+  std::size_t deepest = 0;
+  for (std::size_t i = 0; i < step.count; ++i) {
+    if (step.walls[i].penetration > step.walls[deepest].penetration) deepest = i;
+    if (step.walls[i].flags & control::kControlContact) rec.wall_contact |= 1u << i;
+  }
+  if (step.count > 0) {
+    const control::ControlOutput& w = step.walls[deepest];
+    rec.deepest_wall = static_cast<std::uint8_t>(deepest);
+    rec.penetration = w.penetration;
+    rec.velocity = w.velocity;
+    rec.force_computed = w.force_computed;
+  }
+  rec.flags |= step.flags;
+}
+
+}  // namespace
+
+JointCommand step_scene_tick(SceneState& st, const JointInput& in,
+                             telemetry::TickRecord& rec) noexcept {
+  const kinematics::Pose pose = kinematics::forward(st.kinematics, in.q, st.guess);
+  if (pose.x.allFinite()) st.guess = pose.x;
+  rec.flags |= telemetry::kFlagStepped;
+  rec.position = in.q[0];
+  rec.joint_position[0] = in.q[1];
+  rec.joint_position[1] = in.q[2];
+  for (int i = 0; i < 3; ++i) rec.task_position[i] = st.guess.allFinite() ? st.guess[i] : 0.0;
+  rec.pose_status = static_cast<std::uint8_t>(pose.status);
+
+  control::SceneStep step;
+  st.scene->step_walls(pose, step);
+  record_walls(step, rec);
+  JointCommand c;
+  double energy = 0.0;
+  for (std::size_t i = 0; i < step.count; ++i) {
+    control::PassivityObserver& o = st.walls[i];
+    o.observe(st.scene->coordinate(i, st.guess), in.fresh, in.periods);
+    energy += o.energy_j();
+    const control::Damping d = o.damp(step.walls[i].force_commanded, st.scene->law(i));
+    c.wall[i] = d.command;
+    c.added[i] = d.added;
+    if (d.alpha > 0.0) {
+      rec.flags |= telemetry::kFlagPassivityDamped;
+      rec.passivity_damping = std::max(rec.passivity_damping, d.alpha);
+    }
+  }
+  rec.observer_energy_j = energy;
+  st.scene->map(pose, std::span<const double>(c.wall.data(), step.count), st.limit, step);
+  rec.flags |= step.flags;  // the joints' saturation, a non-finite torque
+  c.non_finite = (step.flags & control::kControlNonFinite) != 0;
+  c.runaway = running_away(st, step, rec.penetration, rec.deepest_wall);
+  if (c.runaway) rec.flags |= telemetry::kFlagRunaway;
+  c.pose_fault = !step.pose_ok;
+  c.scale = step.scale;
+  if (!c.non_finite && !c.runaway && !c.pose_fault) c.tau = step.tau;
+  return c;
+}
+
+void end_scene_tick(SceneState& st, const JointCommand* c, telemetry::TickRecord& rec) noexcept {
+  const Vec3 tau = c != nullptr ? c->tau : Vec3::Zero();
+  rec.force_commanded = tau[0];
+  rec.joint_force[0] = tau[1];
+  rec.joint_force[1] = tau[2];
+  const bool acted = c != nullptr && !c->non_finite && !c->runaway && !c->pose_fault;
+  for (std::size_t i = 0; i < st.walls.size(); ++i) {
+    // What acted along the wall's normal: its force, scaled with the joints' saturation.
+    st.walls[i].commanded(acted ? c->scale * c->wall[i] : 0.0,
+                          acted ? c->scale * c->added[i] : 0.0);
+  }
+}
+
+}  // namespace hapticd::loop

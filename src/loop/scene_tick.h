@@ -1,0 +1,84 @@
+// The tick of a device of several joints as a value, as tick.h is for one: checked joint
+// positions in, the joint torques and the record's control fields out; no clock, no device, no
+// ring. ServoLoop::run calls it on what the device read, `hapticd replay` on what a tick log
+// recorded, so a log's torques come back bit for bit by construction (docs/kinematics.md, the
+// loop at several joints).
+//
+// Each tick: the pose x = fk(q) (the previous x the delta's guess); every wall stepped on its
+// coordinate s_i = n_i . (x - p_i); each wall's passivity observer (control/passivity_observer.h
+// on s_i, crediting the least damping the device has along n_i over the workspace, the gate's
+// b_n) and, in damp mode, its damping along n_i; the walls' forces through J^T, saturated by one
+// factor. A pose that is not ok is a fault with zero torque. The runaway guard is one joint's
+// (controller.h) on the deepest wall: saturated, deeper than the walls can hold, and not
+// slowing. Deeper than they can hold: the saturation scaled the walls' force below
+// 1 / config::kRunawayMargin of what they asked (in one dimension exactly the penetration
+// kRunawayMargin max_force / K), or past an explicit safety.max_penetration.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "control/passivity_observer.h"
+#include "control/scene.h"
+#include "kinematics/kinematics.h"
+#include "loop/sample_check.h"
+#include "telemetry/tick_record.h"
+
+namespace hapticd::loop {
+
+struct JointInput {
+  kinematics::Vec3 q = kinematics::Vec3::Zero();  // each joint's position (held when stale)
+  bool fresh = true;                              // new measurements, none held or stale
+  std::uint32_t periods = 1;                      // sample periods since the previous tick
+
+  // RT-safe. What a log recorded of a tick the loop stepped (kFlagStepped).
+  static JointInput recorded(const telemetry::TickRecord& r, std::uint32_t periods) noexcept {
+    JointInput in;
+    in.q = {r.position, r.joint_position[0], r.joint_position[1]};
+    in.fresh = (r.flags & (telemetry::kFlagStale | telemetry::kFlagHeld)) == 0;
+    in.periods = periods;
+    return in;
+  }
+};
+
+struct JointCommand {
+  kinematics::Vec3 tau = kinematics::Vec3::Zero();  // each joint's torque to write
+  std::array<double, config::kMaxWalls> wall{};     // each wall's force along its normal
+  std::array<double, config::kMaxWalls> added{};    // the passivity controller's part of it
+  double scale = 1.0;                               // the joint saturation's factor
+  bool non_finite = false;                          // a non-finite force or torque: the loop faults
+  bool runaway = false;     // a wall's runaway guard tripped: the loop faults
+  bool pose_fault = false;  // the pose was not ok (rec.pose_status says why): the loop faults
+};
+
+// What the scene's tick works on, built before the loop (not RT-safe to build).
+struct SceneState {
+  // Throws std::invalid_argument when `observers` does not hold one set of parameters per wall.
+  SceneState(const kinematics::Kinematics& kinematics, control::Scene& scene,
+             const kinematics::Vec3& limit, const std::vector<control::ObserverParams>& observers);
+
+  // RT-safe. A new run: no position, nothing in flight (the energies go on).
+  void restart() noexcept;
+
+  kinematics::Kinematics kinematics;
+  control::Scene* scene;
+  kinematics::Vec3 limit;                         // each joint's force limit
+  std::vector<control::PassivityObserver> walls;  // one per wall, built once
+  kinematics::Vec3 guess;                         // the last task position (the delta's start)
+  // The deepest wall's penetration over the runaway guard's two windows, newest first.
+  std::array<double, 2 * control::Controller::kRunawayWindow> deepest{};
+  std::size_t stepped = 0;  // ticks stepped since restart (the guard waits for its windows)
+};
+
+// RT-safe: called every tick with positions. Fills the record's control fields (joint
+// positions, task position, the deepest wall's penetration, velocity and force, contact bits,
+// pose status, the observers' energy and damping, kFlagStepped and the walls' flags).
+JointCommand step_scene_tick(SceneState& st, const JointInput& in,
+                             telemetry::TickRecord& rec) noexcept;
+
+// RT-safe: called every tick with what was written (`c`, or nothing after a fault): the
+// joints' torques in the record, and each wall's share of them for its observer.
+void end_scene_tick(SceneState& st, const JointCommand* c, telemetry::TickRecord& rec) noexcept;
+
+}  // namespace hapticd::loop

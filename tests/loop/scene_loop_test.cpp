@@ -1,0 +1,180 @@
+// The loop at several joints (docs/kinematics.md): the simulated delta of config/sim-delta.yaml
+// inside a box of six walls, a task-space hand pushing into a face, an edge and a corner; it
+// comes to rest at F/K along each normal. And what the loop owes every device: no allocation a
+// tick, zero torque on every joint after a fault, a pose fault named.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "alloc_counter.h"
+#include "config/config_loader.h"
+#include "control/scene.h"
+#include "freerun.h"
+#include "loop/servo_loop.h"
+#include "sim/sim_device.h"
+
+namespace hapticd::loop {
+namespace {
+
+using kinematics::Vec3;
+
+std::string delta_yaml() {
+  std::ifstream in(std::string(HAPTICD_SOURCE_DIR) + "/config/sim-delta.yaml");
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// config/sim-delta.yaml with its text `from` replaced by `to`.
+config::Config delta_config(const std::string& from = "", const std::string& to = "") {
+  std::string yaml = delta_yaml();
+  if (!from.empty()) {
+    const auto at = yaml.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    if (at != std::string::npos) yaml.replace(at, from.size(), to);
+  }
+  return config::load_config_text(yaml, "sim-delta.yaml");
+}
+
+struct SceneRig {
+  explicit SceneRig(const config::Config& c)
+      : cfg(c),
+        device(cfg.device, cfg.loop.sample_period_s()),
+        controller(control::make_control_law(cfg)),
+        scene(control::make_scene(cfg)),
+        state(cfg.device.kinematics, scene, Vec3::Constant(cfg.device.max_force),
+              std::vector<control::ObserverParams>(cfg.walls.size(),
+                                                   control::observer_params(cfg, 0))) {
+    device.configure();
+    device.enable();
+  }
+  LoopOptions options(std::uint64_t ticks) {
+    LoopOptions o = freerun(ticks);
+    o.scene = &state;
+    return o;
+  }
+  config::Config cfg;
+  sim::SimDevice device;
+  control::Controller controller;  // unused at several joints, as the loop's signature asks
+  control::Scene scene;
+  SceneState state;
+};
+
+// At rest after the press has held (t = 2 s): along each wall the hand pushes into, the depth
+// is the hand's force along its normal over K, within 2 %.
+void expect_rest_at_f_over_k(const std::string& direction, int walls_pushed) {
+  SceneRig rig(delta_config("direction: [1, 1, -1]", "direction: " + direction));
+  ServoLoop loop(rig.device, rig.controller, nullptr, rig.options(2000));
+  const std::atomic<bool> stop{false};
+  const LoopResult r = loop.run(stop);
+  ASSERT_EQ(r.fault.cause, FaultCause::kNone) << describe(r.fault);
+  const sim::JointPlant& plant = *rig.device.joint_plant();
+  const Vec3 x = plant.task_position();
+  const Vec3 f = plant.hand_force();
+  int pushed = 0;
+  for (std::size_t i = 0; i < rig.cfg.walls.size(); ++i) {
+    const config::TaskWallConfig& w = rig.cfg.walls[i];
+    const double along = f.dot(w.normal);
+    if (along <= 0.1) continue;  // the hand does not push into this one
+    ++pushed;
+    const double depth = w.normal.dot(x - w.point);
+    EXPECT_NEAR(depth, along / w.law.stiffness, 0.02 * along / w.law.stiffness)
+        << "wall " << i << " pressed along " << direction;
+  }
+  EXPECT_EQ(pushed, walls_pushed) << "hand force " << f.transpose();
+  EXPECT_GT(r.count(kCounterContactTicks), 500u);
+  EXPECT_EQ(r.count(kCounterSaturatedTicks), 0u);
+}
+
+TEST(SceneLoop, DeltaPressedIntoAFaceRestsAtForceOverStiffness) {
+  expect_rest_at_f_over_k("[1, 0, 0]", 1);
+}
+
+TEST(SceneLoop, DeltaPressedIntoAnEdgeRestsAtForceOverStiffnessAlongBothNormals) {
+  expect_rest_at_f_over_k("[1, 1, 0]", 2);
+}
+
+TEST(SceneLoop, DeltaPressedIntoACornerRestsAtForceOverStiffnessAlongAllThreeNormals) {
+  expect_rest_at_f_over_k("[1, 1, -1]", 3);
+}
+
+TEST(SceneLoop, NoHeapAllocationPerTick) {
+  SceneRig rig(delta_config());
+  telemetry::SpscRing<telemetry::TickRecord> ring(4096);
+  ServoLoop loop(rig.device, rig.controller, &ring, rig.options(3000));
+  const std::atomic<bool> stop{false};
+  hapticd::testing::AllocationScope scope;
+  const LoopResult r = loop.run(stop);
+  EXPECT_EQ(scope.count(), 0u) << "allocations on the RT path over " << r.ticks << " ticks";
+  EXPECT_EQ(r.fault.cause, FaultCause::kNone);
+  EXPECT_GT(r.count(kCounterContactTicks), 100u);
+}
+
+TEST(SceneLoop, RecordsCarryEveryJointAndTheTaskPosition) {
+  SceneRig rig(delta_config());
+  telemetry::SpscRing<telemetry::TickRecord> ring(4096);
+  ServoLoop loop(rig.device, rig.controller, &ring, rig.options(1500));
+  const std::atomic<bool> stop{false};
+  loop.run(stop);
+  std::vector<telemetry::TickRecord> records(ring.size_approx());
+  records.resize(ring.pop_many(records.data(), records.size()));
+  ASSERT_EQ(records.size(), 1500u);
+  std::uint8_t contact = 0;
+  for (const telemetry::TickRecord& r : records) contact |= r.wall_contact;
+  const telemetry::TickRecord& last = records.back();
+  EXPECT_EQ(last.joints, 3);
+  const Vec3 q = rig.device.joint_plant()->joint_positions();
+  // The record's joints are those read at the start of its tick, the plant's one period on.
+  EXPECT_NEAR(last.position, q[0], 1e-3);
+  EXPECT_NEAR(last.joint_position[1], q[2], 1e-3);
+  EXPECT_NEAR(last.task_position[2], rig.device.joint_plant()->task_position()[2], 1e-3);
+  EXPECT_EQ(contact, 0b100101) << "walls +x, +y and -z (0, 2 and 5) were touched";
+}
+
+TEST(SceneLoop, ADeviceFaultZeroesEveryJoint) {
+  SceneRig rig(delta_config());
+  telemetry::SpscRing<telemetry::TickRecord> ring(4096);
+  ServoLoop loop(rig.device, rig.controller, &ring, rig.options(800));
+  const std::atomic<bool> stop{false};
+  ASSERT_EQ(loop.run(stop).fault.cause, FaultCause::kNone);
+  rig.device.inject(sim::PeerFault::kDeviceFault);
+  const LoopResult r = loop.run(stop);
+  EXPECT_EQ(r.fault.cause, FaultCause::kDeviceReported);
+  std::vector<telemetry::TickRecord> records(ring.size_approx());
+  records.resize(ring.pop_many(records.data(), records.size()));
+  ASSERT_GE(records.size(), 3u);
+  // The first run's last tick, then the second run's re-armed marker and its faulted tick.
+  const telemetry::TickRecord& pushing = records[records.size() - 3];
+  ASSERT_EQ(records[records.size() - 2].marker, telemetry::kMarkerRearmed);
+  const telemetry::TickRecord& fault = records.back();
+  EXPECT_NE(pushing.force_commanded, 0.0);  // the press was pushing on every joint
+  EXPECT_NE(pushing.joint_force[0], 0.0);
+  EXPECT_NE(pushing.joint_force[1], 0.0);
+  ASSERT_TRUE(fault.flags & telemetry::kFlagFault);
+  EXPECT_EQ(fault.force_commanded, 0.0);
+  EXPECT_EQ(fault.joint_force[0], 0.0);
+  EXPECT_EQ(fault.joint_force[1], 0.0);
+  for (std::size_t j = 0; j < 3; ++j) EXPECT_EQ(rig.device.last_command(j), 0.0) << "joint " << j;
+}
+
+TEST(SceneLoop, LeavingTheWorkspaceIsANamedPoseFaultWithZeroTorque) {
+  // No wall below: the hand drags the effector down through the workspace's floor at z = 0.07.
+  SceneRig rig(delta_config("direction: [1, 1, -1]", "direction: [0, 0, -1]"));
+  rig.cfg.walls.pop_back();
+  control::Scene open = control::make_scene(rig.cfg);
+  SceneState state(rig.cfg.device.kinematics, open, Vec3::Constant(rig.cfg.device.max_force),
+                   std::vector<control::ObserverParams>(5, control::observer_params(rig.cfg, 0)));
+  LoopOptions o = freerun(2000);
+  o.scene = &state;
+  ServoLoop loop(rig.device, rig.controller, nullptr, o);
+  const std::atomic<bool> stop{false};
+  const LoopResult r = loop.run(stop);
+  ASSERT_EQ(r.fault.cause, FaultCause::kPose);
+  EXPECT_NE(describe(r.fault).find("outside workspace"), std::string::npos) << describe(r.fault);
+  for (std::size_t j = 0; j < 3; ++j) EXPECT_EQ(rig.device.last_command(j), 0.0);
+}
+
+}  // namespace
+}  // namespace hapticd::loop
