@@ -65,9 +65,16 @@ BusLoad bus_load(const CanSettings& s, double rate_hz) {
 }
 
 std::string bus_load_refusal(const CanSettings& s, double rate_hz, const BusLoad& load) {
-  // The rate at which the same frames fit in one period, and the bitrate they need at this
-  // rate (classic CAN runs at 1 Mbit/s at most).
-  const double fitting_rate = std::floor(s.bitrate / load.bits_per_tick);
+  // The highest whole rate at which the frames fit in one period (the heartbeats' share of a
+  // tick grows as the rate falls), and the bitrate they need at this rate (classic CAN runs at
+  // 1 Mbit/s at most).
+  double fits = 0.0;
+  double too_fast = rate_hz;
+  while (too_fast - fits > 1.0) {
+    const double mid = std::floor((fits + too_fast) / 2.0);
+    (bus_load(s, mid).load <= 1.0 ? fits : too_fast) = mid;
+  }
+  const double fitting_rate = fits;
   const double needed_bitrate = std::ceil(load.bits_per_tick * rate_hz);
   char text[512];
   std::snprintf(text, sizeof text,

@@ -1,4 +1,6 @@
-// A CiA 402 drive in cyclic synchronous torque (docs/drivers/can.md), driven over CANopen.
+// CiA 402 drives in cyclic synchronous torque (docs/drivers/can.md), driven over CANopen: one
+// Cia402Node per node of device.can.nodes, and Cia402Profile driving them all on one bus, with
+// one SYNC per tick for every node. What follows is each node's sequence.
 //
 // configure: NMT pre-operational, device type 0x1000 checked for profile 402, the power stage
 // switched off (controlword 0x00, "switch on disabled"), rated torque 0x6076 and the drive's
@@ -12,9 +14,10 @@
 // on hapticd), NMT start, then the power state machine walked to Operation enabled through the
 // controlword, each step confirmed from the statusword within state_timeout_ms.
 // Each tick: the device drains the TPDOs, EMCY, heartbeat and bus events; the tick's frames are
-// the RPDO (controlword 0x0F, target torque in per mille of the rated torque) and then SYNC, at
-// which the drive samples its position and applies the torque: the force computed from the
-// sample a tick reads acts from the next SYNC on - one sample of delay, declared as such.
+// every node's RPDO (controlword 0x0F, target torque in per mille of its rated torque) and then
+// one SYNC, at which each drive samples its position and applies the torque: the force
+// computed from the sample a tick reads acts from the next SYNC on - one sample of delay,
+// declared as such.
 // disable (once per enable, a fault's included): at the next SYNC slot one RPDO with zero
 // torque and controlword 0x06 (shutdown: power stage off); the statusword read back by SDO (a
 // drive still enabled is switched off by SDO); SYNC and hapticd's heartbeat kept going, one

@@ -1,4 +1,5 @@
-// An ODrive axis in closed-loop torque control with passthrough input, over CAN Simple
+// ODrive axes (OdriveAxis, one per node of device.can.nodes; OdriveProfile drives them all on
+// one bus), each in closed-loop torque control with passthrough input, over CAN Simple
 // (docs/drivers/can.md), firmware 0.5 or 0.6 (configured, or detected: 0.6 answers Get_Version).
 //
 // configure: the axis watchdog fed from here on (0.5 runs it in every axis state: an axis
