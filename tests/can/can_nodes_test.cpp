@@ -124,9 +124,15 @@ TEST(CanNodesBusLoad, ABusThatCannotCarryATickIsRefusedSayingWhatWouldFit) {
                   "node(s) need "))
       << e;
   EXPECT_TRUE(has(e, "of 250000 bit/s at 4000 Hz (9.0")) << e;
-  EXPECT_TRUE(has(e, "What would fit: loop.rate_hz at most ")) << e;
+  EXPECT_TRUE(has(e, "What would fit: loop.rate_hz at most 287 Hz")) << e;
   EXPECT_TRUE(has(e, "fewer nodes on this bus")) << e;
-  // At 1 kHz the same axes fit, above bus_load_warn: a warning, not a refusal.
+  // The rate named is the highest that fits (a slower tick carries more of the heartbeats).
+  std::vector<std::string> at = sets;
+  at[0] = "loop.rate_hz=287";
+  EXPECT_LE(bus_load(can_settings(odrive_gantry(at)), 287.0).load, 1.0);
+  at[0] = "loop.rate_hz=288";
+  EXPECT_THROW(odrive_gantry(at), config::ConfigError);
+  // At 1 kHz two axes fit, above bus_load_warn: a warning, not a refusal.
   const config::Config fits =
       odrive_gantry({"device.can.bitrate=1000000", "device.can.nodes=[{node_id: 1}, {node_id: 2}]",
                      "device.can.bus_load_warn=0.5"});
