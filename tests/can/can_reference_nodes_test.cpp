@@ -1,8 +1,9 @@
 // Two CiA 402 reference drives (tests/reference/can, written from CiA 301/402 and CANopenNode's
 // rules, sharing no code with the driver) on one socketpair bus as the two joints of one
 // device (device.can.nodes, config/can-gantry.yaml): each joint's torque reaches its own drive,
-// one SYNC per tick reaches both, and an EMCY of either drive ends with both switched off and
-// the cause naming that node.
+// one SYNC per tick reaches both, a normal stop keeps SYNC going until both watch it no more
+// (no EMCY), and an EMCY of either drive ends with both switched off and the cause naming that
+// node.
 #include <gtest/gtest.h>
 
 #include <array>
@@ -104,11 +105,18 @@ TEST(CanReferenceNodes, EachJointsTorqueReachesItsOwnDriveWithOneSyncPerTick) {
   rig.device->disable();
   EXPECT_FALSE(x.torque_on());
   EXPECT_FALSE(y.torque_on());
+  sleep_ms(200);  // 4 cycles: a SYNC or heartbeat watch still on would have fired
   rig.runner->stop();
+  EXPECT_EQ(x.object(0x1006, 0), 0u) << "node 1's SYNC watch switched off by the stop";
+  EXPECT_EQ(y.object(0x1006, 0), 0u) << "node 2's";
   int syncs = 0;
   int rpdos_x = 0;
   int rpdos_y = 0;
   for (const reference::LoggedFrame& l : rig.runner->log()) {
+    if (l.sent && (l.frame.id == 0x081 || l.frame.id == 0x082)) {
+      EXPECT_EQ(l.frame.u16(0), 0) << "an EMCY of node " << (l.frame.id - 0x80)
+                                   << " (0x8100: SYNC lost, 0x8130: heartbeat lost)";
+    }
     if (l.sent || l.time_ns >= stop_ns) continue;
     syncs += l.frame.id == 0x080 ? 1 : 0;
     rpdos_x += l.frame.id == 0x201 ? 1 : 0;
