@@ -75,6 +75,7 @@ class OdriveAxis {
   FrameMeaning on_frame(const CanSocket::Received& rx, bool active) noexcept;
   void sample(PositionSample& out) const noexcept;
   std::span<const CanFrame> tick_frames(double force) noexcept;
+  // Not RT-safe. The sentence for a fault this axis reported; "" for the bus's.
   std::string describe(const CanFault& fault, const std::string& bus) const;
 
  private:
