@@ -1,6 +1,7 @@
-// The bus load a configuration needs (`hapticd check`): the frames each tick puts on the bus
-// for the profile, their worst-case length with bit stuffing, and the fraction of the bitrate
-// that takes at the loop rate. Pure arithmetic.
+// The bus load a configuration needs (`hapticd check`; above 1 device.can's reader refuses
+// it): the frames each tick puts on the bus for the profile and every node (CiA 402: one SYNC
+// for the whole bus), their worst-case length with bit stuffing, and the fraction of the
+// bitrate that takes at the loop rate. Pure arithmetic.
 #pragma once
 
 #include <string>
@@ -22,6 +23,10 @@ struct BusLoad {
   std::vector<std::string> frames;  // "SYNC (0 bytes)", ...
 };
 BusLoad bus_load(const CanSettings& s, double rate_hz);
+
+// Not RT-safe. The sentence refusing a configuration whose load is above 1: the load, the
+// frames per tick, the rate and the bitrate, and what would fit (device.can's reader says it).
+std::string bus_load_refusal(const CanSettings& s, double rate_hz, const BusLoad& load);
 
 // The lines `check` prints (and puts in --json): the load and, above bus_load_warn, a warning.
 std::vector<std::string> bus_load_notes(const CanSettings& s, double rate_hz);

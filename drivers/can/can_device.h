@@ -1,14 +1,17 @@
 // The CAN driver's Device (docs/drivers/can.md): the lifecycle over a CanLink (a SocketCAN
-// interface, or the loopback socketpair) and a CanProfile (cia402 or odrive). Each tick it
+// interface, or the loopback socketpair) and a CanProfile (cia402 or odrive) driving the nodes
+// of device.can, one joint each: a fault of any node is the device's. Each tick it
 // drains everything the socket queued (bus events decoded, malformed messages counted) and
 // hands each frame to the profile; it sends the profile's frames without ever blocking (a
 // full TX queue is counted, and faults only after tx_full_fault_ticks ticks in a row), and
-// watches the drive's heartbeat in ticks. The first fault a tick meets is the one latched, and
+// watches every drive's heartbeat in ticks. The first fault a tick meets is the one latched, and
 // its sentence names what else the bus showed. Counters are Device::counters (can_link.h).
 #pragma once
 
+#include <array>
 #include <memory>
 
+#include "base/joints.h"
 #include "drivers/can/can_link.h"
 #include "drivers/can/can_profile.h"
 #include "drivers/can/can_settings.h"
@@ -45,20 +48,21 @@ class CanDevice final : public Device {
  private:
   // RT-safe: called every tick. Every frame waiting (a bound per tick: a babbling bus cannot
   // hold the RT thread), each to the profile; `fresh` says whether one was a sample.
-  IoStatus drain(bool active, bool& fresh) noexcept;
+  IoStatus drain(bool active, unsigned& fresh) noexcept;
   // RT-safe: called every tick. A full queue is judged at the end of the tick; false when the
   // device must fault (recorded).
   bool send(const CanFrame& f) noexcept;
   bool end_tick_tx() noexcept;
   // RT-safe. Records the first fault of this tick; the status the hook returns.
-  IoStatus raise(CanFaultKind kind, std::uint32_t code) noexcept;
+  IoStatus raise(CanFault fault) noexcept;
   void clear_pending() noexcept;
 
   const int tx_full_fault_ticks_;
+  const std::size_t joints_;  // one per node
   CanLink link_;
   std::unique_ptr<CanProfile> profile_;
   const std::uint32_t heartbeat_limit_ticks_;  // heartbeat_timeout_ms in ticks
-  std::uint32_t ticks_since_heartbeat_ = 0;
+  std::array<std::uint32_t, base::kMaxJoints> ticks_since_heartbeat_{};  // per node
   int tx_full_streak_ = 0;
   bool tx_full_this_tick_ = false;
   IoStatus pending_status_ = IoStatus::kOk;

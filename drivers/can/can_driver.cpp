@@ -35,17 +35,21 @@ std::unique_ptr<Device> can_loopback_device(const DriverContext& ctx, io::Unique
   return std::make_unique<CanDevice>(s, ctx.sample_period_s(), std::move(open), ctx.rt_priority);
 }
 
-// The frames the driver of a profile needs to see.
+// The frames the driver of a profile needs to see, of every node.
 std::vector<IdFilter> receive_filters(const CanSettings& s) {
-  const std::uint32_t n = s.node_id;
-  if (s.profile == Profile::kOdrive) {
-    return {{odrive::frame_id(s.node_id, 0), 0x7E0}};  // the node's 32 command ids
+  std::vector<IdFilter> filters;
+  for (const CanNode& node : s.nodes) {
+    const std::uint32_t n = node.node_id;
+    if (s.profile == Profile::kOdrive) {
+      filters.push_back({odrive::frame_id(node.node_id, 0), 0x7E0});  // its 32 command ids
+      continue;
+    }
+    for (std::uint32_t base : {canopen::kTpdo1Base, canopen::kTpdo2Base, canopen::kEmcyBase,
+                               canopen::kSdoTxBase, canopen::kHeartbeatBase}) {
+      filters.push_back({base + n});
+    }
   }
-  return {{canopen::kTpdo1Base + n},
-          {canopen::kTpdo2Base + n},
-          {canopen::kEmcyBase + n},
-          {canopen::kSdoTxBase + n},
-          {canopen::kHeartbeatBase + n}};
+  return filters;
 }
 
 std::unique_ptr<Device> can_device(const DriverContext& ctx) {
@@ -65,8 +69,13 @@ std::vector<std::string> can_notes(const DriverContext& ctx) {
 // The transmission's sign: a motor mounted to turn the axis the other way (docs/drivers/can.md).
 ForceReversal force_reversal(const config::Config& cfg) {
   using config::schema::format_number;
-  const double k = can_settings(cfg).torque_per_force;
-  return {"device.can.torque_per_force", format_number(k), format_number(-k)};
+  // Joint 0's (the direction check drives one joint); where several nodes are, its own entry
+  // (or the section's default it took) is the one to change.
+  const CanSettings& s = can_settings(cfg);
+  const double k = s.nodes.front().torque_per_force;
+  return {
+      s.nodes.size() > 1 ? "device.can.nodes[0].torque_per_force" : "device.can.torque_per_force",
+      format_number(k), format_number(-k)};
 }
 
 }  // namespace

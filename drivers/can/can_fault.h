@@ -30,6 +30,7 @@ enum class CanFaultKind : std::uint8_t {
 struct CanFault {
   CanFaultKind kind = CanFaultKind::kNone;
   std::uint32_t code = 0;
+  std::uint8_t joint = 0;  // the node that reported it (a drive's kind): device.can.nodes[joint]
 };
 
 // RT-safe. Whether `kind` is the bus's (a transport fault) rather than the drive's.

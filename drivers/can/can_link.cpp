@@ -96,7 +96,7 @@ void CanLink::wait_readable(int timeout_ms) const {
   if (socket_) socket_->wait_readable(timeout_ms);
 }
 
-void CanLink::set_emergency_frames(std::initializer_list<CanFrame> frames) {
+void CanLink::set_emergency_frames(std::span<const CanFrame> frames) {
   emergency_count_ = 0;
   for (const CanFrame& f : frames) {
     if (emergency_count_ < emergency_.size())

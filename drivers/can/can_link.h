@@ -9,7 +9,6 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
-#include <initializer_list>
 #include <optional>
 #include <span>
 #include <string>
@@ -70,8 +69,10 @@ class CanLink {
   bool await(int timeout_ms, const std::function<bool(const CanFrame&)>& accept,
              const std::function<void(const CanFrame&)>& other);
   void wait_readable(int timeout_ms) const;
-  // The frames emergency_stop() writes (at most six), built now.
-  void set_emergency_frames(std::initializer_list<CanFrame> frames);
+  // The frames emergency_stop() writes (at most kMaxEmergencyFrames: each node's stop), built
+  // now.
+  static constexpr std::size_t kMaxEmergencyFrames = 8;
+  void set_emergency_frames(std::span<const CanFrame> frames);
   // Async-signal-safe: write(2) of those frames on the open socket.
   void emergency_stop() noexcept;
 
@@ -98,7 +99,7 @@ class CanLink {
   Opener open_;
   std::string interface_;
   std::optional<CanSocket> socket_;
-  std::array<WireFrame, 6> emergency_{};
+  std::array<WireFrame, kMaxEmergencyFrames> emergency_{};
   std::size_t emergency_count_ = 0;
   std::atomic<int> emergency_fd_{-1};
   using K = base::CounterKind;

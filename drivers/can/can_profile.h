@@ -1,10 +1,10 @@
 // What differs between the two kinds of drive the CAN driver speaks to (device.can.profile):
 // the start-up and shut-down sequences, what each received frame means, and the frames of
-// each tick. The Device (can_device.h) owns the lifecycle, the draining of the socket, the TX
-// accounting, the heartbeat watch and the fault policy, and calls these; a profile speaks on
-// the bus through the device's CanLink, given at construction (it outlives the profile).
-// Configuration-time calls throw DeviceError; the RT calls never block, allocate, lock, log or
-// throw.
+// each tick, for every node of device.can.nodes on the bus (joint i is node i). The Device
+// (can_device.h) owns the lifecycle, the draining of the socket, the TX accounting, the heartbeat
+// watch and the fault policy, and calls these; a profile speaks on the bus through the device's
+// CanLink, given at construction (it outlives the profile). Configuration-time calls throw
+// DeviceError; the RT calls never block, allocate, lock, log or throw.
 #pragma once
 
 #include <memory>
@@ -23,22 +23,24 @@ namespace hapticd::drivers::can {
 struct FrameMeaning {
   bool sample = false;     // a new position sample (CanProfile::sample reads it)
   bool heartbeat = false;  // the drive's heartbeat: it is alive
-  CanFault fault;          // a fault the drive reported (kind kNone: none)
+  std::uint8_t joint = 0;  // whose: the node's index in device.can.nodes
+  CanFault fault;          // a fault the drive reported (kind kNone: none; its joint set)
 };
 
 class CanProfile {
  public:
   virtual ~CanProfile() = default;
 
-  // Not RT-safe. The link is open: identify the drive and prepare it, output off; what the
-  // gate analyses.
+  // Not RT-safe. The link is open: identify every drive and prepare it, output off; what the
+  // gate analyses (its joints: one per node).
   virtual DeviceInfo configure() = 0;
-  // Not RT-safe. Output on with zero torque (an enable left half done is undone by disable).
+  // Not RT-safe. Output on with zero torque on every node (an enable left half done, some
+  // nodes on, is undone by disable).
   virtual void enable() = 0;
-  // Not RT-safe, never throws. Zero torque and output off, once per enable however often it
-  // is asked; `latched` is the fault the device holds (kind kNone: none).
+  // Not RT-safe, never throws. Zero torque and output off on every node, once per enable
+  // however often it is asked; `latched` is the fault the device holds (kind kNone: none).
   virtual void disable(const CanFault& latched) noexcept = 0;
-  // Not RT-safe. The drive's own fault reset, confirmed.
+  // Not RT-safe. Every drive's own fault reset, confirmed.
   virtual void clear_fault() = 0;
   // Not RT-safe, never throws. Ends what writes to the socket on its own (before it closes).
   virtual void close() noexcept = 0;
@@ -47,12 +49,14 @@ class CanProfile {
 
   // RT-safe: called every tick, for each frame received. `active`: output is enabled.
   virtual FrameMeaning on_frame(const CanSocket::Received& rx, bool active) noexcept = 0;
-  // RT-safe: called every tick a frame meant a sample. The newest one, in axis units.
-  virtual void sample(PositionSample& out) const noexcept = 0;
-  // RT-safe: called every tick. The frames that carry `force` (N or N m), in order.
-  virtual std::span<const CanFrame> tick_frames(double force) noexcept = 0;
-  // Not RT-safe. The sentence for a fault the drive reported; "" for the bus's own (the
-  // device names those). `bus` is the link's description.
+  // RT-safe: called every tick each joint's frames meant a sample. Its newest one, in axis
+  // units.
+  virtual void sample(std::size_t joint, PositionSample& out) const noexcept = 0;
+  // RT-safe: called every tick. The frames that carry each joint's force (N or N m; one per
+  // node), in order.
+  virtual std::span<const CanFrame> tick_frames(std::span<const double> forces) noexcept = 0;
+  // Not RT-safe. The sentence for a fault a drive reported (fault.joint's), naming the node;
+  // "" for the bus's own (the device names those). `bus` is the link's description.
   virtual std::string describe(const CanFault& fault, const std::string& bus) const = 0;
 };
 

@@ -4,9 +4,13 @@
 #include <climits>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <vector>
 
+#include "base/joints.h"
+#include "drivers/can/can_bus_load.h"
 #include "drivers/device.h"
+#include "kinematics/kinematics.h"
 
 namespace hapticd::drivers::can {
 namespace {
@@ -17,16 +21,6 @@ using config::schema::IntRange;
 using config::schema::MapReader;
 using config::schema::number;
 using config::schema::Range;
-
-void required_number(MapReader& m, std::string_view key, const Range& range, double& out,
-                     const std::string& why) {
-  const Field f = m.take(key);
-  if (!f.present) {
-    m.missing(key, why);
-    return;
-  }
-  if (const auto v = read_number(m.diag(), f, range)) out = *v;
-}
 
 void read_cia402(MapReader& can, bool selected, CanSettings& s) {
   if (!selected) {
@@ -91,6 +85,148 @@ void read_odrive(MapReader& can, bool selected, CanSettings& s) {
   m.finish();
 }
 
+// The transmission of one drive, read the same way for the section (every node's default) and
+// for each entry of nodes; nothing where the key is absent or wrong.
+struct Transmission {
+  std::optional<double> torque_per_force;
+  std::optional<double> position_per_unit;
+  std::optional<double> max_torque;
+};
+
+std::optional<double> read_nonzero(MapReader& m, std::string_view key) {
+  const Field f = m.take(key);
+  const auto v = read_number(m.diag(), f, Range::any());
+  if (v && *v == 0.0) {
+    m.diag().error(f.key_mark, f.path, "must not be 0");
+    return std::nullopt;
+  }
+  return v;
+}
+
+Transmission read_transmission(MapReader& m) {
+  Transmission t;
+  // Negative for a motor that turns the axis the other way (the direction check says which).
+  t.torque_per_force = read_nonzero(m, "torque_per_force");
+  t.position_per_unit = read_nonzero(m, "position_per_unit");
+  t.max_torque = read_number(m.diag(), m.take("max_torque"), Range::greater_than(0.0));
+  return t;
+}
+
+// Each setting from the node where it gives one, else from the section; `m` names what
+// neither gives (`section_missing`: the section's own error already names it).
+void apply_transmission(MapReader& m, const Transmission& own, const Transmission& section,
+                        bool report_missing, CanNode& node) {
+  const std::string transmission = "the transmission cannot be guessed; see docs/drivers/can.md";
+  const auto pick = [&](const std::optional<double>& o, const std::optional<double>& s,
+                        std::string_view key, const std::string& why, double& out) {
+    if (o) {
+      out = *o;
+    } else if (s) {
+      out = *s;
+    } else if (report_missing) {
+      m.missing(key, why);
+    }
+  };
+  pick(own.torque_per_force, section.torque_per_force, "torque_per_force", transmission,
+       node.torque_per_force);
+  pick(own.position_per_unit, section.position_per_unit, "position_per_unit", transmission,
+       node.position_per_unit);
+  pick(own.max_torque, section.max_torque, "max_torque", "the driver's torque limit in N m",
+       node.max_torque);
+}
+
+std::optional<std::uint8_t> read_node_id(MapReader& m, const Field& f, bool odrive) {
+  const auto v =
+      read_integer(m.diag(), f, odrive ? IntRange::between(0, 63) : IntRange::between(1, 127));
+  if (!v) return std::nullopt;
+  return static_cast<std::uint8_t>(*v);
+}
+
+// device.can.nodes: 1..kMaxJoints entries, joint i is entry i. False after reporting problems.
+bool read_node_list(MapReader& m, const Field& f, bool odrive, const Transmission& section,
+                    std::vector<CanNode>& nodes) {
+  config::schema::Diagnostics& d = m.diag();
+  const std::string shape = std::string("a list of 1 to ") + std::to_string(base::kMaxJoints) +
+                            " nodes, joint i being entry i: [{node_id: 1}, {node_id: 2}]";
+  if (!f.node.IsSequence() || f.node.size() == 0 || f.node.size() > base::kMaxJoints) {
+    const std::string got = f.node.IsSequence() ? std::to_string(f.node.size()) + " entries"
+                                                : config::schema::describe_value(f.node);
+    d.error(f.key_mark, f.path, "must be " + shape + ", got " + got);
+    return false;
+  }
+  nodes.clear();
+  bool ok = true;
+  for (std::size_t i = 0; i < f.node.size(); ++i) {
+    const YAML::Node entry = f.node[i];
+    const std::string path = f.path + "[" + std::to_string(i) + "]";
+    MapReader w(d, Field{path, entry, entry.Mark(), true});
+    if (!w.ok()) {
+      ok = false;
+      continue;
+    }
+    CanNode node;
+    const Field id = w.take("node_id");
+    if (!id.present) w.missing("node_id", odrive ? "the axis's node id, 0..63" : "1..127");
+    const auto v = read_node_id(w, id, odrive);
+    for (std::size_t j = 0; v && j < nodes.size(); ++j) {
+      if (nodes[j].node_id != *v) continue;
+      d.error(id.key_mark, id.path,
+              "node " + std::to_string(*v) + " twice: " + f.path + "[" + std::to_string(j) +
+                  "] and " + path + " (each joint needs its own drive)");
+      ok = false;
+    }
+    if (v) node.node_id = *v;
+    ok = ok && v.has_value();
+    apply_transmission(w, read_transmission(w), section, true, node);
+    w.finish();
+    nodes.push_back(node);
+  }
+  return ok;
+}
+
+// node_id (one node) or nodes (1..kMaxJoints), never both; each node's transmission.
+void read_can_nodes(MapReader& m, bool odrive, std::vector<CanNode>& nodes) {
+  const Field id = m.take("node_id");
+  const Field list = m.take("nodes");
+  const Transmission section = read_transmission(m);
+  const bool several = list.present && !list.node.IsNull();
+  const bool one = id.present && !id.node.IsNull();
+  if (several && one) {
+    m.diag().error(list.key_mark, list.path,
+                   "refuses " + m.path() +
+                       ".node_id beside it: node_id is the one drive of a device of one joint, "
+                       "nodes the drives of its joints; give one of them");
+    return;
+  }
+  if (several) {
+    read_node_list(m, list, odrive, section, nodes);
+    return;
+  }
+  CanNode& node = nodes.front();
+  if (const auto v = one ? read_node_id(m, id, odrive) : std::nullopt) node.node_id = *v;
+  apply_transmission(m, {}, section, true, node);
+}
+
+// The joints the nodes drive against the mechanism's (the run refuses the device otherwise).
+void check_joints(MapReader& m, const CanSettings& s, const config::Config& cfg) {
+  const auto joints = static_cast<std::size_t>(kinematics::joint_count(cfg.device.kinematics));
+  if (s.nodes.size() == joints) return;
+  const std::string n = std::to_string(s.nodes.size());
+  m.diag().error(m.mark(), m.path(),
+                 n + " node(s) drive " + n + " joint(s), but device.kinematics (" +
+                     std::string(kinematics::kind_name(cfg.device.kinematics.kind)) + ") has " +
+                     std::to_string(joints) + ": give " + m.path() +
+                     ".nodes one node per joint (joint i is nodes[i])");
+}
+
+// A bus that cannot carry one tick's frames within one period queues them without end: the
+// SYNC and every command come later each tick. Refused with what would fit.
+void check_bus_load(MapReader& m, const CanSettings& s, double rate_hz) {
+  const BusLoad load = bus_load(s, rate_hz);
+  if (load.load <= 1.0) return;
+  m.diag().error(m.mark(), m.path(), bus_load_refusal(s, rate_hz, load));
+}
+
 }  // namespace
 
 std::shared_ptr<const config::DriverSettings> read_can_section(MapReader& m,
@@ -105,24 +241,8 @@ std::shared_ptr<const config::DriverSettings> read_can_section(MapReader& m,
   if (const auto v = read_choice(d, profile, {"cia402", "odrive"})) {
     s->profile = *v == 0 ? Profile::kCia402 : Profile::kOdrive;
   }
-  const Field node = m.take("node_id");
   const bool odrive = s->profile == Profile::kOdrive;
-  if (const auto v =
-          read_integer(d, node, odrive ? IntRange::between(0, 63) : IntRange::between(1, 127))) {
-    s->node_id = static_cast<std::uint8_t>(*v);
-  }
-  const std::string transmission = "the transmission cannot be guessed; see docs/drivers/can.md";
-  // Negative for a motor that turns the axis the other way (the direction check says which).
-  required_number(m, "torque_per_force", Range::any(), s->torque_per_force, transmission);
-  if (s->torque_per_force == 0.0) {
-    d.error(m.mark(), m.path() + ".torque_per_force", "must not be 0");
-  }
-  required_number(m, "position_per_unit", Range::any(), s->position_per_unit, transmission);
-  if (s->position_per_unit == 0.0) {
-    d.error(m.mark(), m.path() + ".position_per_unit", "must not be 0");
-  }
-  required_number(m, "max_torque", Range::greater_than(0.0), s->max_torque,
-                  "the driver's torque limit in N m");
+  read_can_nodes(m, odrive, s->nodes);
   integer(m, "sdo_timeout_ms", IntRange::between(1, 10'000), s->sdo_timeout_ms);
   integer(m, "state_timeout_ms", IntRange::between(1, 60'000), s->state_timeout_ms);
   integer(m, "heartbeat_timeout_ms", IntRange::between(1, 65'535), s->heartbeat_timeout_ms);
@@ -136,9 +256,19 @@ std::shared_ptr<const config::DriverSettings> read_can_section(MapReader& m,
             "must be longer than the drive's heartbeat period (" + std::to_string(producer) +
                 " ms), or every heartbeat would arrive too late");
   }
-  (void)cfg;
+  if (d.messages().size() != errors_before) return nullptr;
+  // What the whole section decides: the joints the mechanism has, and whether the bus carries
+  // one tick's frames of every node within one period.
+  check_joints(m, *s, cfg);
+  check_bus_load(m, *s, cfg.loop.rate_hz);
   if (d.messages().size() != errors_before) return nullptr;
   return s;
+}
+
+CanSettings single_node(const CanSettings& s, std::size_t joint) {
+  CanSettings one = s;
+  one.nodes = {s.nodes.at(joint)};
+  return one;
 }
 
 const CanSettings& can_settings(const DriverContext& ctx) {
@@ -161,17 +291,24 @@ int declared_delay(const DriverContext& ctx) {
 
 std::string odrive_speed_note(const CanSettings& s) {
   if (s.profile != Profile::kOdrive || s.odrive.vel_limit <= 0.0) return {};
-  const double axis_speed = s.odrive.vel_limit * std::abs(s.position_per_unit);
+  std::string speeds;  // in each joint's own units
+  for (const CanNode& n : s.nodes) {
+    char one[64];
+    std::snprintf(one, sizeof one, "%s%.3g", speeds.empty() ? "" : ", ",
+                  s.odrive.vel_limit * std::abs(n.position_per_unit));
+    speeds += one;
+    if (s.nodes.size() > 1) speeds += " (node " + std::to_string(n.node_id) + ")";
+  }
   char text[512];
   std::snprintf(text, sizeof text,
                 "warning: odrive: in torque control the axis brakes by itself above "
-                "controller.config.vel_limit = %.3g turn/s (%.3g axis units/s here; "
+                "controller.config.vel_limit = %.3g turn/s (%s axis units/s here; "
                 "enable_torque_mode_vel_limit) and faults above %.3g times that "
                 "(enable_overspeed_error: CONTROLLER_FAILED / OVERSPEED on 0.5, "
                 "VELOCITY_LIMIT_VIOLATION on 0.6): forces hapticd never commanded. Raise "
                 "vel_limit, or set both to False, then tell hapticd "
                 "(device.can.odrive.vel_limit; docs/drivers/can.md)",
-                s.odrive.vel_limit, axis_speed, s.odrive.vel_limit_tolerance);
+                s.odrive.vel_limit, speeds.c_str(), s.odrive.vel_limit_tolerance);
   return text;
 }
 

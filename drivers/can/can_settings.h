@@ -4,9 +4,11 @@
 // "FILE:LINE: device.can.key: what".
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "config/config.h"
 #include "config/schema_reader.h"
@@ -54,14 +56,22 @@ struct OdriveSettings {
   std::uint16_t watchdog_timeout_endpoint = 0;
 };
 
-struct CanSettings final : config::DriverSettings {
-  std::string interface = "can0";
-  std::uint32_t bitrate = 1'000'000;
+// One drive (a CiA 402 node, an ODrive axis) and the joint it moves: device.can.node_id with
+// the section's transmission, or one entry of device.can.nodes (its own transmission, the
+// section's where it gives none).
+struct CanNode {
   std::uint8_t node_id = 1;
-  Profile profile = Profile::kCia402;
   double torque_per_force = 1.0;   // motor N m per unit of axis force (N or N m)
   double position_per_unit = 1.0;  // axis m or rad per device position unit
   double max_torque = 1.0;         // |motor torque| the driver never exceeds (N m)
+};
+
+struct CanSettings final : config::DriverSettings {
+  std::string interface = "can0";
+  std::uint32_t bitrate = 1'000'000;
+  // Joint i of the device is nodes[i]: one (node_id) to base::kMaxJoints (nodes), on one bus.
+  std::vector<CanNode> nodes{CanNode{}};
+  Profile profile = Profile::kCia402;
   int sdo_timeout_ms = 100;        // one SDO answer, Get_Version, an endpoint read
   int state_timeout_ms = 500;      // one step of the power state machine / axis state
   int heartbeat_timeout_ms = 300;  // the drive's heartbeat missing this long is a fault
@@ -70,6 +80,9 @@ struct CanSettings final : config::DriverSettings {
   Cia402Settings cia402;
   OdriveSettings odrive;
 };
+
+// The settings of one of the nodes alone (a device, or a simulated drive, of one joint).
+CanSettings single_node(const CanSettings& s, std::size_t joint);
 
 // Reads device.can (DriverSchema::read_section); null after reporting problems.
 std::shared_ptr<const config::DriverSettings> read_can_section(config::schema::MapReader& section,

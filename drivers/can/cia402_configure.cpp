@@ -26,33 +26,33 @@ std::string number(double v) {
 
 }  // namespace
 
-std::string Cia402Profile::node_name() const {
-  return "can: node " + std::to_string(settings_.node_id) + " on " + link_.description();
+std::string Cia402Node::node_name() const {
+  return "can: node " + std::to_string(node_.node_id) + " on " + link_.description();
 }
 
 // --- SDO client ---
 
-std::string Cia402Profile::sdo_where(SdoAddress at, const char* name) const {
+std::string Cia402Node::sdo_where(SdoAddress at, const char* name) const {
   char buf[24];
   std::snprintf(buf, sizeof buf, "0x%04X:%02X", at.index, at.subindex);
   return node_name() + ": SDO " + buf + " (" + name + ")";
 }
 
-void Cia402Profile::note_async(const CanFrame& f) {
-  if (f.id == canopen::kEmcyBase + settings_.node_id) {
+void Cia402Node::note_async(const CanFrame& f) {
+  if (f.id == canopen::kEmcyBase + node_.node_id) {
     const auto e = canopen::decode_emcy(f);
     if (e && e->code == 0) return;  // an error reset is good news
-    throw DeviceError("can: node " + std::to_string(settings_.node_id) + " sent EMCY " +
+    throw DeviceError("can: node " + std::to_string(node_.node_id) + " sent EMCY " +
                       (e ? canopen::describe_emcy_code(e->code) + " (error register " +
                                hex(e->error_register, 2) + ")"
                          : "truncated to " + std::to_string(f.len) + " bytes"));
   }
 }
 
-SdoReply Cia402Profile::sdo_exchange(const CanFrame& request, SdoAddress at, const char* name,
-                                     bool may_lack) {
+SdoReply Cia402Node::sdo_exchange(const CanFrame& request, SdoAddress at, const char* name,
+                                  bool may_lack) {
   link_.send(request, "an SDO request");
-  const std::uint32_t reply_id = canopen::kSdoTxBase + settings_.node_id;
+  const std::uint32_t reply_id = canopen::kSdoTxBase + node_.node_id;
   SdoReply reply;
   const bool answered = link_.await(
       settings_.sdo_timeout_ms,
@@ -81,9 +81,8 @@ SdoReply Cia402Profile::sdo_exchange(const CanFrame& request, SdoAddress at, con
   return reply;
 }
 
-std::optional<std::uint32_t> Cia402Profile::sdo_read_optional(SdoAddress at, const char* name) {
-  const SdoReply r =
-      sdo_exchange(canopen::sdo_upload_request(settings_.node_id, at), at, name, true);
+std::optional<std::uint32_t> Cia402Node::sdo_read_optional(SdoAddress at, const char* name) {
+  const SdoReply r = sdo_exchange(canopen::sdo_upload_request(node_.node_id, at), at, name, true);
   if (r.kind == SdoReply::Kind::kAbort) return std::nullopt;
   if (r.kind != SdoReply::Kind::kUploadValue) {
     throw DeviceError(sdo_where(at, name) + ": answered a read with a write confirmation");
@@ -91,18 +90,18 @@ std::optional<std::uint32_t> Cia402Profile::sdo_read_optional(SdoAddress at, con
   return r.value;
 }
 
-std::uint32_t Cia402Profile::sdo_read(SdoAddress at, const char* name) {
-  const SdoReply r = sdo_exchange(canopen::sdo_upload_request(settings_.node_id, at), at, name);
+std::uint32_t Cia402Node::sdo_read(SdoAddress at, const char* name) {
+  const SdoReply r = sdo_exchange(canopen::sdo_upload_request(node_.node_id, at), at, name);
   if (r.kind != SdoReply::Kind::kUploadValue) {
     throw DeviceError(sdo_where(at, name) + ": answered a read with a write confirmation");
   }
   return r.value;
 }
 
-bool Cia402Profile::sdo_write_optional(SdoAddress at, std::uint32_t value, std::uint8_t size,
-                                       const char* name) {
-  const SdoReply r = sdo_exchange(canopen::sdo_download_request(settings_.node_id, at, value, size),
-                                  at, name, true);
+bool Cia402Node::sdo_write_optional(SdoAddress at, std::uint32_t value, std::uint8_t size,
+                                    const char* name) {
+  const SdoReply r =
+      sdo_exchange(canopen::sdo_download_request(node_.node_id, at, value, size), at, name, true);
   if (r.kind == SdoReply::Kind::kAbort) return false;
   if (r.kind != SdoReply::Kind::kDownloadConfirmed) {
     throw DeviceError(sdo_where(at, name) + ": answered a write with a value");
@@ -110,10 +109,10 @@ bool Cia402Profile::sdo_write_optional(SdoAddress at, std::uint32_t value, std::
   return true;
 }
 
-void Cia402Profile::sdo_write(SdoAddress at, std::uint32_t value, std::uint8_t size,
-                              const char* name) {
+void Cia402Node::sdo_write(SdoAddress at, std::uint32_t value, std::uint8_t size,
+                           const char* name) {
   const SdoReply r =
-      sdo_exchange(canopen::sdo_download_request(settings_.node_id, at, value, size), at, name);
+      sdo_exchange(canopen::sdo_download_request(node_.node_id, at, value, size), at, name);
   if (r.kind != SdoReply::Kind::kDownloadConfirmed) {
     throw DeviceError(sdo_where(at, name) + ": answered a write with a value");
   }
@@ -121,12 +120,12 @@ void Cia402Profile::sdo_write(SdoAddress at, std::uint32_t value, std::uint8_t s
 
 // --- configure ---
 
-PowerState Cia402Profile::read_state(std::uint16_t& statusword) {
+PowerState Cia402Node::read_state(std::uint16_t& statusword) {
   statusword = static_cast<std::uint16_t>(sdo_read(cia402::kStatusword, "statusword"));
   return cia402::decode_statusword(statusword);
 }
 
-std::string Cia402Profile::drive_error_text() {
+std::string Cia402Node::drive_error_text() {
   try {
     const auto code = static_cast<std::uint16_t>(sdo_read(cia402::kErrorCode, "error code"));
     return "error code 0x603F = " + canopen::describe_emcy_code(code);
@@ -135,8 +134,8 @@ std::string Cia402Profile::drive_error_text() {
   }
 }
 
-void Cia402Profile::switch_off_and_identify() {
-  const std::uint8_t node = settings_.node_id;
+void Cia402Node::switch_off_and_identify() {
+  const std::uint8_t node = node_.node_id;
   link_.send(canopen::nmt_command(canopen::NmtCommand::kEnterPreOperational, node), "NMT");
   const std::uint32_t type = sdo_read(cia402::kDeviceType, "device type");
   if ((type & 0xFFFF) != cia402::kDeviceProfile402) {
@@ -162,31 +161,31 @@ void Cia402Profile::switch_off_and_identify() {
 // passed and the configuration promises, saying nothing (the axis goes through it with no
 // fault). Refused, with the two ways out: a warning would leave the wall that was asked for
 // unrendered, and the gate cannot see a force limit (its saturation warning would be wrong).
-void Cia402Profile::check_torque_limit() {
+void Cia402Node::check_torque_limit() {
   const auto limit = sdo_read_optional(cia402::kMaxTorque, "max torque");
   if (!limit) {
     notices_.push_back(node_name() +
                        ": the drive has no 0x6072 (max torque), so hapticd cannot see whether it "
                        "limits torque below device.can.max_torque (" +
-                       number(settings_.max_torque) + " N m); check its manual");
+                       number(node_.max_torque) + " N m); check its manual");
     return;
   }
   const double limit_nm = (*limit & 0xFFFF) * 1e-3 * rated_torque_mnm_ * 1e-3;
-  if (limit_nm < settings_.max_torque * (1.0 - 1e-9)) {
-    const double per_force = std::abs(settings_.torque_per_force);
+  if (limit_nm < node_.max_torque * (1.0 - 1e-9)) {
+    const double per_force = std::abs(node_.torque_per_force);
     const double force = limit_nm / per_force;
     throw DeviceError(node_name() + ": the drive limits its torque to 0x6072 = " +
                       std::to_string(*limit & 0xFFFF) + " per mille of 0x6076 (" +
                       number(limit_nm) + " N m), below device.can.max_torque " +
-                      number(settings_.max_torque) + " N m: the wall would give way at " +
-                      number(force) + " instead of " + number(settings_.max_torque / per_force) +
+                      number(node_.max_torque) + " N m: the wall would give way at " +
+                      number(force) + " instead of " + number(node_.max_torque / per_force) +
                       " (axis force) with no fault; raise 0x6072 with the drive's tool, or set "
                       "device.can.max_torque to at most " +
                       number(limit_nm) + " N m");
   }
 }
 
-void Cia402Profile::select_mode() {
+void Cia402Node::select_mode() {
   sdo_write(cia402::kModesOfOperation,
             static_cast<std::uint8_t>(cia402::kModeCyclicSynchronousTorque), 1,
             "modes of operation");
@@ -200,7 +199,7 @@ void Cia402Profile::select_mode() {
     link_.wait_readable(2);
   }
   if (shown != cia402::kModeCyclicSynchronousTorque) {
-    throw DeviceError("can: node " + std::to_string(settings_.node_id) +
+    throw DeviceError("can: node " + std::to_string(node_.node_id) +
                       " did not take mode 10 (cyclic synchronous torque): 0x6061 still shows " +
                       std::to_string(shown) + " after state_timeout_ms " +
                       std::to_string(settings_.state_timeout_ms) + " ms");
@@ -208,7 +207,7 @@ void Cia402Profile::select_mode() {
 }
 
 // 0x1006 and 0x60C2: the cycle, for drives that watch SYNC or interpolate on it.
-void Cia402Profile::write_cycle_objects() {
+void Cia402Node::write_cycle_objects() {
   const auto cycle_us = static_cast<std::uint32_t>(std::lround(period_s_ * 1e6));
   has_cycle_period_ = sdo_write_optional(cia402::kCommunicationCyclePeriod, cycle_us, 4,
                                          "communication cycle period");
@@ -235,7 +234,7 @@ void Cia402Profile::write_cycle_objects() {
   }
 }
 
-void Cia402Profile::write_parameters() {
+void Cia402Node::write_parameters() {
   const Cia402Settings& c = settings_.cia402;
   select_mode();
   write_cycle_objects();
@@ -256,11 +255,11 @@ void Cia402Profile::write_parameters() {
   sdo_write(cia402::kTargetTorque, 0, 2, "target torque");
 }
 
-void Cia402Profile::map_pdos() {
+void Cia402Node::map_pdos() {
   const bool verify = settings_.cia402.pdo_mapping == PdoMapping::kVerify;
   std::map<std::uint16_t, std::uint32_t> cob_ids;  // each PDO's COB-ID as the drive holds it
   for (const cia402::MappingEntry& e :
-       cia402::pdo_mapping(settings_.node_id, settings_.cia402.map_velocity)) {
+       cia402::pdo_mapping(node_.node_id, settings_.cia402.map_velocity)) {
     if (!verify && e.cob_id) {
       auto it = cob_ids.find(e.at.index);
       if (it == cob_ids.end()) it = cob_ids.emplace(e.at.index, sdo_read(e.at, "PDO COB-ID")).first;
@@ -289,33 +288,21 @@ void Cia402Profile::map_pdos() {
   }
 }
 
-DeviceInfo Cia402Profile::configure() {
+std::string Cia402Node::configure() {
   notices_.clear();
-  stopped_ = true;
   position_.reset();  // the first TPDO1 of this session sets the base
   switch_off_and_identify();
   check_torque_limit();
   write_parameters();
   map_pdos();
   const std::uint32_t vendor = sdo_read(cia402::kVendorId, "vendor id");
-  const std::uint8_t node = settings_.node_id;
   // Per mille of the rated torque for one unit of axis force, through the transmission.
-  permille_per_force_ = settings_.torque_per_force * 1e6 / rated_torque_mnm_;
-  max_permille_ = static_cast<int>(
-      std::min(32767.0, std::floor(settings_.max_torque * 1e6 / rated_torque_mnm_)));
-  const int hb = settings_.cia402.master_heartbeat_ms;
-  master_heartbeat_ticks_ =
-      hb == 0 ? 0 : std::max<std::uint32_t>(1, static_cast<std::uint32_t>(hb * 1e-3 / period_s_));
-  // A crash: zero torque and the power stage off at one SYNC, then pre-operational.
-  link_.set_emergency_frames(
-      {canopen::rpdo1_frame(node, cia402::kCwShutdown, 0), canopen::sync_frame(),
-       canopen::nmt_command(canopen::NmtCommand::kEnterPreOperational, node)});
-  DeviceInfo info;
-  info.description = "cia402 node " + std::to_string(node) + " on " + link_.description() +
-                     " (vendor " + hex(vendor, 8) + ", rated torque " +
-                     std::to_string(rated_torque_mnm_) + " mN m)";
-  info.transport_delay_samples = 1;
-  return info;
+  permille_per_force_ = node_.torque_per_force * 1e6 / rated_torque_mnm_;
+  max_permille_ =
+      static_cast<int>(std::min(32767.0, std::floor(node_.max_torque * 1e6 / rated_torque_mnm_)));
+  return "cia402 node " + std::to_string(node_.node_id) + " on " + link_.description() +
+         " (vendor " + hex(vendor, 8) + ", rated torque " + std::to_string(rated_torque_mnm_) +
+         " mN m)";
 }
 
 }  // namespace hapticd::drivers::can

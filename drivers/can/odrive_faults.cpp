@@ -8,7 +8,7 @@
 
 namespace hapticd::drivers::can {
 
-void OdriveProfile::read_controller_error(const CanFault& latched) noexcept {
+void OdriveAxis::read_controller_error(const CanFault& latched) noexcept {
   // CONTROLLER_FAILED says only that controller.error is set; 0.5.6 answers
   // Get_Controller_Error (can_simple.cpp), earlier 0.5 releases stay silent.
   if (!link_.is_open() || firmware_ != odrive::Firmware::k05 ||
@@ -17,7 +17,7 @@ void OdriveProfile::read_controller_error(const CanFault& latched) noexcept {
     return;
   }
   try {
-    link_.send(odrive::request(settings_.node_id, odrive::kGetControllerError, 8),
+    link_.send(odrive::request(node_.node_id, odrive::kGetControllerError, 8),
                "Get_Controller_Error");
     link_.await(
         settings_.sdo_timeout_ms,
@@ -35,7 +35,7 @@ void OdriveProfile::read_controller_error(const CanFault& latched) noexcept {
 // 0.6 keeps why it disarmed in Get_Error's disarm reason, until Clear_Errors: the heartbeat
 // may already say IDLE without an error (a short DC-bus dip). The RT path asked; the answer
 // may be queued already.
-void OdriveProfile::read_error_status(const CanFault& latched) noexcept {
+void OdriveAxis::read_error_status(const CanFault& latched) noexcept {
   if (!link_.is_open() || firmware_ != odrive::Firmware::k06 || error_status_ ||
       (latched.kind != CanFaultKind::kAxisStateChanged &&
        latched.kind != CanFaultKind::kAxisError)) {
@@ -43,7 +43,7 @@ void OdriveProfile::read_error_status(const CanFault& latched) noexcept {
   }
   try {
     if (!error_requested_) {
-      link_.send(odrive::request(settings_.node_id, odrive::kGetError, 8), "Get_Error");
+      link_.send(odrive::request(node_.node_id, odrive::kGetError, 8), "Get_Error");
       error_requested_ = true;
     }
     link_.await(
@@ -59,7 +59,7 @@ void OdriveProfile::read_error_status(const CanFault& latched) noexcept {
   }
 }
 
-std::string OdriveProfile::describe(const CanFault& f, const std::string& bus) const {
+std::string OdriveAxis::describe(const CanFault& f, const std::string& bus) const {
   switch (f.kind) {
     case CanFaultKind::kAxisError:
       return node_name(bus) + " reports axis error " +
@@ -77,7 +77,7 @@ std::string OdriveProfile::describe(const CanFault& f, const std::string& bus) c
 }
 
 // 0.6: the disarm reason Get_Error gave (the heartbeat's axis error is what is active now).
-std::string OdriveProfile::disarm_text(const CanFault& f) const {
+std::string OdriveAxis::disarm_text(const CanFault& f) const {
   if (firmware_ != odrive::Firmware::k06) return {};
   if (!error_status_) {
     return error_requested_ ? "; Get_Error went unanswered within sdo_timeout_ms " +
@@ -96,7 +96,7 @@ std::string OdriveProfile::disarm_text(const CanFault& f) const {
 // own velocity limit (controller.cpp: enable_torque_mode_vel_limit clamps the torque to
 // (+-vel_limit - vel) * vel_gain, enable_overspeed_error faults above vel_limit_tolerance
 // times vel_limit; defaults 2 turn/s and 1.2).
-std::string OdriveProfile::overspeed_text(std::uint32_t axis_error) const {
+std::string OdriveAxis::overspeed_text(std::uint32_t axis_error) const {
   if ((axis_error & odrive::overspeed_error_bits(firmware_)) == 0) return {};
   const OdriveSettings& o = settings_.odrive;
   const double speed = std::abs(static_cast<double>(last_speed_turns_));

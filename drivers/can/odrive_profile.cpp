@@ -27,17 +27,12 @@ std::uint32_t float_bits(float v) {
 
 }  // namespace
 
-std::unique_ptr<CanProfile> make_odrive_profile(const CanSettings& s, double sample_period_s,
-                                                CanLink& link) {
-  return std::make_unique<OdriveProfile>(s, sample_period_s, link);
+std::string OdriveAxis::node_name(const std::string& bus) const {
+  return "can: odrive node " + std::to_string(node_.node_id) + " on " + bus;
 }
 
-std::string OdriveProfile::node_name(const std::string& bus) const {
-  return "can: odrive node " + std::to_string(settings_.node_id) + " on " + bus;
-}
-
-Heartbeat OdriveProfile::await_heartbeat(int timeout_ms, const std::string& waiting_for,
-                                         bool (*accept)(const Heartbeat&)) {
+Heartbeat OdriveAxis::await_heartbeat(int timeout_ms, const std::string& waiting_for,
+                                      bool (*accept)(const Heartbeat&)) {
   Heartbeat got;
   const bool seen = link_.await(
       timeout_ms,
@@ -63,36 +58,36 @@ Heartbeat OdriveProfile::await_heartbeat(int timeout_ms, const std::string& wait
   return got;
 }
 
-void OdriveProfile::note_unsolicited(const CanFrame& f) {
+void OdriveAxis::note_unsolicited(const CanFrame& f) {
   if (!f.rtr && f.id == id_base_ + odrive::kGetEncoderEstimates) ++unsolicited_estimates_;
 }
 
-void OdriveProfile::feed_watchdog() {
+void OdriveAxis::feed_watchdog() {
   if (!link_.is_open()) return;
   // A remote request for the heartbeat: 0.5 does nothing with it but feed the watchdog
   // (can_simple.cpp, MSG_ODRIVE_HEARTBEAT), 0.6 answers it with a heartbeat.
   const double period_ms = std::clamp(settings_.odrive.watchdog_timeout_s * 1e3 / 4.0, 1.0, 50.0);
-  feeder_.start(link_.fd(), {{odrive::request(settings_.node_id, odrive::kHeartbeat, 8),
+  feeder_.start(link_.fd(), {{odrive::request(node_.node_id, odrive::kHeartbeat, 8),
                               static_cast<std::int64_t>(period_ms * 1e6), 0}});
 }
 
-Heartbeat OdriveProfile::clear_expired_watchdog(Heartbeat h) {
+Heartbeat OdriveAxis::clear_expired_watchdog(Heartbeat h) {
   const std::uint32_t expired = odrive::watchdog_error_bit(firmware_);
   if (h.axis_error != expired) return h;
   // The state of every 0.5 axis with its watchdog on that nobody fed since power-on: nothing
   // went wrong. Clear_Errors feeds the watchdog before it clears (every CAN frame does), and
   // the feeder keeps it fed from now on. It clears every error of the ODrive, so only this one.
-  link_.send(odrive::clear_errors(settings_.node_id, firmware_), "Clear_Errors");
-  link_.send(odrive::request(settings_.node_id, odrive::kHeartbeat, 8), "a heartbeat request");
+  link_.send(odrive::clear_errors(node_.node_id, firmware_), "Clear_Errors");
+  link_.send(odrive::request(node_.node_id, odrive::kHeartbeat, 8), "a heartbeat request");
   return await_heartbeat(settings_.heartbeat_timeout_ms,
                          "without an error after clearing WATCHDOG_TIMER_EXPIRED (the watchdog "
                          "expired before configure could feed it)",
                          &no_error);
 }
 
-std::string OdriveProfile::detect_firmware() {
+std::string OdriveAxis::detect_firmware() {
   if (!settings_.odrive.detect_firmware) return "firmware " + std::string(to_string(firmware_));
-  link_.send(odrive::request(settings_.node_id, odrive::kGetVersion, 8), "Get_Version");
+  link_.send(odrive::request(node_.node_id, odrive::kGetVersion, 8), "Get_Version");
   std::optional<odrive::Version> version;
   link_.await(
       settings_.sdo_timeout_ms,
@@ -117,10 +112,10 @@ std::string OdriveProfile::detect_firmware() {
   return text;
 }
 
-void OdriveProfile::configure_watchdog() {
+void OdriveAxis::configure_watchdog() {
   const OdriveSettings& o = settings_.odrive;
   if (firmware_ != odrive::Firmware::k06 || o.watchdog_timeout_endpoint == 0) return;
-  const std::uint8_t node = settings_.node_id;
+  const std::uint8_t node = node_.node_id;
   const std::uint32_t timeout = float_bits(static_cast<float>(o.watchdog_timeout_s));
   link_.send(odrive::rx_sdo(node, true, o.watchdog_timeout_endpoint, timeout), "RxSdo");
   if (o.enable_watchdog_endpoint != 0) {
@@ -144,8 +139,7 @@ void OdriveProfile::configure_watchdog() {
   }
 }
 
-DeviceInfo OdriveProfile::configure() {
-  id_base_ = odrive::frame_id(settings_.node_id, 0);
+DeviceInfo OdriveAxis::configure() {
   firmware_ = settings_.odrive.firmware;
   unsolicited_estimates_ = 0;
   controller_error_.reset();
@@ -156,7 +150,7 @@ DeviceInfo OdriveProfile::configure() {
   const std::string fw = detect_firmware();
   // The heartbeat comes every heartbeat period anyway; asking for it answers sooner where the
   // firmware answers remote requests for cyclic messages (0.6).
-  link_.send(odrive::request(settings_.node_id, odrive::kHeartbeat, 8), "a heartbeat request");
+  link_.send(odrive::request(node_.node_id, odrive::kHeartbeat, 8), "a heartbeat request");
   const Heartbeat h =
       clear_expired_watchdog(await_heartbeat(settings_.heartbeat_timeout_ms, "", &any_heartbeat));
   if (h.axis_error != 0) {
@@ -165,7 +159,7 @@ DeviceInfo OdriveProfile::configure() {
                       overspeed_text(h.axis_error) +
                       ": find the cause and clear it (Clear_Errors, odrivetool) first");
   }
-  const std::uint8_t node = settings_.node_id;
+  const std::uint8_t node = node_.node_id;
   link_.send(odrive::set_input_torque(node, 0.0f), "Set_Input_Torque");
   link_.send(odrive::set_axis_state(node, odrive::kAxisIdle), "Set_Axis_State");
   link_.send(
@@ -174,8 +168,6 @@ DeviceInfo OdriveProfile::configure() {
   configure_watchdog();
   link_.send(odrive::request(node, odrive::kHeartbeat, 8), "a heartbeat request");
   await_heartbeat(settings_.state_timeout_ms, "showing IDLE", &idle);
-  link_.set_emergency_frames(
-      {odrive::set_input_torque(node, 0.0f), odrive::set_axis_state(node, odrive::kAxisIdle)});
   DeviceInfo info;
   info.description =
       "odrive node " + std::to_string(node) + " on " + link_.description() + " (" + fw + ")";
@@ -193,11 +185,11 @@ DeviceInfo OdriveProfile::configure() {
   return info;
 }
 
-void OdriveProfile::enable() {
+void OdriveAxis::enable() {
   answered_ = true;
   controller_error_.reset();
   forget_error_status();
-  const std::uint8_t node = settings_.node_id;
+  const std::uint8_t node = node_.node_id;
   feed_watchdog();  // fed until the loop's own frames take over
   stopped_ = false;
   link_.send(odrive::set_input_torque(node, 0.0f), "Set_Input_Torque");
@@ -208,15 +200,22 @@ void OdriveProfile::enable() {
     throw DeviceError(node_name() + ": entering closed loop failed with axis error " +
                       odrive::describe_axis_error(firmware_, h.axis_error));
   }
-  // From here only the loop feeds the watchdog: if it stops, the axis stops.
-  feeder_.stop();
 }
 
-void OdriveProfile::disable(const CanFault& latched) noexcept {
-  if (!stopped_) {  // once per enable: a fault's disable and the close after it are one stop
-    stopped_ = true;
-    link_.send_quietly(odrive::set_input_torque(settings_.node_id, 0.0f));
-    link_.send_quietly(odrive::set_axis_state(settings_.node_id, odrive::kAxisIdle));
+std::array<CanFrame, 2> OdriveAxis::emergency_frames() const noexcept {
+  return {odrive::set_input_torque(node_.node_id, 0.0f),
+          odrive::set_axis_state(node_.node_id, odrive::kAxisIdle)};
+}
+
+bool OdriveAxis::stop_output() noexcept {
+  if (stopped_) return false;  // once per enable: a fault's disable and the close after it
+  stopped_ = true;             // are one stop
+  for (const CanFrame& f : emergency_frames()) link_.send_quietly(f);
+  return true;
+}
+
+void OdriveAxis::after_stop(const CanFault& latched, bool stopped_now) noexcept {
+  if (stopped_now) {
     read_controller_error(latched);
     read_error_status(latched);
   }
@@ -227,15 +226,15 @@ void OdriveProfile::disable(const CanFault& latched) noexcept {
   }
 }
 
-void OdriveProfile::clear_fault() {
+void OdriveAxis::clear_fault() {
   controller_error_.reset();
   forget_error_status();
-  link_.send(odrive::clear_errors(settings_.node_id, firmware_), "Clear_Errors");
-  link_.send(odrive::set_axis_state(settings_.node_id, odrive::kAxisIdle), "Set_Axis_State");
+  link_.send(odrive::clear_errors(node_.node_id, firmware_), "Clear_Errors");
+  link_.send(odrive::set_axis_state(node_.node_id, odrive::kAxisIdle), "Set_Axis_State");
   await_heartbeat(settings_.state_timeout_ms, "without an axis error", &no_error);
 }
 
-FrameMeaning OdriveProfile::on_estimates(const CanSocket::Received& rx) noexcept {
+FrameMeaning OdriveAxis::on_estimates(const CanSocket::Received& rx) noexcept {
   const auto e = odrive::decode_encoder_estimates(rx.frame);
   if (!e) {
     link_.count(CanCounter::kWrongLength);
@@ -263,7 +262,7 @@ FrameMeaning OdriveProfile::on_estimates(const CanSocket::Received& rx) noexcept
   return m;
 }
 
-FrameMeaning OdriveProfile::on_heartbeat(const CanFrame& f, bool active) noexcept {
+FrameMeaning OdriveAxis::on_heartbeat(const CanFrame& f, bool active) noexcept {
   const auto h = odrive::decode_heartbeat(f);
   if (!h) {
     link_.count(CanCounter::kWrongLength);
@@ -286,12 +285,8 @@ FrameMeaning OdriveProfile::on_heartbeat(const CanFrame& f, bool active) noexcep
   return m;
 }
 
-FrameMeaning OdriveProfile::on_frame(const CanSocket::Received& rx, bool active) noexcept {
+FrameMeaning OdriveAxis::on_frame(const CanSocket::Received& rx, bool active) noexcept {
   const CanFrame& f = rx.frame;
-  if (f.extended || f.rtr || (f.id & ~0x1Fu) != id_base_) {
-    link_.count(CanCounter::kUnknownIds);
-    return {};
-  }
   const std::uint8_t command = odrive::command_of(f.id);
   if (command == odrive::kGetEncoderEstimates) return on_estimates(rx);
   if (command == odrive::kHeartbeat) return on_heartbeat(f, active);
@@ -310,18 +305,18 @@ FrameMeaning OdriveProfile::on_frame(const CanSocket::Received& rx, bool active)
   return {};
 }
 
-void OdriveProfile::sample(PositionSample& out) const noexcept {
-  out.position = static_cast<double>(position_turns_) * settings_.position_per_unit;
-  out.velocity = static_cast<double>(velocity_turns_) * settings_.position_per_unit;
+void OdriveAxis::sample(PositionSample& out) const noexcept {
+  out.position = static_cast<double>(position_turns_) * node_.position_per_unit;
+  out.velocity = static_cast<double>(velocity_turns_) * node_.position_per_unit;
   out.time_ns = sample_time_ns_;
   out.status = axis_state_;
   out.flags = kSampleHasTime | kSampleHasVelocity;
 }
 
-std::span<const CanFrame> OdriveProfile::tick_frames(double force) noexcept {
+std::span<const CanFrame> OdriveAxis::tick_frames(double force) noexcept {
   const double torque =
-      std::clamp(force * settings_.torque_per_force, -settings_.max_torque, settings_.max_torque);
-  const std::uint8_t node = settings_.node_id;
+      std::clamp(force * node_.torque_per_force, -node_.max_torque, node_.max_torque);
+  const std::uint8_t node = node_.node_id;
   std::size_t n = 0;
   tx_[n++] = odrive::set_input_torque(node, static_cast<float>(torque));
   if (error_request_due_) {

@@ -209,7 +209,7 @@ drivers::can::CanFrame frame(std::uint32_t id, std::uint8_t len, bool rtr = fals
 
 TEST(PeerGuard, ACanopenNodeIsHeardByWhatItSendsNotByWhatAMasterSendsIt) {
   drivers::can::CanSettings s;
-  s.node_id = 1;
+  s.nodes.front().node_id = 1;
   for (std::uint32_t id : {0x701u, 0x181u, 0x281u, 0x381u, 0x481u, 0x581u, 0x081u}) {
     EXPECT_TRUE(sent_by_node(frame(id, 1), s)) << std::hex << id;
   }
@@ -231,7 +231,7 @@ TEST(PeerGuard, ACanopenNodeIsHeardByWhatItSendsNotByWhatAMasterSendsIt) {
 TEST(PeerGuard, AnOdriveIsHeardByItsHeartbeatAndItsAnswers) {
   drivers::can::CanSettings s;
   s.profile = drivers::can::Profile::kOdrive;
-  s.node_id = 3;
+  s.nodes.front().node_id = 3;
   EXPECT_TRUE(sent_by_node(frame(3 << 5 | 0x01, 8), s)) << "heartbeat";
   EXPECT_TRUE(sent_by_node(frame(3 << 5 | 0x09, 8), s)) << "encoder estimates";
   EXPECT_FALSE(sent_by_node(frame(3 << 5 | 0x09, 8, true), s)) << "a master's request for them";

@@ -38,29 +38,30 @@ bool odrive_sends(std::uint8_t command) {
 bool sent_by_node(const can::CanFrame& f, const can::CanSettings& s) {
   if (f.rtr || f.extended) return false;  // a remote request asks; the node answers with data
   if (s.profile == can::Profile::kOdrive) {
-    return odrive::node_of(f.id) == s.node_id && odrive_sends(odrive::command_of(f.id));
+    return odrive::node_of(f.id) == s.nodes.front().node_id &&
+           odrive_sends(odrive::command_of(f.id));
   }
   for (std::uint32_t base : kCiaNodeBases) {
-    if (f.id == base + s.node_id) return true;
+    if (f.id == base + s.nodes.front().node_id) return true;
   }
   return false;
 }
 
 std::string describe_node_frame(const can::CanFrame& f, const can::CanSettings& s) {
-  const std::string node = "node " + std::to_string(s.node_id);
+  const std::string node = "node " + std::to_string(s.nodes.front().node_id);
   std::string what;
   if (s.profile == can::Profile::kOdrive) {
     what = odrive::command_of(f.id) == odrive::kHeartbeat
                ? "the heartbeat of ODrive " + node
                : "an answer of ODrive " + node + " (command " +
                      base::hex(odrive::command_of(f.id), 3) + ")";
-  } else if (f.id == canopen::kHeartbeatBase + s.node_id) {
+  } else if (f.id == canopen::kHeartbeatBase + s.nodes.front().node_id) {
     const auto state = canopen::decode_heartbeat(f);
     what = "the heartbeat of " + node +
            (state ? " (" + std::string(canopen::to_string(*state)) + ")" : "");
-  } else if (f.id == canopen::kSdoTxBase + s.node_id) {
+  } else if (f.id == canopen::kSdoTxBase + s.nodes.front().node_id) {
     what = "an SDO reply of " + node;
-  } else if (f.id == canopen::kEmcyBase + s.node_id) {
+  } else if (f.id == canopen::kEmcyBase + s.nodes.front().node_id) {
     what = "an EMCY of " + node;
   } else {
     what = "a TPDO of " + node;
@@ -70,24 +71,26 @@ std::string describe_node_frame(const can::CanFrame& f, const can::CanSettings& 
 
 can::CanFrame node_probe(const can::CanSettings& s) {
   if (s.profile == can::Profile::kOdrive) {
-    return odrive::request(s.node_id, odrive::kGetEncoderEstimates, 8);
+    return odrive::request(s.nodes.front().node_id, odrive::kGetEncoderEstimates, 8);
   }
-  return canopen::sdo_upload_request(s.node_id, {0x1000, 0});  // device type: mandatory
+  return canopen::sdo_upload_request(s.nodes.front().node_id,
+                                     {0x1000, 0});  // device type: mandatory
 }
 
 std::optional<can::CanFrame> listen_for_node(const can::CanSettings& s,
                                              const std::string& interface, double seconds) {
   std::vector<can::IdFilter> filters;
   if (s.profile == can::Profile::kOdrive) {
-    filters.push_back({odrive::frame_id(s.node_id, 0), 0x7E0});  // the node's 32 command ids
+    filters.push_back(
+        {odrive::frame_id(s.nodes.front().node_id, 0), 0x7E0});  // the node's 32 command ids
   } else {
-    for (std::uint32_t base : kCiaNodeBases) filters.push_back({base + s.node_id});
+    for (std::uint32_t base : kCiaNodeBases) filters.push_back({base + s.nodes.front().node_id});
   }
   can::CanSocket socket = can::CanSocket::open_interface(interface, filters, false);
   int error = 0;
   if (socket.send(node_probe(s), error) == can::CanSocket::Io::kFailed) {
-    throw DeviceError("peer: cannot ask node " + std::to_string(s.node_id) + " on " + interface +
-                      ": " + base::errno_text(error));
+    throw DeviceError("peer: cannot ask node " + std::to_string(s.nodes.front().node_id) + " on " +
+                      interface + ": " + base::errno_text(error));
   }
   using Clock = std::chrono::steady_clock;
   const auto end = Clock::now() + std::chrono::duration<double>(seconds);
@@ -105,10 +108,11 @@ std::optional<can::CanFrame> listen_for_node(const can::CanSettings& s,
 void check_can_node_free(const config::Config& cfg, const std::string& interface, double seconds) {
   const auto& s = can::can_settings(cfg);
   spdlog::info("peer: listening {} s on {} for a node {} already there", seconds, interface,
-               s.node_id);
+               s.nodes.front().node_id);
   if (const auto heard = listen_for_node(s, interface, seconds)) {
-    throw DeviceError("peer: a node already answers at node id " + std::to_string(s.node_id) +
-                      " on " + interface + " (heard " + describe_node_frame(*heard, s) +
+    throw DeviceError("peer: a node already answers at node id " +
+                      std::to_string(s.nodes.front().node_id) + " on " + interface + " (heard " +
+                      describe_node_frame(*heard, s) +
                       "): a simulated drive there would answer beside it. Stop that node, or "
                       "give the peer another device.can.node_id");
   }

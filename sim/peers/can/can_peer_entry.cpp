@@ -21,9 +21,10 @@ namespace can = drivers::can;
 std::vector<can::IdFilter> peer_filters(const config::Config& cfg) {
   const can::CanSettings& s = can::can_settings(cfg);
   if (s.profile == can::Profile::kOdrive) {
-    return {{can::odrive::frame_id(s.node_id, 0), 0x7E0}};  // the node's 32 command ids
+    return {
+        {can::odrive::frame_id(s.nodes.front().node_id, 0), 0x7E0}};  // the node's 32 command ids
   }
-  const std::uint32_t n = s.node_id;
+  const std::uint32_t n = s.nodes.front().node_id;
   return {{can::canopen::kNmtId},
           {can::canopen::kSyncId},
           {can::canopen::kRpdo1Base + n},
@@ -58,8 +59,19 @@ PeerEntry can_peer_entry() {
 
 std::unique_ptr<LoopbackPeer> make_can_peer(const config::Config& cfg,
                                             drivers::can::CanSocket socket, bool realtime) {
+  const can::CanSettings& s = can::can_settings(cfg);
+  if (s.nodes.size() != 1) {
+    // One simulated drive plays one node, with one plant; one peer per node (each with a
+    // configuration of that node alone) plays a bus of several.
+    throw config::ConfigError({cfg.locate("device.can.nodes") +
+                               ": device.can.nodes: the simulated drive plays one node (one "
+                               "plant), got " +
+                               std::to_string(s.nodes.size()) +
+                               ": run one peer per node, each with a configuration of that node "
+                               "alone"});
+  }
   try {
-    if (can::can_settings(cfg).profile == can::Profile::kOdrive) {
+    if (s.profile == can::Profile::kOdrive) {
       return std::make_unique<OdrivePeer>(cfg, std::move(socket), realtime);
     }
     return std::make_unique<Cia402Peer>(cfg, std::move(socket), realtime);

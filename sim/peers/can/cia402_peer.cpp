@@ -42,7 +42,7 @@ bool mappable(std::uint32_t entry) {
 Cia402Peer::Cia402Peer(const config::Config& cfg, drivers::can::CanSocket socket, bool realtime)
     : CanPeerBase(cfg, std::move(socket), realtime,
                   {CanPeerFault::kStopSdo, CanPeerFault::kAbortSdo, CanPeerFault::kTruncatedEmcy}),
-      node_(settings_.node_id) {
+      node_(settings_.nodes.front().node_id) {
   // Factory defaults: the predefined connection set, with a mapping that is not hapticd's
   // (RPDO1 controlword only, TPDO1 statusword only, event-driven): `pdo_mapping: verify`
   // against a factory-fresh drive must fail, as it would on a real one.
@@ -79,8 +79,9 @@ std::uint32_t Cia402Peer::object(std::uint16_t index, std::uint8_t sub) const {
 }
 
 std::int32_t Cia402Peer::position_units() noexcept {
-  const auto units = std::llround(axis_.encoder_position() / settings_.position_per_unit) +
-                     position_offset_.load();
+  const auto units =
+      std::llround(axis_.encoder_position() / settings_.nodes.front().position_per_unit) +
+      position_offset_.load();
   return static_cast<std::int32_t>(static_cast<std::uint32_t>(units));  // modulo 2^32
 }
 
@@ -92,7 +93,7 @@ void Cia402Peer::set_power(PowerState s) {
   // Torque follows 0x6071 only in operation enabled and mode 10 (cyclic synchronous torque).
   if (on && static_cast<std::int8_t>(object(0x6060, 0)) == cia402::kModeCyclicSynchronousTorque) {
     axis_.hold_force(target_torque_ * static_cast<double>(kRatedTorqueMilliNm) /
-                     (1e6 * settings_.torque_per_force));
+                     (1e6 * settings_.nodes.front().torque_per_force));
   } else if (on) {
     axis_.hold_force(0.0);
   }

@@ -16,7 +16,7 @@ namespace odrive = drivers::can::odrive;
 
 OdrivePeer::OdrivePeer(const config::Config& cfg, drivers::can::CanSocket socket, bool realtime)
     : CanPeerBase(cfg, std::move(socket), realtime),
-      node_(settings_.node_id),
+      node_(settings_.nodes.front().node_id),
       firmware_(settings_.odrive.detect_firmware ? odrive::Firmware::k06
                                                  : settings_.odrive.firmware),
       watchdog_timeout_s_(settings_.odrive.watchdog_timeout_s) {
@@ -67,14 +67,14 @@ void OdrivePeer::trigger() {
   const bool torque_mode =
       control_mode_ == odrive::kControlModeTorque && input_mode_ == odrive::kInputModePassthrough;
   if (state_.load() == odrive::kAxisClosedLoop && torque_mode) {
-    axis_.hold_force(static_cast<double>(input_torque_) / settings_.torque_per_force);
+    axis_.hold_force(static_cast<double>(input_torque_) / settings_.nodes.front().torque_per_force);
   }
   const bool cyclic = settings_.odrive.position_source == drivers::can::PositionSource::kCyclic;
   const auto every = static_cast<std::uint64_t>(
       cyclic ? std::max(1.0, std::round(settings_.odrive.cyclic_period_ms * 1e-3 / period_s_)) : 1);
   if (!faults_.active(PeerFault::kStopAnswering) && triggers_ % every == 0) {
-    const double turns = axis_.encoder_position() / settings_.position_per_unit;
-    const double speed = axis_.plant().velocity() / settings_.position_per_unit;
+    const double turns = axis_.encoder_position() / settings_.nodes.front().position_per_unit;
+    const double speed = axis_.plant().velocity() / settings_.nodes.front().position_per_unit;
     CanFrame f =
         odrive::encoder_estimates(node_, {static_cast<float>(turns), static_cast<float>(speed)});
     if (can_faults_.take(CanPeerFault::kWrongLengthPdo)) f.len = 6;
