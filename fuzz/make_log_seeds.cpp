@@ -176,7 +176,7 @@ int main(int argc, char** argv) {
   write_bytes(dir / "with_counters.hlog", counted);
   write_bytes(dir / "cut_in_block.hlog", Bytes(full.begin(), full.end() - 30));
   write_bytes(dir / "cut_in_header.hlog", Bytes(full.begin(), full.begin() + 20));
-  for (std::uint32_t version : {1u, 2u}) {
+  for (std::uint32_t version : {1u, 2u, 3u}) {
     const std::string name = "v" + std::to_string(version) + "_three_blocks";
     const Bytes old = to_version(full, version);
     expect(blocks_read(old) == blocks_read(full), name + ": an older version's log must read back");

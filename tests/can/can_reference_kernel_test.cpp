@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 #include <cstdio>
 #include <string>
 #include <thread>
@@ -160,6 +161,64 @@ TEST(CanReferenceOnVcan, ADriveLimitBelowMaxTorqueIsNamedBeforeOutputIsEnabled) 
   EXPECT_EQ(run.output().find("output enabled"), std::string::npos) << run.output();
   runner.stop();
   EXPECT_FALSE(drive.torque_on());
+}
+
+// Two CiA 402 reference drives on vcan0 as the joints of a cartesian XY gantry
+// (config/can-gantry.yaml), each pushed by its own hand with the same force, against a wall
+// whose normal is the diagonal: at rest at F sqrt(2) / K along it (the task force (F, F)), and
+// an EMCY of either drive ends the run with zero torque on both and the node named.
+TEST(CanReferenceOnVcan, TwoCia402DrivesAsAGantryRenderADiagonalWallAndAFaultZeroesBoth) {
+  for (const int faulty : {1, 2}) {
+    SCOPED_TRACE("the fault on node " + std::to_string(faulty));
+    kernel_test::VcanInterface bus("vcan0");
+    std::vector<std::unique_ptr<reference::Cia402Drive>> drives;
+    std::vector<std::unique_ptr<reference::ReferenceRunner>> runners;
+    for (std::uint8_t node : {1, 2}) {
+      reference::Cia402Behaviour b = with([](reference::Cia402Behaviour&) {});
+      b.node = node;
+      drives.push_back(std::make_unique<reference::Cia402Drive>(
+          b, hand(kCia402Rig.hand_force, 3.0), reference::monotonic_ns()));
+      runners.push_back(std::make_unique<reference::ReferenceRunner>(
+          *drives.back(), reference::CanPort::open("vcan0")));
+    }
+    std::vector<std::string> a = {kBin, "run", "--config",
+                                  std::string(HAPTICD_SOURCE_DIR) + "/config/can-gantry.yaml",
+                                  "--duration", "60"};
+    for (const std::string& set :
+         {std::string("loop.rate_hz=") + std::to_string(kCia402Rig.rate_hz),
+          std::string("device.can.interface=vcan0"), std::string("device.can.sdo_timeout_ms=1000"),
+          std::string("device.can.state_timeout_ms=2000"),
+          std::string("device.can.heartbeat_timeout_ms=3000"),
+          std::string("device.can.cia402.master_heartbeat_ms=200"),
+          std::string("device.can.cia402.drive_watchdog_ms=1500"),
+          std::string("safety.stale_fault_ticks=10"), std::string("loop.overrun_fault_streak=100"),
+          "walls=[{point: [0, 0], normal: [1, 1], damping: 0, stiffness: " +
+              std::to_string(kCia402Rig.stiffness) + "}]"}) {
+      a.insert(a.end(), {"--set", set});
+    }
+    ChildProcess run(a, "/tmp/hapticd-ref-gantry.out");
+    kernel_test::wait_until([&] { return drives[0]->torque_on() && drives[1]->torque_on(); },
+                            milliseconds(60'000), "both drives operation enabled");
+    for (auto& d : drives) d->press_now();
+    std::this_thread::sleep_for(milliseconds(10'000));
+    const double x = rest_position(*drives[0], 1000), y = rest_position(*drives[1], 1000);
+    const double depth = (x + y) / std::sqrt(2.0);  // n . (x - 0)
+    const double expected = kCia402Rig.hand_force * std::sqrt(2.0) / kCia402Rig.stiffness;
+    EXPECT_NEAR(depth, expected, 0.02 * expected) << run.output();
+    RecordProperty("rest_mm_" + std::to_string(faulty), std::to_string(depth * 1e3));
+    ASSERT_GT(std::abs(drives[0]->motor_force_n()), 0.05) << "the wall pushes on both joints";
+    ASSERT_GT(std::abs(drives[1]->motor_force_n()), 0.05);
+    drives[faulty - 1]->inject_fault(0x2310);
+    EXPECT_EQ(run.wait(seconds(60)), 1) << run.output();
+    EXPECT_NE(run.output().find("node " + std::to_string(faulty)), std::string::npos)
+        << run.output();
+    std::this_thread::sleep_for(milliseconds(300));
+    for (auto& r : runners) r->stop();
+    for (auto& d : drives) {
+      EXPECT_FALSE(d->torque_on()) << run.output();
+      EXPECT_EQ(d->motor_force_n(), 0.0);
+    }
+  }
 }
 
 }  // namespace

@@ -62,6 +62,17 @@ inline TickRecord make_record(std::uint64_t tick) {
   r.fault_code = static_cast<std::uint32_t>(tick * 40503u);
   r.observer_energy_j = 0.25 - 1e-3 * static_cast<double>(tick);
   r.passivity_damping = static_cast<double>(tick % 4);
+  r.joint_position[0] = 0.002 * static_cast<double>(tick);
+  r.joint_position[1] = -0.003 * static_cast<double>(tick);
+  r.joint_force[0] = 0.5 * static_cast<double>(tick % 11);
+  r.joint_force[1] = -0.25 * static_cast<double>(tick % 7);
+  r.task_position[0] = 1e-4 * static_cast<double>(tick);
+  r.task_position[1] = 2e-4 * static_cast<double>(tick);
+  r.task_position[2] = 0.11 + 1e-5 * static_cast<double>(tick);
+  r.joints = static_cast<std::uint8_t>(1 + tick % 3);
+  r.deepest_wall = static_cast<std::uint8_t>(tick % 8);
+  r.wall_contact = static_cast<std::uint8_t>(tick * 37u);
+  r.pose_status = static_cast<std::uint8_t>(tick % 4);
   return r;
 }
 
