@@ -104,16 +104,25 @@ void ServoLoop::account(const telemetry::TickRecord& rec, const Sensed& sensed,
   live_.position.store(rec.position, r);
   live_.penetration.store(rec.penetration, r);
   live_.force_commanded.store(rec.force_commanded, r);
-  if (rec.joints > 1) {
-    const double q[] = {rec.position, rec.joint_position[0], rec.joint_position[1]};
-    const double tau[] = {rec.force_commanded, rec.joint_force[0], rec.joint_force[1]};
-    for (std::size_t j = 0; j < base::kMaxJoints; ++j) {
-      live_.joint_position[j].store(q[j], r);
-      live_.joint_force[j].store(tau[j], r);
-      live_.task_position[j].store(rec.task_position[j], r);
-    }
+  if (options_.scene != nullptr) {
+    account_joints(rec);
+    return;
   }
-  const PassivityResult p = passivity();
+  live_.wall_energy_j.store(observer_.wall_work_j(), r);
+  live_.observer_energy_j.store(observer_.energy_j(), r);
+  live_.damped_ticks.store(observer_.damped_ticks(), r);
+}
+
+void ServoLoop::account_joints(const telemetry::TickRecord& rec) noexcept {
+  constexpr auto r = std::memory_order_relaxed;
+  const double q[] = {rec.position, rec.joint_position[0], rec.joint_position[1]};
+  const double tau[] = {rec.force_commanded, rec.joint_force[0], rec.joint_force[1]};
+  for (std::size_t j = 0; j < base::kMaxJoints; ++j) {
+    live_.joint_position[j].store(q[j], r);
+    live_.joint_force[j].store(tau[j], r);
+    live_.task_position[j].store(rec.task_position[j], r);
+  }
+  const PassivityResult p = scene_passivity();
   live_.wall_energy_j.store(wall_work_j(), r);
   live_.observer_energy_j.store(p.energy_j, r);
   live_.damped_ticks.store(p.damped_ticks, r);

@@ -177,6 +177,8 @@ class ServoLoop {
   // Counts what the tick's record says and stores what `hapticctl status` reads.
   // RT-safe: called every tick.
   void account(const telemetry::TickRecord& rec, const Sensed& sensed, LoopResult& res) noexcept;
+  // account's stores for several joints: each joint, the pose, the walls' observers. RT-safe.
+  void account_joints(const telemetry::TickRecord& rec) noexcept;
   // This run's share of the counters (LoopResult's counts). RT-safe.
   void run_counts(const std::array<std::uint64_t, kLoopCounterCount>& before,
                   LoopResult& res) const noexcept;

@@ -7,8 +7,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <memory>
 #include <cstdio>
+#include <memory>
 #include <string>
 #include <thread>
 #include <vector>
@@ -166,9 +166,11 @@ TEST(CanReferenceOnVcan, ADriveLimitBelowMaxTorqueIsNamedBeforeOutputIsEnabled) 
 // Two CiA 402 reference drives on vcan0 as the joints of a cartesian XY gantry
 // (config/can-gantry.yaml), each pushed by its own hand with the same force, against a wall
 // whose normal is the diagonal: at rest at F sqrt(2) / K along it (the task force (F, F)), and
-// an EMCY of either drive ends the run with zero torque on both and the node named.
+// an EMCY of the second drive ends the run with zero torque on both and the node named (the
+// first's, and each node's heartbeat, over a socketpair: can_reference_nodes_test.cpp; one
+// run here, as the emulated guest takes most of a minute to start one).
 TEST(CanReferenceOnVcan, TwoCia402DrivesAsAGantryRenderADiagonalWallAndAFaultZeroesBoth) {
-  for (const int faulty : {1, 2}) {
+  for (const int faulty : {2}) {
     SCOPED_TRACE("the fault on node " + std::to_string(faulty));
     kernel_test::VcanInterface bus("vcan0");
     std::vector<std::unique_ptr<reference::Cia402Drive>> drives;
@@ -176,14 +178,15 @@ TEST(CanReferenceOnVcan, TwoCia402DrivesAsAGantryRenderADiagonalWallAndAFaultZer
     for (std::uint8_t node : {1, 2}) {
       reference::Cia402Behaviour b = with([](reference::Cia402Behaviour&) {});
       b.node = node;
-      drives.push_back(std::make_unique<reference::Cia402Drive>(
-          b, hand(kCia402Rig.hand_force, 3.0), reference::monotonic_ns()));
+      drives.push_back(std::make_unique<reference::Cia402Drive>(b, hand(kCia402Rig.hand_force, 3.0),
+                                                                reference::monotonic_ns()));
       runners.push_back(std::make_unique<reference::ReferenceRunner>(
           *drives.back(), reference::CanPort::open("vcan0")));
     }
-    std::vector<std::string> a = {kBin, "run", "--config",
-                                  std::string(HAPTICD_SOURCE_DIR) + "/config/can-gantry.yaml",
-                                  "--duration", "60"};
+    std::vector<std::string> a = {
+        kBin,         "run",
+        "--config",   std::string(HAPTICD_SOURCE_DIR) + "/config/can-gantry.yaml",
+        "--duration", "60"};
     for (const std::string& set :
          {std::string("loop.rate_hz=") + std::to_string(kCia402Rig.rate_hz),
           std::string("device.can.interface=vcan0"), std::string("device.can.sdo_timeout_ms=1000"),

@@ -46,6 +46,14 @@ with tempfile.TemporaryDirectory() as tmp:
     subprocess.run([binary, "run", "--duration", "1", "--set", "loop.clock=freerun", "--log", log],
                    check=True, capture_output=True)
     check(["log", log], os.path.join(tmp, "log-freerun"))
+    # A device of several joints: the log over time, and the workspace with its trajectory.
+    delta = os.path.join(tmp, "delta.hlog")
+    subprocess.run([binary, "run", "--config", os.path.join(source, "config", "sim-delta.yaml"),
+                    "--duration", "2", "--log", delta], check=True, capture_output=True)
+    check(["log", delta], os.path.join(tmp, "log-delta"))
+    for ext in ("png", "svg"):
+        if not os.path.exists(os.path.join(tmp, "log-delta-workspace." + ext)):
+            failures.append("a delta's log: no workspace figure (%s)" % ext)
     r = subprocess.run([tool, "log", os.path.join(tmp, "missing.hlog")], env=env,
                        capture_output=True, text=True)
     if r.returncode != 2 or "no such file" not in r.stderr:
