@@ -69,39 +69,49 @@ double SimDevice::encoder(double position) noexcept {
   return std::floor(counts) / c.counts_per_unit;
 }
 
-void SimDevice::read_joints(std::span<PositionSample> samples) noexcept {
-  if (!first_read_) joints_->step(kinematics::Vec3((output_on_ ? motor_sign_ : 0.0) * torque_));
-  first_read_ = false;
-  for (std::size_t i = 0; i < samples.size(); ++i) {
-    samples[i].position = encoder(joints_->joint_positions()[static_cast<int>(i)]);
-  }
-}
-
-IoStatus SimDevice::on_read(std::span<PositionSample> samples) noexcept {
+IoStatus SimDevice::read_joints(std::span<PositionSample> samples) noexcept {
   if (faults_.active(PeerFault::kTransportFault)) {
     set_fault_code(ENODEV);
     return IoStatus::kTransportFault;
   }
   if (faults_.active(PeerFault::kStopAnswering)) return IoStatus::kNoNewData;
-  if (joints_) {
-    read_joints(samples);
-  } else if (first_read_) {
-    first_read_ = false;
-    samples.front().position = axis_.encoder_position();
-  } else {
-    axis_.step();
-    samples.front().position = axis_.encoder_position();
-  }
+  if (!first_read_) joints_->step(kinematics::Vec3((output_on_ ? motor_sign_ : 0.0) * torque_));
+  first_read_ = false;
   if (faults_.take(PeerFault::kSkipSequence)) sequence_ += 3;
-  std::uint32_t status = axis_.output_on() ? kStatusOutputEnabled : 0u;
-  if (faults_.active(PeerFault::kDeviceFault)) status |= kStatusFault;
-  for (PositionSample& out : samples) {  // every joint measured at the same instant
+  const bool fault = faults_.active(PeerFault::kDeviceFault);
+  for (std::size_t i = 0; i < samples.size(); ++i) {  // every joint at the same instant
+    PositionSample& out = samples[i];
+    out.position = encoder(joints_->joint_positions()[static_cast<int>(i)]);
     out.sequence = sequence_;
-    out.status = status;
+    out.status = (output_on_ ? kStatusOutputEnabled : 0u) | (fault ? kStatusFault : 0u);
     out.flags = kSampleHasSequence;
   }
   ++sequence_;
-  if (status & kStatusFault) {
+  if (!fault) return IoStatus::kOk;
+  set_fault_code(kStatusFault);
+  return IoStatus::kDeviceFault;
+}
+
+IoStatus SimDevice::on_read(std::span<PositionSample> samples) noexcept {
+  if (joints_) return read_joints(samples);
+  PositionSample& out = samples.front();  // one joint
+  if (faults_.active(PeerFault::kTransportFault)) {
+    set_fault_code(ENODEV);
+    return IoStatus::kTransportFault;
+  }
+  if (faults_.active(PeerFault::kStopAnswering)) return IoStatus::kNoNewData;
+  if (first_read_) {
+    first_read_ = false;
+  } else {
+    axis_.step();
+  }
+  if (faults_.take(PeerFault::kSkipSequence)) sequence_ += 3;
+  out.position = axis_.encoder_position();
+  out.sequence = sequence_++;
+  out.status = axis_.output_on() ? kStatusOutputEnabled : 0u;
+  out.flags = kSampleHasSequence;
+  if (faults_.active(PeerFault::kDeviceFault)) {
+    out.status |= kStatusFault;
     set_fault_code(kStatusFault);
     return IoStatus::kDeviceFault;
   }

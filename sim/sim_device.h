@@ -55,9 +55,9 @@ class SimDevice final : public hapticd::Device {
   std::string describe(const DeviceFault& fault) const override;
 
  private:
-  // RT-safe: called every tick. The joint plant's read: one period on with the torques held,
-  // then each joint's encoder.
-  void read_joints(std::span<PositionSample> samples) noexcept;
+  // RT-safe: called every tick. on_read for several joints: one period on with the torques
+  // held, then each joint's encoder, the faults injected as one joint's.
+  IoStatus read_joints(std::span<PositionSample> samples) noexcept;
   double encoder(double position) noexcept;
 
   SimAxis axis_;

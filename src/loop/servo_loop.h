@@ -200,7 +200,8 @@ class ServoLoop {
   LatencyHistogram wake_latency_;
   LatencyHistogram compute_time_;
   std::atomic<std::uint64_t> ticks_done_{0};
-  std::uint64_t next_tick_ = 0;  // the first tick of the next run()
+  std::uint64_t next_tick_ = 0;           // the first tick of the next run()
+  std::uint64_t scene_damped_ticks_ = 0;  // several joints: ticks any wall's controller damped
   LiveStatus live_;
   using K = base::CounterKind;
   std::array<base::Counter, kLoopCounterCount> counters_{{
