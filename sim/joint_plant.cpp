@@ -17,9 +17,9 @@ JointPlant::JointPlant(const config::DeviceConfig& device, double sample_period_
       drift_((h_ - gain_ * device.mass) / device.damping),
       coast_(gain_ * device.mass),
       setpoint_(device.sim.op.setpoint) {
-  using Kind = config::OperatorSpec::Kind;
+  using Operator = config::OperatorSpec::Kind;
   if (n_ < 2) throw std::invalid_argument("sim: the joint plant is for several joints");
-  if (device.sim.op.kind != Kind::kHand && device.sim.op.kind != Kind::kNone) {
+  if (device.sim.op.kind != Operator::kHand && device.sim.op.kind != Operator::kNone) {
     throw std::invalid_argument("sim: a device of several joints takes a hand or no operator");
   }
   if (!(device.mass > 0.0) || !(device.damping > 0.0) || !(sample_period_s > 0.0)) {

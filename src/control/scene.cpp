@@ -75,24 +75,28 @@ SceneStep Scene::step(const kinematics::Pose& pose, const kinematics::Vec3& limi
   return out;
 }
 
+ControlLaw task_wall_law(const config::Config& cfg, const config::TaskWallConfig& w) {
+  config::Config one = cfg;
+  one.wall = w.law;
+  one.wall.position = 0.0;  // the law runs on s = n . (x - p): its wall is at s = 0,
+  one.wall.normal = 1;      // occupying s > 0
+  ControlLaw law = make_control_law(one);
+  // device.max_force limits each joint, not a wall: the joints' saturation, which keeps the
+  // force's direction, is the only limit, so a wall never saturates alone and its runaway
+  // guard is the scene's (loop/scene_tick.h), which reads runaway_penetration: an explicit
+  // safety.max_penetration, or none (the margin on the joints' saturation instead).
+  law.max_force = std::numeric_limits<double>::infinity();
+  if (!(cfg.safety.max_penetration > 0.0)) {
+    law.runaway_penetration = std::numeric_limits<double>::infinity();
+  }
+  return law;
+}
+
 Scene make_scene(const config::Config& cfg) {
   std::vector<WallGeometry> geometry;
   std::vector<ControlLaw> laws;
   for (const config::TaskWallConfig& w : cfg.walls) {
-    config::Config one = cfg;
-    one.wall = w.law;
-    one.wall.position = 0.0;  // the law runs on s = n . (x - p): its wall is at s = 0,
-    one.wall.normal = 1;      // occupying s > 0
-    ControlLaw law = make_control_law(one);
-    // device.max_force limits each joint, not a wall: the joints' saturation, which keeps the
-    // force's direction, is the only limit, so a wall never saturates alone and its runaway
-    // guard is the scene's (loop/scene_tick.h), which reads runaway_penetration: an explicit
-    // safety.max_penetration, or none (the margin on the joints' saturation instead).
-    law.max_force = std::numeric_limits<double>::infinity();
-    if (!(cfg.safety.max_penetration > 0.0)) {
-      law.runaway_penetration = std::numeric_limits<double>::infinity();
-    }
-    laws.push_back(law);
+    laws.push_back(task_wall_law(cfg, w));
     geometry.push_back({w.point, w.normal});
   }
   return Scene(geometry, laws);

@@ -76,6 +76,10 @@ class Scene {
   kinematics::Vec3 last_x_ = kinematics::Vec3::Zero();  // the last finite task position
 };
 
+// Not RT-safe. Wall `w`'s law along its normal: make_control_law of its own section on the
+// coordinate s = n . (x - p) (a wall at 0 occupying s > 0), limited by the joints alone.
+ControlLaw task_wall_law(const config::Config& cfg, const config::TaskWallConfig& w);
+
 // Not RT-safe. The scene of cfg's `walls` (none for a device of one joint): each wall's law is
 // make_control_law of its own section, on its coordinate along the normal.
 Scene make_scene(const config::Config& cfg);

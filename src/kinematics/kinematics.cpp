@@ -94,6 +94,10 @@ const Box& workspace(const Kinematics& k) noexcept {
   return k.joints.workspace;
 }
 
+Box& workspace(Kinematics& k) noexcept {
+  return const_cast<Box&>(workspace(static_cast<const Kinematics&>(k)));
+}
+
 Vec3 workspace_centre(const Kinematics& k) noexcept {
   const Box& b = workspace(k);
   Vec3 c = Vec3::Zero();

@@ -29,6 +29,7 @@ int joint_count(const Kinematics& k) noexcept;
 
 // The kind's workspace box (on the joints' own coordinates for `joints`).
 const Box& workspace(const Kinematics& k) noexcept;
+Box& workspace(Kinematics& k) noexcept;
 // Its centre on each coordinate the box bounds on both sides, 0 on the others.
 Vec3 workspace_centre(const Kinematics& k) noexcept;
 

@@ -13,6 +13,7 @@
 #include "control/controller.h"
 #include "loop/servo_loop.h"
 #include "sim/sim_device.h"
+#include "verify/frequency_sweep.h"
 
 namespace hapticd::verify {
 namespace {
@@ -35,51 +36,25 @@ config::Config measurement_config(const config::Config& base, int total_delay) {
   return c;
 }
 
-class Sweep {
+class Sweep final : public FrequencySweep {
  public:
   Sweep(const config::Config& base, int total_delay, double amplitude, bool nyquist_pole,
         double slowest_pole)
-      : cfg_(measurement_config(base, total_delay)),
-        amplitude_(amplitude),
-        nyquist_pole_(nyquist_pole) {
-    // Decay time for the filters' start-up transient: short for a bare wall (E is FIR for
-    // backward); behind a coupling with a pole at z = 1, until H's slowest pole has decayed by
-    // 1e-6 (13.8 time constants). Its transient would otherwise be measured as power at the
-    // lowest frequencies; what is left of it is nearly constant over a window of whole
-    // periods and averages out: measured on couplings with poles up to 1 - 3e-5, it moved
-    // the measured b_req by at most 1e-2 of its remaining fraction, so here by 1e-8 of b_req
-    // against the tolerance of 1e-3 (at 1e-12, 27.6 time constants, twice the ticks, the
-    // same verdicts to 1e-6).
-    warmup_ = 16 + 4 * total_delay;
-    if (slowest_pole > 0.0 && slowest_pole < 1.0) {
-      const double settle = std::log(1e-6) / std::log(slowest_pole);
-      warmup_ = std::max<std::int64_t>(warmup_, std::llround(std::min(settle, 1e6)));
-    }
+      : FrequencySweep(base.loop.sample_period_s(), nyquist_pole),
+        cfg_(measurement_config(base, total_delay)),
+        amplitude_(amplitude) {
+    warmup_ = warmup_ticks(total_delay, slowest_pole);
   }
 
-  // Zero of the cycle-averaged operator power at theta = 2 pi p / q (rad per sample).
-  double damping_zero(std::int64_t p, std::int64_t q) {
-    const std::int64_t g = std::gcd(p, q);
-    p /= g;
-    q /= g;
-    const auto key = std::make_pair(p, q);
-    if (auto it = memo_.find(key); it != memo_.end()) return it->second;
-    // Whole periods only; an odd period is doubled so a Nyquist-rate transient averages out.
-    std::int64_t window = (q % 2 == 1 && nyquist_pole_) ? 2 * q : q;
-    while (window < 256) window *= 2;
-    const double theta = 2.0 * kPi * static_cast<double>(p) / static_cast<double>(q);
+ private:
+  // The zero of the cycle-averaged operator power at theta.
+  double measure(double theta, std::int64_t period, std::int64_t window) override {
     const double b1 = cfg_.device.damping;
     const double b2 = 2.0 * b1;
-    const auto [p1, p2] = powers(theta, q, window, b1, b2);
+    const auto [p1, p2] = powers(theta, period, window, b1, b2);
     // P(b) = P0 + b D is affine in b: its zero is where the device stops delivering energy.
-    const double zero = b1 - p1 * (b2 - b1) / (p2 - p1);
-    memo_[key] = zero;
-    sweep_.push_back({theta / (2.0 * kPi * cfg_.loop.sample_period_s()), zero});
-    return zero;
+    return b1 - p1 * (b2 - b1) / (p2 - p1);
   }
-
-  std::uint64_t ticks() const { return ticks_; }
-  const std::vector<SweepPoint>& points() const { return sweep_; }
 
  private:
   // The cycle-averaged operator power over `window` ticks after the warm-up, at damping b1
@@ -149,46 +124,9 @@ class Sweep {
 
   config::Config cfg_;
   double amplitude_;
-  bool nyquist_pole_;
   std::int64_t warmup_ = 0;
   bool in_contact_ = true;
-  std::uint64_t ticks_ = 0;
-  std::map<std::pair<std::int64_t, std::int64_t>, double> memo_;
-  std::vector<SweepPoint> sweep_;
 };
-
-// The largest measured damping zero over the frequencies up to Nyquist: a coarse grid
-// theta = pi j / J (Tustin's pole at -1 resonates exactly at Nyquist, left out), low
-// frequencies where delayed walls peak as theta -> 0, then a ternary search around the coarse
-// maximum on the finer grid theta = 2 pi p / Q.
-double worst_damping(Sweep& sweep, bool tustin) {
-  constexpr std::int64_t kJ = 64;
-  double best = -std::numeric_limits<double>::infinity();
-  std::int64_t best_j = 1;
-  for (std::int64_t j = 1; j <= (tustin ? kJ - 1 : kJ); ++j) {
-    const double v = sweep.damping_zero(j, 2 * kJ);
-    if (v > best) {
-      best = v;
-      best_j = j;
-    }
-  }
-  for (std::int64_t q : {4096, 1024, 512}) best = std::max(best, sweep.damping_zero(1, q));
-  constexpr std::int64_t kQ = 4096;
-  constexpr std::int64_t kScale = kQ / (2 * kJ);
-  std::int64_t lo = std::max<std::int64_t>(1, (best_j - 1) * kScale);
-  std::int64_t hi = std::min<std::int64_t>(tustin ? kQ / 2 - 1 : kQ / 2, (best_j + 1) * kScale);
-  while (hi - lo > 2) {  // ternary search on a unimodal bracket
-    const std::int64_t m1 = lo + (hi - lo) / 3;
-    const std::int64_t m2 = hi - (hi - lo) / 3;
-    if (sweep.damping_zero(m1, kQ) < sweep.damping_zero(m2, kQ)) {
-      lo = m1 + 1;
-    } else {
-      hi = m2 - 1;
-    }
-  }
-  for (std::int64_t p = lo; p <= hi; ++p) best = std::max(best, sweep.damping_zero(p, kQ));
-  return best;
-}
 
 }  // namespace
 
@@ -216,12 +154,8 @@ VerifyResult verify_passivity(const config::Config& cfg, int device_delay_sample
   const double best = worst_damping(sweep, tustin);
 
   r.sweep = sweep.points();
-  std::sort(r.sweep.begin(), r.sweep.end(), [](const SweepPoint& a, const SweepPoint& b) {
-    return a.frequency_hz < b.frequency_hz;
-  });
   r.measured_required_damping = best;
-  for (const SweepPoint& s : r.sweep)
-    if (s.measured_damping == best) r.worst_frequency_hz = s.frequency_hz;
+  r.worst_frequency_hz = worst_frequency_hz(r.sweep, best);
   const double scale = std::max(std::abs(r.analytic_required_damping), 1e-12);
   r.relative_error = std::abs(r.measured_required_damping - r.analytic_required_damping) / scale;
   r.agrees = r.relative_error <= kVerifyTolerance;

@@ -47,5 +47,45 @@ TEST(CliVerify, MeasuresTheLinearLoopBehindACouplingWithAPoleAtOne) {
   EXPECT_NEAR(j["measured_required_damping"].get<double>(), 0.1961, 1e-3);
 }
 
+// Several joints: each wall of config/sim-delta.yaml measured on the simulated delta's loop at
+// the configuration the gate found worst for it agrees with the one-axis bound along its normal,
+// and the gate's verdict is the measurement's: a stiff wall the device cannot hold passive there
+// is measured active and refused, the box it passes is measured passive.
+TEST(CliVerify, TheDeltasWallsAreMeasuredAtTheirWorstConfigurationsAndTheGateAgrees) {
+  const std::string delta = source_dir() + "/config/sim-delta.yaml";
+  const ProcessResult ok = run_process({hapticd_binary(), "verify", "--json", "--config", delta});
+  ASSERT_EQ(ok.exit_code, 0) << ok.out << ok.err;
+  const nlohmann::json j = nlohmann::json::parse(ok.out);
+  ASSERT_EQ(j["walls"].size(), 6u);
+  for (const nlohmann::json& w : j["walls"]) {
+    EXPECT_EQ(w["verdict"], "agree") << w.dump();
+    EXPECT_TRUE(w["measured_passive"].get<bool>()) << w.dump();
+    EXPECT_TRUE(w["gate_passive"].get<bool>()) << w.dump();
+    // The motion met the damping the gate credits there (to the kinematics' curvature).
+    EXPECT_NEAR(w["measured_normal_damping"].get<double>(), w["normal_damping"].get<double>(),
+                1e-3 * w["normal_damping"].get<double>());
+  }
+  const ProcessResult stiff =
+      run_process({hapticd_binary(), "verify", "--json", "--config", delta, "--set",
+                   "walls=[{point: [-0.02, 0, 0.11], normal: [-1, 0, 0], stiffness: 1500}]"});
+  ASSERT_EQ(stiff.exit_code, 0) << stiff.out << stiff.err;
+  const nlohmann::json a = nlohmann::json::parse(stiff.out)["walls"][0];
+  EXPECT_FALSE(a["measured_passive"].get<bool>()) << a.dump();
+  EXPECT_FALSE(a["gate_passive"].get<bool>()) << a.dump();
+  EXPECT_GT(a["measured_required_damping"].get<double>(), a["normal_damping"].get<double>());
+  const ProcessResult check =
+      run_process({hapticd_binary(), "check", "--config", delta, "--set",
+                   "walls=[{point: [-0.02, 0, 0.11], normal: [-1, 0, 0], stiffness: 1500}]"});
+  EXPECT_EQ(check.exit_code, 3) << check.out;
+  // Below the damping there with the margin to spare: measured passive, and passed.
+  const ProcessResult soft =
+      run_process({hapticd_binary(), "verify", "--json", "--config", delta, "--set",
+                   "walls=[{point: [-0.02, 0, 0.11], normal: [-1, 0, 0], stiffness: 900}]"});
+  ASSERT_EQ(soft.exit_code, 0) << soft.out << soft.err;
+  const nlohmann::json p = nlohmann::json::parse(soft.out)["walls"][0];
+  EXPECT_TRUE(p["measured_passive"].get<bool>()) << p.dump();
+  EXPECT_TRUE(p["gate_passive"].get<bool>()) << p.dump();
+}
+
 }  // namespace
 }  // namespace hapticd::testing
