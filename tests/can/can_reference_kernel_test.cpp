@@ -202,6 +202,8 @@ TEST(CanReferenceOnVcan, TwoCia402DrivesAsAGantryRenderADiagonalWallAndAFaultZer
     ChildProcess run(a, "/tmp/hapticd-ref-gantry.out");
     kernel_test::wait_until([&] { return drives[0]->torque_on() && drives[1]->torque_on(); },
                             milliseconds(60'000), "both drives operation enabled");
+    // The press's ramp (0.5 s), then its slow pole (each axis: 0.1 s^2 + 3 s + K/2, 1.2 s)
+    // decays to 3e-4.
     for (auto& d : drives) d->press_now();
     std::this_thread::sleep_for(milliseconds(10'000));
     const double x = rest_position(*drives[0], 1000), y = rest_position(*drives[1], 1000);
