@@ -47,7 +47,8 @@ void tick_bench(benchmark::State& state, bool loop_thread_only) {
     runner.wait_idle();
     const auto t2 = Clock::now();
     force = -force;
-    state.SetIterationTime(std::chrono::duration<double>((loop_thread_only ? t1 : t2) - t0).count());
+    state.SetIterationTime(
+        std::chrono::duration<double>((loop_thread_only ? t1 : t2) - t0).count());
   }
   const double ticks = static_cast<double>(state.iterations());
   const double in = static_cast<double>(counter(device, "axis_events") - frames) / ticks;

@@ -2,18 +2,18 @@
 // the servo loop in freerun over a device that hands back a precomputed delta motion (so no
 // plant is timed), through config/sim-delta.yaml's scene: the samples checked per joint, the
 // delta's forward kinematics, six walls each with its passivity observer, J^T and the
-// saturation, three torques written, the record pushed. Reports ns per tick, the loop's own
-// compute-time percentiles and heap allocations per tick.
+// saturation, three torques written, the record pushed, timed by bench/full_tick.h.
 #include <benchmark/benchmark.h>
 
 #include <cmath>
 #include <fstream>
+#include <memory>
 #include <sstream>
 #include <vector>
 
-#include "alloc_counter.h"
 #include "config/config_loader.h"
 #include "control/scene.h"
+#include "full_tick.h"
 #include "loop/servo_loop.h"
 
 namespace {
@@ -63,47 +63,37 @@ class PathDevice final : public hapticd::Device {
   std::size_t next_ = 0;
 };
 
+// What one run drives: the path, the scene of config/sim-delta.yaml's six walls with their
+// observers, and the loop over them.
+struct DeltaRig {
+  DeltaRig(const hapticd::config::Config& cfg, hapticd::bench::TickRing& ring,
+           hapticd::loop::LoopOptions o)
+      : device(cfg.device.kinematics),
+        unused(hapticd::control::make_control_law(cfg)),
+        scene(hapticd::control::make_scene(cfg)),
+        state(cfg.device.kinematics, scene, Vec3::Constant(cfg.device.max_force),
+              std::vector<hapticd::control::ObserverParams>(
+                  cfg.walls.size(), hapticd::control::observer_params(cfg, 0))),
+        loop(device, unused, &ring, with_scene(o, &state)) {}
+  static hapticd::loop::LoopOptions with_scene(hapticd::loop::LoopOptions o,
+                                               hapticd::loop::SceneState* s) {
+    o.scene = s;
+    return o;
+  }
+  PathDevice device;
+  hapticd::control::Controller unused;
+  hapticd::control::Scene scene;
+  hapticd::loop::SceneState state;
+  hapticd::loop::ServoLoop loop;
+};
+
 void BM_FullTick_Delta(benchmark::State& state) {
   const hapticd::config::Config cfg = delta_config();
-  const auto ticks = static_cast<std::uint64_t>(state.range(0));
-  hapticd::telemetry::SpscRing<hapticd::telemetry::TickRecord> ring(ticks + 1);
-  std::vector<hapticd::telemetry::TickRecord> drained(ticks + 1);
-  std::uint64_t allocations = 0, total = 0;
-  std::int64_t p50 = 0, p99 = 0, max = 0;
-  for (auto _ : state) {
-    state.PauseTiming();
-    PathDevice device(cfg.device.kinematics);
-    hapticd::control::Controller unused(hapticd::control::make_control_law(cfg));
-    hapticd::control::Scene scene = hapticd::control::make_scene(cfg);
-    hapticd::loop::SceneState st(cfg.device.kinematics, scene, Vec3::Constant(cfg.device.max_force),
-                                 std::vector<hapticd::control::ObserverParams>(
-                                     cfg.walls.size(), hapticd::control::observer_params(cfg, 0)));
-    hapticd::loop::LoopOptions lo;
-    lo.sample.realtime = false;
-    lo.max_ticks = ticks;
-    lo.scene = &st;
-    hapticd::loop::ServoLoop loop(device, unused, &ring, lo);
-    const std::atomic<bool> stop{false};
-    state.ResumeTiming();
-    hapticd::testing::AllocationScope allocs;
-    const auto r = loop.run(stop);
-    allocations += allocs.count();
-    state.PauseTiming();
-    total += r.ticks;
-    ring.pop_many(drained.data(), drained.size());
-    const auto& h = loop.compute_time();
-    p50 = std::max(p50, h.percentile_ns(0.5));
-    p99 = std::max(p99, h.percentile_ns(0.99));
-    max = std::max(max, h.max_ns());
-    state.ResumeTiming();
-  }
-  state.counters["ns_per_tick"] = benchmark::Counter(
-      static_cast<double>(total), benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
-  state.counters["allocs_per_tick"] =
-      static_cast<double>(allocations) / static_cast<double>(std::max<std::uint64_t>(total, 1));
-  state.counters["compute_p50_ns"] = static_cast<double>(p50);
-  state.counters["compute_p99_ns"] = static_cast<double>(p99);
-  state.counters["compute_max_ns"] = static_cast<double>(max);
+  hapticd::bench::run_full_ticks(
+      state, static_cast<std::uint64_t>(state.range(0)), {},
+      [&](hapticd::bench::TickRing& ring, const hapticd::loop::LoopOptions& o) {
+        return std::make_unique<DeltaRig>(cfg, ring, o);
+      });
 }
 
 BENCHMARK(BM_FullTick_Delta)->Arg(100000)->ArgName("ticks")->Unit(benchmark::kMillisecond);

@@ -7,11 +7,13 @@
 
 #include <array>
 #include <cmath>
+#include <memory>
 
 #include "alloc_counter.h"
 #include "config/config_loader.h"
 #include "control/controller.h"
 #include "control/passivity_observer.h"
+#include "full_tick.h"
 #include "loop/servo_loop.h"
 #include "sim/sim_device.h"
 
@@ -84,53 +86,32 @@ void BM_PassivityObserver(benchmark::State& state) {
                                       static_cast<double>(std::max<std::size_t>(i, 1));
 }
 
-// The servo loop in freerun over the sim device, with the tick log ring: exactly the code
-// of a realtime tick without the sleep. Each iteration runs `range(0)` ticks.
+// The servo loop in freerun over the sim device (bench/full_tick.h). Each iteration runs
+// `range(0)` ticks; range(1): safety.passivity_controller 0 off, 1 observe (the default).
+struct SimRig {
+  SimRig(const Config& cfg, hapticd::bench::TickRing& ring, const hapticd::loop::LoopOptions& o)
+      : device(cfg.device, cfg.loop.sample_period_s()),
+        ctl(hapticd::control::make_control_law(cfg)),
+        loop(device, ctl, &ring, o) {
+    device.configure();
+    device.enable();
+  }
+  hapticd::sim::SimDevice device;
+  hapticd::control::Controller ctl;
+  hapticd::loop::ServoLoop loop;
+};
+
 void BM_FullTick_SimDevice(benchmark::State& state) {
   const Config cfg = demo();
-  const auto ticks = static_cast<std::uint64_t>(state.range(0));
-  // range(1): safety.passivity_controller 0 off, 1 observe (the default).
-  hapticd::telemetry::SpscRing<hapticd::telemetry::TickRecord> ring(ticks + 1);
-  std::vector<hapticd::telemetry::TickRecord> drained(ticks + 1);
   hapticd::loop::LoopOptions lo;
-  lo.sample.realtime = false;
-  lo.max_ticks = ticks;
   lo.observer = hapticd::control::observer_params(cfg, 0);
   lo.observer.mode = state.range(1) == 0 ? hapticd::config::PassivityControl::kOff
                                          : hapticd::config::PassivityControl::kObserve;
-  std::uint64_t allocations = 0, total = 0;
-  std::int64_t p50 = 0, p99 = 0, p999 = 0, max = 0;
-  for (auto _ : state) {
-    state.PauseTiming();
-    hapticd::sim::SimDevice device(cfg.device, cfg.loop.sample_period_s());
-    hapticd::control::Controller ctl(hapticd::control::make_control_law(cfg));
-    device.configure();
-    device.enable();
-    hapticd::loop::ServoLoop loop(device, ctl, &ring, lo);
-    const std::atomic<bool> stop{false};
-    state.ResumeTiming();
-    hapticd::testing::AllocationScope allocs;
-    const auto r = loop.run(stop);
-    allocations += allocs.count();
-    state.PauseTiming();
-    total += r.ticks;
-    ring.pop_many(drained.data(), drained.size());
-    const auto& h = loop.compute_time();
-    p50 = std::max(p50, h.percentile_ns(0.5));
-    p99 = std::max(p99, h.percentile_ns(0.99));
-    p999 = std::max(p999, h.percentile_ns(0.999));
-    max = std::max(max, h.max_ns());
-    state.ResumeTiming();
-  }
-  state.counters["ns_per_tick"] = benchmark::Counter(
-      static_cast<double>(total), benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
-  state.counters["allocs_per_tick"] =
-      static_cast<double>(allocations) / static_cast<double>(std::max<std::uint64_t>(total, 1));
-  // The loop's own per-tick compute time (read + step + write + clock reads), worst iteration.
-  state.counters["compute_p50_ns"] = static_cast<double>(p50);
-  state.counters["compute_p99_ns"] = static_cast<double>(p99);
-  state.counters["compute_p999_ns"] = static_cast<double>(p999);
-  state.counters["compute_max_ns"] = static_cast<double>(max);
+  hapticd::bench::run_full_ticks(
+      state, static_cast<std::uint64_t>(state.range(0)), lo,
+      [&](hapticd::bench::TickRing& ring, const hapticd::loop::LoopOptions& o) {
+        return std::make_unique<SimRig>(cfg, ring, o);
+      });
 }
 
 BENCHMARK(BM_ControllerStep_BareWall);

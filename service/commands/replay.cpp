@@ -84,7 +84,7 @@ struct Walker {
     if (stepped) {
       c = loop::step_scene_tick(*scene.state, loop::JointInput::recorded(logged, periods), rec);
     }
-    const bool zero = faulted || c.non_finite || c.runaway || c.pose_fault;
+    const bool zero = faulted || c.faulted();
     loop::end_scene_tick(*scene.state, zero ? nullptr : &c, rec);
     series.commanded.push_back(rec.force_commanded);
     series.wall_energy_j = 0.0;

@@ -64,6 +64,12 @@ void read_walls(MapReader& top, int task_axes, std::vector<TaskWallConfig>& wall
 // Reads device.kinematics of `device` (kinematics_schema.cpp); absent: one joint.
 void read_kinematics(MapReader& device, kinematics::Kinematics& k);
 
+// Reads device.sim of `device` for the mechanism `k` (sim_schema.cpp): the plant and its
+// operator. `rate_hz` (empty when invalid) bounds an imposed motion's frequency, `base_dir`
+// resolves a replayed log's path.
+void read_plant(MapReader& device, std::optional<double> rate_hz, const std::string& base_dir,
+                const kinematics::Kinematics& k, SimDeviceConfig& sim_cfg);
+
 // Reads the section `safety` of `top` (safety_schema.cpp).
 void read_safety(MapReader& top, SafetyConfig& safety);
 

@@ -57,10 +57,6 @@ class Scene {
   void step_walls(const kinematics::Pose& pose, SceneStep& out) noexcept;
   void map(const kinematics::Pose& pose, std::span<const double> commands,
            const kinematics::Vec3& limit, SceneStep& out) const noexcept;
-  // RT-safe. Wall i's coordinate s = n . (x - p) at the task position x.
-  double coordinate(std::size_t i, const kinematics::Vec3& x) const noexcept {
-    return geometry_[i].normal.dot(x - geometry_[i].point);
-  }
   // RT-safe. Wall i's law (a live reload does not reach a scene yet).
   const ControlLaw& law(std::size_t i) const noexcept { return walls_[i].law(); }
 
@@ -71,6 +67,11 @@ class Scene {
   const WallGeometry& geometry(std::size_t i) const noexcept { return geometry_[i]; }
 
  private:
+  // RT-safe. Wall i's coordinate s = n . (x - p) at the task position x.
+  double coordinate(std::size_t i, const kinematics::Vec3& x) const noexcept {
+    return geometry_[i].normal.dot(x - geometry_[i].point);
+  }
+
   std::array<WallGeometry, kMaxWalls> geometry_{};
   std::vector<Controller> walls_;                       // built once, never resized
   kinematics::Vec3 last_x_ = kinematics::Vec3::Zero();  // the last finite task position

@@ -73,7 +73,8 @@ JointCommand step_scene_tick(SceneState& st, const JointInput& in,
   rec.position = in.q[0];
   rec.joint_position[0] = in.q[1];
   rec.joint_position[1] = in.q[2];
-  for (int i = 0; i < 3; ++i) rec.task_position[i] = st.guess.allFinite() ? st.guess[i] : 0.0;
+  const bool placed = st.guess.allFinite();  // a pose found, now or on an earlier tick
+  for (int i = 0; i < 3; ++i) rec.task_position[i] = placed ? st.guess[i] : 0.0;
   rec.pose_status = static_cast<std::uint8_t>(pose.status);
 
   control::SceneStep step;
@@ -83,7 +84,7 @@ JointCommand step_scene_tick(SceneState& st, const JointInput& in,
   double energy = 0.0;
   for (std::size_t i = 0; i < step.count; ++i) {
     control::PassivityObserver& o = st.walls[i];
-    o.observe(st.scene->coordinate(i, st.guess), in.fresh, in.periods);
+    o.observe(step.walls[i].penetration, in.fresh, in.periods);  // s_i: the law's penetration
     energy += o.energy_j();
     const control::Damping d = o.damp(step.walls[i].force_commanded, st.scene->law(i));
     c.wall[i] = d.command;
@@ -101,7 +102,7 @@ JointCommand step_scene_tick(SceneState& st, const JointInput& in,
   if (c.runaway) rec.flags |= telemetry::kFlagRunaway;
   c.pose_fault = !step.pose_ok;
   c.scale = step.scale;
-  if (!c.non_finite && !c.runaway && !c.pose_fault) c.tau = step.tau;
+  if (!c.faulted()) c.tau = step.tau;
   return c;
 }
 
@@ -110,7 +111,7 @@ void end_scene_tick(SceneState& st, const JointCommand* c, telemetry::TickRecord
   rec.force_commanded = tau[0];
   rec.joint_force[0] = tau[1];
   rec.joint_force[1] = tau[2];
-  const bool acted = c != nullptr && !c->non_finite && !c->runaway && !c->pose_fault;
+  const bool acted = c != nullptr && !c->faulted();
   for (std::size_t i = 0; i < st.walls.size(); ++i) {
     // What acted along the wall's normal: its force, scaled with the joints' saturation.
     st.walls[i].commanded(acted ? c->scale * c->wall[i] : 0.0,

@@ -50,6 +50,9 @@ struct JointCommand {
   bool non_finite = false;                          // a non-finite force or torque: the loop faults
   bool runaway = false;     // a wall's runaway guard tripped: the loop faults
   bool pose_fault = false;  // the pose was not ok (rec.pose_status says why): the loop faults
+
+  // RT-safe. Any of the three: nothing but zero may be written.
+  bool faulted() const noexcept { return non_finite || runaway || pose_fault; }
 };
 
 // What the scene's tick works on, built before the loop (not RT-safe to build).

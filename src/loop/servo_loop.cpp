@@ -59,6 +59,15 @@ void ServoLoop::set_fault(Fault f, telemetry::TickRecord& rec, LoopResult& res) 
   }
 }
 
+void ServoLoop::check_write(IoStatus written, std::uint64_t tick, telemetry::TickRecord& rec,
+                            LoopResult& res) const noexcept {
+  if (written != IoStatus::kTransportFault && written != IoStatus::kDeviceFault) return;
+  set_fault({written == IoStatus::kDeviceFault ? FaultCause::kDeviceReported
+                                               : FaultCause::kTransportWrite,
+             tick, 0.0},
+            rec, res);
+}
+
 void ServoLoop::log(const telemetry::TickRecord& rec, const std::atomic<bool>& stop) noexcept {
   if (ring_ == nullptr) return;
   while (options_.wait_for_ring && ring_->size_approx() >= ring_->capacity() &&
@@ -168,6 +177,13 @@ void ServoLoop::write_zero() noexcept {
   device_.write(std::span<const double>(zero.data(), device_.info().joints));
 }
 
+Sensed ServoLoop::read_joint(std::uint64_t tick, std::int64_t wake, SampleCheck& check,
+                             telemetry::TickRecord& rec) noexcept {
+  PositionSample sample;
+  const IoStatus rs = device_.read(sample);
+  return check.check(tick, wake, rs, sample, rec);
+}
+
 Sensed ServoLoop::read_joints(std::uint64_t tick, std::int64_t wake, std::span<SampleCheck> checks,
                               kinematics::Vec3& q, telemetry::TickRecord& rec) noexcept {
   std::array<PositionSample, base::kMaxJoints> samples{};
@@ -209,13 +225,8 @@ void ServoLoop::scene_tick(std::uint64_t tick, const Sensed& sensed, const kinem
     if (c.pose_fault) set_fault({FaultCause::kPose, tick, double(rec.pose_status)}, rec, res);
   }
   if (res.fault.cause == FaultCause::kNone) {
-    const IoStatus ws = device_.write(std::span<const double>(c.tau.data(), device_.info().joints));
-    if (ws == IoStatus::kTransportFault || ws == IoStatus::kDeviceFault) {
-      set_fault(
-          {ws == IoStatus::kDeviceFault ? FaultCause::kDeviceReported : FaultCause::kTransportWrite,
-           tick, 0.0},
-          rec, res);
-    }
+    check_write(device_.write(std::span<const double>(c.tau.data(), device_.info().joints)), tick,
+                rec, res);
   }
   const bool faulted = res.fault.cause != FaultCause::kNone;
   if (faulted) write_zero();  // zero on every joint at once; the service disables output
@@ -244,22 +255,16 @@ PassivityResult ServoLoop::scene_passivity() const noexcept {
                                                std::uint32_t periods, std::span<SampleCheck> checks,
                                                telemetry::TickRecord& rec,
                                                LoopResult& res) noexcept {
-  if (options_.scene != nullptr) {
-    kinematics::Vec3 q = kinematics::Vec3::Zero();
-    const Sensed sensed = read_joints(tick, wake, checks, q, rec);
-    if (sensed.fault.cause != FaultCause::kNone) set_fault(sensed.fault, rec, res);
-    if (!sensed.has_position && res.fault.cause == FaultCause::kNone) {
-      rec.flags |= telemetry::kFlagNoPosition;
-    }
-    scene_tick(tick, sensed, q, periods, rec, res);
-    return sensed;
-  }
-  PositionSample sample;
-  const IoStatus rs = device_.read(sample);
-  const Sensed sensed = checks[0].check(tick, wake, rs, sample, rec);
+  kinematics::Vec3 q;  // several joints: what the scene acts on (read_joints fills it)
+  const Sensed sensed = options_.scene != nullptr ? read_joints(tick, wake, checks, q, rec)
+                                                  : read_joint(tick, wake, checks[0], rec);
   if (sensed.fault.cause != FaultCause::kNone) set_fault(sensed.fault, rec, res);
   if (!sensed.has_position && res.fault.cause == FaultCause::kNone) {
     rec.flags |= telemetry::kFlagNoPosition;
+  }
+  if (options_.scene != nullptr) {
+    scene_tick(tick, sensed, q, periods, rec, res);
+    return sensed;
   }
   TickCommand c;
   if (sensed.has_position && !probe_.ended()) {
@@ -273,15 +278,7 @@ PassivityResult ServoLoop::scene_passivity() const noexcept {
           rec, res);
     }
   }
-  if (res.fault.cause == FaultCause::kNone) {
-    const IoStatus ws = device_.write(c.command);
-    if (ws == IoStatus::kTransportFault || ws == IoStatus::kDeviceFault) {
-      set_fault(
-          {ws == IoStatus::kDeviceFault ? FaultCause::kDeviceReported : FaultCause::kTransportWrite,
-           tick, 0.0},
-          rec, res);
-    }
-  }
+  if (res.fault.cause == FaultCause::kNone) check_write(device_.write(c.command), tick, rec, res);
   if (res.fault.cause != FaultCause::kNone) {
     c = {};
     device_.write(0.0);  // zero force at once; the service then disables output

@@ -155,6 +155,9 @@ class ServoLoop {
   Sensed device_tick(std::uint64_t tick, std::int64_t wake, std::uint32_t periods,
                      std::span<SampleCheck> checks, telemetry::TickRecord& rec,
                      LoopResult& res) noexcept;
+  // device_tick's read for one joint, checked. RT-safe: called every tick.
+  Sensed read_joint(std::uint64_t tick, std::int64_t wake, SampleCheck& check,
+                    telemetry::TickRecord& rec) noexcept;
   // device_tick's read for several joints: each joint's sample checked, `q` what the scene
   // acts on; the Sensed of them all (a position only when every joint has one). RT-safe.
   Sensed read_joints(std::uint64_t tick, std::int64_t wake, std::span<SampleCheck> checks,
@@ -166,6 +169,9 @@ class ServoLoop {
   void write_zero() noexcept;
   // Records a fault on this tick (the device's class and code for device and transport ones).
   void set_fault(Fault f, telemetry::TickRecord& rec, LoopResult& res) const noexcept;
+  // A write the device refused (a transport or device fault) as this tick's fault. RT-safe.
+  void check_write(IoStatus written, std::uint64_t tick, telemetry::TickRecord& rec,
+                   LoopResult& res) const noexcept;
   // Hands one record to the ring (freerun waits for room). RT-safe: called every tick.
   void log(const telemetry::TickRecord& rec, const std::atomic<bool>& stop) noexcept;
   // Swaps in a law a live reload offered, and marks it (and refusals) in the log.

@@ -19,6 +19,7 @@
 #include <span>
 #include <vector>
 
+#include "alloc_counter.h"
 #include "can_rig.h"
 #include "drivers/can/can_settings.h"
 
@@ -116,6 +117,26 @@ struct NodesRig {
     const IoStatus w = device->write(forces);
     runner->wait_idle();
     return w == IoStatus::kOk ? r : w;
+  }
+
+  // `n` ticks of `forces` inside an allocation count: how many read a new sample on every
+  // joint, what read and write allocated, and the first status that was neither kOk nor
+  // kNoNewData (kOk when none was; the ticks stop there).
+  struct Run {
+    int fresh = 0;
+    std::uint64_t allocations = 0;
+    IoStatus failure = IoStatus::kOk;
+  };
+  Run ticks(std::span<const double> forces, std::span<PositionSample> samples, int n) {
+    Run run;
+    const hapticd::testing::AllocationScope scope;
+    for (int i = 0; i < n && run.failure == IoStatus::kOk; ++i) {
+      const IoStatus r = tick(forces, samples);
+      if (r != IoStatus::kOk && r != IoStatus::kNoNewData) run.failure = r;
+      run.fresh += r == IoStatus::kOk ? 1 : 0;
+    }
+    run.allocations = scope.count();
+    return run;
   }
 
   config::Config cfg;

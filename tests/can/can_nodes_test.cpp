@@ -9,7 +9,6 @@
 #include <string>
 #include <vector>
 
-#include "alloc_counter.h"
 #include "can_nodes_bus.h"
 #include "drivers/can/can_bus_load.h"
 
@@ -159,19 +158,10 @@ TEST(CanNodesLoopback, TwoNodesAreReadAndWrittenWithOneSyncPerTick) {
   const std::array<double, 2> forces = {1.0, -2.0};
   std::array<PositionSample, 2> s{};
   constexpr int kTicks = 400;
-  int fresh = 0;
-  std::uint64_t allocations = 1;
-  {
-    const hapticd::testing::AllocationScope scope;
-    for (int i = 0; i < kTicks; ++i) {
-      const IoStatus r = rig.tick(forces, s);
-      ASSERT_TRUE(r == IoStatus::kOk || r == IoStatus::kNoNewData) << rig.device->describe_fault();
-      fresh += r == IoStatus::kOk ? 1 : 0;
-    }
-    allocations = scope.count();
-  }
-  EXPECT_EQ(allocations, 0u) << "read/write of two nodes over " << kTicks << " ticks";
-  EXPECT_GE(fresh, kTicks - 1) << "every TPDO answers its SYNC (the first read precedes any)";
+  const NodesRig::Run run = rig.ticks(forces, s, kTicks);
+  ASSERT_EQ(run.failure, IoStatus::kOk) << rig.device->describe_fault();
+  EXPECT_EQ(run.allocations, 0u) << "read/write of two nodes over " << kTicks << " ticks";
+  EXPECT_GE(run.fresh, kTicks - 1) << "every TPDO answers its SYNC (the first read precedes any)";
   EXPECT_EQ(rig.hub->sent_with_id(0x080) - syncs_before, static_cast<std::uint64_t>(kTicks))
       << "one SYNC per tick for the whole bus";
   EXPECT_EQ(rig.hub->sent_with_id(0x201), rig.hub->sent_with_id(0x202)) << "one RPDO per node";
@@ -248,19 +238,10 @@ TEST(CanNodesLoopback, TwoOdriveAxesEachWithTheirOwnIdsAndRequests) {
   constexpr int kTicks = 300;
   const std::uint64_t requests1 = rig.hub->sent_with_id(1 << 5 | 0x09);
   const std::uint64_t requests2 = rig.hub->sent_with_id(2 << 5 | 0x09);
-  int fresh = 0;
-  std::uint64_t allocations = 1;
-  {
-    const hapticd::testing::AllocationScope scope;
-    for (int i = 0; i < kTicks; ++i) {
-      const IoStatus r = rig.tick(forces, s);
-      ASSERT_TRUE(r == IoStatus::kOk || r == IoStatus::kNoNewData) << rig.device->describe_fault();
-      fresh += r == IoStatus::kOk ? 1 : 0;
-    }
-    allocations = scope.count();
-  }
-  EXPECT_EQ(allocations, 0u);
-  EXPECT_GE(fresh, kTicks - 1);
+  const NodesRig::Run run = rig.ticks(forces, s, kTicks);
+  ASSERT_EQ(run.failure, IoStatus::kOk) << rig.device->describe_fault();
+  EXPECT_EQ(run.allocations, 0u);
+  EXPECT_GE(run.fresh, kTicks - 1);
   EXPECT_EQ(rig.hub->sent_with_id(1 << 5 | 0x09) - requests1, static_cast<std::uint64_t>(kTicks))
       << "axis 1's own request each tick";
   EXPECT_EQ(rig.hub->sent_with_id(2 << 5 | 0x09) - requests2, static_cast<std::uint64_t>(kTicks));

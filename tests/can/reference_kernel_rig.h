@@ -39,10 +39,10 @@ inline std::vector<std::string> run_args(const std::string& profile, double dura
     sets.push_back("device.can.cia402.master_heartbeat_ms=200");
     sets.push_back("device.can.cia402.drive_watchdog_ms=1500");
   }
-  for (const char* s :
-       {"safety.stale_fault_ticks=10", "loop.overrun_fault_streak=100",
-        "safety.direction_check.max_latency_ms=300", "device.can.interface=vcan0", "device.can.sdo_timeout_ms=1000",
-        "device.can.state_timeout_ms=2000", "device.can.heartbeat_timeout_ms=3000"}) {
+  for (const char* s : {"safety.stale_fault_ticks=10", "loop.overrun_fault_streak=100",
+                        "safety.direction_check.max_latency_ms=300", "device.can.interface=vcan0",
+                        "device.can.sdo_timeout_ms=1000", "device.can.state_timeout_ms=2000",
+                        "device.can.heartbeat_timeout_ms=3000"}) {
     sets.push_back(s);
   }
   sets.push_back("wall.stiffness=" + std::to_string(r.stiffness));

@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "process.h"
 
@@ -65,22 +66,22 @@ TEST(CliVerify, TheDeltasWallsAreMeasuredAtTheirWorstConfigurationsAndTheGateAgr
     EXPECT_NEAR(w["measured_normal_damping"].get<double>(), w["normal_damping"].get<double>(),
                 1e-3 * w["normal_damping"].get<double>());
   }
-  const ProcessResult stiff =
-      run_process({hapticd_binary(), "verify", "--json", "--config", delta, "--set",
-                   "walls=[{point: [-0.02, 0, 0.11], normal: [-1, 0, 0], stiffness: 1500}]"});
+  // One wall on the -x face at stiffness k: what `command` answers.
+  const auto one_wall = [&](const char* command, int k) {
+    return run_process({hapticd_binary(), command, "--json", "--config", delta, "--set",
+                        "walls=[{point: [-0.02, 0, 0.11], normal: [-1, 0, 0], stiffness: " +
+                            std::to_string(k) + "}]"});
+  };
+  const ProcessResult stiff = one_wall("verify", 1500);
   ASSERT_EQ(stiff.exit_code, 0) << stiff.out << stiff.err;
   const nlohmann::json a = nlohmann::json::parse(stiff.out)["walls"][0];
   EXPECT_FALSE(a["measured_passive"].get<bool>()) << a.dump();
   EXPECT_FALSE(a["gate_passive"].get<bool>()) << a.dump();
   EXPECT_GT(a["measured_required_damping"].get<double>(), a["normal_damping"].get<double>());
-  const ProcessResult check =
-      run_process({hapticd_binary(), "check", "--config", delta, "--set",
-                   "walls=[{point: [-0.02, 0, 0.11], normal: [-1, 0, 0], stiffness: 1500}]"});
+  const ProcessResult check = one_wall("check", 1500);
   EXPECT_EQ(check.exit_code, 3) << check.out;
   // Below the damping there with the margin to spare: measured passive, and passed.
-  const ProcessResult soft =
-      run_process({hapticd_binary(), "verify", "--json", "--config", delta, "--set",
-                   "walls=[{point: [-0.02, 0, 0.11], normal: [-1, 0, 0], stiffness: 900}]"});
+  const ProcessResult soft = one_wall("verify", 900);
   ASSERT_EQ(soft.exit_code, 0) << soft.out << soft.err;
   const nlohmann::json p = nlohmann::json::parse(soft.out)["walls"][0];
   EXPECT_TRUE(p["measured_passive"].get<bool>()) << p.dump();
