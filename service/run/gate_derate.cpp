@@ -11,9 +11,15 @@ namespace hapticd::service {
 std::optional<std::pair<double, double>> derate_stiffness(config::Config& cfg,
                                                           int device_delay_samples,
                                                           gate::GateReport& report) {
-  // A wall of several (report.workspace) is not derated: each has its own largest K in the
-  // report, and which to lower is the user's choice.
-  if (report.pass || cfg.safety.gate != config::GateMode::kDerate || report.workspace) {
+  if (report.pass || cfg.safety.gate != config::GateMode::kDerate) return std::nullopt;
+  if (report.workspace) {
+    // Walls over a workspace are not derated: each has its own largest K in the report, and
+    // walls acting together bound them jointly, so which to lower is the user's choice. Said,
+    // so that a refusal under derate is not taken for a derating that found nothing to pass.
+    report.reasons.push_back(
+        "safety.gate: derate lowers the stiffness of one joint's wall; walls on a device of "
+        "several joints are not derated: set each failing wall's stiffness at most to its "
+        "largest passing K above, then check again");
     return std::nullopt;
   }
   const analysis::StiffnessLimit& limit = report.passivity.max_stiffness;

@@ -16,7 +16,8 @@ namespace hapticd::service {
 // the effective YAML) to the largest K that passes and re-runs the gate into `report`.
 // Returns {configured K, K that runs} when it did; nothing when the gate passed, the mode is
 // not derate, or no lower stiffness makes it pass (then cfg and report are unchanged and the
-// gate refuses as under enforce).
+// gate refuses as under enforce). Walls over a workspace (several joints) are not derated: the
+// report's reasons then say so.
 std::optional<std::pair<double, double>> derate_stiffness(config::Config& cfg,
                                                           int device_delay_samples,
                                                           gate::GateReport& report);

@@ -118,6 +118,18 @@ TEST(CliCheck, ADeltasBoxIsProvenWallByWallOverItsWorkspace) {
   EXPECT_NE(stiff.out.find("fail: walls[1]: b_req 30 exceeds"), std::string::npos) << stiff.out;
   EXPECT_NE(stiff.out.find("walls[1].stiffness must be <= "), std::string::npos) << stiff.out;
   EXPECT_EQ(stiff.out.find("design-coupling"), std::string::npos) << stiff.out;
+
+  // safety.gate: derate does not derate walls of several joints, and says so rather than
+  // leaving the user to take the refusal for a derating that found nothing to pass.
+  std::string b = box;
+  b.replace(b.find("STIFF"), 5, "60000");
+  const ProcessResult derate = run_process(
+      {hapticd_binary(), "run", "--duration", "1", "--config", delta_yaml(), "--set",
+       "device.damping=0.05", "--set", "safety.gate=derate", "--set", "loop.clock=freerun", b});
+  EXPECT_EQ(derate.exit_code, 3) << derate.out << derate.err;
+  EXPECT_NE(derate.err.find("walls on a device of several joints are not derated"),
+            std::string::npos)
+      << derate.err;
 }
 
 // The example configuration of several joints passes its gate, and the direction check, which
