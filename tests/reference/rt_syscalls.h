@@ -18,8 +18,17 @@
 namespace hapticd::reference {
 
 // `strace -ff -T -qq -o PREFIX` (PREFIX.TID for each thread): what run_hapticd runs hapticd
-// under.
+// under. An earlier run's PREFIX.* are removed first: tick_calls reads every file of the
+// prefix, and a test's second run in the guest (tools/kernel-vm/test-suite) would otherwise
+// count the first run's threads with its own.
 inline std::vector<std::string> strace_to(const std::string& prefix) {
+  const std::filesystem::path p(prefix);
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator(p.parent_path(), ec)) {
+    if (e.path().filename().string().rfind(p.filename().string() + ".", 0) == 0) {
+      std::filesystem::remove(e.path(), ec);
+    }
+  }
   return {"/usr/bin/strace", "-ff", "-T", "-qq", "-o", prefix};
 }
 
