@@ -1,5 +1,6 @@
 #include "drivers/device.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace hapticd {
@@ -121,7 +122,7 @@ IoStatus Device::refuse(Refusal why) noexcept {
   return latch(IoStatus::kTransportFault);
 }
 
-IoStatus Device::read(std::span<PositionSample> out) noexcept {
+IoStatus Device::read(std::span<PositionSample> out, std::uint32_t periods) noexcept {
   const DeviceState s = state();
   if (s != DeviceState::kActive && s != DeviceState::kConfigured) {
     return s == DeviceState::kFaulted && fault_.fault_class == FaultClass::kDevice
@@ -129,6 +130,7 @@ IoStatus Device::read(std::span<PositionSample> out) noexcept {
                : IoStatus::kTransportFault;
   }
   if (out.size() != info_.joints) return refuse(Refusal::kJointCount);
+  read_periods_ = std::max<std::uint32_t>(periods, 1);
   const IoStatus r = on_read(out);
   if (r == IoStatus::kTransportFault || r == IoStatus::kDeviceFault) return latch(r);
   return r;

@@ -136,8 +136,10 @@ class Device {
 
   // RT-safe: called every tick. The newest sample of each joint (out.size() == info().joints),
   // draining whatever the transport queued. Allowed in CONFIGURED (output off) and ACTIVE; a
-  // fault latches FAULTED and commands zero on every joint.
-  IoStatus read(std::span<PositionSample> out) noexcept;
+  // fault latches FAULTED and commands zero on every joint. `periods`: sample periods since
+  // the previous read, more than one after the loop skipped some (a device whose time is the
+  // loop's, the sim, lives through them too; a real one did anyway).
+  IoStatus read(std::span<PositionSample> out, std::uint32_t periods = 1) noexcept;
   // RT-safe: called every tick. One force command per joint (N or N m, device frame;
   // forces.size() == info().joints). Only ACTIVE passes them on; in FAULTED only zero is passed
   // (returns the latched fault's status); in any other state it is refused as a transport
@@ -179,6 +181,8 @@ class Device {
   // a drive during enable): latch it. read/write returning a fault status latch it themselves
   // with the code set here beforehand (or 0).
   void set_fault_code(std::uint32_t code) noexcept { pending_code_ = code; }
+  // RT-safe. In on_read: the sample periods since the previous read (at least 1).
+  std::uint32_t read_periods() const noexcept { return read_periods_; }
 
  private:
   // What the base refused itself, rather than the driver reporting it.
@@ -195,6 +199,7 @@ class Device {
   DeviceFault fault_;
   std::uint32_t pending_code_ = 0;
   Refusal refusal_ = Refusal::kNone;  // the latched fault is the base's refusal
+  std::uint32_t read_periods_ = 1;
   std::array<std::atomic<double>, base::kMaxJoints> last_command_{};
 };
 

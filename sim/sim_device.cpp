@@ -75,7 +75,8 @@ IoStatus SimDevice::read_joints(std::span<PositionSample> samples) noexcept {
     return IoStatus::kTransportFault;
   }
   if (faults_.active(PeerFault::kStopAnswering)) return IoStatus::kNoNewData;
-  if (!first_read_) joints_->step(kinematics::Vec3((output_on_ ? motor_sign_ : 0.0) * torque_));
+  const kinematics::Vec3 held((output_on_ ? motor_sign_ : 0.0) * torque_);
+  for (std::uint32_t k = 0; !first_read_ && k < read_periods(); ++k) joints_->step(held);
   first_read_ = false;
   if (faults_.take(PeerFault::kSkipSequence)) sequence_ += 3;
   const bool fault = faults_.active(PeerFault::kDeviceFault);
@@ -100,11 +101,8 @@ IoStatus SimDevice::on_read(std::span<PositionSample> samples) noexcept {
     return IoStatus::kTransportFault;
   }
   if (faults_.active(PeerFault::kStopAnswering)) return IoStatus::kNoNewData;
-  if (first_read_) {
-    first_read_ = false;
-  } else {
-    axis_.step();
-  }
+  for (std::uint32_t k = 0; !first_read_ && k < read_periods(); ++k) axis_.step();
+  first_read_ = false;
   if (faults_.take(PeerFault::kSkipSequence)) sequence_ += 3;
   out.position = axis_.encoder_position();
   out.sequence = sequence_++;

@@ -1,8 +1,10 @@
 // The simulated device in-process, behind the Device seam: a SimAxis advanced one sample
 // period per read() with the force last written (zero while output is disabled, like an
-// amplifier that is off). No transport, so no transport delay; the sample carries the
-// plant's step count as its sequence number. It is its own loopback peer (SimSelfPeer), so
-// the conformance suite can inject each fault class into it like into any other peer.
+// amplifier that is off), or as many periods as the loop says passed when it skipped some: the
+// sim lives through a stall as a real device does. No transport, so no transport delay; the
+// sample carries the count of reads as its sequence number. It is its own loopback peer
+// (SimSelfPeer), so the conformance suite can inject each fault class into it like into any
+// other peer.
 #pragma once
 
 #include <atomic>
@@ -47,7 +49,7 @@ class SimDevice final : public hapticd::Device {
   void on_disable() noexcept override;
   void on_close() noexcept override {}
   // RT-safe: called every tick. The first call after configure() samples the initial state;
-  // each later one first advances the plant one period with the force last written.
+  // each later one first advances the plant read_periods() with the force last written.
   IoStatus on_read(std::span<PositionSample> samples) noexcept override;
   // RT-safe: called every tick. Stores the command for the next period, unclamped
   // (saturation is the controller's job).

@@ -39,7 +39,7 @@ class PacedDevice final : public Device {
   void on_clear_fault() override { inner_->clear_fault(); }
   void on_close() noexcept override { inner_->close(); }
   IoStatus on_read(std::span<PositionSample> samples) noexcept override {
-    const IoStatus r = inner_->read(samples);
+    const IoStatus r = inner_->read(samples, read_periods());  // the sim lives through them
     for (PositionSample& out : samples) {
       out.flags &= static_cast<std::uint8_t>(~kSampleHasTime);
       out.time_ns = 0;

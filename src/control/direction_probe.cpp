@@ -26,6 +26,9 @@ constexpr double kCurvatureShare = 0.1;
 // acted for up to 120 ms: 3.7 to 4 times the model's motion on a free wheel), so the bound
 // leaves room for that.
 constexpr double kMaxGain = 10.0;
+// A push held past this many times its length by a skip is given up: the model still has it,
+// but the device has moved far more than the check meant to move it.
+constexpr int kMaxPushStretch = 2;
 
 }  // namespace
 
@@ -49,10 +52,22 @@ const char* probe_state_name(ProbeState s) noexcept {
   return "unknown";
 }
 
-double ProbePlan::expected(int c, std::size_t i) const noexcept {
-  // Index R - 1 is where the pulse began; the response shows c ticks after that.
+double ProbePlan::expected(int c, std::size_t i, int push) const noexcept {
+  // Index R - 1 is where the pulse began; the response shows c periods after that. The push
+  // is the force held from 0 less the same force held from `push` on.
   const long j = static_cast<long>(i) - (rest_ticks - 1) - c;
-  return j > 0 ? response[static_cast<std::size_t>(j)] : 0.0;
+  if (j <= 0) return 0.0;
+  const double held = step_response[static_cast<std::size_t>(j)];
+  return j > push ? held - step_response[static_cast<std::size_t>(j - push)] : held;
+}
+
+double ProbePlan::brake_after(int push, int start) const noexcept {
+  // The exact ZOH speed of a mass and damper pushed from rest for `push` periods is
+  // (F/b)(1 - e^-a push), a = decay; it decays until `start`, and a brake of -s F over n
+  // periods takes s (F/b)(1 - e^-a n) of what is left of it then.
+  const double n = half_ticks;
+  return (1.0 - std::exp(-decay * push)) * std::exp(-decay * (start - push + n)) /
+         (1.0 - std::exp(-decay * n));
 }
 
 namespace {
@@ -68,12 +83,13 @@ std::vector<double> curvature_weights(int rows) {
   return out;
 }
 
-// The fitted positions for a response c ticks late: the rest window and the push's own
-// response, up to where the brake begins to act (n + c after the pulse began). From rest, any
-// passive device's step response has the force's sign (a spring holding it only slows it
-// later): what follows the brake depends on the hand.
-std::size_t fitted_rows(const ProbePlan& p, int c) {
-  return static_cast<std::size_t>(p.rest_ticks + p.half_ticks + c);
+// The fitted positions for a response c periods late to a push of `push` periods: the rest
+// window and the push's own response, up to where the push's end begins to act (push + c after
+// the pulse began), within the window. From rest, any passive device's response to a push has
+// the force's sign while it is pushed (a spring holding it only slows it): what follows
+// depends on the hand.
+std::size_t fitted_rows(const ProbePlan& p, int c, int push) {
+  return std::min(p.window(), static_cast<std::size_t>(p.rest_ticks + push + c));
 }
 
 }  // namespace
@@ -96,11 +112,13 @@ ProbePlan probe_plan(const config::Config& cfg, int device_delay) {
   p.min_gain = dc.min_motion;
   // Out of the wall first: the way the wall itself would push.
   p.force = -static_cast<double>(cfg.wall.normal) * dc.level * cfg.device.max_force;
-  p.brake = std::exp(-(p.half_ticks + p.max_delay) * period * cfg.device.damping / cfg.device.mass);
-  std::vector<double> pulse(static_cast<std::size_t>(p.half_ticks + p.max_delay) + 1, 0.0);
-  for (int j = 0; j < p.half_ticks; ++j) pulse[static_cast<std::size_t>(j)] = p.force_at(j);
-  p.response = analysis::free_motion_response(pulse, cfg.device.mass, cfg.device.damping, period);
-  for (const double e : p.response) {
+  p.decay = period * cfg.device.damping / cfg.device.mass;
+  p.brake = p.brake_after(p.half_ticks, p.half_ticks + p.max_delay);
+  const std::vector<double> held(static_cast<std::size_t>(p.half_ticks + p.max_delay) + 1, p.force);
+  p.step_response =
+      analysis::free_motion_response(held, cfg.device.mass, cfg.device.damping, period);
+  for (std::size_t i = 0; i < p.window(); ++i) {
+    const double e = p.expected(0, i, p.half_ticks);
     if (std::abs(e) > std::abs(p.expected_peak)) p.expected_peak = e;
   }
   if (!(std::abs(p.expected_peak) > 0.0) || !std::isfinite(p.expected_peak)) {
@@ -119,14 +137,16 @@ DirectionProbe::DirectionProbe(ProbePlan plan)
     : plan_(std::move(plan)),
       rest_(static_cast<std::size_t>(plan_.rest_ticks), 0.0),
       window_(plan_.window(), 0.0),
-      residual_(plan_.window(), 0.0) {
+      residual_(plan_.window(), 0.0),
+      present_(plan_.window(), 0) {
   restart();
 }
 
 void DirectionProbe::restart() noexcept {
   rest_head_ = 0;
   rest_count_ = 0;
-  pulse_tick_ = 0;
+  pulse_period_ = 0;
+  push_ = 0;
   braking_ = 0;
   result_ = {};
   result_.state = plan_.enabled ? ProbeState::kWaiting : ProbeState::kOff;
@@ -155,8 +175,11 @@ double DirectionProbe::wait(double position) noexcept {
     for (std::size_t i = 0; i < rest_.size(); ++i) {
       window_[i] = rest_[(rest_head_ + i) % rest_.size()];
     }
+    std::fill(present_.begin(), present_.end(), std::uint8_t{0});
+    std::fill(present_.begin(), present_.begin() + static_cast<long>(rest_.size()), 1);
     result_.state = ProbeState::kPulsing;
-    pulse_tick_ = 0;
+    pulse_period_ = 0;
+    push_ = plan_.half_ticks;
     return plan_.force_at(0);
   }
   if (result_.ticks >= plan_.max_wait_ticks) result_.state = ProbeState::kNeverAtRest;
@@ -167,31 +190,49 @@ double DirectionProbe::step(double position, std::uint32_t periods) noexcept {
   if (ended()) return 0.0;
   ++result_.ticks;
   if (braking_ > 0) {  // confirmed: the force's sign is known, so this slows the device
-    --braking_;
-    return -plan_.brake * plan_.force;
-  }
-  if (result_.state == ProbeState::kPulsing && periods != 1) {
-    result_.state = ProbeState::kWaiting;  // the force was held longer than the model's
-    rest_count_ = 0;
+    // The skipped periods held the brake too: what is left of it, this period on.
+    const long left = braking_ - (static_cast<long>(periods) - 1);
+    braking_ = left > 0 ? static_cast<int>(left) - 1 : 0;
+    return left > 0 ? -brake_ * plan_.force : 0.0;
   }
   if (result_.state == ProbeState::kWaiting) return wait(position);
-  ++pulse_tick_;
-  window_[rest_.size() - 1 + static_cast<std::size_t>(pulse_tick_)] = position;
-  if (rest_.size() - 1 + static_cast<std::size_t>(pulse_tick_) + 1 < window_.size()) {
-    return plan_.force_at(pulse_tick_);
+  return pulse(position, std::max<std::uint32_t>(periods, 1));
+}
+
+double DirectionProbe::start_over() noexcept {
+  result_.state =
+      result_.ticks >= plan_.max_wait_ticks ? ProbeState::kNeverAtRest : ProbeState::kWaiting;
+  rest_count_ = 0;
+  return 0.0;
+}
+
+// RT-safe.
+double DirectionProbe::pulse(double position, std::uint32_t periods) noexcept {
+  const int before = pulse_period_;
+  pulse_period_ += static_cast<int>(std::min<std::uint32_t>(periods, 1u << 20));
+  // The push's force stayed on over the periods skipped at its end: it ended only now.
+  if (before < plan_.half_ticks && pulse_period_ > plan_.half_ticks) push_ = pulse_period_;
+  if (push_ > kMaxPushStretch * plan_.half_ticks) return start_over();
+  const std::size_t at = rest_.size() - 1 + static_cast<std::size_t>(pulse_period_);
+  if (at < window_.size()) {
+    window_[at] = position;
+    present_[at] = 1;
   }
+  if (at + 1 < window_.size()) return plan_.force_at(pulse_period_);
+  // Skips left too few positions of the push's own response to fit: another push.
+  const std::size_t rows = fitted_rows(plan_, plan_.delay, push_);
+  const long read = std::count(present_.begin() + static_cast<long>(rest_.size()),
+                               present_.begin() + static_cast<long>(rows), std::uint8_t{1});
+  if (2 * read < static_cast<long>(rows - rest_.size()) || read < 3) return start_over();
   decide();
   if ((result_.state == ProbeState::kConfirmed || result_.state == ProbeState::kReversed) &&
       std::abs(result_.gain) > kMaxGain) {
-    // Far more motion than the push makes: something else moved it. Wait for rest again.
-    result_.state =
-        result_.ticks >= plan_.max_wait_ticks ? ProbeState::kNeverAtRest : ProbeState::kWaiting;
-    rest_count_ = 0;
-    return 0.0;
+    return start_over();  // far more motion than the push makes: something else moved it
   }
   if (result_.state != ProbeState::kConfirmed) return 0.0;
+  brake_ = plan_.brake_after(push_, pulse_period_);
   braking_ = plan_.half_ticks - 1;
-  return -plan_.brake * plan_.force;
+  return -brake_ * plan_.force;
 }
 
 // RT-safe. The least-squares fit of r_i = g e_c(i) over the push's fitted rows, r the positions
@@ -199,17 +240,20 @@ double DirectionProbe::step(double position, std::uint32_t periods) noexcept {
 // alone: fitted jointly with the push, a line could take up the response itself (a coarse or
 // slow encoder's steps), and the fit at a later delay would see the opposite sign.
 std::array<double, 2> DirectionProbe::fit(int c) const noexcept {
-  const std::size_t rows = fitted_rows(plan_, c);
+  const std::size_t rows = fitted_rows(plan_, c, push_);
   double ee = 0.0, er = 0.0, rr = 0.0;
+  int used = 0;
   for (std::size_t i = rest_.size(); i < rows; ++i) {
-    const double e = plan_.expected(c, i);
+    if (present_[i] == 0) continue;  // a skipped period: no position
+    const double e = plan_.expected(c, i, push_);
     ee += e * e;
     er += e * residual_[i];
     rr += residual_[i] * residual_[i];
+    ++used;
   }
-  if (!(ee > 0.0)) return {0.0, 0.0};
+  if (!(ee > 0.0) || used < 2) return {0.0, 0.0};
   const double g = er / ee;
-  const double dof = static_cast<double>(rows - rest_.size()) - 1.0;
+  const double dof = static_cast<double>(used) - 1.0;
   return {g, std::sqrt(std::max(0.0, rr - g * er) / dof / ee)};
 }
 

@@ -24,6 +24,12 @@
 // waits for rest and tries again, until rest_timeout_ms. Once confirmed, and only
 // then, a brake of n ticks takes out what speed the model's device would still have (a
 // reversed force would turn a brake into a push).
+//
+// The loop may skip periods (an overrun: the host stalled it). The device kept the command it
+// had over them, so the pulse is followed in periods, not ticks: the skipped periods' positions
+// are missing rows of the fit, and a push held past its end by a skip is a longer push, whose
+// response and brake the model gives as well (the ZOH response is linear in the force). Only a
+// push held past twice its length, or a fit left with too few rows, is given up for a new one.
 #pragma once
 
 #include <array>
@@ -55,10 +61,11 @@ inline bool probe_ended(ProbeState s) noexcept {
 struct ProbePlan {
   bool enabled = false;
   double force = 0.0;  // the push's force (N), signed: along -wall.normal
-  // The brake's force as a share of -force, after a confirmed push: exp(-(n + D) T b / m),
-  // what stops the model's device exactly (its damping has taken that much of the speed the
-  // push gave it by the time the brake ends).
+  // The brake's force as a share of -force, after a confirmed push of n periods decided n + D
+  // after it began: exp(-(n + D) T b / m), what stops the model's device exactly (its damping
+  // has taken that much of the speed the push gave it by the time the brake ends).
   double brake = 1.0;
+  double decay = 0.0;                   // T b / m: the model's speed decays by exp(-decay) a period
   int half_ticks = 3;                   // n
   int rest_ticks = 6;                   // R = 2n: the rest window, the fit's baseline
   int delay = 0;                        // d: the driver's declared transport delay
@@ -72,15 +79,19 @@ struct ProbePlan {
   double min_gain = 0.2;
   int max_delay = 0;           // D: d and the latency allowed beyond it (ticks)
   double expected_peak = 0.0;  // the model's largest displacement (m), signed
-  // The model's positions j ticks after the push began, with no delay: n + D + 1 of them.
-  std::vector<double> response;
+  // The model's positions j periods after `force` began to be held, and on: n + D + 1 of them.
+  std::vector<double> step_response;
   // The positions recorded: the rest window (R), then n + D after the push began.
   std::size_t window() const noexcept {
     return static_cast<std::size_t>(rest_ticks + half_ticks + max_delay);
   }
-  // RT-safe. e_c(i): the model's position at window index i for a response c ticks late.
-  double expected(int c, std::size_t i) const noexcept;
-  // RT-safe. The force of pulse tick j: the push's n, then zero.
+  // RT-safe. e_c(i): the model's position at window index i for a response c periods late to
+  // a push of `push` periods.
+  double expected(int c, std::size_t i, int push) const noexcept;
+  // RT-safe. The brake's share of -force that stops the model's device after a push of `push`
+  // periods, the brake beginning `start` periods after the push began (brake, for n and n + D).
+  double brake_after(int push, int start) const noexcept;
+  // RT-safe. The force of the pulse's period j: the push's n, then zero.
   double force_at(int j) const noexcept { return j < half_ticks ? force : 0.0; }
 };
 
@@ -106,8 +117,8 @@ class DirectionProbe {
   // RT-safe. From the start: waiting for rest (or off).
   void restart() noexcept;
   // RT-safe: called every tick with a position until ended(). The force to write this tick.
-  // `periods`: sample periods since the previous tick; a pulse that more than one passed
-  // (the loop skipped periods) no longer matches the model, and waits for rest again.
+  // `periods`: sample periods since the previous tick (more than one when the loop skipped
+  // some, over which the device held the last force).
   double step(double position, std::uint32_t periods = 1) noexcept;
   // Whether it commands nothing more: a verdict reached, and a confirmed one's brake done.
   bool ended() const noexcept { return probe_ended(result_.state) && braking_ == 0; }
@@ -117,6 +128,10 @@ class DirectionProbe {
  private:
   bool at_rest() const noexcept;
   double wait(double position) noexcept;
+  // RT-safe. The pulse's next position, `periods` after the last; the force to write.
+  double pulse(double position, std::uint32_t periods) noexcept;
+  // RT-safe. The pulse given up (held too long, or too few positions): wait for rest again.
+  double start_over() noexcept;
   void decide() noexcept;
   // The fit for a response c ticks late: {g, its standard error}.
   std::array<double, 2> fit(int c) const noexcept;
@@ -126,10 +141,13 @@ class DirectionProbe {
   std::vector<double> window_;  // the rest window, then the positions after the pulse began
   // The window's positions less the rest window's own line (its drift carried on).
   std::vector<double> residual_;
+  std::vector<std::uint8_t> present_;  // 1 for each window index a position was read at
   std::size_t rest_head_ = 0;
   std::size_t rest_count_ = 0;
-  int pulse_tick_ = 0;
-  int braking_ = 0;  // brake ticks left after a confirmed push
+  int pulse_period_ = 0;  // periods since the pulse began
+  int push_ = 0;          // periods the push was held: n, or more after a skip at its end
+  int braking_ = 0;       // brake periods left after a confirmed push
+  double brake_ = 0.0;    // the brake's share of -force for this push
   ProbeResult result_;
 };
 

@@ -177,18 +177,19 @@ void ServoLoop::write_zero() noexcept {
   device_.write(std::span<const double>(zero.data(), device_.info().joints));
 }
 
-Sensed ServoLoop::read_joint(std::uint64_t tick, std::int64_t wake, SampleCheck& check,
-                             telemetry::TickRecord& rec) noexcept {
+Sensed ServoLoop::read_joint(std::uint64_t tick, std::int64_t wake, std::uint32_t periods,
+                             SampleCheck& check, telemetry::TickRecord& rec) noexcept {
   PositionSample sample;
-  const IoStatus rs = device_.read(sample);
+  const IoStatus rs = device_.read(std::span<PositionSample>(&sample, 1), periods);
   return check.check(tick, wake, rs, sample, rec);
 }
 
-Sensed ServoLoop::read_joints(std::uint64_t tick, std::int64_t wake, std::span<SampleCheck> checks,
-                              kinematics::Vec3& q, telemetry::TickRecord& rec) noexcept {
+Sensed ServoLoop::read_joints(std::uint64_t tick, std::int64_t wake, std::uint32_t periods,
+                              std::span<SampleCheck> checks, kinematics::Vec3& q,
+                              telemetry::TickRecord& rec) noexcept {
   std::array<PositionSample, base::kMaxJoints> samples{};
   const std::size_t n = device_.info().joints;
-  const IoStatus rs = device_.read(std::span<PositionSample>(samples.data(), n));
+  const IoStatus rs = device_.read(std::span<PositionSample>(samples.data(), n), periods);
   Sensed all = check_joint(checks[0], tick, wake, rs, samples[0], rec);
   q[0] = all.position;
   for (std::size_t i = 1; i < n; ++i) {
@@ -256,8 +257,8 @@ PassivityResult ServoLoop::scene_passivity() const noexcept {
                                                telemetry::TickRecord& rec,
                                                LoopResult& res) noexcept {
   kinematics::Vec3 q;  // several joints: what the scene acts on (read_joints fills it)
-  const Sensed sensed = options_.scene != nullptr ? read_joints(tick, wake, checks, q, rec)
-                                                  : read_joint(tick, wake, checks[0], rec);
+  const Sensed sensed = options_.scene != nullptr ? read_joints(tick, wake, periods, checks, q, rec)
+                                                  : read_joint(tick, wake, periods, checks[0], rec);
   if (sensed.fault.cause != FaultCause::kNone) set_fault(sensed.fault, rec, res);
   if (!sensed.has_position && res.fault.cause == FaultCause::kNone) {
     rec.flags |= telemetry::kFlagNoPosition;

@@ -156,12 +156,13 @@ class ServoLoop {
                      std::span<SampleCheck> checks, telemetry::TickRecord& rec,
                      LoopResult& res) noexcept;
   // device_tick's read for one joint, checked. RT-safe: called every tick.
-  Sensed read_joint(std::uint64_t tick, std::int64_t wake, SampleCheck& check,
-                    telemetry::TickRecord& rec) noexcept;
+  Sensed read_joint(std::uint64_t tick, std::int64_t wake, std::uint32_t periods,
+                    SampleCheck& check, telemetry::TickRecord& rec) noexcept;
   // device_tick's read for several joints: each joint's sample checked, `q` what the scene
   // acts on; the Sensed of them all (a position only when every joint has one). RT-safe.
-  Sensed read_joints(std::uint64_t tick, std::int64_t wake, std::span<SampleCheck> checks,
-                     kinematics::Vec3& q, telemetry::TickRecord& rec) noexcept;
+  Sensed read_joints(std::uint64_t tick, std::int64_t wake, std::uint32_t periods,
+                     std::span<SampleCheck> checks, kinematics::Vec3& q,
+                     telemetry::TickRecord& rec) noexcept;
   // device_tick's step and write for several joints. RT-safe: called every tick.
   void scene_tick(std::uint64_t tick, const Sensed& sensed, const kinematics::Vec3& q,
                   std::uint32_t periods, telemetry::TickRecord& rec, LoopResult& res) noexcept;

@@ -278,6 +278,71 @@ TEST(DirectionProbe, AnEncoderSlowerThanThePushNeverTurnsTheVerdictAround) {
   }
 }
 
+// Runs the probe on the device with the loop skipping periods: tick k comes `periods(k)`
+// periods after tick k - 1, the device holding the last force over them. The forces written.
+template <typename Periods>
+std::vector<double> run_skipping(DirectionProbe& probe, Device& d, Periods periods) {
+  std::vector<double> written;
+  std::uint32_t p = 1;
+  for (int k = 0; k < 10000 && !probe.ended(); ++k) {
+    written.push_back(probe.step(d.read(), p));
+    p = periods(k + 1);
+    for (std::uint32_t i = 0; i < p; ++i) d.write(written.back());
+  }
+  return written;
+}
+
+// A loaded host stalls the loop every few ticks (CI's sanitizer run of the demo: an overrun
+// every 12 ticks, 280 periods skipped in 1000): the device held the force over them, so the
+// pulse is followed in periods, and the verdict and the gain are the same as without.
+TEST(DirectionProbe, ALoopThatSkipsPeriodsStillFindsTheWayAndHowMuch) {
+  for (const double sign : {1.0, -1.0}) {
+    for (const int every : {5, 7, 12, 31}) {
+      DirectionProbe probe(probe_plan(demo(), 0));
+      Device d;
+      d.sign = sign;
+      const bool hand = every % 2 == 1;
+      d.hand_stiffness = hand ? 300.0 : 0.0;  // the demo's hand, or none
+      d.hand_damping = hand ? 5.0 : 0.0;
+      const Device held_only = d;
+      run_skipping(probe, d, [&](int k) { return k % every == 0 ? 1u + k % 5 : 1u; });
+      const ProbeResult r = probe.result();
+      Device steady = held_only;
+      const ProbeResult ref = run(demo(), steady);
+      EXPECT_EQ(r.state, sign > 0 ? ProbeState::kConfirmed : ProbeState::kReversed)
+          << "every " << every;
+      EXPECT_NEAR(r.gain, ref.gain, 0.05) << "every " << every;
+      EXPECT_LT(r.ticks, 400u) << "no push given up: every " << every;
+      if (sign > 0 && !hand) {
+        EXPECT_LT(std::abs(d.v), 1e-3) << "the brake stops it: every " << every;
+      }
+    }
+  }
+}
+
+// A stall at the push's end held the force longer: a longer push, which the model has too; one
+// held past twice its length is given up (zero at once) and the check pushes again from rest.
+TEST(DirectionProbe, APushAStallLengthensIsFittedAsLongerOrGivenUpWhenTooLong) {
+  const ProbePlan p = probe_plan(demo(), 0);
+  const std::size_t start = static_cast<std::size_t>(p.rest_ticks) - 1;
+  for (const std::uint32_t stall : {10u, 40u}) {
+    DirectionProbe probe(p);
+    Device d;
+    const auto written = run_skipping(probe, d, [&](int k) {
+      return static_cast<std::size_t>(k) == start + 20 ? stall : 1u;  // from period 19 on
+    });
+    EXPECT_EQ(probe.result().state, ProbeState::kConfirmed) << stall;
+    // Pushed again from near rest, the first push's glide still dying away: a little more.
+    EXPECT_NEAR(probe.result().gain, 1.0, stall == 10u ? 0.05 : 0.1) << stall;
+    EXPECT_EQ(written[start + 20], 0.0) << "the push ended when the loop came back";
+    int pushes = 0;
+    for (std::size_t k = 1; k < written.size(); ++k) {
+      pushes += written[k] == p.force && written[k - 1] != p.force;
+    }
+    EXPECT_EQ(pushes, stall == 10u ? 1 : 2) << "19 + 10 <= 2n: fitted; 19 + 40: pushed again";
+  }
+}
+
 TEST(DirectionProbe, ADeviceThatIsNeverStillGivesUpAfterTheTimeOut) {
   config::Config c = demo();
   c.safety.direction_check.rest_timeout_ms = 300;

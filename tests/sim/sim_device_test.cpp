@@ -168,6 +168,29 @@ TEST(SimDevice, OneReadIsOnePeriodWithTheLastWrittenForce) {
   }
 }
 
+// A loop that skipped periods (a stalled host) says so at its next read: the sim lives through
+// them with the force it held, as a real device would, rather than pausing with the loop.
+TEST(SimDevice, AReadAfterSkippedPeriodsAdvancesThemAllWithTheHeldForce) {
+  config::DeviceConfig c = at_rest(0.002, 0.0);
+  c.sim.initial_velocity = 0.1;
+  SimDevice d(c, kT);
+  d.configure();
+  d.enable();
+  Plant ref(c.mass, c.damping, c.sim.op, kT, 0.002, 0.1);
+  EXPECT_EQ(read_position(d), ref.position());
+  std::uint32_t total = 0;
+  for (const std::uint32_t periods : {1u, 4u, 1u, 17u, 2u}) {
+    const double u = 0.3 * periods;
+    d.write(u);
+    for (std::uint32_t k = 0; k < periods; ++k) ref.step(u);
+    total += periods;
+    PositionSample s;
+    ASSERT_EQ(d.read(std::span<PositionSample>(&s, 1), periods), IoStatus::kOk);
+    EXPECT_EQ(s.position, ref.position()) << periods << " periods";
+    EXPECT_DOUBLE_EQ(d.axis().plant().time_s(), total * kT);
+  }
+}
+
 TEST(SimDevice, IdentityAndTransportDelay) {
   SimDevice d(config::DeviceConfig{}, kT);
   d.configure();
