@@ -71,7 +71,7 @@ struct DeltaRig {
       : device(cfg.device.kinematics),
         unused(hapticd::control::make_control_law(cfg)),
         scene(hapticd::control::make_scene(cfg)),
-        state(cfg.device.kinematics, scene, Vec3::Constant(cfg.device.max_force),
+        state(cfg.device.kinematics, scene, cfg.device.max_force.per_joint(),
               std::vector<hapticd::control::ObserverParams>(
                   cfg.walls.size(), hapticd::control::observer_params(cfg, 0))),
         loop(device, unused, &ring, with_scene(o, &state)) {}

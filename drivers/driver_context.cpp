@@ -7,7 +7,7 @@ DriverContext::DriverContext(const config::Config& cfg)
       period_ns(cfg.loop.period_ns()),
       rt_priority(cfg.loop.rt_priority),
       realtime(cfg.loop.clock == config::ClockMode::kRealtime) {
-  max_force.fill(cfg.device.max_force);
+  for (std::size_t i = 0; i < max_force.size(); ++i) max_force[i] = cfg.device.max_force[i];
 }
 
 }  // namespace hapticd::drivers

@@ -12,18 +12,22 @@ JointPlant::JointPlant(const config::DeviceConfig& device, double sample_period_
       n_(kinematics::joint_count(device.kinematics)),
       period_(sample_period_s),
       h_(sample_period_s / kSubsteps),
-      decay_(std::exp(-device.damping * h_ / device.mass)),
-      gain_(-std::expm1(-device.damping * h_ / device.mass) / device.damping),
-      drift_((h_ - gain_ * device.mass) / device.damping),
-      coast_(gain_ * device.mass),
       setpoint_(device.sim.op.setpoint) {
   using Operator = config::OperatorSpec::Kind;
   if (n_ < 2) throw std::invalid_argument("sim: the joint plant is for several joints");
   if (device.sim.op.kind != Operator::kHand && device.sim.op.kind != Operator::kNone) {
     throw std::invalid_argument("sim: a device of several joints takes a hand or no operator");
   }
-  if (!(device.mass > 0.0) || !(device.damping > 0.0) || !(sample_period_s > 0.0)) {
-    throw std::invalid_argument("sim: mass, damping and the period must be positive");
+  for (int i = 0; i < n_; ++i) {
+    const double m = device.mass[static_cast<std::size_t>(i)];
+    const double b = device.damping[static_cast<std::size_t>(i)];
+    if (!(m > 0.0) || !(b > 0.0) || !(sample_period_s > 0.0)) {
+      throw std::invalid_argument("sim: mass, damping and the period must be positive");
+    }
+    decay_[i] = std::exp(-b * h_ / m);
+    gain_[i] = -std::expm1(-b * h_ / m) / b;
+    drift_[i] = (h_ - gain_[i] * m) / b;
+    coast_[i] = gain_[i] * m;
   }
   const kinematics::JointSolution s = kinematics::inverse(device.kinematics, device.sim.op.origin);
   if (s.status != kinematics::Status::kOk) {
@@ -63,8 +67,8 @@ void JointPlant::step(const Vec3& torque) noexcept {
   for (int s = 0; s < kSubsteps; ++s) {
     const Vec3 force = torque + hand_torque(t0 + s * h_);
     for (int i = 0; i < n_; ++i) {
-      q_[i] += coast_ * qd_[i] + drift_ * force[i];
-      qd_[i] = decay_ * qd_[i] + gain_ * force[i];
+      q_[i] += coast_[i] * qd_[i] + drift_[i] * force[i];
+      qd_[i] = decay_[i] * qd_[i] + gain_[i] * force[i];
     }
   }
   ++k_;

@@ -46,11 +46,12 @@ class JointPlant {
   config::DeviceConfig device_;  // its kinematics, mass, damping and operator
   int n_;
   double period_;
-  double h_;      // substep length
-  double decay_;  // exp(-b h / m): one joint's velocity over a substep, unforced
-  double gain_;   // (1 - decay) / b: its velocity per unit force
-  double drift_;  // (h - gain m) / b: its displacement per unit force
-  double coast_;  // gain m: its displacement per unit velocity
+  double h_;  // substep length
+  // Each joint's, with its own m and b:
+  kinematics::Vec3 decay_ = kinematics::Vec3::Zero();  // exp(-b h / m): velocity over a substep
+  kinematics::Vec3 gain_ = kinematics::Vec3::Zero();   // (1 - decay) / b: velocity per unit force
+  kinematics::Vec3 drift_ = kinematics::Vec3::Zero();  // (h - gain m) / b: displacement per force
+  kinematics::Vec3 coast_ = kinematics::Vec3::Zero();  // gain m: displacement per unit velocity
   Profile setpoint_;
   kinematics::Vec3 q0_ = kinematics::Vec3::Zero();
   kinematics::Vec3 q_ = kinematics::Vec3::Zero();

@@ -21,7 +21,7 @@ const config::DeviceConfig& validated(const config::DeviceConfig& c) {
 
 SimAxis::SimAxis(const config::DeviceConfig& config, double sample_period_s,
                  std::vector<double> replay_positions)
-    : plant_(validated(config).mass, config.damping, config.sim.op, sample_period_s,
+    : plant_(validated(config).mass[0], config.damping[0], config.sim.op, sample_period_s,
              config.sim.initial_position, config.sim.initial_velocity, std::move(replay_positions)),
       counts_per_unit_(config.sim.counts_per_unit),
       noise_counts_(config.sim.noise_counts),

@@ -152,9 +152,9 @@ void read_force(MapReader& ev, const config::Config& cfg, EvdevSettings& s) {
   const Field fs = take(ev, "force_full_scale");
   if (!fs.present) ev.missing("force_full_scale", "the force (N or N m) at level 0x7fff");
   number(ev, fs, Range::greater_than(0.0), s.force_full_scale);
-  if (fs.present && s.force_full_scale > 0.0 && s.force_full_scale < cfg.device.max_force) {
+  if (fs.present && s.force_full_scale > 0.0 && s.force_full_scale < cfg.device.max_force[0]) {
     ev.diag().error(fs.key_mark, fs.path,
-                    "cannot represent device.max_force " + format_number(cfg.device.max_force) +
+                    "cannot represent device.max_force " + format_number(cfg.device.max_force[0]) +
                         " N: the level saturates at " + format_number(s.force_full_scale) + " N");
   }
   number(ev, take(ev, "direction_deg"), Range::interval(0.0, true, 360.0, false), s.direction_deg);

@@ -2,6 +2,7 @@
 
 #include <cerrno>
 #include <cmath>
+#include <limits>
 
 #include "base/clock.h"
 #include "base/errno_text.h"
@@ -16,10 +17,11 @@ int fraction16(double f) { return static_cast<int>(std::lround(f * 0xFFFF)); }
 }  // namespace
 
 EvdevDevice::EvdevDevice(std::shared_ptr<const EvdevSettings> settings,
-                         std::function<Opened()> open, double sample_period_s)
+                         std::function<Opened()> open, double sample_period_s, bool realtime)
     : settings_(std::move(settings)),
       open_(std::move(open)),
       period_s_(sample_period_s),
+      realtime_(realtime),
       liveness_ns_(static_cast<std::int64_t>(settings_->liveness_ms * 1e6)) {}
 
 EvdevDevice::~EvdevDevice() { close(); }
@@ -46,10 +48,11 @@ std::int64_t EvdevDevice::unwrapped(int raw) noexcept {
 }
 
 // The update thread, at SCHED_FIFO one below the loop, timing each update against what the
-// declared delay covers.
+// declared delay covers (in a realtime loop: in freerun an update's wall time delays nothing).
 void EvdevDevice::start_updates() {
   const UpdateThread::Timing timing{
-      static_cast<std::int64_t>(covered_update_s(*settings_, period_s_) * 1e9),
+      realtime_ ? static_cast<std::int64_t>(covered_update_s(*settings_, period_s_) * 1e9)
+                : std::numeric_limits<std::int64_t>::max(),
       settings_->late_update_fault};
   updates_ = std::make_unique<UpdateThread>(
       *transport_, settings_->writer_priority, timing,

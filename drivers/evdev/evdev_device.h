@@ -37,8 +37,11 @@ class EvdevDevice final : public Device {
     std::optional<InputListing> listing;
   };
   // Not RT-safe. `open` opens the transport (called by configure, again after a close).
+  // `realtime`: the loop keeps time (loop.clock realtime), so an update longer than the
+  // declared delay covers is late; in freerun nothing waits on the clock and none is (each is
+  // still timed and the longest counted).
   EvdevDevice(std::shared_ptr<const EvdevSettings> settings, std::function<Opened()> open,
-              double sample_period_s);
+              double sample_period_s, bool realtime = true);
   ~EvdevDevice() override;
 
   std::string_view driver_name() const noexcept override { return "evdev"; }
@@ -106,6 +109,7 @@ class EvdevDevice final : public Device {
   std::shared_ptr<const EvdevSettings> settings_;
   std::function<Opened()> open_;
   double period_s_;
+  bool realtime_;
   std::int64_t liveness_ns_;
   std::unique_ptr<EvdevTransport> transport_;
   std::vector<std::string> notices_;

@@ -34,7 +34,7 @@ std::unique_ptr<Device> make_device(const DriverContext& ctx) {
     o.listing = listing;
     return o;
   };
-  return std::make_unique<EvdevDevice>(s, std::move(open), ctx.sample_period_s());
+  return std::make_unique<EvdevDevice>(s, std::move(open), ctx.sample_period_s(), ctx.realtime);
 }
 
 std::unique_ptr<Device> make_loopback_device(const DriverContext& ctx, io::UniqueFd end) {
@@ -48,7 +48,7 @@ std::unique_ptr<Device> make_loopback_device(const DriverContext& ctx, io::Uniqu
     o.transport = std::make_unique<SocketTransport>(std::move(fd), std::chrono::seconds(2));
     return o;
   };
-  return std::make_unique<EvdevDevice>(s, std::move(open), ctx.sample_period_s());
+  return std::make_unique<EvdevDevice>(s, std::move(open), ctx.sample_period_s(), ctx.realtime);
 }
 
 std::vector<std::string> notes(const DriverContext& ctx) {

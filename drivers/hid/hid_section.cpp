@@ -245,7 +245,7 @@ void read_report_profile(MapReader& hid, Ctx& c, const config::Config& cfg, HidS
   l.watchdog_feature = read_feature(m, c, "watchdog_feature", false);
   m.finish();
   if (c.failed()) return;
-  for (const std::string& e : validate(l, cfg.device.max_force)) {
+  for (const std::string& e : validate(l, cfg.device.max_force[0])) {
     const std::size_t colon = e.find(": ");
     c.error_at(e.substr(0, colon), e.substr(colon + 2), field.key_mark);
   }
@@ -282,10 +282,10 @@ void read_pid_profile(MapReader& hid, Ctx& c, const config::Config& cfg, HidSett
   }
   const Field fs = take(m, "force_full_scale", "the force (N) at the Magnitude's logical maximum");
   number(m, fs, Range::greater_than(0.0), p.force_full_scale);
-  if (fs.present && p.force_full_scale > 0.0 && p.force_full_scale < cfg.device.max_force) {
+  if (fs.present && p.force_full_scale > 0.0 && p.force_full_scale < cfg.device.max_force[0]) {
     c.d.error(fs.key_mark, fs.path,
               "cannot represent device.max_force " +
-                  config::schema::format_number(cfg.device.max_force) +
+                  config::schema::format_number(cfg.device.max_force[0]) +
                   " N: the magnitude saturates at " +
                   config::schema::format_number(p.force_full_scale) + " N");
   }

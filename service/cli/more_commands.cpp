@@ -89,6 +89,9 @@ Command identify(CLI::App& app) {
   c->add_option("--f-low", o->f_low, "Lowest frequency (Hz) of the multisine");
   c->add_option("--f-high", o->f_high, "Highest frequency (Hz), below Nyquist");
   c->add_option("--duration", o->duration_s, "Seconds of excitation (default 8)");
+  c->add_option("--joint", o->joint,
+                "Of a device of several joints, the one to excite (0-based, as device.mass[J]); "
+                "the others are commanded zero");
   c->add_option("--max-travel", o->max_travel,
                 "Metres from the start the device may move before the excitation stops as a "
                 "fault (default 0.1)");

@@ -31,7 +31,7 @@ const char* kind_name(analysis::StiffnessLimit::Kind k) {
 // The stiffness at which the measured b_req (verify's simulation) reaches the damping the gate
 // allows, by bisection on K up to 1.5 times the analytic one; none when it cannot be measured.
 std::optional<double> measured_stiffness(config::Config cfg, int delay, double analytic) {
-  const double available = (1.0 - cfg.safety.passivity_margin) * cfg.device.damping;
+  const double available = (1.0 - cfg.safety.passivity_margin) * cfg.device.damping[0];
   const auto passes = [&](double k) {
     cfg.wall.stiffness = k;
     return verify::verify_passivity(cfg, delay).measured_required_damping <= available;
@@ -116,8 +116,8 @@ int curves_command(const ConfigOptions& options, bool measure) {
       {"config", cfg.source_name},
       {"sample_period_s", report.sample_period_s},
       {"delay_samples", report.delay_samples},
-      {"device_mass", cfg.device.mass},
-      {"device_damping", cfg.device.damping},
+      {"device_mass", cfg.device.mass[0]},
+      {"device_damping", cfg.device.damping[0]},
       {"available_damping", report.passivity.available_damping},
       {"discretization",
        cfg.wall.discretization == config::Discretization::kTustin ? "tustin" : "backward"},

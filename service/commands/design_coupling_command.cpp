@@ -45,8 +45,8 @@ analysis::CouplingSpec spec_of(const config::Config& cfg, const DesignCouplingOp
     throw usage(cfg,
                 std::string("--felt-from-hz ") + format_number(o.felt_from_hz) + ": " + e.what());
   }
-  s.device_damping = cfg.device.damping;
-  s.allowed_damping = (1.0 - cfg.safety.passivity_margin) * cfg.device.damping -
+  s.device_damping = cfg.device.damping[0];
+  s.allowed_damping = (1.0 - cfg.safety.passivity_margin) * cfg.device.damping[0] -
                       cfg.safety.operator_passivity_shortage;
   s.delay_samples = delay;
   s.order = o.order;

@@ -32,16 +32,43 @@ struct Excitation {
   std::vector<double> force;
 };
 
+// The joint to excite: --joint, which a device of several joints must be given; its index into
+// device.mass and the others. config::ConfigError (exit 2) when wrong or missing.
+std::size_t excited_joint(const IdentifyOptions& o, const config::Config& cfg) {
+  const int n = kinematics::joint_count(cfg.device.kinematics);
+  const std::string has = "device.kinematics (kind " +
+                          std::string(kinematics::kind_name(cfg.device.kinematics.kind)) +
+                          ") has " + std::to_string(n) + (n == 1 ? " joint" : " joints");
+  if (!o.joint && n > 1) {
+    throw config::ConfigError({"--joint: " + has + ": say which one to excite (0 to " +
+                               std::to_string(n - 1) + "; the others are commanded zero)"});
+  }
+  const int j = o.joint.value_or(0);
+  if (j < 0 || j >= n) {
+    throw config::ConfigError({"--joint: must be 0 to " + std::to_string(n - 1) + " (" + has +
+                               "), got " + std::to_string(j)});
+  }
+  return static_cast<std::size_t>(j);
+}
+
+// "device.max_force", or "device.max_force[J]" for a joint of several.
+std::string key_of(const std::string& key, std::size_t joint, const config::Config& cfg) {
+  return kinematics::joint_count(cfg.device.kinematics) == 1
+             ? key
+             : key + "[" + std::to_string(joint) + "]";
+}
+
 // The excitation asked for, checked against the device; config::ConfigError (exit 2) when not.
-Excitation plan(const IdentifyOptions& o, const config::Config& cfg) {
-  const double rate = cfg.loop.rate_hz,
-               corner = cfg.device.damping / (2.0 * M_PI * cfg.device.mass);
+Excitation plan(const IdentifyOptions& o, const config::Config& cfg, std::size_t j) {
+  const double mass = cfg.device.mass[j], damping = cfg.device.damping[j],
+               max_force = cfg.device.max_force[j];
+  const double rate = cfg.loop.rate_hz, corner = damping / (2.0 * M_PI * mass);
   Excitation e;
   e.duration = o.duration_s;
   // Defaults: enough force that a drive's command resolution (a CiA 402 drive's per mille of
   // rated torque) is small beside it, and a band from the mechanical corner b / (2 pi m), where
   // mass and damping weigh alike, up a decade and more, so the travel stays a few cm.
-  e.amplitude = o.amplitude.value_or(0.4 * cfg.device.max_force);
+  e.amplitude = o.amplitude.value_or(0.4 * max_force);
   e.f_high = o.f_high.value_or(std::min(corner * 20.0, rate / 8.0));
   e.f_low = o.f_low.value_or(std::max(std::min(corner, e.f_high / 4.0), 2.0 / e.duration));
   std::vector<std::string> errors;
@@ -50,9 +77,9 @@ Excitation plan(const IdentifyOptions& o, const config::Config& cfg) {
   };
   bad(!std::isfinite(e.duration) || e.duration < 1.0 || e.duration > 600.0,
       "--duration: must be 1 to 600 s, got " + format_number(e.duration));
-  bad(!(e.amplitude > 0.0) || e.amplitude > cfg.device.max_force,
-      "--amplitude: must be > 0 and at most device.max_force = " +
-          format_number(cfg.device.max_force) + " N, got " + format_number(e.amplitude));
+  bad(!(e.amplitude > 0.0) || e.amplitude > max_force,
+      "--amplitude: must be > 0 and at most " + key_of("device.max_force", j, cfg) + " = " +
+          format_number(max_force) + " N, got " + format_number(e.amplitude));
   bad(!(e.f_high < rate / 2.0), "--f-high: must be below the Nyquist frequency " +
                                     format_number(rate / 2.0) + " Hz, got " +
                                     format_number(e.f_high));
@@ -68,8 +95,8 @@ Excitation plan(const IdentifyOptions& o, const config::Config& cfg) {
     // Less force where the configured m and b say the default would take the device past half
     // of --max-travel (a light, little damped device moves far at low frequencies).
     double travel = 0.0;
-    for (const double x : analysis::free_motion_response(
-             e.force, cfg.device.mass, cfg.device.damping, cfg.loop.sample_period_s())) {
+    for (const double x :
+         analysis::free_motion_response(e.force, mass, damping, cfg.loop.sample_period_s())) {
       travel = std::max(travel, std::abs(x));
     }
     if (travel > 0.5 * o.max_travel) {
@@ -99,9 +126,9 @@ std::string describe_end(const ExcitationRecord& rec, const Device& device, doub
 
 // The excitation on this thread, a stop signal watched on another (the tick loop only reads
 // an atomic): the one place identify runs the device.
-ExcitationRecord excite(Device& device, const Excitation& e, const ExcitationLimits& limits,
-                        SignalWatch& signals) {
-  ExcitationRecord rec(e.force.size());
+ExcitationRecord excite(Device& device, const Excitation& e, std::size_t joint,
+                        const ExcitationLimits& limits, SignalWatch& signals) {
+  ExcitationRecord rec(e.force.size(), joint);
   std::atomic<bool> stop{false}, done{false};
   std::thread watch([&] {
     // Not the excitation's real-time priority, which this thread inherits.
@@ -145,8 +172,8 @@ std::string reversal_fix(const drivers::ForceReversal& r) {
 }
 
 nlohmann::json to_json(const analysis::FreeMotionFit& f, const Excitation& e,
-                       const config::Config& cfg, bool loopback, double travel, double count,
-                       const drivers::ForceReversal& reversal) {
+                       const config::Config& cfg, std::size_t joint, bool loopback, double travel,
+                       double count, const drivers::ForceReversal& reversal) {
   const auto est = [](const analysis::Estimate& x) {
     return nlohmann::json{{"value", x.value}, {"ci95", x.ci95}};
   };
@@ -164,6 +191,8 @@ nlohmann::json to_json(const analysis::FreeMotionFit& f, const Excitation& e,
           {"rms_residual_counts",
            count > 0.0 ? nlohmann::json(f.rms_residual / count) : nlohmann::json(nullptr)},
           {"note", residual_note(f, count)},
+          {"joint", joint},
+          {"joints", kinematics::joint_count(cfg.device.kinematics)},
           {"samples", f.samples},
           {"ticks", e.force.size()},
           {"travel_m", travel},
@@ -177,15 +206,32 @@ nlohmann::json to_json(const analysis::FreeMotionFit& f, const Excitation& e,
             {"duration_s", e.duration}}}};
 }
 
+// What to paste: the fitted value, or for a joint of several the list with the others' as
+// configured.
+std::string paste(const config::JointValues& configured, double fitted, std::size_t joint,
+                  const config::Config& cfg) {
+  const auto n = static_cast<std::size_t>(kinematics::joint_count(cfg.device.kinematics));
+  if (n == 1) return format_number(fitted, 6);
+  std::string list = "[";
+  for (std::size_t i = 0; i < n; ++i) {
+    list += (i > 0 ? ", " : "") + format_number(i == joint ? fitted : configured[i], 6);
+  }
+  return list + "]";
+}
+
 std::string to_text(const analysis::FreeMotionFit& f, const Excitation& e,
-                    const config::Config& cfg, bool simulated, double travel, double count,
-                    const drivers::ForceReversal& reversal) {
+                    const config::Config& cfg, std::size_t joint, bool simulated, double travel,
+                    double count, const drivers::ForceReversal& reversal) {
   std::ostringstream os;
   const auto pm = [](const analysis::Estimate& x, int digits) {
     return format_number(x.value, digits) + " +- " + format_number(x.ci95, 2);
   };
   os << "hapticd identify: " << cfg.source_name << " (" << cfg.device.driver
-     << (simulated ? ", simulated device held free: no operator" : "") << ")\n"
+     << (simulated ? ", simulated device held free: no operator" : "")
+     << (kinematics::joint_count(cfg.device.kinematics) > 1
+             ? ", joint " + std::to_string(joint) + " excited, the others commanded zero"
+             : "")
+     << ")\n"
      << "  excitation     multisine " << format_number(e.amplitude) << " N peak, "
      << format_number(e.f_low) << " to " << format_number(e.f_high) << " Hz, "
      << format_number(e.duration) << " s (" << e.force.size() << " ticks), travel "
@@ -210,8 +256,9 @@ std::string to_text(const analysis::FreeMotionFit& f, const Excitation& e,
   if (const std::string note = residual_note(f, count); !note.empty()) {
     os << "  note           " << note << "\n";
   }
-  os << "paste into the configuration:\ndevice:\n  mass: " << format_number(f.mass.value, 6)
-     << "\n  damping: " << format_number(f.damping.value, 6) << "\n";
+  os << "paste into the configuration:\ndevice:\n  mass: "
+     << paste(cfg.device.mass, f.mass.value, joint, cfg)
+     << "\n  damping: " << paste(cfg.device.damping, f.damping.value, joint, cfg) << "\n";
   return os.str();
 }
 
@@ -219,7 +266,7 @@ std::string to_text(const analysis::FreeMotionFit& f, const Excitation& e,
 
 int identify_command(const IdentifyOptions& options, SignalWatch& signals) {
   config::Config cfg = load_config(options.config);
-  require_one_joint(cfg, "identify");
+  const std::size_t joint = excited_joint(options, cfg);
   // The sim driver has no hardware device: it only simulates.
   const bool simulated =
       options.loopback || wiring::find_driver(cfg.device.driver).make_device == nullptr;
@@ -236,7 +283,7 @@ int identify_command(const IdentifyOptions& options, SignalWatch& signals) {
     cfg.loop.clock = config::ClockMode::kFreerun;
   }
   const bool realtime = !simulated;
-  const Excitation e = plan(options, cfg);
+  const Excitation e = plan(options, cfg, joint);
   DeviceSession session(cfg, simulated, realtime);
   Device& device = session.device();
   device.configure();
@@ -252,7 +299,7 @@ int identify_command(const IdentifyOptions& options, SignalWatch& signals) {
   device.enable();
   const ExcitationLimits limits{sample_limits(cfg, device.info(), realtime),
                                 cfg.loop.overrun_fault_streak, options.max_travel};
-  const ExcitationRecord rec = excite(device, e, limits, signals);
+  const ExcitationRecord rec = excite(device, e, joint, limits, signals);
   const std::string why = describe_end(rec, device, options.max_travel);
   session.shut_down();
   if (rec.end != ExcitationEnd::kDone) {
@@ -273,8 +320,9 @@ int identify_command(const IdentifyOptions& options, SignalWatch& signals) {
   const double count = count_of(cfg, simulated);
   const std::string text =
       options.json
-          ? to_json(fit, e, cfg, options.loopback, rec.travel(), count, reversal).dump(2) + "\n"
-          : to_text(fit, e, cfg, simulated, rec.travel(), count, reversal);
+          ? to_json(fit, e, cfg, joint, options.loopback, rec.travel(), count, reversal).dump(2) +
+                "\n"
+          : to_text(fit, e, cfg, joint, simulated, rec.travel(), count, reversal);
   if (fit.force_reversed) {
     spdlog::error(
         "identify: the force is reversed (the fit needs a negative mass): no configuration is "

@@ -12,8 +12,9 @@
 namespace hapticd::service {
 
 // The shape of `identify --json` (docs/operations.md): 1 had no schema_version; 2 added it,
-// force_direction and reverse_with (mass and damping are negative when the force is reversed).
-inline constexpr int kIdentifySchemaVersion = 2;
+// force_direction and reverse_with (mass and damping are negative when the force is reversed);
+// 3 added joint and joints (the joint excited, of how many).
+inline constexpr int kIdentifySchemaVersion = 3;
 
 struct IdentifyOptions {
   ConfigOptions config;
@@ -27,6 +28,9 @@ struct IdentifyOptions {
   std::optional<double> f_high;  // Hz
   double duration_s = 8.0;
   double max_travel = 0.1;  // m from the start before the excitation stops as a fault
+  // --joint: the joint excited, 0-based as device.mass[J] (required for several joints); the
+  // others are commanded zero.
+  std::optional<int> joint;
 };
 
 // Returns the exit code: 0 fitted, 1 a fault during the excitation (zero force, output off) or

@@ -6,6 +6,7 @@
 // of overruns fault it as they fault a run.
 #pragma once
 
+#include <array>
 #include <atomic>
 #include <cstddef>
 #include <span>
@@ -23,14 +24,17 @@ struct ExcitationRecord {
   std::vector<double> position;  // x_k (held over a tick without a fresh sample)
   std::vector<bool> valid;       // a fresh sample at tick k
   std::size_t ticks = 0;         // ticks run
-  double start = 0.0;            // the first position read
-  bool started = false;
+  // The joint excited, whose positions these are (< the device's joints: the command checks).
+  std::size_t joint = 0;
+  // Each joint's first position read, once it has one.
+  std::array<double, base::kMaxJoints> start{};
+  std::array<bool, base::kMaxJoints> started{};
   ExcitationEnd end = ExcitationEnd::kDone;
   loop::Fault fault;  // what faulted it (ExcitationEnd::kFault), as the loop names faults
 
   // Not RT-safe: sizes everything for `ticks` before the first tick.
-  explicit ExcitationRecord(std::size_t length);
-  // The farthest the device went from where it started (m).
+  explicit ExcitationRecord(std::size_t length, std::size_t excited = 0);
+  // The farthest the excited joint went from where it started (m or rad).
   double travel() const;
 };
 
@@ -38,13 +42,15 @@ struct ExcitationRecord {
 struct ExcitationLimits {
   loop::SampleLimits samples;     // realtime: an absolute CLOCK_MONOTONIC schedule
   int overrun_fault_streak = 10;  // loop.overrun_fault_streak
-  double max_travel = 0.1;        // m from where it started (--max-travel)
+  double max_travel = 0.1;        // m (rad) from where it started (--max-travel), every joint
 };
 
-// Drives `force` (one value a tick) and records into `rec`; then writes zero and disables
-// output, whatever ended it. Realtime: ticks on an absolute schedule of the limits' period;
-// otherwise back to back (a simulated device, paced by its peer). `stop` is read once a tick.
-// RT-safe: nothing allocated, locked, logged or thrown while it runs.
+// Drives `force` (one value a tick) on rec.joint, zero on the device's other joints, and
+// records that joint's positions into `rec` (every joint's sample checked as the loop checks
+// it, and held within max_travel); then writes zero and disables output, whatever ended it.
+// Realtime: ticks on an absolute schedule of the limits' period; otherwise back to back (a
+// simulated device, paced by its peer). `stop` is read once a tick. RT-safe: nothing allocated,
+// locked, logged or thrown while it runs.
 void run_excitation(Device& device, std::span<const double> force, const ExcitationLimits& limits,
                     const std::atomic<bool>& stop, ExcitationRecord& rec) noexcept;
 

@@ -97,7 +97,7 @@ int verify_command(const ConfigOptions& options, bool json) {
                      {"relative_error", r.relative_error},
                      {"worst_frequency_hz", r.worst_frequency_hz},
                      {"delay_samples", r.delay_samples},
-                     {"device_damping", cfg.device.damping},
+                     {"device_damping", cfg.device.damping[0]},
                      {"frequencies_measured", r.sweep.size()},
                      {"simulated_ticks", r.ticks},
                      {"tolerance", verify::kVerifyTolerance},

@@ -18,8 +18,9 @@ namespace hapticd::service {
 // The shape of --summary-json (and of `hapticctl status`, which shares its objects). Each
 // change of shape is a new version, listed in docs/operations.md: 1 had no schema_version
 // key; 2 added it, direction_check, and the status answer's direction_check; 3 added the
-// gate's workspace (several task axes).
-inline constexpr int kSummarySchemaVersion = 4;
+// gate's workspace (several task axes); 4 the runs of several joints; 5 the workspace's
+// joint_damping (device.damping per joint).
+inline constexpr int kSummarySchemaVersion = 5;
 
 struct RunSummary {
   bool realtime = true;

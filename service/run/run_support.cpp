@@ -122,8 +122,7 @@ SceneParts make_scene_parts(const config::Config& cfg, const DeviceInfo& info,
     observers.push_back(p);
   }
   parts.state = std::make_unique<loop::SceneState>(cfg.device.kinematics, *parts.scene,
-                                                   kinematics::Vec3::Constant(cfg.device.max_force),
-                                                   observers);
+                                                   cfg.device.max_force.per_joint(), observers);
   return parts;
 }
 

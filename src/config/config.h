@@ -3,6 +3,8 @@
 // config_loader.h; nothing here knows about YAML.
 #pragma once
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -12,6 +14,7 @@
 #include <string_view>
 #include <vector>
 
+#include "base/joints.h"
 #include "kinematics/kinematics.h"
 
 namespace hapticd::config {
@@ -121,11 +124,34 @@ struct DriverSettings {
   virtual ~DriverSettings() = default;
 };
 
+// device.mass, damping, max_force: one number for every joint, or a list of one per joint (as
+// long as device.kinematics has joints). A device of one joint reads joint 0.
+class JointValues {
+ public:
+  JointValues(double every) noexcept { values_.fill(every); }  // one number: every joint
+  double operator[](std::size_t joint) const noexcept { return values_[joint]; }
+  double& operator[](std::size_t joint) noexcept { return values_[joint]; }
+  // The largest and the least of the first n joints' (n in 1..base::kMaxJoints).
+  double largest(std::size_t n) const noexcept {
+    return *std::max_element(values_.begin(), values_.begin() + static_cast<long>(n));
+  }
+  double least(std::size_t n) const noexcept {
+    return *std::min_element(values_.begin(), values_.begin() + static_cast<long>(n));
+  }
+  // Every joint's, in joint order (the joints a device does not have hold what they held).
+  kinematics::Vec3 per_joint() const noexcept { return {values_[0], values_[1], values_[2]}; }
+  bool operator==(const JointValues&) const = default;
+
+ private:
+  static_assert(base::kMaxJoints == 3, "per_joint() is a Vec3");
+  std::array<double, base::kMaxJoints> values_{};
+};
+
 struct DeviceConfig {
-  std::string driver = "sim";  // a registered driver's name
-  double mass = 0.1;           // m (kg), > 0
-  double damping = 2.0;        // b (N s/m), > 0: the device's own physical damping
-  double max_force = 10.0;     // |u| saturation of each joint (N or N m), > 0
+  std::string driver = "sim";    // a registered driver's name
+  JointValues mass = 0.1;        // m (kg, or kg m^2 for a rotary joint), > 0
+  JointValues damping = 2.0;     // b (N s/m, N m s/rad), > 0: the joints' own physical damping
+  JointValues max_force = 10.0;  // |u| saturation of each joint (N or N m), > 0
   // device.kinematics: the mechanism the joints drive (one joint, today's axis, by default).
   kinematics::Kinematics kinematics;
   SimDeviceConfig sim;  // the simulated plant: the sim driver, and every loopback peer

@@ -55,6 +55,35 @@ void read_driver_section(MapReader& m, const DriverSchemas& drivers, bool driver
   section.finish();
 }
 
+// device.mass, damping, max_force: one number for every joint, or a list of one per joint of
+// device.kinematics (read before: `joints`). Each value in `range`.
+void joint_values(MapReader& m, const Field& field, const Range& range, std::size_t joints,
+                  JointValues& out) {
+  if (!field.present) return;
+  if (!field.node.IsSequence()) {
+    if (const auto v = read_number(m.diag(), field, range)) out = JointValues(*v);
+    return;
+  }
+  if (field.node.size() != joints) {
+    m.diag().error(field.key_mark, field.path,
+                   "must be one number (every joint's) or a list of one per joint: "
+                   "device.kinematics has " +
+                       std::to_string(joints) + (joints == 1 ? " joint" : " joints") + ", got " +
+                       std::to_string(field.node.size()) + " numbers");
+    return;
+  }
+  JointValues read = out;
+  bool ok = true;
+  for (std::size_t i = 0; i < joints; ++i) {
+    const YAML::Node element = field.node[i];
+    const Field f{field.path + "[" + std::to_string(i) + "]", element, element.Mark(), true};
+    const auto v = read_number(m.diag(), f, range);
+    if (v) read[i] = *v;
+    ok = ok && v.has_value();
+  }
+  if (ok) out = read;
+}
+
 void read_device(MapReader& top, std::optional<double> rate_hz, const std::string& base_dir,
                  const DriverSchemas& drivers, Config& cfg) {
   MapReader m(top.diag(), top.take("device"));
@@ -64,10 +93,12 @@ void read_device(MapReader& top, std::optional<double> rate_hz, const std::strin
   const Field driver = m.take("driver");
   const auto index = read_choice(d, driver, names);
   if (index) cfg.device.driver = names[*index];
-  number(m, "mass", Range::greater_than(0.0), cfg.device.mass);
-  number(m, "damping", Range::greater_than(0.0), cfg.device.damping);
-  number(m, "max_force", Range::greater_than(0.0), cfg.device.max_force);
+  const Field mass = m.take("mass"), damping = m.take("damping"), max_force = m.take("max_force");
   read_kinematics(m, cfg.device.kinematics);
+  const auto joints = static_cast<std::size_t>(kinematics::joint_count(cfg.device.kinematics));
+  joint_values(m, mass, Range::greater_than(0.0), joints, cfg.device.mass);
+  joint_values(m, damping, Range::greater_than(0.0), joints, cfg.device.damping);
+  joint_values(m, max_force, Range::greater_than(0.0), joints, cfg.device.max_force);
   read_plant(m, rate_hz, base_dir, cfg.device.kinematics, cfg.device.sim);
   read_driver_section(m, drivers, index.has_value() || !driver.present, cfg);
   m.finish();

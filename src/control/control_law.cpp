@@ -43,7 +43,7 @@ std::optional<analysis::TransferFunction> coupling_filter(const config::Config& 
 double runaway_penetration(const config::Config& cfg) {
   if (cfg.safety.max_penetration > 0.0) return cfg.safety.max_penetration;
   if (cfg.wall.stiffness > 0.0) {
-    return config::kRunawayMargin * cfg.device.max_force / cfg.wall.stiffness;
+    return config::kRunawayMargin * cfg.device.max_force[0] / cfg.wall.stiffness;
   }
   return std::numeric_limits<double>::infinity();
 }
@@ -63,7 +63,7 @@ ControlLaw make_control_law(const config::Config& cfg) {
   }
   law.delay_samples = cfg.wall.delay_samples;
   law.no_pull = cfg.wall.no_pull;
-  law.max_force = cfg.device.max_force;
+  law.max_force = cfg.device.max_force[0];
   law.runaway_penetration = runaway_penetration(cfg);
   law.sample_period = t;
   law.inv_sample_period = 1.0 / t;

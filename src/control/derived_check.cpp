@@ -87,7 +87,7 @@ void check_models(const config::Config& cfg, Problems& p) {
           "coefficients divided by denominator[0] overflow: W(z) is not a finite filter");
   }
   const analysis::TransferFunction g =
-      analysis::device_operator_zoh(cfg.device.mass, cfg.device.damping, w.operator_stiffness,
+      analysis::device_operator_zoh(cfg.device.mass[0], cfg.device.damping[0], w.operator_stiffness,
                                     w.operator_damping, cfg.loop.sample_period_s());
   if (!finite_tf(g)) {
     p.add("analysis.operator",

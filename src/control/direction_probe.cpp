@@ -111,12 +111,12 @@ ProbePlan probe_plan(const config::Config& cfg, int device_delay) {
                static_cast<std::uint64_t>(std::ceil(dc.rest_timeout_ms * 1e-3 / period)));
   p.min_gain = dc.min_motion;
   // Out of the wall first: the way the wall itself would push.
-  p.force = -static_cast<double>(cfg.wall.normal) * dc.level * cfg.device.max_force;
-  p.decay = period * cfg.device.damping / cfg.device.mass;
+  p.force = -static_cast<double>(cfg.wall.normal) * dc.level * cfg.device.max_force[0];
+  p.decay = period * cfg.device.damping[0] / cfg.device.mass[0];
   p.brake = p.brake_after(p.half_ticks, p.half_ticks + p.max_delay);
   const std::vector<double> held(static_cast<std::size_t>(p.half_ticks + p.max_delay) + 1, p.force);
   p.step_response =
-      analysis::free_motion_response(held, cfg.device.mass, cfg.device.damping, period);
+      analysis::free_motion_response(held, cfg.device.mass[0], cfg.device.damping[0], period);
   for (std::size_t i = 0; i < p.window(); ++i) {
     const double e = p.expected(0, i, p.half_ticks);
     if (std::abs(e) > std::abs(p.expected_peak)) p.expected_peak = e;

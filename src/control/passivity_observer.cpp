@@ -21,11 +21,11 @@ const char* passivity_mode_name(config::PassivityControl mode) noexcept {
 ObserverParams observer_params(const config::Config& cfg, int device_delay_samples) {
   ObserverParams p;
   p.mode = cfg.safety.passivity_controller;
-  p.device_damping = cfg.device.damping;
+  p.device_damping = cfg.device.damping[0];
   p.sample_period = cfg.loop.sample_period_s();
   p.device_delay = device_delay_samples;
   p.max_damping = std::min(cfg.safety.passivity_max_damping,
-                           kStableDampingFraction * 2.0 * cfg.device.mass / p.sample_period);
+                           kStableDampingFraction * 2.0 * cfg.device.mass[0] / p.sample_period);
   return p;
 }
 

@@ -13,7 +13,7 @@ std::vector<ZwidthPoint> zwidth_curve(const config::Config& cfg, int device_dela
                                       int points) {
   const double t = cfg.loop.sample_period_s();
   const int delay = cfg.wall.delay_samples + device_delay_samples;
-  const double available = (1.0 - cfg.safety.passivity_margin) * cfg.device.damping;
+  const double available = (1.0 - cfg.safety.passivity_margin) * cfg.device.damping[0];
   const auto c = control::coupling_filter(cfg);
   std::vector<ZwidthPoint> out;
   for (int i = 0; i < points; ++i) {
@@ -37,7 +37,7 @@ analysis::TransferFunction oscillation_loop(const config::Config& cfg,
                                             int delay_samples) {
   // The loop seen by xi(.): E (z^-d G + C), which is docs/math.md's E z^-d G without coupling.
   const analysis::TransferFunction g = analysis::device_operator_zoh(
-      cfg.device.mass, cfg.device.damping, cfg.analysis.operator_stiffness,
+      cfg.device.mass[0], cfg.device.damping[0], cfg.analysis.operator_stiffness,
       cfg.analysis.operator_damping, cfg.loop.sample_period_s());
   analysis::TransferFunction path = analysis::tf_delay(g, delay_samples);
   if (c) path = analysis::tf_sum(path, *c);

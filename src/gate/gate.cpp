@@ -21,7 +21,7 @@ double to_hz(double theta, double t) { return theta / (2.0 * std::numbers::pi * 
 
 std::string passivity_reason(const config::Config& cfg, const GateReport& r) {
   const PassivityReport& p = r.passivity;
-  const double b = cfg.device.damping;
+  const double b = cfg.device.damping[0];
   const double m = cfg.safety.passivity_margin;
   std::string s = "passivity: required damping b_req = " + format_number(p.required_damping) +
                   " N s/m exceeds (1 - safety.passivity_margin) x device.damping = (1 - " +
@@ -134,9 +134,9 @@ void add_warnings(const config::Config& cfg, bool coupled, GateReport& r) {
         "damping term leaves a force alternating at the Nyquist frequency that never decays");
   }
   if (cfg.wall.stiffness > 0.0) {
-    r.warnings.push_back("device.max_force = " + format_number(cfg.device.max_force) +
+    r.warnings.push_back("device.max_force = " + format_number(cfg.device.max_force[0]) +
                          " N saturates the wall beyond " +
-                         format_number(cfg.device.max_force / cfg.wall.stiffness * 1e3) +
+                         format_number(cfg.device.max_force[0] / cfg.wall.stiffness * 1e3) +
                          " mm of penetration at rest: saturation is outside the theorems");
   }
   if (cfg.wall.no_pull) {
@@ -153,7 +153,7 @@ GateReport evaluate_gate(const config::Config& cfg, int device_delay_samples) {
   r.sample_period_s = cfg.loop.sample_period_s();
   r.device_delay_samples = device_delay_samples;
   r.delay_samples = device_delay_samples;
-  r.device_damping = cfg.device.damping;
+  r.device_damping = cfg.device.damping[0];
   // Several task axes: each wall along its normal over the workspace (workspace_gate.h), each
   // with its own delay added to the driver's.
   if (kinematics::joint_count(cfg.device.kinematics) != 1) {

@@ -145,8 +145,14 @@ std::string gate_to_text(const GateReport& r, const config::Config& cfg) {
                   : std::to_string(r.delay_samples) + " samples (wall " +
                         std::to_string(r.wall_delay_samples) + " + driver " +
                         std::to_string(r.device_delay_samples) + ")");
-  row(os, "device damping b",
-      format_number(r.device_damping) + (r.workspace ? " per joint (its own units)" : " N s/m"));
+  std::string b = format_number(r.device_damping) + " N s/m";
+  if (r.workspace) {
+    b.clear();
+    for (const double d : r.workspace->joint_damping)
+      b += (b.empty() ? "" : ", ") + format_number(d);
+    b += " (each joint's, in its own units)";
+  }
+  row(os, "device damping b", b);
   if (r.workspace) {
     workspace_rows(*r.workspace, cfg, os);
   } else {

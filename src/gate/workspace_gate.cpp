@@ -25,7 +25,7 @@ kinematics::Status pose_at(const config::Config& cfg, const Vec3& x, analysis::D
   const kinematics::Pose p = kinematics::forward(k, q.q, x);
   if (p.status != kinematics::Status::kOk) return p.status;
   d.jacobian = p.J;
-  d.joint_damping = Vec3::Constant(cfg.device.damping);  // device.damping: each joint's
+  d.joint_damping = cfg.device.damping.per_joint();
   d.m = p.m;
   d.n = p.n;
   return kinematics::Status::kOk;
@@ -226,6 +226,8 @@ WorkspaceReport evaluate_workspace(const config::Config& cfg, int device_delay_s
   WorkspaceReport r;
   const kinematics::Kinematics& k = cfg.device.kinematics;
   const int m = kinematics::joint_count(k);
+  for (int j = 0; j < m; ++j)
+    r.joint_damping.push_back(cfg.device.damping[static_cast<std::size_t>(j)]);
   const kinematics::Box& box = kinematics::workspace(k);
   r.configuration_independent =
       k.kind == kinematics::Kind::kJoints || k.kind == kinematics::Kind::kCartesian;

@@ -32,8 +32,9 @@ struct WallVerdict {
 };
 
 struct WorkspaceReport {
-  std::vector<WallVerdict> walls;  // one per config walls entry
-  int samples = 0;                 // grid configurations examined
+  std::vector<WallVerdict> walls;     // one per config walls entry
+  std::vector<double> joint_damping;  // B_j's diagonal: device.damping of each joint
+  int samples = 0;                    // grid configurations examined
   int outside = 0;  // of them, not a pose of the mechanism: refused (a wrong workspace box)
   // Least lambda_min(B_c - sum b_req_i / (1 - margin) n_i n_i^T) over the samples where two or
   // more walls act (+inf when nowhere), and where (N s/m).

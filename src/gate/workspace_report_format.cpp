@@ -43,6 +43,7 @@ json workspace_to_json(const WorkspaceReport& w) {
                           : json(nullptr)}});
   }
   return {{"walls", walls},
+          {"joint_damping", w.joint_damping},
           {"samples", w.samples},
           {"outside", w.outside},
           {"corner_margin", finite_or_null(w.corner_margin)},

@@ -49,7 +49,7 @@ class Sweep final : public FrequencySweep {
  private:
   // The zero of the cycle-averaged operator power at theta.
   double measure(double theta, std::int64_t period, std::int64_t window) override {
-    const double b1 = cfg_.device.damping;
+    const double b1 = cfg_.device.damping[0];
     const double b2 = 2.0 * b1;
     const auto [p1, p2] = powers(theta, period, window, b1, b2);
     // P(b) = P0 + b D is affine in b: its zero is where the device stops delivering energy.

@@ -176,7 +176,7 @@ Measured measured_wall(const config::Config& cfg, const config::TaskWallConfig& 
   dd.jacobian = pose.J;
   dd.m = pose.m;
   dd.n = pose.n;
-  for (int j = 0; j < m.n; ++j) dd.joint_damping[j] = cfg.device.damping;
+  dd.joint_damping = cfg.device.damping.per_joint();
   m.joint_damping = dd.joint_damping;
   const double b_n = analysis::normal_damping(dd, w.normal);
   if (!(b_n > 0.0) || !std::isfinite(b_n)) {

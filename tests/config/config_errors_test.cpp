@@ -173,7 +173,7 @@ DriverSchemas fake_drivers() {
     auto s = std::make_shared<FakeSettings>();
     const auto gain = schema::read_number(m.diag(), m.take("gain"), schema::Range::greater_than(0));
     if (!gain) return nullptr;
-    s->gain = *gain * cfg.device.max_force;  // a driver sees what was read before its section
+    s->gain = *gain * cfg.device.max_force[0];  // a driver sees what was read before its section
     return s;
   };
   return {{"sim", {}}, {"fake", read_fake}, {"other", read_fake}};

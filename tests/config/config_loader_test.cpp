@@ -76,7 +76,7 @@ TEST(EmbeddedDefault, PassesThePassivityGateWithItsMargin) {
   const Config c = load_embedded_default();
   const double b_req = c.wall.stiffness * c.loop.sample_period_s() / 2.0 + c.wall.damping;
   EXPECT_NEAR(b_req, 1.2, 1e-12);
-  EXPECT_LE(b_req, (1.0 - c.safety.passivity_margin) * c.device.damping);
+  EXPECT_LE(b_req, (1.0 - c.safety.passivity_margin) * c.device.damping[0]);
 }
 
 TEST(EmbeddedDefault, HandStartsAtRestOnItsSetPoint) {

@@ -91,6 +91,45 @@ TEST(KinematicsConfig, TooManyJointsAndAnUnknownKindAreRefused) {
       << e[0];
 }
 
+// A gantry of two different drives: each joint its own mass, damping and limit, or one number
+// for all; the list's length is the kinematics' joint count, whatever order the keys come in.
+TEST(KinematicsConfig, MassDampingAndMaxForceAreOneNumberOrOnePerJoint) {
+  const Config c = load_config_text(R"(device:
+  max_force: [3, 1.5]
+  mass: 0.4
+  damping: [2, 8]
+  kinematics: {kind: cartesian, joints: 2}
+)",
+                                    "t.yaml");
+  EXPECT_EQ(c.device.max_force[0], 3.0);
+  EXPECT_EQ(c.device.max_force[1], 1.5);
+  EXPECT_EQ(c.device.mass[0], 0.4);
+  EXPECT_EQ(c.device.mass[1], 0.4);
+  EXPECT_EQ(c.device.damping.per_joint().head<2>(), kinematics::Vec3(2, 8, 0).head<2>());
+  EXPECT_EQ(load_config_text("device: {mass: [0.3]}\n", "t.yaml").device.mass[0], 0.3)
+      << "one joint: a list of one";
+}
+
+TEST(KinematicsConfig, APerJointListOfTheWrongLengthOrABadNumberIsNamed) {
+  const Lines e = errors_of(R"(device:
+  max_force: [3, 1.5, 2]
+  damping: [2, -1]
+  kinematics: {kind: cartesian, joints: 2}
+  mass: []
+)");
+  ASSERT_EQ(e.size(), 3u);
+  EXPECT_EQ(e[0],
+            "t.yaml:2: device.max_force: must be one number (every joint's) or a list of one "
+            "per joint: device.kinematics has 2 joints, got 3 numbers");
+  EXPECT_EQ(e[1], "t.yaml:3: device.damping[1]: must be > 0, got '-1'");
+  EXPECT_EQ(e[2],
+            "t.yaml:5: device.mass: must be one number (every joint's) or a list of one per "
+            "joint: device.kinematics has 2 joints, got 0 numbers");
+  EXPECT_EQ(errors_of("device: {max_force: [1, 2]}\n"),
+            Lines{"t.yaml:1: device.max_force: must be one number (every joint's) or a list of "
+                  "one per joint: device.kinematics has 1 joint, got 2 numbers"});
+}
+
 TEST(KinematicsConfig, AMechanismThatCannotExistIsRefusedWithTheReason) {
   const Lines e = errors_of(R"(device:
   kinematics:

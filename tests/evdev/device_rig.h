@@ -13,7 +13,7 @@ namespace hapticd::drivers::evdev::testing {
 
 struct Rig {
   explicit Rig(double liveness_ms = 0.0, InputListing listing = {},
-               const std::function<void(EvdevSettings&)>& adjust = {}) {
+               const std::function<void(EvdevSettings&)>& adjust = {}, bool realtime = true) {
     auto s = std::make_shared<EvdevSettings>();
     s->select.name = "x";
     s->axis = {0, Scale::kRange, -0.05, 0.05, false, 0.0};
@@ -37,7 +37,7 @@ struct Rig {
           if (with_listing) o.listing = listing;
           return o;
         },
-        0.001);
+        0.001, realtime);
   }
   explicit Rig(const std::function<void(EvdevSettings&)>& adjust) : Rig(0.0, {}, adjust) {}
   void frame(int value, std::int64_t t = 1000) {

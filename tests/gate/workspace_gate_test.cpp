@@ -42,6 +42,23 @@ TEST(WorkspaceGate, AGantrysDampingAlongANormalIsWhatItsScalesMakeIt) {
   EXPECT_TRUE(r.pass) << (r.reasons.empty() ? "" : r.reasons[0]);
 }
 
+// device.damping per joint: B_j = diag(b_0, b_1), so b_n = 1 / sum n_i^2 s_i^2 / b_i; the
+// weaker joint's damping bounds a wall along it, and a diagonal wall sees both.
+TEST(WorkspaceGate, EachJointsOwnDampingIsItsShareOfTheDampingAlongANormal) {
+  config::Config c = gantry_walls(
+      "  - {point: [0.01, 0], normal: [1, 0], stiffness: 100}\n"
+      "  - {point: [0, 0.01], normal: [0, 1], stiffness: 100}\n"
+      "  - {point: [0, 0.01], normal: [1, 1], stiffness: 100}\n");
+  c.device.damping[0] = 2.0;
+  c.device.damping[1] = 32.0;
+  const WorkspaceReport r = evaluate_workspace(c, 0);
+  ASSERT_EQ(r.walls.size(), 3u);
+  EXPECT_EQ(r.joint_damping, (std::vector<double>{2.0, 32.0}));
+  EXPECT_NEAR(r.walls[0].worst_damping, 2.0 / 0.25, 1e-12);
+  EXPECT_NEAR(r.walls[1].worst_damping, 32.0 / 4.0, 1e-12);
+  EXPECT_NEAR(r.walls[2].worst_damping, 1.0 / (0.5 * (0.25 / 2.0 + 4.0 / 32.0)), 1e-12);
+}
+
 TEST(WorkspaceGate, ATooStiffWallIsRefusedWithTheStiffnessThatPassesAndThatOnePasses) {
   const std::string wall = "  - {point: [0, 0.01], normal: [0, 1], stiffness: STIFF}\n";
   auto with = [&](const std::string& k) {

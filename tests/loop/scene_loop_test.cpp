@@ -44,7 +44,7 @@ struct SceneRig {
         device(cfg.device, cfg.loop.sample_period_s()),
         controller(control::make_control_law(cfg)),
         scene(control::make_scene(cfg)),
-        state(cfg.device.kinematics, scene, Vec3::Constant(cfg.device.max_force),
+        state(cfg.device.kinematics, scene, cfg.device.max_force.per_joint(),
               std::vector<control::ObserverParams>(cfg.walls.size(),
                                                    control::observer_params(cfg, 0))) {
     device.configure();
@@ -159,12 +159,34 @@ TEST(SceneLoop, ADeviceFaultZeroesEveryJoint) {
   for (std::size_t j = 0; j < 3; ++j) EXPECT_EQ(rig.device.last_command(j), 0.0) << "joint " << j;
 }
 
+// device.max_force per joint: a weak third motor saturates alone, and the whole torque is
+// scaled down with it (the direction the walls push in kept), never past any joint's limit.
+TEST(SceneLoop, EachJointSaturatesAtItsOwnLimit) {
+  SceneRig rig(delta_config("max_force: 1.0 ", "max_force: [1.0, 1.0, 0.02] "));
+  ASSERT_EQ(rig.cfg.device.max_force[2], 0.02);
+  telemetry::SpscRing<telemetry::TickRecord> ring(4096);
+  ServoLoop loop(rig.device, rig.controller, &ring, rig.options(2000));
+  const std::atomic<bool> stop{false};
+  const LoopResult r = loop.run(stop);
+  EXPECT_GT(r.count(kCounterSaturatedTicks), 0u);
+  std::vector<telemetry::TickRecord> records(ring.size_approx());
+  records.resize(ring.pop_many(records.data(), records.size()));
+  double most = 0.0;
+  for (const telemetry::TickRecord& t : records) {
+    EXPECT_LE(std::abs(t.force_commanded), 1.0);
+    EXPECT_LE(std::abs(t.joint_force[0]), 1.0);
+    EXPECT_LE(std::abs(t.joint_force[1]), 0.02 * (1.0 + 1e-12)) << "tick " << t.tick;
+    most = std::max(most, std::abs(t.joint_force[1]));
+  }
+  EXPECT_NEAR(most, 0.02, 1e-12) << "the third joint reached its limit";
+}
+
 TEST(SceneLoop, LeavingTheWorkspaceIsANamedPoseFaultWithZeroTorque) {
   // No wall below: the hand drags the effector down through the workspace's floor at z = 0.07.
   SceneRig rig(delta_config("direction: [1, 1, -1]", "direction: [0, 0, -1]"));
   rig.cfg.walls.pop_back();
   control::Scene open = control::make_scene(rig.cfg);
-  SceneState state(rig.cfg.device.kinematics, open, Vec3::Constant(rig.cfg.device.max_force),
+  SceneState state(rig.cfg.device.kinematics, open, rig.cfg.device.max_force.per_joint(),
                    std::vector<control::ObserverParams>(5, control::observer_params(rig.cfg, 0)));
   LoopOptions o = freerun(2000);
   o.scene = &state;

@@ -61,7 +61,7 @@ TEST(CliDirectionCheck, EveryPeerWithItsForceReversedIsRefusedNamingTheSettingTh
     EXPECT_TRUE(has(r.out, "stopped by direction check")) << r.out;
     EXPECT_TRUE(has(r.out, "direction      REVERSED")) << r.out;
     const json j = json::parse(read_file(summary));
-    EXPECT_EQ(j["schema_version"], 4);
+    EXPECT_EQ(j["schema_version"], 5);
     EXPECT_EQ(j["direction_check"]["state"], "reversed");
     EXPECT_LT(j["direction_check"]["gain"].get<double>(), -0.2);
     EXPECT_EQ(j["counters"]["loop"]["contact_ticks"], 0) << "no wall ever acted";
@@ -170,7 +170,7 @@ TEST(CliIdentifyDirection, EveryPeerWithItsForceReversedIsReportedAndNoConfigura
     ProcessResult r = run_process(cmd);
     EXPECT_EQ(r.exit_code, 1) << r.out << r.err;
     const json j = json::parse(r.out);
-    EXPECT_EQ(j["schema_version"], 2);
+    EXPECT_EQ(j["schema_version"], 3);
     EXPECT_EQ(j["force_direction"], "reversed");
     EXPECT_LT(j["mass"].get<double>(), 0.0) << "a reversed force fits a negative mass";
     EXPECT_LT(j["damping"].get<double>(), 0.0);

@@ -3,6 +3,7 @@
 // m and b within 1 %; and it refuses what it must refuse.
 #include <gtest/gtest.h>
 
+#include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "process.h"
@@ -44,6 +45,34 @@ TEST(CliIdentify, PrintsTheEstimatesAndTheYamlToPaste) {
   const double damping = std::stod(lines.substr(lines.find("damping: ") + 9));
   EXPECT_NEAR(mass, 0.1, 1e-3);
   EXPECT_NEAR(damping, 2.0, 0.02);
+}
+
+// A gantry of two different axes: --joint J excites J alone (the others commanded zero) and
+// recovers its own m and b, and the YAML to paste keeps the other joint's as configured.
+TEST(CliIdentify, RecoversEachJointOfSeveralWithItsOwnMassAndDamping) {
+  const std::string config = temp_path("gantry.yaml");
+  std::ofstream(config) << R"(device:
+  mass: [0.1, 0.4]
+  damping: [2, 5]
+  kinematics: {kind: cartesian, joints: 2}
+walls:
+  - {point: [0.05, 0], normal: [1, 0], stiffness: 500}
+)";
+  expect_recovers({"--config", config, "--joint", "0"}, 0.1, 2.0);
+  expect_recovers({"--config", config, "--joint", "1"}, 0.4, 5.0);
+  const ProcessResult r =
+      run_process({hapticd_binary(), "identify", "--config", config, "--joint", "1"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(has(r.out, "joint 1 excited, the others commanded zero")) << r.out;
+  EXPECT_TRUE(has(r.out, "  mass: [0.1, 0.4")) << r.out;
+  EXPECT_TRUE(has(r.out, "  damping: [2, 5") || has(r.out, "  damping: [2, 4.9")) << r.out;
+  const ProcessResult bad =
+      run_process({hapticd_binary(), "identify", "--config", config, "--joint", "2"});
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_TRUE(has(bad.err,
+                  "--joint: must be 0 to 1 (device.kinematics (kind cartesian) has 2 "
+                  "joints), got 2"))
+      << bad.err;
 }
 
 #if HAPTICD_TEST_WITH_HID

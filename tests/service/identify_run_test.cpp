@@ -61,7 +61,7 @@ TEST(IdentifyRun, RealtimeRecordsEveryTickWithoutAllocating) {
   EXPECT_EQ(scope.count(), 0u) << "the tick loop allocated";
   EXPECT_EQ(rec.end, ExcitationEnd::kDone);
   EXPECT_EQ(rec.ticks, 200u);
-  EXPECT_EQ(rec.start, -0.02);
+  EXPECT_EQ(rec.start[0], -0.02);
   EXPECT_GT(rec.travel(), 0.0);
   expect_safe_end(rig);
 }

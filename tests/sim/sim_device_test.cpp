@@ -1,6 +1,7 @@
 // The simulated device behind the Device seam: encoder, output gating, tick semantics and the
 // RT contract (no allocation).
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -156,7 +157,7 @@ TEST(SimDevice, OneReadIsOnePeriodWithTheLastWrittenForce) {
   SimDevice d(c, kT);
   d.configure();
   d.enable();
-  Plant ref(c.mass, c.damping, c.sim.op, kT, 0.002, 0.1);
+  Plant ref(c.mass[0], c.damping[0], c.sim.op, kT, 0.002, 0.1);
   EXPECT_EQ(read_position(d), ref.position());  // first read: the initial state
   EXPECT_EQ(d.axis().plant().time_s(), 0.0);
   for (int k = 1; k <= 50; ++k) {
@@ -176,7 +177,7 @@ TEST(SimDevice, AReadAfterSkippedPeriodsAdvancesThemAllWithTheHeldForce) {
   SimDevice d(c, kT);
   d.configure();
   d.enable();
-  Plant ref(c.mass, c.damping, c.sim.op, kT, 0.002, 0.1);
+  Plant ref(c.mass[0], c.damping[0], c.sim.op, kT, 0.002, 0.1);
   EXPECT_EQ(read_position(d), ref.position());
   std::uint32_t total = 0;
   for (const std::uint32_t periods : {1u, 4u, 1u, 17u, 2u}) {
@@ -189,6 +190,34 @@ TEST(SimDevice, AReadAfterSkippedPeriodsAdvancesThemAllWithTheHeldForce) {
     EXPECT_EQ(s.position, ref.position()) << periods << " periods";
     EXPECT_DOUBLE_EQ(d.axis().plant().time_s(), total * kT);
   }
+}
+
+// device.mass and damping per joint: each joint of the mechanism moves as its own mass and
+// damping make it, the exact step of the one-joint plant with that joint's numbers.
+TEST(SimDevice, EachJointOfSeveralMovesWithItsOwnMassAndDamping) {
+  config::DeviceConfig c = at_rest(0.0, 0.0);
+  c.kinematics.kind = kinematics::Kind::kJoints;
+  c.kinematics.joints.n = 3;
+  c.mass[0] = 0.1, c.mass[1] = 0.4, c.mass[2] = 0.05;
+  c.damping[0] = 2.0, c.damping[1] = 1.0, c.damping[2] = 6.0;
+  SimDevice d(c, kT);
+  d.configure();
+  d.enable();
+  std::array<PositionSample, 3> s{};
+  ASSERT_EQ(d.read(std::span<PositionSample>(s)), IoStatus::kOk);
+  const std::array<double, 3> tau{0.5, -0.25, 1.0};
+  std::vector<Plant> ref;
+  for (std::size_t i = 0; i < 3; ++i)
+    ref.emplace_back(c.mass[i], c.damping[i], c.sim.op, kT, 0.0, 0.0);
+  for (int k = 0; k < 20; ++k) {
+    d.write(std::span<const double>(tau));
+    ASSERT_EQ(d.read(std::span<PositionSample>(s)), IoStatus::kOk);
+    for (std::size_t i = 0; i < 3; ++i) {
+      ref[i].step(tau[i]);
+      EXPECT_NEAR(s[i].position, ref[i].position(), 1e-12) << "joint " << i << " tick " << k;
+    }
+  }
+  EXPECT_GT(std::abs(s[0].position), 2.0 * std::abs(s[1].position)) << "four times the mass";
 }
 
 TEST(SimDevice, IdentityAndTransportDelay) {

@@ -15,7 +15,7 @@ constexpr std::uint8_t bit_of(dg::Line line) {
 EncoderSim::EncoderSim(const config::Config& cfg, const dg::GpioSettings& s)
     : axis_(cfg.device, cfg.loop.sample_period_s()),
       s_(s),
-      max_force_(cfg.device.max_force),
+      max_force_(cfg.device.max_force[0]),
       period_ns_(cfg.loop.period_ns()),
       count_(0),
       queued_levels_(0),
