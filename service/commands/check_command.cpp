@@ -6,6 +6,7 @@
 #include "service/exit_codes.h"
 #include "service/result_output.h"
 #include "service/run/gate_derate.h"
+#include "service/run/run_summary.h"
 #include "wiring/registry.h"
 
 namespace hapticd::service {
@@ -41,17 +42,18 @@ int check_command(const ConfigOptions& options, bool json) {
     j["driver"] = cfg.device.driver;
     j["driver_notes"] = notes;
     if (hint) j["design_coupling"] = kDesignHint;
-    j["derated"] = derated
-                       ? nlohmann::json{{"configured", derated->first}, {"ran", derated->second}}
-                       : nlohmann::json(nullptr);
+    derated_to_json(derated, j);
     text = j.dump(2) + "\n";
   } else {
     text = gate::gate_to_text(r, cfg);
     for (const std::string& line : notes) text += line + "\n";
     if (hint) text += std::string(kDesignHint) + "\n";
-    if (derated) {
-      text += "safety.gate: derate: `run` would run wall.stiffness at " +
-              gate::format_number(derated->second, 10) + " N/m, the largest that passes\n";
+    for (const Derating& d : derated) {
+      text += "safety.gate: derate: `run` would run " + d.key + " at " +
+              gate::format_number(d.ran, 10) + " N/m, the largest that passes\n";
+    }
+    if (derated.empty() && derated_report.reasons.size() > r.reasons.size()) {
+      text += derated_report.reasons.back() + "\n";  // why derate would not help
     }
   }
   if (!write_stdout(text)) return kExitRuntimeFault;  // a verdict nobody can read is no verdict

@@ -159,9 +159,9 @@ std::optional<WhatIf> what_if(const ReplayOptions& o, const telemetry::LogConten
   const wiring::DriverEntry& driver = wiring::find_driver(w.cfg.device.driver);
   w.gate = gate::evaluate_gate(w.cfg, driver.declared_delay(w.cfg));
   // Under safety.gate: derate the what-if runs the stiffness `run` would (and says so).
-  if (const auto d = derate_stiffness(w.cfg, driver.declared_delay(w.cfg), w.gate)) {
-    std::cerr << "hapticd: what-if: DERATED (safety.gate: derate): wall.stiffness "
-              << format_number(d->first) << " N/m replayed at " << format_number(d->second)
+  for (const Derating& d : derate_stiffness(w.cfg, driver.declared_delay(w.cfg), w.gate)) {
+    std::cerr << "hapticd: what-if: DERATED (safety.gate: derate): " << d.key << " "
+              << format_number(d.configured) << " N/m replayed at " << format_number(d.ran)
               << " N/m, the largest that passes\n";
   }
   return w;

@@ -27,6 +27,21 @@ std::string percentiles(const json& p) {
          "  max " + num(p["max"]) + " us";
 }
 
+// The lines of an answer's "derated" (one joint: wall.stiffness) and "derated_walls".
+std::string derated_lines(const json& j, const std::string& after) {
+  std::string out;
+  const auto line = [&](const json& d) {
+    const std::string key = d.contains("key") ? text(d["key"]) : "wall.stiffness";
+    out += "  DERATED       " + key + " " + num(d["configured"]) + " N/m configured, running at " +
+           num(d["ran"]) + " N/m" + after + "\n";
+  };
+  if (j.contains("derated") && j["derated"].is_object()) line(j["derated"]);
+  if (j.contains("derated_walls") && j["derated_walls"].is_array()) {
+    for (const json& d : j["derated_walls"]) line(d);
+  }
+  return out;
+}
+
 std::string gate_line(const json& g) {
   if (!g.is_object()) return "-";
   const json& pass = g["passivity"];
@@ -66,10 +81,7 @@ std::string status_text(const json& s) {
     out << "  direction     " << text(d["state"]) << " (gain " << num(d["gain"]) << "), wall "
         << (d.value("armed", false) ? "armed" : "not armed") << "\n";
   }
-  if (s.contains("derated") && s["derated"].is_object()) {
-    out << "  DERATED       wall.stiffness " << num(s["derated"]["configured"])
-        << " N/m configured, running at " << num(s["derated"]["ran"]) << " N/m\n";
-  }
+  out << derated_lines(s, "");
   out << "  position      " << num(s["position"], 1e3) << " mm, penetration "
       << num(s["penetration"], 1e3) << " mm, force " << num(s["force_commanded"]) << " N\n";
   if (s.contains("joints") && s["joints"].is_array()) {
@@ -120,11 +132,7 @@ std::string reload_text(const json& r) {
     out << "the new configuration applies when output is next enabled";
   }
   out << "\n  gate          " << gate_line(r["gate"]) << "\n";
-  if (r.contains("derated") && r["derated"].is_object()) {
-    out << "  DERATED       wall.stiffness " << num(r["derated"]["configured"])
-        << " N/m configured, running at " << num(r["derated"]["ran"])
-        << " N/m (safety.gate: derate)\n";
-  }
+  out << derated_lines(r, " (safety.gate: derate)");
   return out.str();
 }
 

@@ -7,41 +7,70 @@
 #include "gate/number_format.h"
 
 namespace hapticd::service {
+namespace {
 
-std::optional<std::pair<double, double>> derate_stiffness(config::Config& cfg,
-                                                          int device_delay_samples,
-                                                          gate::GateReport& report) {
-  if (report.pass || cfg.safety.gate != config::GateMode::kDerate) return std::nullopt;
-  if (report.workspace) {
-    // Walls over a workspace are not derated: each has its own largest K in the report, and
-    // walls acting together bound them jointly, so which to lower is the user's choice. Said,
-    // so that a refusal under derate is not taken for a derating that found nothing to pass.
-    report.reasons.push_back(
-        "safety.gate: derate lowers the stiffness of one joint's wall; walls on a device of "
-        "several joints are not derated: set each failing wall's stiffness at most to its "
-        "largest passing K above, then check again");
-    return std::nullopt;
-  }
-  const analysis::StiffnessLimit& limit = report.passivity.max_stiffness;
-  if (report.passivity.passive || limit.kind != analysis::StiffnessLimit::Kind::kBounded ||
-      !(limit.value < cfg.wall.stiffness)) {
-    return std::nullopt;  // the stiffness is not what fails, or no stiffness passes
-  }
-  // The typed value changes; the gate runs again on it. The recorded document gets the same
-  // value to the last bit (%.17g round-trips a double), so `replay` rebuilds the law that ran.
-  config::Config next = cfg;
-  next.wall.stiffness = limit.value;
-  gate::GateReport derated = gate::evaluate_gate(next, device_delay_samples);
-  if (!derated.pass) return std::nullopt;
+// %.17g round-trips a double: the recorded document gets the value that ran to the last bit.
+std::string exact(double v) {
   char k[40];
-  std::snprintf(k, sizeof k, "%.17g", limit.value);
-  const double configured = cfg.wall.stiffness;
-  cfg.effective_yaml = "# safety.gate: derate ran wall.stiffness at " + std::string(k) +
-                       " N/m (configured " + gate::format_number(configured, 17) + ")\n" +
-                       config::with_setting(cfg.effective_yaml, {"wall.stiffness", k, {}});
-  cfg.wall.stiffness = limit.value;
+  std::snprintf(k, sizeof k, "%.17g", v);
+  return k;
+}
+
+// The walls of several joints: each one the gate does not pass alone, lowered to its own
+// largest passing K; empty when one that fails has no such K (or none fails alone).
+std::vector<Derating> wall_deratings(const config::Config& cfg, const gate::WorkspaceReport& w) {
+  std::vector<Derating> out;
+  for (std::size_t i = 0; i < w.walls.size() && i < cfg.walls.size(); ++i) {
+    const gate::WallVerdict& v = w.walls[i];
+    if (v.passive) continue;
+    const double k = cfg.walls[i].law.stiffness;
+    if (!v.reached || v.max_stiffness.kind != analysis::StiffnessLimit::Kind::kBounded ||
+        !(v.max_stiffness.value < k)) {
+      return {};  // the stiffness is not what fails this wall, or no stiffness passes it
+    }
+    out.push_back({"walls[" + std::to_string(i) + "].stiffness", i, k, v.max_stiffness.value});
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<Derating> derate_stiffness(config::Config& cfg, int device_delay_samples,
+                                       gate::GateReport& report) {
+  if (report.pass || cfg.safety.gate != config::GateMode::kDerate) return {};
+  std::vector<Derating> lowered;
+  config::Config next = cfg;
+  if (report.workspace) {
+    lowered = wall_deratings(cfg, *report.workspace);
+    for (const Derating& d : lowered) next.walls[d.wall].law.stiffness = d.ran;
+  } else {
+    const analysis::StiffnessLimit& limit = report.passivity.max_stiffness;
+    if (!report.passivity.passive && limit.kind == analysis::StiffnessLimit::Kind::kBounded &&
+        limit.value < cfg.wall.stiffness) {
+      lowered.push_back({"wall.stiffness", 0, cfg.wall.stiffness, limit.value});
+      next.wall.stiffness = limit.value;
+    }
+  }
+  if (lowered.empty()) return {};  // the stiffness is not what fails, or no stiffness passes
+  gate::GateReport derated = gate::evaluate_gate(next, device_delay_samples);
+  if (!derated.pass) {
+    if (report.workspace) {
+      report.reasons.push_back(
+          "safety.gate: derate lowered each failing wall to its largest passing K and the gate "
+          "still refuses (walls acting together): lower them further yourself, then check again");
+    }
+    return {};
+  }
+  std::string notes;
+  for (const Derating& d : lowered) {
+    notes += "# safety.gate: derate ran " + d.key + " at " + exact(d.ran) + " N/m (configured " +
+             gate::format_number(d.configured, 17) + ")\n";
+    next.effective_yaml = config::with_setting(next.effective_yaml, {d.key, exact(d.ran), {}});
+  }
+  next.effective_yaml = notes + next.effective_yaml;
+  cfg = std::move(next);
   report = std::move(derated);
-  return std::make_pair(configured, cfg.wall.stiffness);
+  return lowered;
 }
 
 bool gate_allows(const gate::GateReport& report, const config::Config& cfg) {

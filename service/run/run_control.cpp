@@ -97,8 +97,7 @@ json RunSession::status() const {
     j["wall"] = {{"stiffness", cfg_.wall.stiffness}, {"damping", cfg_.wall.damping}};
     j["walls"] = nullptr;
   }
-  j["derated"] =
-      derated_ ? json{{"configured", derated_->first}, {"ran", derated_->second}} : json(nullptr);
+  derated_to_json(derated_, j);
   j["fault"] = fault_.empty() ? json(nullptr) : json(fault_);
   j["gate"] = gate_;
   if (servo_) {
@@ -164,18 +163,16 @@ json RunSession::reload(const std::string& text, const std::string& source,
   const double k = next.cfg.wall.stiffness, b = next.cfg.wall.damping;
   json out = {{"accepted", true},
               {"applied_at_tick", first_tick ? json(*first_tick) : json(nullptr)},
-              {"gate", gate::gate_to_json(next.report)},
-              {"derated", next.derated ? json{{"configured", next.derated->first},
-                                              {"ran", next.derated->second}}
-                                       : json(nullptr)}};
+              {"gate", gate::gate_to_json(next.report)}};
+  derated_to_json(next.derated, out);
   {
     std::lock_guard lock(mutex_);
     cfg_ = std::move(next.cfg);
     ++reloads_;
     gate_ = out["gate"];
     summary_.gate = gate_;
-    if (next.derated) {  // the last derating stays said
-      summary_.derated_stiffness = next.derated;
+    if (!next.derated.empty()) {  // the last derating stays said
+      summary_.derated = next.derated;
       derated_ = next.derated;
     }
   }
@@ -202,12 +199,13 @@ RunSession::Prepared RunSession::prepare(const config::Config& running, const st
   const int delay = session_->device().info().transport_delay_samples;
   p.report = gate::evaluate_gate(p.cfg, delay);
   const gate::GateReport configured = p.report;
-  if (const auto derated = (p.derated = derate_stiffness(p.cfg, delay, p.report))) {
+  p.derated = derate_stiffness(p.cfg, delay, p.report);
+  for (const Derating& d : p.derated) {
     spdlog::warn(
-        "reload from {}: DERATED (safety.gate: derate): wall.stiffness {} N/m fails the gate ({}), "
-        "swapping in {} N/m, the largest that passes",
-        source, gate::format_number(derated->first), joined(configured.reasons),
-        gate::format_number(derated->second));
+        "reload from {}: DERATED (safety.gate: derate): {} {} N/m fails the gate ({}), swapping "
+        "in {} N/m, the largest that passes",
+        source, d.key, gate::format_number(d.configured), joined(configured.reasons),
+        gate::format_number(d.ran));
   }
   if (!gate_allows(p.report, p.cfg)) {
     throw ControlRefusal("the gate refuses it: " + joined(p.report.reasons), kExitGateRefused);

@@ -110,7 +110,7 @@ bool RunSession::start_up(gate::GateReport& report) {
   {
     std::lock_guard lock(mutex_);
     cfg_ = std::move(cfg);
-    derated_ = summary_.derated_stiffness;
+    derated_ = summary_.derated;
     gate_ = summary_.gate;
   }
   if (!pass) return false;

@@ -60,7 +60,7 @@ class RunSession final : public ControlHandler {
     config::Config cfg;
     gate::GateReport report;
     std::unique_ptr<control::Controller> law;
-    std::optional<std::pair<double, double>> derated;  // safety.gate: derate lowered K
+    std::vector<Derating> derated;  // what safety.gate: derate lowered
   };
 
   nlohmann::json status() const;
@@ -79,7 +79,7 @@ class RunSession final : public ControlHandler {
   const bool realtime_;
   RunSummary summary_;
   // What safety.gate: derate last did, for `status` (guarded by mutex_).
-  std::optional<std::pair<double, double>> derated_;
+  std::vector<Derating> derated_;
   std::optional<DeviceSession> session_;
   TickLog log_;
   loop::RtStatus rt_;

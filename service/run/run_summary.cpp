@@ -160,11 +160,33 @@ json summary_to_json(const RunSummary& s) {
   j["gate"] = s.gate;
   j["passivity"] = passivity_json(s);
   j["direction_check"] = direction_json(s.loop.direction);
-  j["derated"] = s.derated_stiffness ? json{{"key", "wall.stiffness"},
-                                            {"configured", s.derated_stiffness->first},
-                                            {"ran", s.derated_stiffness->second}}
-                                     : json(nullptr);
+  derated_to_json(s.derated, j);
   return j;
+}
+
+void derated_to_json(const std::vector<Derating>& derated, json& j) {
+  j["derated"] = nullptr;
+  j["derated_walls"] = nullptr;
+  for (const Derating& d : derated) {
+    const json one = {{"key", d.key}, {"configured", d.configured}, {"ran", d.ran}};
+    if (d.key == "wall.stiffness") {
+      j["derated"] = one;
+      continue;
+    }
+    if (j["derated_walls"].is_null()) j["derated_walls"] = json::array();
+    json w = one;
+    w["wall"] = d.wall;
+    j["derated_walls"].push_back(w);
+  }
+}
+
+std::string derated_text(const std::vector<Derating>& derated, const std::string& ran) {
+  std::string out;
+  for (const Derating& d : derated) {
+    out += "  DERATED       " + d.key + " " + format_number(d.configured) + " N/m configured, " +
+           ran + " " + format_number(d.ran) + " N/m\n";
+  }
+  return out;
 }
 
 std::string summary_to_text(const RunSummary& s) {
@@ -175,11 +197,10 @@ std::string summary_to_text(const RunSummary& s) {
      << format_number(1.0 / s.sample_period_s) << " Hz (" << j["clock"].get<std::string>()
      << "), stopped by " << s.stop_reason
      << (s.output_was_enabled ? "" : " before output was enabled") << "\n";
-  if (s.derated_stiffness) {
-    os << "  DERATED        wall.stiffness " << format_number(s.derated_stiffness->first)
-       << " N/m configured, ran at " << format_number(s.derated_stiffness->second)
-       << " N/m: the largest that passes the gate (safety.gate: derate; the last derating of "
-          "the run, at start or by a reload)\n";
+  if (!s.derated.empty()) {
+    os << derated_text(s.derated, "ran at")
+       << "  (safety.gate: derate: the largest that passes the gate; the last derating of the "
+          "run, at start or by a reload)\n";
   }
   timing_text(s, j, os);
   if (s.output_was_enabled) {

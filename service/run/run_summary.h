@@ -12,6 +12,7 @@
 #include "loop/latency_histogram.h"
 #include "loop/rt_setup.h"
 #include "loop/servo_loop.h"
+#include "service/run/gate_derate.h"
 
 namespace hapticd::service {
 
@@ -58,11 +59,16 @@ struct RunSummary {
   bool peer_output_on = false;
   nlohmann::json gate;
   std::string passivity_mode;  // safety.passivity_controller: "off", "observe", "damp"
-  // safety.gate: derate ran the wall at a lower stiffness than configured: {configured, ran}.
-  std::optional<std::pair<double, double>> derated_stiffness;
+  // safety.gate: derate ran walls at a lower stiffness than configured (the last derating).
+  std::vector<Derating> derated;
 };
 
 nlohmann::json summary_to_json(const RunSummary& s);
+// Into `j`: "derated", one joint's wall.stiffness {key, configured, ran}, and "derated_walls",
+// several joints' [{key, wall, configured, ran}], each null when not derated.
+void derated_to_json(const std::vector<Derating>& derated, nlohmann::json& j);
+// "  DERATED  walls[1].stiffness 900 N/m configured, ran at 700 N/m\n" for each.
+std::string derated_text(const std::vector<Derating>& derated, const std::string& ran);
 // {"name": value, ...}: a driver's counters for the summary and `hapticctl status`.
 std::string summary_to_text(const RunSummary& s);
 

@@ -286,13 +286,15 @@ bool configure_and_gate(config::Config& cfg, DeviceSession& session, RunSummary&
   }
   report = gate::evaluate_gate(cfg, declared);
   const gate::GateReport configured = report;
-  if ((s.derated_stiffness = derate_stiffness(cfg, declared, report))) {
+  s.derated = derate_stiffness(cfg, declared, report);
+  if (!s.derated.empty()) {
     for (const std::string& r : configured.reasons) spdlog::error("gate: {}", r);
+  }
+  for (const Derating& d : s.derated) {
     spdlog::warn(
-        "gate: DERATED (safety.gate: derate): wall.stiffness {} N/m fails, running at {} N/m, the "
-        "largest that passes",
-        gate::format_number(s.derated_stiffness->first),
-        gate::format_number(s.derated_stiffness->second));
+        "gate: DERATED (safety.gate: derate): {} {} N/m fails, running at {} N/m, the largest "
+        "that passes",
+        d.key, gate::format_number(d.configured), gate::format_number(d.ran));
   }
   s.gate = gate::gate_to_json(report);
   return announce_gate(report, cfg);

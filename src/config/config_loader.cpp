@@ -4,6 +4,9 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <string>
+#include <utility>
+
 #include "config/config_schema.h"
 #include "config/schema_reader.h"
 #include "config/yaml_documents.h"
@@ -33,6 +36,20 @@ std::vector<std::string> split_key_path(std::string_view path) {
     if (dot == std::string_view::npos) return segments;
     start = dot + 1;
   }
+}
+
+// "walls[2]" -> {"walls", 2}: an element of a list; any other segment -> {it, npos}.
+std::pair<std::string, std::size_t> indexed(const std::string& segment) {
+  const std::size_t open = segment.find('[');
+  if (open == 0 || open == std::string::npos || segment.back() != ']') {
+    return {segment, std::string::npos};
+  }
+  const std::string digits = segment.substr(open + 1, segment.size() - open - 2);
+  if (digits.empty() || digits.size() > 4 ||
+      digits.find_first_not_of("0123456789") != std::string::npos) {
+    return {segment, std::string::npos};
+  }
+  return {segment.substr(0, open), std::stoul(digits)};
 }
 
 std::string override_text(const Override& o) {
@@ -71,6 +88,19 @@ void apply_overrides(YAML::Node& root, const std::vector<Override>& overrides,
     bool blocked = false;
     for (std::size_t s = 0; s + 1 < segments.size(); ++s) {
       path = schema::child_path(path, segments[s]);
+      if (const auto [key, index] = indexed(segments[s]); index != std::string::npos) {
+        // An element of a list the document has: walls[1].stiffness.
+        const YAML::Node list = cur[key];
+        if (!list.IsSequence() || index >= list.size() || !list[index].IsMap()) {
+          diag.set_error(
+              text, i, path,
+              "no such mapping to set '" + o.key_path.substr(path.size() + 1) + "' inside");
+          blocked = true;
+          break;
+        }
+        cur.reset(list[index]);
+        continue;
+      }
       YAML::Node next = cur[segments[s]];
       if (!next.IsDefined() || next.IsNull()) {
         if (!next.IsDefined() && created.empty()) created = path;
@@ -85,7 +115,16 @@ void apply_overrides(YAML::Node& root, const std::vector<Override>& overrides,
       cur.reset(next);
     }
     if (blocked) continue;
-    cur[segments.back()] = value;
+    if (const auto [key, index] = indexed(segments.back()); index != std::string::npos) {
+      YAML::Node list = cur[key];
+      if (!list.IsSequence() || index >= list.size()) {
+        diag.set_error(text, i, o.key_path, "no such element of a list to set");
+        continue;
+      }
+      list[index] = value;
+    } else {
+      cur[segments.back()] = value;
+    }
     diag.set_origin(created.empty() ? o.key_path : created, text, i);
   }
 }

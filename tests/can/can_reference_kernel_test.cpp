@@ -169,6 +169,26 @@ TEST(CanReferenceOnVcan, ADriveLimitBelowMaxTorqueIsNamedBeforeOutputIsEnabled) 
 // an EMCY of the second drive ends the run with zero torque on both and the node named (the
 // first's, and each node's heartbeat, over a socketpair: can_reference_nodes_test.cpp; one
 // run here, as the emulated guest takes most of a minute to start one).
+// `hapticd run` on config/can-gantry.yaml over vcan0 at the rig's rate, with the rig's wall
+// along the diagonal through the origin, the emulator's slack in the timeouts, and `sets`.
+std::vector<std::string> gantry_args(const Rig& rig, std::vector<std::string> sets) {
+  std::vector<std::string> a = {
+      kBin,         "run", "--config", std::string(HAPTICD_SOURCE_DIR) + "/config/can-gantry.yaml",
+      "--duration", "60"};
+  for (const std::string& set :
+       {std::string("loop.rate_hz=") + std::to_string(rig.rate_hz),
+        std::string("device.can.interface=vcan0"), std::string("device.can.sdo_timeout_ms=1000"),
+        std::string("device.can.state_timeout_ms=2000"),
+        std::string("device.can.heartbeat_timeout_ms=3000"),
+        std::string("safety.stale_fault_ticks=10"), std::string("loop.overrun_fault_streak=100"),
+        "walls=[{point: [0, 0], normal: [1, 1], damping: 0, stiffness: " +
+            std::to_string(rig.stiffness) + "}]"}) {
+    sets.push_back(set);
+  }
+  for (const std::string& set : sets) a.insert(a.end(), {"--set", set});
+  return a;
+}
+
 TEST(CanReferenceOnVcan, TwoCia402DrivesAsAGantryRenderADiagonalWallAndAFaultZeroesBoth) {
   for (const int faulty : {2}) {
     SCOPED_TRACE("the fault on node " + std::to_string(faulty));
@@ -183,22 +203,9 @@ TEST(CanReferenceOnVcan, TwoCia402DrivesAsAGantryRenderADiagonalWallAndAFaultZer
       runners.push_back(std::make_unique<reference::ReferenceRunner>(
           *drives.back(), reference::CanPort::open("vcan0")));
     }
-    std::vector<std::string> a = {
-        kBin,         "run",
-        "--config",   std::string(HAPTICD_SOURCE_DIR) + "/config/can-gantry.yaml",
-        "--duration", "60"};
-    for (const std::string& set :
-         {std::string("loop.rate_hz=") + std::to_string(kCia402Rig.rate_hz),
-          std::string("device.can.interface=vcan0"), std::string("device.can.sdo_timeout_ms=1000"),
-          std::string("device.can.state_timeout_ms=2000"),
-          std::string("device.can.heartbeat_timeout_ms=3000"),
-          std::string("device.can.cia402.master_heartbeat_ms=200"),
-          std::string("device.can.cia402.drive_watchdog_ms=1500"),
-          std::string("safety.stale_fault_ticks=10"), std::string("loop.overrun_fault_streak=100"),
-          "walls=[{point: [0, 0], normal: [1, 1], damping: 0, stiffness: " +
-              std::to_string(kCia402Rig.stiffness) + "}]"}) {
-      a.insert(a.end(), {"--set", set});
-    }
+    const std::vector<std::string> a = gantry_args(
+        kCia402Rig,
+        {"device.can.cia402.master_heartbeat_ms=200", "device.can.cia402.drive_watchdog_ms=1500"});
     ChildProcess run(a, "/tmp/hapticd-ref-gantry.out");
     kernel_test::wait_until([&] { return drives[0]->torque_on() && drives[1]->torque_on(); },
                             milliseconds(60'000), "both drives operation enabled");
@@ -224,6 +231,53 @@ TEST(CanReferenceOnVcan, TwoCia402DrivesAsAGantryRenderADiagonalWallAndAFaultZer
       EXPECT_EQ(d->motor_force_n(), 0.0);
     }
   }
+}
+
+// Two ODrive 0.5 axes on one bus, one per joint of an XY gantry (docs/kinematics.md, several
+// CAN drives): a diagonal wall holds the hand's (1 N, 1 N) at rest at its force along the normal
+// over K, and a motor failure on one axis ends the run naming it, both axes idle with zero force.
+TEST(CanReferenceOnVcan, TwoOdriveAxesAsAGantryRenderADiagonalWallAndAFaultIdlesBoth) {
+  kernel_test::VcanInterface bus("vcan0");
+  std::vector<std::unique_ptr<reference::Odrive056>> axes;
+  std::vector<std::unique_ptr<reference::ReferenceRunner>> runners;
+  for (const std::uint8_t node : {1, 2}) {
+    reference::Odrive056Config c;
+    c.node = node;
+    c.watchdog_timeout_s = 1.0;  // the emulator's slow start of the RT thread
+    axes.push_back(std::make_unique<reference::Odrive056>(c, hand(kOdriveRig.hand_force, 10.0),
+                                                          reference::monotonic_ns()));
+    runners.push_back(std::make_unique<reference::ReferenceRunner>(
+        *axes.back(), reference::CanPort::open("vcan0")));
+  }
+  const std::vector<std::string> a = gantry_args(
+      kOdriveRig,
+      {"device.can.profile=odrive", "device.can.cia402=null",
+       "device.can.torque_per_force=0.015625", "device.can.position_per_unit=0.09817477042468103",
+       "device.can.max_torque=0.15625", "device.can.nodes=[{node_id: 1}, {node_id: 2}]",
+       "device.can.odrive.watchdog_timeout_s=1", "device.can.odrive.vel_limit=2"});
+  ChildProcess run(a, "/tmp/hapticd-ref-odrive-gantry.out");
+  kernel_test::wait_until([&] { return axes[0]->armed() && axes[1]->armed(); },
+                          milliseconds(60'000), "both axes in closed loop");
+  std::this_thread::sleep_for(milliseconds(500));
+  for (auto& x : axes) x->press_now();
+  std::this_thread::sleep_for(milliseconds(4000));
+  const double x = rest_position(*axes[0], 1000), y = rest_position(*axes[1], 1000);
+  const double depth = (x + y) / std::sqrt(2.0);  // n . (x - 0)
+  const double expected = kOdriveRig.hand_force * std::sqrt(2.0) / kOdriveRig.stiffness;
+  EXPECT_NEAR(depth, expected, 0.02 * expected) << run.output();
+  RecordProperty("rest_mm", std::to_string(depth * 1e3));
+  ASSERT_GT(std::abs(axes[0]->motor_force_n()), 0.3) << "the wall pushes on both joints";
+  ASSERT_GT(std::abs(axes[1]->motor_force_n()), 0.3);
+  axes[1]->raise_axis_error(reference::Odrive056::kMotorFailed);
+  EXPECT_EQ(run.wait(seconds(60)), 1) << run.output();
+  EXPECT_NE(run.output().find("node 2"), std::string::npos) << run.output();
+  kernel_test::wait_until(
+      [&] {
+        return !axes[0]->armed() && !axes[1]->armed() && axes[0]->motor_force_n() == 0.0 &&
+               axes[1]->motor_force_n() == 0.0;
+      },
+      milliseconds(3000), "both axes idle with zero force");
+  for (auto& r : runners) r->stop();
 }
 
 }  // namespace

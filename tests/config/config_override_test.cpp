@@ -81,6 +81,23 @@ TEST(Set, WrongTypeNamesTheArgument) {
             "number, got 'x'"});
 }
 
+// An element of a list the document has: walls[1].stiffness sets that wall's alone (safety.gate:
+// derate records the walls it lowered this way); an element it does not have is named.
+TEST(Set, AnElementOfAListIsSetByItsIndex) {
+  const std::string walls =
+      "device: {kinematics: {kind: cartesian, joints: 2}}\n"
+      "walls:\n  - {point: [0.01, 0], normal: [1, 0], stiffness: 100}\n"
+      "  - {point: [0, 0.01], normal: [0, 1], stiffness: 200}\n";
+  const Config c = load_config_text(walls, "t", sets({"walls[1].stiffness=250"}));
+  EXPECT_EQ(c.walls[0].law.stiffness, 100.0);
+  EXPECT_EQ(c.walls[1].law.stiffness, 250.0);
+  EXPECT_EQ(errors_of(walls, sets({"walls[2].stiffness=5"})),
+            Lines{"--set walls[2].stiffness=5: walls[2]: no such mapping to set 'stiffness' "
+                  "inside"});
+  EXPECT_EQ(errors_of(walls, sets({"walls[7]=5"})),
+            Lines{"--set walls[7]=5: walls[7]: no such element of a list to set"});
+}
+
 TEST(Set, UnknownKeyNamesTheArgument) {
   EXPECT_EQ(errors_of("", sets({"wall.stifness=5"})),
             Lines{"--set wall.stifness=5: wall.stifness: unknown key (did you mean 'stiffness'?)"});

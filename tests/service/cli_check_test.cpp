@@ -119,17 +119,35 @@ TEST(CliCheck, ADeltasBoxIsProvenWallByWallOverItsWorkspace) {
   EXPECT_NE(stiff.out.find("walls[1].stiffness must be <= "), std::string::npos) << stiff.out;
   EXPECT_EQ(stiff.out.find("design-coupling"), std::string::npos) << stiff.out;
 
-  // safety.gate: derate does not derate walls of several joints, and says so rather than
-  // leaving the user to take the refusal for a derating that found nothing to pass.
+  // safety.gate: derate lowers the failing wall to its own largest passing K (the report's),
+  // runs it, says so in the summary and the log, and records it in the tick log's document:
+  // the replay rebuilds the walls that ran.
+  const double k_max = [&] {
+    const ProcessResult out = check("60000", true);
+    return nlohmann::json::parse(out.out)["workspace"]["walls"][1]["max_stiffness"].get<double>();
+  }();
   std::string b = box;
   b.replace(b.find("STIFF"), 5, "60000");
-  const ProcessResult derate = run_process(
-      {hapticd_binary(), "run", "--duration", "1", "--config", delta_yaml(), "--set",
-       "device.damping=0.05", "--set", "safety.gate=derate", "--set", "loop.clock=freerun", b});
-  EXPECT_EQ(derate.exit_code, 3) << derate.out << derate.err;
-  EXPECT_NE(derate.err.find("walls on a device of several joints are not derated"),
+  const std::string sum = temp_path("derated-walls.json"), log = temp_path("derated-walls.hlog");
+  const ProcessResult derate =
+      run_process({hapticd_binary(), "run", "--duration", "1", "--config", delta_yaml(), "--set",
+                   "device.damping=0.05", "--set", "safety.gate=derate", "--set",
+                   "loop.clock=freerun", b, "--summary-json", sum, "--log", log});
+  EXPECT_EQ(derate.exit_code, 0) << derate.out << derate.err;
+  const nlohmann::json s = nlohmann::json::parse(read_file(sum));
+  EXPECT_TRUE(s["derated"].is_null());
+  ASSERT_EQ(s["derated_walls"].size(), 1u) << s["derated_walls"];
+  EXPECT_EQ(s["derated_walls"][0]["key"], "walls[1].stiffness");
+  EXPECT_EQ(s["derated_walls"][0]["wall"], 1);
+  EXPECT_EQ(s["derated_walls"][0]["configured"].get<double>(), 60000.0);
+  EXPECT_EQ(s["derated_walls"][0]["ran"].get<double>(), k_max);
+  EXPECT_EQ(s["gate"]["verdict"], "pass");
+  EXPECT_NE(derate.out.find("DERATED       walls[1].stiffness 60000 N/m configured"),
             std::string::npos)
-      << derate.err;
+      << derate.out;
+  const ProcessResult replay = run_process({hapticd_binary(), "replay", log, "--json"});
+  EXPECT_EQ(replay.exit_code, 0) << replay.out << replay.err;
+  EXPECT_EQ(nlohmann::json::parse(replay.out)["reproduced"]["differing"], 0) << replay.out;
 }
 
 // The example configuration of several joints passes its gate, and the direction check, which
