@@ -118,9 +118,8 @@ TEST(EvdevUinput, TheWallHoldsTheHandAtForceOverStiffness) {
 // What reaches the device: each tick's level, or a newer one that replaced it while the device
 // was busy (strace slows the update thread's calls too: 4 ms an EVIOCSFF here). The guest's
 // clock has no vDSO path under the emulator (its clocksource is the HPET, not the TSC), so its
-// clock_gettime calls show as system calls here; on a TSC host they do not. Under strace the
-// loop skips periods, and the direction check starts its pulse again after each
-// (docs/devices.md), never done within its time-out: it is off here, not what is measured.
+// clock_gettime calls show as system calls here; on a TSC host they do not. The direction check
+// is off here: its push and wait are not what is measured.
 TEST(EvdevUinput, EveryTickHandsItsLevelOverAndTheLoopThreadDoesLittleElse) {
   Rig rig;
   rig.checked = false;
