@@ -3,7 +3,6 @@
 // config_loader.h; nothing here knows about YAML.
 #pragma once
 
-#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
@@ -131,13 +130,6 @@ class JointValues {
   JointValues(double every) noexcept { values_.fill(every); }  // one number: every joint
   double operator[](std::size_t joint) const noexcept { return values_[joint]; }
   double& operator[](std::size_t joint) noexcept { return values_[joint]; }
-  // The largest and the least of the first n joints' (n in 1..base::kMaxJoints).
-  double largest(std::size_t n) const noexcept {
-    return *std::max_element(values_.begin(), values_.begin() + static_cast<long>(n));
-  }
-  double least(std::size_t n) const noexcept {
-    return *std::min_element(values_.begin(), values_.begin() + static_cast<long>(n));
-  }
   // Every joint's, in joint order (the joints a device does not have hold what they held).
   kinematics::Vec3 per_joint() const noexcept { return {values_[0], values_[1], values_[2]}; }
   bool operator==(const JointValues&) const = default;

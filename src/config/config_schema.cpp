@@ -72,16 +72,8 @@ void joint_values(MapReader& m, const Field& field, const Range& range, std::siz
                        std::to_string(field.node.size()) + " numbers");
     return;
   }
-  JointValues read = out;
-  bool ok = true;
-  for (std::size_t i = 0; i < joints; ++i) {
-    const YAML::Node element = field.node[i];
-    const Field f{field.path + "[" + std::to_string(i) + "]", element, element.Mark(), true};
-    const auto v = read_number(m.diag(), f, range);
-    if (v) read[i] = *v;
-    ok = ok && v.has_value();
-  }
-  if (ok) out = read;
+  const auto list = read_number_list(m.diag(), field, range);
+  for (std::size_t i = 0; list && i < joints; ++i) out[i] = (*list)[i];
 }
 
 void read_device(MapReader& top, std::optional<double> rate_hz, const std::string& base_dir,

@@ -184,8 +184,10 @@ std::optional<std::string> read_string(Diagnostics& diag, const Field& field);
 // Index into `choices` of the value: "must be one of a, b; got 'c'".
 std::optional<std::size_t> read_choice(Diagnostics& diag, const Field& field,
                                        const std::vector<std::string>& choices);
-// A non-empty list of finite numbers; a bad element is reported as "path[i]: ...".
-std::optional<std::vector<double>> read_number_list(Diagnostics& diag, const Field& field);
+// A non-empty list of finite numbers, each in `range`; a bad element is reported as
+// "path[i]: ...".
+std::optional<std::vector<double>> read_number_list(Diagnostics& diag, const Field& field,
+                                                    const Range& range = Range::any());
 // An unsigned integer written in decimal or 0x hexadecimal, at most `max` (ids, usages, masks:
 // the numbers datasheets and descriptors print in hexadecimal).
 std::optional<std::uint32_t> read_hex(Diagnostics& diag, const Field& field, std::uint32_t max);

@@ -180,7 +180,8 @@ std::optional<std::size_t> read_choice(Diagnostics& diag, const Field& field,
   return std::nullopt;
 }
 
-std::optional<std::vector<double>> read_number_list(Diagnostics& diag, const Field& field) {
+std::optional<std::vector<double>> read_number_list(Diagnostics& diag, const Field& field,
+                                                    const Range& range) {
   if (!field.present) return std::nullopt;
   if (field.node.IsNull() || (field.node.IsSequence() && field.node.size() == 0)) {
     diag.error(field.key_mark, field.path, "must be a non-empty list of numbers");
@@ -195,7 +196,7 @@ std::optional<std::vector<double>> read_number_list(Diagnostics& diag, const Fie
   for (std::size_t i = 0; i < field.node.size(); ++i) {
     const YAML::Node element = field.node[i];
     const Field f{field.path + "[" + std::to_string(i) + "]", element, element.Mark(), true};
-    if (auto v = read_number(diag, f)) {
+    if (auto v = read_number(diag, f, range)) {
       out.push_back(*v);
     } else {
       ok = false;
