@@ -6,10 +6,10 @@
 #pragma once
 
 #include <cstdint>
-#include <random>
 #include <vector>
 
 #include "config/config.h"
+#include "sim/encoder.h"
 #include "sim/plant.h"
 
 namespace hapticd::sim {
@@ -37,9 +37,9 @@ class SimAxis {
 
   // RT-safe. The encoder at the current instant, in counts (floor of x * counts_per_unit plus
   // noise) and in axis units; an ideal encoder (counts_per_unit 0) reports x exactly.
-  std::int64_t encoder_counts() noexcept;
-  double encoder_position() noexcept;
-  double counts_per_unit() const noexcept { return counts_per_unit_; }
+  std::int64_t encoder_counts() noexcept { return encoder_.counts(plant_.position()); }
+  double encoder_position() noexcept { return encoder_.reading(plant_.position()); }
+  double counts_per_unit() const noexcept { return encoder_.counts_per_unit(); }
 
   // The force the plant feels: the one held, reversed with device.sim.force_reversed.
   double held_force() const noexcept { return output_on_ ? motor_sign_ * force_ : 0.0; }
@@ -48,14 +48,8 @@ class SimAxis {
   double sample_period_s() const noexcept { return plant_.sample_period_s(); }
 
  private:
-  double noisy_counts() noexcept;
-
   Plant plant_;
-  double counts_per_unit_;
-  double noise_counts_;
-  std::uint64_t seed_;
-  std::mt19937_64 rng_;
-  std::normal_distribution<double> noise_{0.0, 1.0};
+  Encoder encoder_;
   double force_ = 0.0;
   bool output_on_ = false;
   double motor_sign_ = 1.0;  // -1: device.sim.force_reversed

@@ -1,7 +1,6 @@
 #include "sim/sim_device.h"
 
 #include <cerrno>
-#include <cmath>
 #include <string>
 #include <utility>
 
@@ -26,20 +25,15 @@ std::string_view to_string(PeerFault fault) noexcept {
 
 SimDevice::SimDevice(const config::DeviceConfig& config, double sample_period_s,
                      std::vector<double> replay_positions)
-    : axis_(config, sample_period_s, std::move(replay_positions)),
-      motor_sign_(config.sim.force_reversed ? -1.0 : 1.0),
-      sim_(config.sim) {
+    : axis_(config, sample_period_s, std::move(replay_positions)) {
   if (kinematics::joint_count(config.kinematics) > 1) {
-    joints_ = std::make_unique<JointPlant>(config, sample_period_s);
+    joints_ = std::make_unique<Mechanism>(config, sample_period_s);
   }
 }
 
 DeviceInfo SimDevice::on_configure() {
   axis_.reset();
   if (joints_) joints_->reset();
-  rng_.seed(sim_.seed);
-  noise_.reset();
-  torque_.setZero();
   first_read_ = true;
   sequence_ = 0;
   if (joints_) {
@@ -52,21 +46,13 @@ DeviceInfo SimDevice::on_configure() {
 void SimDevice::on_enable() {
   axis_.set_output(true);
   output_on_ = true;
-  torque_.setZero();
+  for (int i = 0; joints_ && i < joints_->joints(); ++i) joints_->set_output(i, true);
 }
 
 void SimDevice::on_disable() noexcept {
   axis_.set_output(false);
   output_on_ = false;
-  torque_.setZero();
-}
-
-double SimDevice::encoder(double position) noexcept {
-  const config::SimDeviceConfig& c = sim_;
-  if (c.counts_per_unit == 0.0) return position;  // ideal encoder
-  double counts = position * c.counts_per_unit;
-  if (c.seed != 0 && c.noise_counts > 0.0) counts += c.noise_counts * noise_(rng_);
-  return std::floor(counts) / c.counts_per_unit;
+  for (int i = 0; joints_ && i < joints_->joints(); ++i) joints_->set_output(i, false);
 }
 
 IoStatus SimDevice::read_joints(std::span<PositionSample> samples) noexcept {
@@ -75,14 +61,13 @@ IoStatus SimDevice::read_joints(std::span<PositionSample> samples) noexcept {
     return IoStatus::kTransportFault;
   }
   if (faults_.active(PeerFault::kStopAnswering)) return IoStatus::kNoNewData;
-  const kinematics::Vec3 held((output_on_ ? motor_sign_ : 0.0) * torque_);
-  for (std::uint32_t k = 0; !first_read_ && k < read_periods(); ++k) joints_->step(held);
+  for (std::uint32_t k = 0; !first_read_ && k < read_periods(); ++k) joints_->step();
   first_read_ = false;
   if (faults_.take(PeerFault::kSkipSequence)) sequence_ += 3;
   const bool fault = faults_.active(PeerFault::kDeviceFault);
   for (std::size_t i = 0; i < samples.size(); ++i) {  // every joint at the same instant
     PositionSample& out = samples[i];
-    out.position = encoder(joints_->joint_positions()[static_cast<int>(i)]);
+    out.position = joints_->encoder_position(static_cast<int>(i));
     out.sequence = sequence_;
     out.status = (output_on_ ? kStatusOutputEnabled : 0u) | (fault ? kStatusFault : 0u);
     out.flags = kSampleHasSequence;
@@ -118,7 +103,9 @@ IoStatus SimDevice::on_read(std::span<PositionSample> samples) noexcept {
 
 IoStatus SimDevice::on_write(std::span<const double> forces) noexcept {
   if (joints_) {
-    for (std::size_t i = 0; i < forces.size(); ++i) torque_[static_cast<int>(i)] = forces[i];
+    for (std::size_t i = 0; i < forces.size(); ++i) {
+      joints_->hold_torque(static_cast<int>(i), forces[i]);
+    }
   } else {
     axis_.hold_force(forces.front());  // one joint
   }

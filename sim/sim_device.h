@@ -10,7 +10,6 @@
 #include <atomic>
 #include <cstdint>
 #include <memory>
-#include <random>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -18,6 +17,7 @@
 #include "config/config.h"
 #include "drivers/device.h"
 #include "sim/joint_plant.h"
+#include "sim/mechanism.h"
 #include "sim/peers/loopback_peer.h"
 #include "sim/peers/peer_state.h"
 #include "sim/sim_axis.h"
@@ -38,7 +38,7 @@ class SimDevice final : public hapticd::Device {
   std::string_view driver_name() const noexcept override { return "sim"; }
   const SimAxis& axis() const noexcept { return axis_; }
   // The mechanism of a device of several joints (device.kinematics); null for one joint.
-  const JointPlant* joint_plant() const noexcept { return joints_.get(); }
+  const JointPlant* joint_plant() const noexcept { return joints_ ? &joints_->plant() : nullptr; }
   // Any thread: make the next reads or writes fail the way `fault` says.
   bool inject(PeerFault fault) noexcept { return faults_.inject(fault); }
 
@@ -60,16 +60,10 @@ class SimDevice final : public hapticd::Device {
   // RT-safe: called every tick. on_read for several joints: one period on with the torques
   // held, then each joint's encoder, the faults injected as one joint's.
   IoStatus read_joints(std::span<PositionSample> samples) noexcept;
-  double encoder(double position) noexcept;
 
   SimAxis axis_;
-  std::unique_ptr<JointPlant> joints_;                  // several joints: the mechanism, else null
-  kinematics::Vec3 torque_ = kinematics::Vec3::Zero();  // held on each joint (zero while off)
+  std::unique_ptr<Mechanism> joints_;  // several joints: the mechanism, else null
   bool output_on_ = false;
-  double motor_sign_;
-  config::SimDeviceConfig sim_;  // the joints' encoders: resolution, noise, seed
-  std::mt19937_64 rng_;          // the joints' encoder noise
-  std::normal_distribution<double> noise_{0.0, 1.0};
   bool first_read_ = true;
   std::uint64_t sequence_ = 0;
   FaultFlags<PeerFault> faults_{PeerFault::kStopAnswering, PeerFault::kSkipSequence,

@@ -9,6 +9,7 @@
 #include "gate/number_format.h"
 #include "service/exit_codes.h"
 #include "service/result_output.h"
+#include "sim/joint_plant.h"
 #include "sim/peers/peer_runner.h"
 #include "wiring/registry.h"
 
@@ -42,10 +43,25 @@ int peer_command(const PeerOptions& options, SignalWatch& signals) {
     error = runner.error();
   }
   std::ostringstream os;
-  os << "hapticd peer: " << cfg.device.driver << " on " << options.endpoint << ", "
-     << peer->plant().steps() << " periods simulated, final position "
-     << gate::format_number(peer->plant().position() * 1e3) << " mm, operator work "
-     << gate::format_number(peer->plant().operator_work_j()) << " J\n";
+  os << "hapticd peer: " << cfg.device.driver << " on " << options.endpoint << ", ";
+  if (const sim::JointPlant* joints = peer->joint_plant()) {
+    // Several drives moved one mechanism: its joints, and where they put the effector (task
+    // coordinates are as many as joints).
+    const kinematics::Vec3 x = joints->task_position();
+    os << joints->steps() << " periods simulated, final joints";
+    for (int i = 0; i < joints->joints(); ++i) {
+      os << (i == 0 ? " " : ", ") << gate::format_number(joints->joint_positions()[i]);
+    }
+    os << ", effector at";
+    for (int i = 0; i < kinematics::joint_count(cfg.device.kinematics); ++i) {
+      os << (i == 0 ? " " : ", ") << gate::format_number(x[i] * 1e3);
+    }
+    os << " mm\n";
+  } else {
+    os << peer->plant().steps() << " periods simulated, final position "
+       << gate::format_number(peer->plant().position() * 1e3) << " mm, operator work "
+       << gate::format_number(peer->plant().operator_work_j()) << " J\n";
+  }
   if (!error.empty()) os << "  failed: " << error << "\n";
   if (!write_stdout(os.str())) return kExitRuntimeFault;
   return error.empty() ? kExitOk : kExitRuntimeFault;

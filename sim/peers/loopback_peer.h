@@ -12,6 +12,8 @@
 
 namespace hapticd::sim {
 
+class JointPlant;
+
 // Faults a peer can be told to produce, for the conformance suite and the kernel tests.
 enum class PeerFault {
   kStopAnswering,   // no more samples (a device that hangs, a cable pulled): stale data
@@ -41,6 +43,9 @@ class LoopbackPeer {
   virtual bool output_on() const noexcept = 0;
   // After the run (the peer thread joined): the plant, for the operator's work.
   virtual const Plant& plant() const noexcept = 0;
+  // After the run: the mechanism of a device of several joints its drives moved together;
+  // null when plant() is the device.
+  virtual const JointPlant* joint_plant() const noexcept { return nullptr; }
 
   // Not RT-safe. For a peer with threads of its own (the raw USB gadget): ends them, so the
   // device is gone and plant() may be read; the others have nothing to stop.

@@ -107,10 +107,12 @@ TEST(CanNodesBusLoad, EveryNodeCountsAndTheBusHasOneSync) {
 TEST(CanNodesBusLoad, ABusThatCannotCarryATickIsRefusedSayingWhatWouldFit) {
   // Three ODrive axes at 4 kHz on 250 kbit/s: 3 x (95 + 55 + 135) bits a tick, 1370 % of it.
   const std::vector<std::string> sets = {
-      "loop.rate_hz=4000", "device.can.bitrate=250000",
+      "loop.rate_hz=4000",
+      "device.can.bitrate=250000",
       "device.kinematics={kind: cartesian, joints: 3, scale: [1, 1, 1], sign: [1, 1, 1]}",
       "walls=[{point: [0.02, 0.02, 0], normal: [1, 1, 0], stiffness: 100}]",
-      "device.can.nodes=[{node_id: 1}, {node_id: 2}, {node_id: 3}]"};
+      "device.can.nodes=[{node_id: 1}, {node_id: 2}, {node_id: 3}]",
+      "device.sim=null"};  // the example's hand is in the plane
   std::string e;
   try {
     odrive_gantry(sets);
@@ -144,7 +146,7 @@ TEST(CanNodesBusLoad, ABusThatCannotCarryATickIsRefusedSayingWhatWouldFit) {
 // Joint i's force reaches node i's drive and node i's position is joint i's sample; one
 // SYNC per tick goes on the wire for both; read and write allocate nothing.
 TEST(CanNodesLoopback, TwoNodesAreReadAndWrittenWithOneSyncPerTick) {
-  NodesRig rig(gantry());
+  NodesRig rig(gantry({"device.sim=null"}));  // no hand: the joints move with their forces
   rig.device->configure();
   EXPECT_EQ(rig.device->info().joints, 2u);
   EXPECT_TRUE(has(rig.device->info().description, "cia402 node 1"))
@@ -154,7 +156,7 @@ TEST(CanNodesLoopback, TwoNodesAreReadAndWrittenWithOneSyncPerTick) {
   rig.device->enable();
   EXPECT_TRUE(rig.hub->drive(0).output_on());
   EXPECT_TRUE(rig.hub->drive(1).output_on());
-  const std::uint64_t syncs_before = rig.hub->sent_with_id(0x080);
+  const std::uint64_t syncs_before = rig.hub->frames_from_master(0x080);
   const std::array<double, 2> forces = {1.0, -2.0};
   std::array<PositionSample, 2> s{};
   constexpr int kTicks = 400;
@@ -162,12 +164,13 @@ TEST(CanNodesLoopback, TwoNodesAreReadAndWrittenWithOneSyncPerTick) {
   ASSERT_EQ(run.failure, IoStatus::kOk) << rig.device->describe_fault();
   EXPECT_EQ(run.allocations, 0u) << "read/write of two nodes over " << kTicks << " ticks";
   EXPECT_GE(run.fresh, kTicks - 1) << "every TPDO answers its SYNC (the first read precedes any)";
-  EXPECT_EQ(rig.hub->sent_with_id(0x080) - syncs_before, static_cast<std::uint64_t>(kTicks))
+  EXPECT_EQ(rig.hub->frames_from_master(0x080) - syncs_before, static_cast<std::uint64_t>(kTicks))
       << "one SYNC per tick for the whole bus";
-  EXPECT_EQ(rig.hub->sent_with_id(0x201), rig.hub->sent_with_id(0x202)) << "one RPDO per node";
+  EXPECT_EQ(rig.hub->frames_from_master(0x201), rig.hub->frames_from_master(0x202))
+      << "one RPDO per node";
   EXPECT_DOUBLE_EQ(rig.hub->drive(0).applied_force(), 1.0) << "joint 0's force at node 1";
   EXPECT_DOUBLE_EQ(rig.hub->drive(1).applied_force(), -2.0) << "joint 1's force at node 2";
-  // Each plant moved with its own force: joint 0 forward, joint 1 back.
+  // Each joint moved with its own force: joint 0 forward, joint 1 back.
   EXPECT_GT(s[0].position, 0.0);
   EXPECT_LT(s[1].position, 0.0);
   rig.device->disable();
@@ -229,22 +232,24 @@ TEST(CanNodesLoopback, AHeartbeatLostOnEitherNodeZeroesBothAndNamesIt) {
 }
 
 TEST(CanNodesLoopback, TwoOdriveAxesEachWithTheirOwnIdsAndRequests) {
-  NodesRig rig(odrive_gantry());
+  NodesRig rig(odrive_gantry({"device.sim=null"}));
   rig.device->configure();
   EXPECT_EQ(rig.device->info().joints, 2u);
   rig.device->enable();
   const std::array<double, 2> forces = {-1.0, 2.0};
   std::array<PositionSample, 2> s{};
   constexpr int kTicks = 300;
-  const std::uint64_t requests1 = rig.hub->sent_with_id(1 << 5 | 0x09);
-  const std::uint64_t requests2 = rig.hub->sent_with_id(2 << 5 | 0x09);
+  const std::uint64_t requests1 = rig.hub->frames_from_master(1 << 5 | 0x09);
+  const std::uint64_t requests2 = rig.hub->frames_from_master(2 << 5 | 0x09);
   const NodesRig::Run run = rig.ticks(forces, s, kTicks);
   ASSERT_EQ(run.failure, IoStatus::kOk) << rig.device->describe_fault();
   EXPECT_EQ(run.allocations, 0u);
   EXPECT_GE(run.fresh, kTicks - 1);
-  EXPECT_EQ(rig.hub->sent_with_id(1 << 5 | 0x09) - requests1, static_cast<std::uint64_t>(kTicks))
+  EXPECT_EQ(rig.hub->frames_from_master(1 << 5 | 0x09) - requests1,
+            static_cast<std::uint64_t>(kTicks))
       << "axis 1's own request each tick";
-  EXPECT_EQ(rig.hub->sent_with_id(2 << 5 | 0x09) - requests2, static_cast<std::uint64_t>(kTicks));
+  EXPECT_EQ(rig.hub->frames_from_master(2 << 5 | 0x09) - requests2,
+            static_cast<std::uint64_t>(kTicks));
   EXPECT_NEAR(rig.hub->drive(0).applied_force(), -1.0, 1e-6);
   EXPECT_NEAR(rig.hub->drive(1).applied_force(), 2.0, 1e-6);
   EXPECT_LT(s[0].position, 0.0);
@@ -260,14 +265,14 @@ TEST(CanNodesLoopback, TwoOdriveAxesEachWithTheirOwnIdsAndRequests) {
   EXPECT_FALSE(rig.hub->drive(1).output_on());
 }
 
-TEST(CanNodesLoopback, TheSimulatedDrivePlaysOneNode) {
-  try {
-    wiring::find_driver("can").make_loopback(gantry());
-    FAIL() << "a loopback peer for two nodes";
-  } catch (const config::ConfigError& e) {
-    EXPECT_TRUE(has(e.messages().front(), "device.can.nodes: the simulated drive plays one node"))
-        << e.messages().front();
-  }
+// `hapticd run --loopback` of several nodes: the driver's loopback is the bus of one simulated
+// drive per node, moving one gantry.
+TEST(CanNodesLoopback, TheLoopbackOfSeveralNodesIsOneDrivePerNodeMovingOneMechanism) {
+  wiring::Loopback pair = wiring::find_driver("can").make_loopback(gantry());
+  ASSERT_NE(pair.peer->joint_plant(), nullptr);
+  EXPECT_EQ(pair.peer->joint_plant()->joints(), 2);
+  const auto& bus = dynamic_cast<const sim::CanBusPeer&>(*pair.peer);
+  EXPECT_EQ(bus.nodes(), 2u);
 }
 
 }  // namespace

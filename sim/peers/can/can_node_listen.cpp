@@ -106,15 +106,21 @@ std::optional<can::CanFrame> listen_for_node(const can::CanSettings& s,
 }
 
 void check_can_node_free(const config::Config& cfg, const std::string& interface, double seconds) {
-  const auto& s = can::can_settings(cfg);
-  spdlog::info("peer: listening {} s on {} for a node {} already there", seconds, interface,
-               s.nodes.front().node_id);
-  if (const auto heard = listen_for_node(s, interface, seconds)) {
-    throw DeviceError("peer: a node already answers at node id " +
-                      std::to_string(s.nodes.front().node_id) + " on " + interface + " (heard " +
-                      describe_node_frame(*heard, s) +
-                      "): a simulated drive there would answer beside it. Stop that node, or "
-                      "give the peer another device.can.node_id");
+  const auto& all = can::can_settings(cfg);
+  for (std::size_t i = 0; i < all.nodes.size(); ++i) {
+    const can::CanSettings s = can::single_node(all, i);
+    const std::uint8_t id = s.nodes.front().node_id;
+    spdlog::info("peer: listening {} s on {} for a node {} already there", seconds, interface, id);
+    if (const auto heard = listen_for_node(s, interface, seconds)) {
+      const std::string key = all.nodes.size() > 1
+                                  ? "device.can.nodes[" + std::to_string(i) + "].node_id"
+                                  : std::string("device.can.node_id");
+      throw DeviceError("peer: a node already answers at node id " + std::to_string(id) + " on " +
+                        interface + " (heard " + describe_node_frame(*heard, s) +
+                        "): a simulated drive there would answer beside it. Stop that node, or "
+                        "give the peer another " +
+                        key);
+    }
   }
 }
 

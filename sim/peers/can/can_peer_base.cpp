@@ -15,10 +15,12 @@ using drivers::can::CanFrame;
 using drivers::can::CanSocket;
 
 CanPeerBase::CanPeerBase(const config::Config& cfg, CanSocket socket, bool realtime,
-                         std::initializer_list<CanPeerFault> own_faults)
+                         std::initializer_list<CanPeerFault> own_faults, const SharedJoint& joint)
     : settings_(drivers::can::can_settings(cfg)),
       period_s_(cfg.loop.sample_period_s()),
-      axis_(cfg.device, cfg.loop.sample_period_s()),
+      axis_(joint.mechanism
+                ? DriveAxis(cfg.device, cfg.loop.sample_period_s(), *joint.mechanism, joint.joint)
+                : DriveAxis(cfg.device, cfg.loop.sample_period_s())),
       socket_(std::move(socket)),
       realtime_(realtime),
       can_faults_({CanPeerFault::kStopHeartbeat, CanPeerFault::kWrongLengthPdo,

@@ -16,9 +16,10 @@
 #include "config/config.h"
 #include "drivers/can/can_settings.h"
 #include "drivers/can/can_socket.h"
+#include "sim/mechanism.h"
+#include "sim/peers/drive_axis.h"
 #include "sim/peers/loopback_peer.h"
 #include "sim/peers/peer_state.h"
-#include "sim/sim_axis.h"
 
 namespace hapticd::sim {
 
@@ -33,6 +34,13 @@ enum class CanPeerFault : std::uint8_t {
   kMalformedMessage,  // a message that is not one struct can_frame (socketpair only)
   kDisarm,            // ODrive 0.6: a short DC-bus dip disarms the axis: IDLE, no active error
                       // by its heartbeat, the reason only in Get_Error's disarm reason
+};
+
+// The joint of a mechanism a simulated drive moves with the other drives of its bus
+// (can_bus_peer.h); `mechanism` null: an axis of its own.
+struct SharedJoint {
+  Mechanism* mechanism = nullptr;
+  int joint = 0;
 };
 
 class CanPeerBase : public LoopbackPeer {
@@ -54,8 +62,10 @@ class CanPeerBase : public LoopbackPeer {
  protected:
   // `own_faults`: the CAN faults this device can produce beyond those every simulated CAN
   // device can (heartbeats stopped, a wrong-length answer, unknown ids, a malformed message).
+  // `joint`: the joint of a mechanism shared with the bus's other drives it moves (null: an
+  // axis of its own).
   CanPeerBase(const config::Config& cfg, drivers::can::CanSocket socket, bool realtime,
-              std::initializer_list<CanPeerFault> own_faults = {});
+              std::initializer_list<CanPeerFault> own_faults, const SharedJoint& joint);
 
   // One frame from the master.
   virtual void handle(const drivers::can::CanFrame& f) = 0;
@@ -68,11 +78,11 @@ class CanPeerBase : public LoopbackPeer {
 
   void send(const drivers::can::CanFrame& f);
   // After each change of the axis: what any thread may read.
-  void publish() noexcept { felt_.publish(axis_); }
+  void publish() noexcept { felt_.publish(axis_.held_force(), axis_.output_on()); }
 
   const drivers::can::CanSettings settings_;
   const double period_s_;
-  SimAxis axis_;
+  DriveAxis axis_;
   drivers::can::CanSocket socket_;
   const bool realtime_;
   bool bus_failed_ = false;

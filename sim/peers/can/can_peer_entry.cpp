@@ -7,6 +7,7 @@
 #include "drivers/can/can_settings.h"
 #include "drivers/can/canopen.h"
 #include "drivers/can/odrive_protocol.h"
+#include "sim/peers/can/can_bus_peer.h"
 #include "sim/peers/can/can_endpoint.h"
 #include "sim/peers/can/can_node_listen.h"
 #include "sim/peers/can/cia402_peer.h"
@@ -17,19 +18,25 @@ namespace {
 
 namespace can = drivers::can;
 
-// The frames the simulated drive of cfg's profile needs to see on a shared bus.
+// The frames the simulated drives of cfg's profile, one per node, need to see on a shared bus.
 std::vector<can::IdFilter> peer_filters(const config::Config& cfg) {
   const can::CanSettings& s = can::can_settings(cfg);
-  if (s.profile == can::Profile::kOdrive) {
-    return {
-        {can::odrive::frame_id(s.nodes.front().node_id, 0), 0x7E0}};  // the node's 32 command ids
+  std::vector<can::IdFilter> filters;
+  if (s.profile != can::Profile::kOdrive) {
+    filters = {{can::canopen::kNmtId},
+               {can::canopen::kSyncId},
+               {can::canopen::kHeartbeatBase + s.cia402.master_node_id}};
   }
-  const std::uint32_t n = s.nodes.front().node_id;
-  return {{can::canopen::kNmtId},
-          {can::canopen::kSyncId},
-          {can::canopen::kRpdo1Base + n},
-          {can::canopen::kSdoRxBase + n},
-          {can::canopen::kHeartbeatBase + s.cia402.master_node_id}};
+  for (const can::CanNode& node : s.nodes) {
+    const std::uint32_t n = node.node_id;
+    if (s.profile == can::Profile::kOdrive) {
+      filters.push_back({can::odrive::frame_id(n, 0), 0x7E0});  // the node's 32 command ids
+    } else {
+      filters.push_back({can::canopen::kRpdo1Base + n});
+      filters.push_back({can::canopen::kSdoRxBase + n});
+    }
+  }
+  return filters;
 }
 
 std::unique_ptr<LoopbackPeer> loopback_peer(const config::Config& cfg, io::UniqueFd end) {
@@ -59,22 +66,20 @@ PeerEntry can_peer_entry() {
 
 std::unique_ptr<LoopbackPeer> make_can_peer(const config::Config& cfg,
                                             drivers::can::CanSocket socket, bool realtime) {
-  const can::CanSettings& s = can::can_settings(cfg);
-  if (s.nodes.size() != 1) {
-    // One simulated drive plays one node, with one plant; one peer per node (each with a
-    // configuration of that node alone) plays a bus of several.
-    throw config::ConfigError({cfg.locate("device.can.nodes") +
-                               ": device.can.nodes: the simulated drive plays one node (one "
-                               "plant), got " +
-                               std::to_string(s.nodes.size()) +
-                               ": run one peer per node, each with a configuration of that node "
-                               "alone"});
+  if (can::can_settings(cfg).nodes.size() > 1) {
+    return std::make_unique<CanBusPeer>(cfg, std::move(socket), realtime);
   }
+  return make_can_drive(cfg, std::move(socket), realtime, {});
+}
+
+std::unique_ptr<CanPeerBase> make_can_drive(const config::Config& cfg,
+                                            drivers::can::CanSocket socket, bool realtime,
+                                            const SharedJoint& joint) {
   try {
-    if (s.profile == can::Profile::kOdrive) {
-      return std::make_unique<OdrivePeer>(cfg, std::move(socket), realtime);
+    if (can::can_settings(cfg).profile == can::Profile::kOdrive) {
+      return std::make_unique<OdrivePeer>(cfg, std::move(socket), realtime, joint);
     }
-    return std::make_unique<Cia402Peer>(cfg, std::move(socket), realtime);
+    return std::make_unique<Cia402Peer>(cfg, std::move(socket), realtime, joint);
   } catch (const std::invalid_argument& e) {
     throw config::ConfigError({cfg.locate("device.sim") + ": device.sim: " + e.what()});
   }

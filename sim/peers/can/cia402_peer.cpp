@@ -39,9 +39,11 @@ bool mappable(std::uint32_t entry) {
 
 }  // namespace
 
-Cia402Peer::Cia402Peer(const config::Config& cfg, drivers::can::CanSocket socket, bool realtime)
+Cia402Peer::Cia402Peer(const config::Config& cfg, drivers::can::CanSocket socket, bool realtime,
+                       const SharedJoint& joint)
     : CanPeerBase(cfg, std::move(socket), realtime,
-                  {CanPeerFault::kStopSdo, CanPeerFault::kAbortSdo, CanPeerFault::kTruncatedEmcy}),
+                  {CanPeerFault::kStopSdo, CanPeerFault::kAbortSdo, CanPeerFault::kTruncatedEmcy},
+                  joint),
       node_(settings_.nodes.front().node_id) {
   // Factory defaults: the predefined connection set, with a mapping that is not hapticd's
   // (RPDO1 controlword only, TPDO1 statusword only, event-driven): `pdo_mapping: verify`

@@ -23,7 +23,9 @@ class Cia402Peer final : public CanPeerBase {
   // The EMCY a commanded fault sends: continuous over-current.
   static constexpr std::uint16_t kFaultEmcyCode = 0x2310;
 
-  Cia402Peer(const config::Config& cfg, drivers::can::CanSocket socket, bool realtime);
+  // `joint`: the joint of a mechanism it moves with the other drives of its bus (can_bus_peer.h).
+  Cia402Peer(const config::Config& cfg, drivers::can::CanSocket socket, bool realtime,
+             const SharedJoint& joint = {});
 
   // Any thread, for tests: the power state and NMT state right now.
   drivers::can::cia402::PowerState power_state() const noexcept { return power_.load(); }

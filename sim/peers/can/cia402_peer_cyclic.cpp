@@ -29,7 +29,7 @@ std::int32_t Cia402Peer::mapped_value(std::uint16_t index) noexcept {
       return position_units();
     case 0x606C:
       return static_cast<std::int32_t>(
-          std::lround(axis_.plant().velocity() / settings_.nodes.front().position_per_unit));
+          std::lround(axis_.velocity() / settings_.nodes.front().position_per_unit));
     case 0x6071:
       return target_torque_;
     case 0x6040:

@@ -14,8 +14,9 @@ namespace odrive = drivers::can::odrive;
 
 }  // namespace
 
-OdrivePeer::OdrivePeer(const config::Config& cfg, drivers::can::CanSocket socket, bool realtime)
-    : CanPeerBase(cfg, std::move(socket), realtime),
+OdrivePeer::OdrivePeer(const config::Config& cfg, drivers::can::CanSocket socket, bool realtime,
+                       const SharedJoint& joint)
+    : CanPeerBase(cfg, std::move(socket), realtime, {}, joint),
       node_(settings_.nodes.front().node_id),
       firmware_(settings_.odrive.detect_firmware ? odrive::Firmware::k06
                                                  : settings_.odrive.firmware),
@@ -74,7 +75,7 @@ void OdrivePeer::trigger() {
       cyclic ? std::max(1.0, std::round(settings_.odrive.cyclic_period_ms * 1e-3 / period_s_)) : 1);
   if (!faults_.active(PeerFault::kStopAnswering) && triggers_ % every == 0) {
     const double turns = axis_.encoder_position() / settings_.nodes.front().position_per_unit;
-    const double speed = axis_.plant().velocity() / settings_.nodes.front().position_per_unit;
+    const double speed = axis_.velocity() / settings_.nodes.front().position_per_unit;
     CanFrame f =
         odrive::encoder_estimates(node_, {static_cast<float>(turns), static_cast<float>(speed)});
     if (can_faults_.take(CanPeerFault::kWrongLengthPdo)) f.len = 6;

@@ -20,7 +20,9 @@ namespace hapticd::sim {
 
 class OdrivePeer final : public CanPeerBase {
  public:
-  OdrivePeer(const config::Config& cfg, drivers::can::CanSocket socket, bool realtime);
+  // `joint`: the joint of a mechanism it moves with the other drives of its bus (can_bus_peer.h).
+  OdrivePeer(const config::Config& cfg, drivers::can::CanSocket socket, bool realtime,
+             const SharedJoint& joint = {});
   // The axis error a commanded fault raises (0.5 MOTOR_FAILED, 0.6 CURRENT_LIMIT_VIOLATION).
   std::uint32_t fault_error() const noexcept;
   // Any thread, for tests.
