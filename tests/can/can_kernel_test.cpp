@@ -2,7 +2,8 @@
 // each example configuration against `hapticd peer` renders the wall as the sim driver does;
 // every injected fault ends the run with exit 1, the cause named and zero force; a capture of
 // the bus decodes to the frame sequence of docs/drivers/can.md; and a killed hapticd leaves a drive
-// that switches itself off (its own watchdog on hapticd).
+// that switches itself off (its own watchdog on hapticd). The gantry's two nodes against
+// `hapticd peer` of both render its diagonal wall as the sim driver does.
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
@@ -254,6 +255,61 @@ TEST_P(CanOnVcan, AnInterfaceThatVanishesMidRunIsATransportFault) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Profiles, CanOnVcan, ::testing::Values("cia402", "odrive"));
+
+// Two nodes as a gantry (config/can-gantry.yaml) on vcan0: `hapticd peer` plays both drives,
+// moving one simulated gantry whose hand presses along the diagonal, and `hapticd run` renders
+// the wall on it as the sim driver does with the same mechanism and delay; the peer's report
+// names the gantry's final joints.
+TEST(CanGantryOnVcan, HapticdRunAgainstHapticdPeerOfTwoNodesRendersTheWallLikeTheSimDriver) {
+  kernel_test::VcanInterface bus("vcan0");
+  const std::string gantry = std::string(HAPTICD_SOURCE_DIR) + "/config/can-gantry.yaml";
+  std::vector<std::string> sets;
+  for (const char* set :
+       {"loop.rate_hz=100", "walls[0].stiffness=100", "safety.stale_fault_ticks=10",
+        "loop.overrun_fault_streak=100", "device.can.interface=vcan0",
+        "device.can.sdo_timeout_ms=1000", "device.can.state_timeout_ms=2000",
+        "device.can.heartbeat_timeout_ms=1000", "device.can.cia402.drive_watchdog_ms=1000"}) {
+    sets.insert(sets.end(), {"--set", set});
+  }
+  std::vector<std::string> peer_args = {HAPTICD_BINARY, "peer",  "--config",   gantry,
+                                        "--endpoint",   "vcan0", "--duration", "60"};
+  peer_args.insert(peer_args.end(), sets.begin(), sets.end());
+  ChildProcess peer(peer_args, temp("peer-gantry.out"));
+  ASSERT_TRUE(peer.started());
+  wait_for_peer(peer);
+  std::vector<std::string> run_args = {
+      HAPTICD_BINARY, "run", "--config",       gantry,
+      "--duration",   "3",   "--summary-json", temp("run-gantry.json")};
+  run_args.insert(run_args.end(), sets.begin(), sets.end());
+  ChildProcess run(run_args, temp("run-gantry.out"));
+  ASSERT_EQ(run.wait(seconds(60)), 0) << run.output();
+  peer.signal(SIGTERM);
+  EXPECT_EQ(peer.wait(seconds(10)), 0) << peer.output();
+  EXPECT_NE(peer.output().find("final joints"), std::string::npos) << peer.output();
+
+  ChildProcess sim({HAPTICD_BINARY,   "run",
+                    "--config",       gantry,
+                    "--set",          "device.driver=sim",
+                    "--set",          "device.can=null",
+                    "--set",          "walls[0].delay_samples=1",
+                    "--set",          "loop.clock=freerun",
+                    "--set",          "loop.rate_hz=100",
+                    "--set",          "walls[0].stiffness=100",
+                    "--duration",     "3",
+                    "--summary-json", temp("sim-gantry.json")},
+                   temp("sim-gantry.out"));
+  ASSERT_EQ(sim.wait(seconds(60)), 0) << sim.output();
+  const nlohmann::json r = read_json(temp("run-gantry.json"));
+  const nlohmann::json s = read_json(temp("sim-gantry.json"));
+  EXPECT_TRUE(r["faults"].empty()) << r["faults"].dump();
+  EXPECT_GT(r["counters"]["loop"]["contact_ticks"].get<int>(), 100)
+      << "the gantry's hand reached the wall (100 Hz)";
+  const double p = r["max_penetration"].get<double>();
+  const double ps = s["max_penetration"].get<double>();
+  EXPECT_NEAR(p, ps, 0.1 * ps) << "vcan " << p * 1e3 << " mm, sim (delay 1) " << ps * 1e3 << " mm";
+  RecordProperty("penetration_vcan_mm", std::to_string(p * 1e3));
+  RecordProperty("penetration_sim_mm", std::to_string(ps * 1e3));
+}
 
 }  // namespace
 }  // namespace hapticd::drivers::can::testing
