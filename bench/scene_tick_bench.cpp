@@ -70,10 +70,10 @@ struct DeltaRig {
            hapticd::loop::LoopOptions o)
       : device(cfg.device.kinematics),
         unused(hapticd::control::make_control_law(cfg)),
-        scene(hapticd::control::make_scene(cfg)),
-        state(cfg.device.kinematics, scene, cfg.device.max_force.per_joint(),
+        walls(std::make_unique<hapticd::control::Scene>(hapticd::control::make_scene(cfg)),
               std::vector<hapticd::control::ObserverParams>(
                   cfg.walls.size(), hapticd::control::observer_params(cfg, 0))),
+        state(cfg.device.kinematics, walls, cfg.device.max_force.per_joint()),
         loop(device, unused, &ring, with_scene(o, &state)) {}
   static hapticd::loop::LoopOptions with_scene(hapticd::loop::LoopOptions o,
                                                hapticd::loop::SceneState* s) {
@@ -82,7 +82,7 @@ struct DeltaRig {
   }
   PathDevice device;
   hapticd::control::Controller unused;
-  hapticd::control::Scene scene;
+  hapticd::loop::SceneWalls walls;
   hapticd::loop::SceneState state;
   hapticd::loop::ServoLoop loop;
 };

@@ -68,7 +68,16 @@ struct Walker {
     observer->restart();
   }
   void swap_to(const config::Config& cfg) {
-    if (scene.state) return;  // a run of several joints refuses every reload (reload_check)
+    if (scene.state) {  // the walls of several joints, going on from the running ones
+      DeviceInfo info;
+      info.transport_delay_samples = device_delay(cfg);
+      auto next = make_scene_walls(cfg, info, gate::evaluate_gate(cfg, device_delay(cfg)),
+                                   scene.walls.get());
+      next->continue_from(*scene.walls);
+      scene.state->walls = next.get();
+      scene.walls = std::move(next);
+      return;
+    }
     auto next = std::make_unique<control::Controller>(control::make_control_law(cfg));
     next->continue_from(*law);
     law = std::move(next);
@@ -87,10 +96,7 @@ struct Walker {
     const bool zero = faulted || c.faulted();
     loop::end_scene_tick(*scene.state, zero ? nullptr : &c, rec);
     series.commanded.push_back(rec.force_commanded);
-    series.wall_energy_j = 0.0;
-    for (const control::PassivityObserver& o : scene.state->walls) {
-      series.wall_energy_j += o.wall_work_j();
-    }
+    series.wall_energy_j = scene.walls->totals().wall_work_j;
     series.min_observer_energy_j = std::min(series.min_observer_energy_j, rec.observer_energy_j);
     series.damped_ticks += (rec.flags & telemetry::kFlagPassivityDamped) ? 1 : 0;
     if (!stepped || faulted) return std::nullopt;

@@ -10,7 +10,42 @@ std::optional<Command> command_named(const std::string& name) {
   if (name == "stop") return Command::kStop;
   if (name == "reload") return Command::kReload;
   if (name == "clear-fault") return Command::kClearFault;
+  if (name == "scene") return Command::kScene;
   return std::nullopt;
+}
+
+// A scene request's members (control_protocol.h); false with `error` naming the member.
+bool parse_scene(const json& j, SceneEdit& out, std::string& error) {
+  const auto op = j.find("op");
+  const std::string name = op != j.end() && op->is_string() ? op->get<std::string>() : "";
+  if (name == "add") {
+    out.op = SceneEdit::Op::kAdd;
+  } else if (name == "change") {
+    out.op = SceneEdit::Op::kChange;
+  } else if (name == "remove") {
+    out.op = SceneEdit::Op::kRemove;
+  } else {
+    error = "scene: \"op\" must be one of add, change, remove";
+    return false;
+  }
+  if (out.op != SceneEdit::Op::kAdd) {
+    const auto index = j.find("index");
+    if (index == j.end() || !index->is_number_unsigned()) {
+      error =
+          std::string("scene: ") + name + " needs \"index\": the wall's place in walls (0, 1, ...)";
+      return false;
+    }
+    out.index = index->get<std::size_t>();
+  }
+  if (out.op != SceneEdit::Op::kRemove) {
+    const auto wall = j.find("wall");
+    if (wall == j.end() || !wall->is_object()) {
+      error = std::string("scene: ") + name + " needs \"wall\": an object of a wall's keys";
+      return false;
+    }
+    out.wall = *wall;
+  }
+  return true;
 }
 
 std::string line(json j) {
@@ -41,7 +76,7 @@ std::optional<Request> parse_request(std::string_view text, std::string& error, 
   const std::optional<Command> c =
       cmd != j.end() && cmd->is_string() ? command_named(cmd->get<std::string>()) : std::nullopt;
   if (!c) {
-    error = "\"cmd\" must be one of status, stop, reload, clear-fault";
+    error = "\"cmd\" must be one of status, stop, reload, clear-fault, scene";
     return std::nullopt;
   }
   Request r;
@@ -57,7 +92,20 @@ std::optional<Request> parse_request(std::string_view text, std::string& error, 
     const auto source = j.find("source");
     r.source = source != j.end() && source->is_string() ? source->get<std::string>() : "reload";
   }
+  if (*c == Command::kScene && !parse_scene(j, r.scene, error)) return std::nullopt;
   return r;
+}
+
+const char* scene_op_name(SceneEdit::Op op) noexcept {
+  switch (op) {
+    case SceneEdit::Op::kAdd:
+      return "add";
+    case SceneEdit::Op::kChange:
+      return "change";
+    case SceneEdit::Op::kRemove:
+      return "remove";
+  }
+  return "?";
 }
 
 std::string ok_response(const json& id, const json& payload) {

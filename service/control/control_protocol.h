@@ -4,6 +4,8 @@
 //
 // Request:  {"v": 1, "cmd": "status" | "stop" | "reload" | "clear-fault", "id": <any>,
 //            "config": "<YAML text>", "source": "<name for messages>"}    (config: reload only)
+//           {"v": 1, "cmd": "scene", "op": "add" | "change" | "remove", "index": <n>,
+//            "wall": {<a wall's keys>}}      (a device of several joints; index: change, remove)
 // Response: {"v": 1, "id": <echoed>, "ok": true, ...the command's members}
 //           {"v": 1, "id": <echoed>, "ok": false, "error": "<why>", "code": <exit code>}
 // `code` is the exit code of docs/operations.md a client reports for the failure: 2 a malformed
@@ -22,13 +24,25 @@ namespace hapticd::service {
 inline constexpr int kProtocolVersion = 1;
 inline constexpr std::size_t kMaxRequestBytes = 256 * 1024;  // a configuration fits with room
 
-enum class Command { kStatus, kStop, kReload, kClearFault };
+enum class Command { kStatus, kStop, kReload, kClearFault, kScene };
+
+// A scene request: a change to the walls of the running scene.
+struct SceneEdit {
+  enum class Op { kAdd, kChange, kRemove };
+  Op op = Op::kAdd;
+  std::size_t index = 0;  // change, remove: which wall (walls[index])
+  nlohmann::json wall;    // add: the new wall's keys; change: the keys that change
+};
+
+// "add", "change", "remove".
+const char* scene_op_name(SceneEdit::Op op) noexcept;
 
 struct Request {
   Command command = Command::kStatus;
   nlohmann::json id;        // echoed in the response; null when absent
   std::string config_text;  // reload
   std::string source;       // reload: the name messages about the configuration use
+  SceneEdit scene;          // scene
 };
 
 // Parses one line (without its newline). On a malformed request returns nothing and sets

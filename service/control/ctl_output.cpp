@@ -125,9 +125,15 @@ std::string status_text(const json& s) {
 
 std::string reload_text(const json& r) {
   std::ostringstream out;
-  out << "reload accepted: ";
+  if (r.contains("op")) {
+    out << "scene " << r["op"].get<std::string>() << " accepted: walls[" << num(r["index"]) << "], "
+        << num(r["walls"]) << " walls; ";
+  } else {
+    out << "reload accepted: ";
+  }
   if (r["applied_at_tick"].is_number()) {
-    out << "the new wall governs from tick " << num(r["applied_at_tick"]);
+    out << "the new " << (r.contains("op") ? "walls govern" : "wall governs") << " from tick "
+        << num(r["applied_at_tick"]);
   } else {
     out << "the new configuration applies when output is next enabled";
   }

@@ -40,6 +40,8 @@ int report(const json& answer, const std::string& command, bool as_json) {
     std::cout << hapticd::service::status_text(answer["status"]);
   } else if (command == "reload") {
     std::cout << hapticd::service::reload_text(answer["reload"]);
+  } else if (command == "scene") {
+    std::cout << hapticd::service::reload_text(answer["scene"]);
   } else if (command == "stop") {
     std::cout << "stopping: zero force, output disabled, log flushed\n";
   } else {
@@ -55,7 +57,8 @@ int report(const json& answer, const std::string& command, bool as_json) {
 int main(int argc, char** argv) {
   CLI::App app{
       "hapticctl: ask a running hapticd through its control socket (status, stop, reload, "
-      "clear-fault). Exit 0 done, 1 refused or failed, 2 usage or invalid configuration, 3 a "
+      "clear-fault, scene). Exit 0 done, 1 refused or failed, 2 usage or invalid configuration, 3 "
+      "a "
       "reload the gate refused."};
   app.require_subcommand(1);
   std::string socket, instance = "hapticd";
@@ -80,6 +83,24 @@ int main(int argc, char** argv) {
   app.add_subcommand("clear-fault",
                      "Re-arm after a latched fault (hapticd run --on-fault hold): only through "
                      "the gate and with the device outside the wall");
+  CLI::App* scene = app.add_subcommand(
+      "scene",
+      "Change the walls of a device of several joints: checked and gated by the daemon as a "
+      "reload, swapped in at a tick boundary, or refused with the reason");
+  scene->require_subcommand(1);
+  std::string wall_text;
+  std::size_t index = 0;
+  scene->add_subcommand("add", "Add a wall: WALL is a JSON object of a wall's keys")
+      ->add_option("WALL", wall_text,
+                   "e.g. '{\"point\": [0.03, 0, 0.11], \"normal\": [1, 0, 0], "
+                   "\"stiffness\": 500}'")
+      ->required();
+  CLI::App* change = scene->add_subcommand("change", "Change keys of walls[INDEX]");
+  change->add_option("INDEX", index, "The wall's place in walls (0, 1, ...)")->required();
+  change->add_option("WALL", wall_text, "A JSON object of the keys that change")->required();
+  scene->add_subcommand("remove", "Remove walls[INDEX]")
+      ->add_option("INDEX", index, "The wall's place in walls (0, 1, ...)")
+      ->required();
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -98,6 +119,19 @@ int main(int argc, char** argv) {
     req["config"] = text;
     // Absolute: the daemon resolves the file's relative paths (a replay log) against it.
     req["source"] = std::filesystem::absolute(file).lexically_normal().string();
+  }
+  if (command == "scene") {
+    const std::string op = scene->get_subcommands().front()->get_name();
+    req["op"] = op;
+    if (op != "add") req["index"] = index;
+    if (op != "remove") {
+      req["wall"] = json::parse(wall_text, nullptr, false);
+      if (!req["wall"].is_object()) {
+        std::cerr << "hapticctl: scene " << op << ": WALL must be a JSON object, e.g. "
+                  << "'{\"stiffness\": 400}'\n";
+        return hapticd::kExitUsage;
+      }
+    }
   }
   if (socket.empty()) socket = hapticd::service::instance_socket(instance);
   try {

@@ -31,10 +31,14 @@ std::vector<std::string> reload_blockers(const config::Config& running,
   const auto differs = [&](bool changed, const std::string& key, const std::string& why) {
     if (changed) out.push_back(key + ": " + why + "; that needs a restart");
   };
-  // The loop of several joints steps a scene built at start-up; a reload swaps one law.
-  differs(kinematics::joint_count(running.device.kinematics) > 1 ||
-              kinematics::joint_count(next.device.kinematics) > 1,
-          "walls", "the walls of a device of several joints are built as output is enabled");
+  // The mechanism the loop's scene maps through, and the joints' limits it saturates at (a
+  // device of one joint's limit is its law's, which a reload swaps).
+  differs(section(running.effective_yaml, "device", "kinematics") !=
+              section(next.effective_yaml, "device", "kinematics"),
+          "device.kinematics", "a different mechanism");
+  differs(kinematics::joint_count(running.device.kinematics) > 1 &&
+              running.device.max_force != next.device.max_force,
+          "device.max_force", "new joint limits for a device of several joints");
   const config::LoopConfig &a = running.loop, &b = next.loop;
   differs(a.rate_hz != b.rate_hz, "loop.rate_hz", "a new sample rate");
   differs(a.clock != b.clock, "loop.clock", "a new clock");

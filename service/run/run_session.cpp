@@ -133,6 +133,7 @@ bool RunSession::start_up(gate::GateReport& report) {
   if (session_->device().info().joints > 1) {
     scene_ = make_scene_parts(cfg_, session_->device().info(), report);
     lo.scene = scene_.state.get();
+    lo.scene_swap = &scene_swap_;
   }
   auto servo = std::make_unique<loop::ServoLoop>(session_->device(), *active_, log_.ring.get(), lo);
   summary_.wake_latency = &servo->wake_latency();
@@ -173,6 +174,11 @@ int RunSession::run() {
     // recorded after the loop's re-armed marker.
     std::lock_guard lock(mutex_);
     active_ = std::make_unique<control::Controller>(control::make_control_law(cfg_));
+    if (pending_walls_) {  // walls reloaded while held: no loop runs, so no swap is needed
+      pending_walls_->continue_from(*scene_.walls);
+      scene_.state->walls = pending_walls_.get();
+      scene_.walls = std::move(pending_walls_);
+    }
     if (log_.writer) log_.writer->queue_config_change(cfg_.effective_yaml);
     servo_->set_controller(*active_);
     summary_.loop.fault = {};
@@ -221,6 +227,7 @@ loop::LoopResult RunSession::arm() {
     // The RT thread is made, scheduled and pinned before output is enabled, and its loop
     // started right after: a drive's watchdog sees commands within a period of the enable.
     swap_.loop_starting();  // before the phase says running: a reload then waits for this loop
+    scene_swap_.loop_starting();
     RtThread rt(*servo_, cfg.loop.rt_priority, cfg.loop.cpu, realtime_, rt_);
     if (const std::string error = rt.wait_ready(); !error.empty()) {
       throw config::ConfigError({cfg.locate("loop.cpu") + ": " + error});

@@ -55,20 +55,36 @@ class RunSession final : public ControlHandler {
   void accumulate(const loop::LoopResult& r);
   int finish();
 
-  // A reload's new configuration, its gate report and the law built from it.
+  // A reload's new configuration, its gate report and the law built from it (the walls, for
+  // a device of several joints).
   struct Prepared {
     config::Config cfg;
     gate::GateReport report;
     std::unique_ptr<control::Controller> law;
+    std::unique_ptr<loop::SceneWalls> walls;
     std::vector<Derating> derated;  // what safety.gate: derate lowered
   };
 
   nlohmann::json status() const;
   nlohmann::json reload(const std::string& text, const std::string& source,
                         const std::vector<std::string>& sets);
+  // A client's change to the walls (scene_edit.h), applied as a reload of the running
+  // configuration with its walls edited.
+  nlohmann::json scene(const SceneEdit& edit);
+  // reload() and scene() under reload_mutex_: `what` names it in messages ("reload", "scene
+  // add"), `continues` (null: wall i goes on from wall i) says which running wall each new
+  // one goes on from.
+  nlohmann::json apply(const std::string& text, const std::string& source,
+                       const std::vector<std::string>& sets, const std::string& what,
+                       const std::vector<int>* continues);
   Prepared prepare(const config::Config& running, const std::string& text,
-                   const std::string& source, const std::vector<std::string>& sets) const;
+                   const std::string& source, const std::vector<std::string>& sets,
+                   const std::vector<int>* continues) const;
   std::optional<std::uint64_t> swap_in(Prepared& next, const std::string& source);
+  // Offers `next` on `swap` and waits for the tick that takes it (none: the loop ended first);
+  // throws ControlRefusal when the loop reached no tick boundary in time.
+  template <class T>
+  std::optional<std::uint64_t> offer(loop::TickSwap<T>& swap, T* next, const std::string& source);
   config::Config config_snapshot() const;
   nlohmann::json reload_file();
   nlohmann::json clear_fault();
@@ -85,8 +101,11 @@ class RunSession final : public ControlHandler {
   loop::RtStatus rt_;
   std::optional<loop::CpuDmaLatencyRequest> pm_qos_;
   loop::LawSwap swap_;
+  loop::SceneSwap scene_swap_;                   // several joints: new walls
   std::unique_ptr<control::Controller> active_;  // the law the loop runs
   SceneParts scene_;  // a device of several joints: the walls the loop steps instead
+  // Walls a reload accepted while no loop ran (a held fault): the next arming takes them.
+  std::unique_ptr<loop::SceneWalls> pending_walls_;
   std::unique_ptr<loop::ServoLoop> servo_;
   std::unique_ptr<ControlServer> server_;
   int wake_fd_ = -1;  // eventfd: the control thread wakes the supervisor (stop, clear-fault)

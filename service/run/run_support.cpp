@@ -106,10 +106,11 @@ loop::LoopOptions loop_options(const RunOptions& options, const config::Config& 
   return lo;
 }
 
-SceneParts make_scene_parts(const config::Config& cfg, const DeviceInfo& info,
-                            const gate::GateReport& report) {
-  SceneParts parts;
-  parts.scene = std::make_unique<control::Scene>(control::make_scene(cfg));
+std::unique_ptr<loop::SceneWalls> make_scene_walls(const config::Config& cfg,
+                                                   const DeviceInfo& info,
+                                                   const gate::GateReport& report,
+                                                   const loop::SceneWalls* running,
+                                                   const std::vector<int>* continues) {
   std::vector<control::ObserverParams> observers;
   for (std::size_t i = 0; i < cfg.walls.size(); ++i) {
     control::ObserverParams p = control::observer_params(cfg, info.transport_delay_samples);
@@ -121,8 +122,24 @@ SceneParts make_scene_parts(const config::Config& cfg, const DeviceInfo& info,
     p.device_damping = std::isfinite(b) ? b : 0.0;
     observers.push_back(p);
   }
-  parts.state = std::make_unique<loop::SceneState>(cfg.device.kinematics, *parts.scene,
-                                                   cfg.device.max_force.per_joint(), observers);
+  auto walls = std::make_unique<loop::SceneWalls>(
+      std::make_unique<control::Scene>(control::make_scene(cfg)), observers);
+  for (std::size_t i = 0; running != nullptr && i < cfg.walls.size(); ++i) {
+    const int from =
+        continues != nullptr ? (i < continues->size() ? (*continues)[i] : -1) : static_cast<int>(i);
+    if (from >= 0 && static_cast<std::size_t>(from) < running->observers.size()) {
+      walls->continues[i] = from;
+    }
+  }
+  return walls;
+}
+
+SceneParts make_scene_parts(const config::Config& cfg, const DeviceInfo& info,
+                            const gate::GateReport& report) {
+  SceneParts parts;
+  parts.walls = make_scene_walls(cfg, info, report);
+  parts.state = std::make_unique<loop::SceneState>(cfg.device.kinematics, *parts.walls,
+                                                   cfg.device.max_force.per_joint());
   return parts;
 }
 

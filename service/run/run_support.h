@@ -36,15 +36,23 @@ TickLog open_tick_log(const RunOptions& options, const config::Config& cfg, bool
 loop::LoopOptions loop_options(const RunOptions& options, const config::Config& cfg,
                                const DeviceInfo& info, bool realtime, bool logging);
 
-// A device of several joints: the scene the loop steps in place of the one-joint law, and
+// A device of several joints: the walls the loop steps in place of the one-joint law, and
 // its state (docs/kinematics.md, the loop at several joints). Each wall's passivity observer
 // credits the least damping the device has along its normal, as the gate found it (`report`).
 struct SceneParts {
-  std::unique_ptr<control::Scene> scene;
+  std::unique_ptr<loop::SceneWalls> walls;  // a reload replaces them
   std::unique_ptr<loop::SceneState> state;
 };
 SceneParts make_scene_parts(const config::Config& cfg, const DeviceInfo& info,
                             const gate::GateReport& report);
+// The walls of cfg, each with its observer; a reload's go on from `running`'s: wall i from
+// running wall continues[i] (-1: a new wall), or from wall i when `continues` is null
+// (docs/operations.md, live reload).
+std::unique_ptr<loop::SceneWalls> make_scene_walls(const config::Config& cfg,
+                                                   const DeviceInfo& info,
+                                                   const gate::GateReport& report,
+                                                   const loop::SceneWalls* running = nullptr,
+                                                   const std::vector<int>* continues = nullptr);
 
 // `advice`: what to change, after the fault's sentence (direction_report.h).
 void summarise_fault(const loop::LoopResult& result, const Device& device, RunSummary& s,

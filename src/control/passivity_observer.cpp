@@ -135,4 +135,32 @@ void PassivityObserver::restart() noexcept {
   previous_velocity_ = 0.0;
 }
 
+void PassivityObserver::continue_from(const PassivityObserver& previous) noexcept {
+  // The newest commands of the old history, as many as this one holds (both are sized by the
+  // same device's delay; the ages keep them right if they were not).
+  const std::size_t n = history_.size(), m = previous.history_.size();
+  for (std::size_t age = 0; age < n; ++age) {
+    const std::size_t from = (previous.head_ + m - age % m) & previous.mask_;
+    const std::size_t to = (head_ + n - age) & mask_;
+    history_[to] = age < m ? previous.history_[from] : 0.0;
+    damping_history_[to] = age < m ? previous.damping_history_[from] : 0.0;
+  }
+  last_x_ = previous.last_x_;
+  have_x_ = previous.have_x_;
+  pending_force_ = previous.pending_force_;
+  pending_damping_ = previous.pending_damping_;
+  pending_periods_ = previous.pending_periods_;
+  velocity_ = previous.velocity_;
+  previous_velocity_ = previous.previous_velocity_;
+  energy_ = previous.energy_;
+  wall_work_ = previous.wall_work_;
+  damping_work_ = previous.damping_work_;
+  min_energy_ = previous.min_energy_;
+  negative_ticks_ = previous.negative_ticks_;
+  damped_ticks_ = previous.damped_ticks_;
+  max_alpha_ = previous.max_alpha_;
+  in_deficit_ = previous.in_deficit_;
+  deficit_start_work_ = previous.deficit_start_work_;
+}
+
 }  // namespace hapticd::control

@@ -97,6 +97,10 @@ class PassivityObserver {
   // RT-safe. A new run (after a cleared fault): no previous position, no force in flight.
   // The energies go on accumulating.
   void restart() noexcept;
+  // RT-safe: a swap at a tick boundary (a reload of a scene's walls). Goes on from `previous`
+  // - its energies, its last position, the forces in flight - with its own parameters (the
+  // damping the gate credits the new wall with).
+  void continue_from(const PassivityObserver& previous) noexcept;
 
   bool enabled() const noexcept { return params_.mode != config::PassivityControl::kOff; }
   // E_k (J): energy into the wall and the device's damping, positive while passive.

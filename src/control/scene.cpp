@@ -31,6 +31,16 @@ void Scene::reset() noexcept {
   for (Controller& c : walls_) c.reset();
 }
 
+void Scene::continue_from(const Scene& from, std::span<const int> continues) noexcept {
+  last_x_ = from.last_x_;
+  for (std::size_t i = 0; i < walls_.size() && i < continues.size(); ++i) {
+    const int j = continues[i];
+    if (j >= 0 && static_cast<std::size_t>(j) < from.walls_.size()) {
+      walls_[i].continue_from(from.walls_[static_cast<std::size_t>(j)]);
+    }
+  }
+}
+
 void Scene::step_walls(const kinematics::Pose& pose, SceneStep& out) noexcept {
   out.count = walls_.size();
   out.pose_ok = pose.status == kinematics::Status::kOk && pose.x.allFinite();

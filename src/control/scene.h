@@ -62,6 +62,10 @@ class Scene {
 
   // RT-safe. Every wall's filters cleared and disarmed (as at construction).
   void reset() noexcept;
+  // RT-safe: a swap at a tick boundary. Wall i goes on from `from`'s wall continues[i] (its
+  // filters, delay line and arming: Controller::continue_from), a wall with -1 starts afresh;
+  // the last task position carries over.
+  void continue_from(const Scene& from, std::span<const int> continues) noexcept;
 
   std::size_t size() const noexcept { return walls_.size(); }
   const WallGeometry& geometry(std::size_t i) const noexcept { return geometry_[i]; }

@@ -1,37 +1,39 @@
-// The one-slot mailbox through which a live reload hands the RT thread a new control law
-// (docs/architecture.md: a swap at a tick boundary). The reload builds, checks and gates the new
-// Controller off the RT thread (allocating as it likes), offer()s it, and the RT thread takes
-// it at the start of its next tick without allocating, locking or waiting; the controller it
-// replaced comes back through retire() for the offering side to destroy. A refused reload is
-// noted here too, so the RT thread - the ring's only producer - can mark it in the tick log.
+// The one-slot mailbox through which a live reload hands the RT thread what it renders
+// (docs/architecture.md: a swap at a tick boundary): a new control law for one joint
+// (LawSwap), new walls for a scene of several (SceneSwap, scene_tick.h). The reload builds,
+// checks and gates it off the RT thread (allocating as it likes), offer()s it, and the RT
+// thread takes it at the start of its next tick without allocating, locking or waiting; what
+// it replaced comes back through retire() for the offering side to destroy. A refused reload
+// is noted here too, so the RT thread - the ring's only producer - can mark it in the tick log.
+// T has `void continue_from(T& running) noexcept`: what carries over at the swap.
 #pragma once
 
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <thread>
 
 #include "control/controller.h"
 
 namespace hapticd::loop {
 
-class LawSwap {
+template <class T>
+class TickSwap {
  public:
   // Not RT-safe (any one thread at a time). Hands `next` over; false when a previous offer has
   // not been taken yet, or the controller it replaced not retire()d yet (the caller keeps
   // ownership of `next` then).
-  bool offer(control::Controller* next) noexcept {
+  bool offer(T* next) noexcept {
     if (retired_.load(std::memory_order_acquire) != nullptr) return false;
-    control::Controller* expected = nullptr;
+    T* expected = nullptr;
     return pending_.compare_exchange_strong(expected, next, std::memory_order_acq_rel);
   }
   // Not RT-safe. The controller replaced by the last swap, once the RT thread is done with it
   // (ownership passes to the caller); null when there is none.
-  control::Controller* retire() noexcept {
-    return retired_.exchange(nullptr, std::memory_order_acq_rel);
-  }
+  T* retire() noexcept { return retired_.exchange(nullptr, std::memory_order_acq_rel); }
   // Not RT-safe. Takes an offer back that the RT thread has not taken (true: the caller owns
   // `offered` again); false when it was taken meanwhile.
-  bool withdraw(control::Controller* offered) noexcept {
+  bool withdraw(T* offered) noexcept {
     return pending_.compare_exchange_strong(offered, nullptr, std::memory_order_acq_rel);
   }
   // Not RT-safe. A reload was refused: the RT thread writes a marker record at its next tick.
@@ -42,12 +44,12 @@ class LawSwap {
     return swap_tick_.load(std::memory_order_acquire);
   }
 
-  // RT-safe: called every tick. The offered controller, if any, already continued from
-  // `current` (its filter histories and delay line); `current` goes to retire(). The caller
+  // RT-safe: called every tick. The offer, if any, already continued from `current` (a
+  // controller's filter histories and delay line); `current` goes to retire(). The caller
   // switches to it from `tick` on. The continuation happens before the swap is published:
   // the offering side destroys `current` as soon as it sees the swap.
-  control::Controller* take(control::Controller* current, std::uint64_t tick) noexcept {
-    control::Controller* next = pending_.load(std::memory_order_acquire);
+  T* take(T* current, std::uint64_t tick) noexcept {
+    T* next = pending_.load(std::memory_order_acquire);
     if (next == nullptr) return nullptr;  // the usual tick: one load, nothing else
     // The slot for the retired one is free: the offering side takes it before offering again.
     // Claim the offer first: a concurrent withdraw() then fails and the offerer knows.
@@ -75,8 +77,8 @@ class LawSwap {
   }
 
  private:
-  std::atomic<control::Controller*> pending_{nullptr};
-  std::atomic<control::Controller*> retired_{nullptr};
+  std::atomic<T*> pending_{nullptr};
+  std::atomic<T*> retired_{nullptr};
   std::atomic<std::uint32_t> refused_{0};
   std::atomic<std::uint64_t> swaps_{0};
   std::atomic<std::uint64_t> swap_tick_{0};
@@ -94,7 +96,20 @@ enum class SwapOutcome {
 // taken, or the loop has ended, or `timeout` passes, then withdraws an offer not taken.
 // A swap the RT thread makes while it is being withdrawn is reported as kTaken: the answer
 // never disagrees with what the loop runs.
-SwapOutcome await_swap(LawSwap& swap, control::Controller* offered, std::uint64_t before,
-                       std::chrono::milliseconds timeout);
+template <class T>
+SwapOutcome await_swap(TickSwap<T>& swap, T* offered, std::uint64_t before,
+                       std::chrono::milliseconds timeout) {
+  // A deadline on the clock, not a count of sleeps: a starved control thread oversleeps, and
+  // the time-out is about the RT thread, which may be starved too.
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (swap.swaps() == before && !swap.ended() && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  if (!swap.withdraw(offered)) return SwapOutcome::kTaken;
+  return swap.ended() ? SwapOutcome::kLoopEnded : SwapOutcome::kTimedOut;
+}
+
+// A new control law for a loop of one joint.
+using LawSwap = TickSwap<control::Controller>;
 
 }  // namespace hapticd::loop

@@ -8,19 +8,53 @@ namespace hapticd::loop {
 
 using kinematics::Vec3;
 
-SceneState::SceneState(const kinematics::Kinematics& k, control::Scene& s, const Vec3& lim,
-                       const std::vector<control::ObserverParams>& observers)
-    : kinematics(k), scene(&s), limit(lim), guess(Vec3::Constant(std::nan(""))) {
-  if (observers.size() != s.size()) {
+SceneWalls::SceneWalls(std::unique_ptr<control::Scene> s,
+                       const std::vector<control::ObserverParams>& params)
+    : scene(std::move(s)) {
+  if (scene == nullptr || params.size() != scene->size()) {
     throw std::invalid_argument("a scene's loop needs one passivity observer per wall");
   }
-  walls.reserve(observers.size());
-  for (const control::ObserverParams& p : observers) walls.emplace_back(p);
+  observers.reserve(params.size());
+  for (const control::ObserverParams& p : params) observers.emplace_back(p);
+  continues.fill(-1);
 }
 
+void SceneWalls::Totals::add(const control::PassivityObserver& o) noexcept {
+  energy_j += o.energy_j();
+  min_energy_j += o.min_energy_j();
+  wall_work_j += o.wall_work_j();
+  damping_work_j += o.damping_work_j();
+  negative_ticks = std::max(negative_ticks, o.negative_ticks());
+  max_damping = std::max(max_damping, o.max_alpha());
+}
+
+void SceneWalls::continue_from(SceneWalls& running) noexcept {
+  scene->continue_from(*running.scene, continues);
+  std::array<bool, config::kMaxWalls> continued{};
+  for (std::size_t i = 0; i < observers.size(); ++i) {
+    const int j = continues[i];
+    if (j < 0 || static_cast<std::size_t>(j) >= running.observers.size()) continue;
+    observers[i].continue_from(running.observers[static_cast<std::size_t>(j)]);
+    continued[static_cast<std::size_t>(j)] = true;
+  }
+  ended = running.ended;
+  for (std::size_t j = 0; j < running.observers.size(); ++j) {
+    if (!continued[j]) ended.add(running.observers[j]);
+  }
+}
+
+SceneWalls::Totals SceneWalls::totals() const noexcept {
+  Totals t = ended;
+  for (const control::PassivityObserver& o : observers) t.add(o);
+  return t;
+}
+
+SceneState::SceneState(const kinematics::Kinematics& k, SceneWalls& w, const Vec3& lim)
+    : kinematics(k), walls(&w), limit(lim), guess(Vec3::Constant(std::nan(""))) {}
+
 void SceneState::restart() noexcept {
-  for (control::PassivityObserver& o : walls) o.restart();
-  scene->reset();
+  for (control::PassivityObserver& o : walls->observers) o.restart();
+  walls->scene->reset();
   guess = Vec3::Constant(std::nan(""));
   deepest.fill(0.0);
   stepped = 0;
@@ -35,7 +69,8 @@ bool running_away(SceneState& st, const control::SceneStep& step, double s,
   st.deepest[0] = s;
   ++st.stepped;
   const bool saturated = step.saturation == kinematics::SaturationStatus::kSaturated;
-  const double explicit_bound = step.count > 0 ? st.scene->law(wall).runaway_penetration : 0.0;
+  const double explicit_bound =
+      step.count > 0 ? st.walls->scene->law(wall).runaway_penetration : 0.0;
   const bool deeper = std::isfinite(explicit_bound)
                           ? s > explicit_bound
                           : step.scale * config::kRunawayMargin < 1.0 && s > 0.0;
@@ -78,15 +113,15 @@ JointCommand step_scene_tick(SceneState& st, const JointInput& in,
   rec.pose_status = static_cast<std::uint8_t>(pose.status);
 
   control::SceneStep step;
-  st.scene->step_walls(pose, step);
+  st.walls->scene->step_walls(pose, step);
   record_walls(step, rec);
   JointCommand c;
-  double energy = 0.0;
+  double energy = st.walls->ended.energy_j;  // the walls a reload ended still count
   for (std::size_t i = 0; i < step.count; ++i) {
-    control::PassivityObserver& o = st.walls[i];
+    control::PassivityObserver& o = st.walls->observers[i];
     o.observe(step.walls[i].penetration, in.fresh, in.periods);  // s_i: the law's penetration
     energy += o.energy_j();
-    const control::Damping d = o.damp(step.walls[i].force_commanded, st.scene->law(i));
+    const control::Damping d = o.damp(step.walls[i].force_commanded, st.walls->scene->law(i));
     c.wall[i] = d.command;
     c.added[i] = d.added;
     if (d.alpha > 0.0) {
@@ -95,7 +130,7 @@ JointCommand step_scene_tick(SceneState& st, const JointInput& in,
     }
   }
   rec.observer_energy_j = energy;
-  st.scene->map(pose, std::span<const double>(c.wall.data(), step.count), st.limit, step);
+  st.walls->scene->map(pose, std::span<const double>(c.wall.data(), step.count), st.limit, step);
   rec.flags |= step.flags;  // the joints' saturation, a non-finite torque
   c.non_finite = (step.flags & control::kControlNonFinite) != 0;
   c.runaway = running_away(st, step, rec.penetration, rec.deepest_wall);
@@ -112,10 +147,10 @@ void end_scene_tick(SceneState& st, const JointCommand* c, telemetry::TickRecord
   rec.joint_force[0] = tau[1];
   rec.joint_force[1] = tau[2];
   const bool acted = c != nullptr && !c->faulted();
-  for (std::size_t i = 0; i < st.walls.size(); ++i) {
+  for (std::size_t i = 0; i < st.walls->observers.size(); ++i) {
     // What acted along the wall's normal: its force, scaled with the joints' saturation.
-    st.walls[i].commanded(acted ? c->scale * c->wall[i] : 0.0,
-                          acted ? c->scale * c->added[i] : 0.0);
+    st.walls->observers[i].commanded(acted ? c->scale * c->wall[i] : 0.0,
+                                     acted ? c->scale * c->added[i] : 0.0);
   }
 }
 

@@ -17,11 +17,13 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "control/passivity_observer.h"
 #include "control/scene.h"
 #include "kinematics/kinematics.h"
+#include "loop/law_swap.h"
 #include "loop/sample_check.h"
 #include "telemetry/tick_record.h"
 
@@ -55,20 +57,55 @@ struct JointCommand {
   bool faulted() const noexcept { return non_finite || runaway || pose_fault; }
 };
 
+// What a scene of several joints renders: its walls and an observer each, built off the RT
+// thread, and swapped in whole at a tick boundary by a live reload (SceneSwap). What the walls
+// that a swap ended had observed stays in the run's totals (`ended`).
+struct SceneWalls {
+  // Not RT-safe. Throws std::invalid_argument when `observers` does not hold one set of
+  // parameters per wall of `scene`.
+  SceneWalls(std::unique_ptr<control::Scene> scene,
+             const std::vector<control::ObserverParams>& observers);
+
+  // RT-safe: taken at a tick boundary. Wall i goes on from `running`'s wall continues[i]
+  // (its filters and its observer's energies; -1: a new wall, which starts afresh), and the
+  // observations of `running`'s walls that no wall continues join `ended`.
+  void continue_from(SceneWalls& running) noexcept;
+
+  // The walls' observations together: energies and works add, each minimum adds into a
+  // bound below the sum's, the most ticks any wall had below zero, the largest damping.
+  struct Totals {
+    double energy_j = 0.0;
+    double min_energy_j = 0.0;
+    double wall_work_j = 0.0;
+    double damping_work_j = 0.0;
+    std::uint64_t negative_ticks = 0;
+    double max_damping = 0.0;
+    void add(const control::PassivityObserver& o) noexcept;
+  };
+  // RT-safe. Every wall's, the ended ones' included.
+  Totals totals() const noexcept;
+
+  std::unique_ptr<control::Scene> scene;
+  std::vector<control::PassivityObserver> observers;  // one per wall
+  std::array<int, config::kMaxWalls> continues;       // set before the offer; -1: a new wall
+  Totals ended;
+};
+
+// A scene's new walls for the loop: a live reload at several joints.
+using SceneSwap = TickSwap<SceneWalls>;
+
 // What the scene's tick works on, built before the loop (not RT-safe to build).
 struct SceneState {
-  // Throws std::invalid_argument when `observers` does not hold one set of parameters per wall.
-  SceneState(const kinematics::Kinematics& kinematics, control::Scene& scene,
-             const kinematics::Vec3& limit, const std::vector<control::ObserverParams>& observers);
+  SceneState(const kinematics::Kinematics& kinematics, SceneWalls& walls,
+             const kinematics::Vec3& limit);
 
   // RT-safe. A new run: no position, nothing in flight (the energies go on).
   void restart() noexcept;
 
   kinematics::Kinematics kinematics;
-  control::Scene* scene;
-  kinematics::Vec3 limit;                         // each joint's force limit
-  std::vector<control::PassivityObserver> walls;  // one per wall, built once
-  kinematics::Vec3 guess;                         // the last task position (the delta's start)
+  SceneWalls* walls;       // what is rendered now; a reload swaps it (owned by the caller)
+  kinematics::Vec3 limit;  // each joint's force limit
+  kinematics::Vec3 guess;  // the last task position (the delta's start)
   // The deepest wall's penetration over the runaway guard's two windows, newest first.
   std::array<double, 2 * control::Controller::kRunawayWindow> deepest{};
   std::size_t stepped = 0;  // ticks stepped since restart (the guard waits for its windows)

@@ -79,17 +79,31 @@ void ServoLoop::log(const telemetry::TickRecord& rec, const std::atomic<bool>& s
 
 void ServoLoop::take_reloads(std::uint64_t tick, std::int64_t scheduled_ns,
                              const std::atomic<bool>& stop) noexcept {
-  if (options_.law_swap == nullptr) return;
+  if (options_.law_swap == nullptr && options_.scene_swap == nullptr) return;
   telemetry::TickRecord marker;
   marker.tick = tick;
   marker.scheduled_ns = scheduled_ns;
-  if (control::Controller* next = options_.law_swap->take(controller_, tick)) {
-    controller_ = next;
+  bool taken = false;
+  if (options_.law_swap != nullptr) {
+    if (control::Controller* next = options_.law_swap->take(controller_, tick)) {
+      controller_ = next;
+      taken = true;
+    }
+  }
+  if (options_.scene_swap != nullptr && options_.scene != nullptr) {
+    if (SceneWalls* next = options_.scene_swap->take(options_.scene->walls, tick)) {
+      options_.scene->walls = next;
+      taken = true;
+    }
+  }
+  if (taken) {
     counters_[kCounterReloads].add();
     marker.marker = telemetry::kMarkerReloadAccepted;
     log(marker, stop);
   }
-  for (std::uint32_t n = options_.law_swap->take_refusals(); n > 0; --n) {
+  std::uint32_t refused = options_.law_swap ? options_.law_swap->take_refusals() : 0;
+  if (options_.scene_swap != nullptr) refused += options_.scene_swap->take_refusals();
+  for (; refused > 0; --refused) {
     marker.marker = telemetry::kMarkerReloadRefused;
     log(marker, stop);
   }
@@ -148,8 +162,9 @@ void ServoLoop::account_joints(const telemetry::TickRecord& rec) noexcept {
 
 double ServoLoop::wall_work_j() const noexcept {
   if (options_.scene == nullptr) return observer_.wall_work_j();
-  double work = 0.0;
-  for (const control::PassivityObserver& o : options_.scene->walls) work += o.wall_work_j();
+  const SceneWalls& walls = *options_.scene->walls;
+  double work = walls.ended.wall_work_j;
+  for (const control::PassivityObserver& o : walls.observers) work += o.wall_work_j();
   return work;
 }
 
@@ -218,7 +233,7 @@ void ServoLoop::scene_tick(std::uint64_t tick, const Sensed& sensed, const kinem
     if (c.runaway) {
       // What the walls can hold: the penetration at which they ask kRunawayMargin times what
       // the saturated joints render, or the explicit bound.
-      const double bound = st.scene->law(rec.deepest_wall).runaway_penetration;
+      const double bound = st.walls->scene->law(rec.deepest_wall).runaway_penetration;
       set_fault({FaultCause::kRunaway, tick, rec.penetration,
                  std::isfinite(bound) ? bound : config::kRunawayMargin * c.scale * rec.penetration},
                 rec, res);
@@ -235,18 +250,16 @@ void ServoLoop::scene_tick(std::uint64_t tick, const Sensed& sensed, const kinem
 }
 
 PassivityResult ServoLoop::scene_passivity() const noexcept {
-  // The walls' observers together: energies and works add, each minimum adds into a bound
-  // below the sum's, the most any wall had below zero and added, the ticks any of them damped.
+  // The walls' observers together (SceneWalls::totals), the ticks any of them damped.
+  const SceneWalls::Totals t = options_.scene->walls->totals();
   PassivityResult p;
   p.observed = observer_.enabled();
   p.damped_ticks = scene_damped_ticks_;
-  for (const control::PassivityObserver& o : options_.scene->walls) {
-    p.energy_j += o.energy_j();
-    p.min_energy_j += o.min_energy_j();
-    p.negative_ticks = std::max(p.negative_ticks, o.negative_ticks());
-    p.max_damping = std::max(p.max_damping, o.max_alpha());
-    p.damping_work_j += o.damping_work_j();
-  }
+  p.energy_j = t.energy_j;
+  p.min_energy_j = t.min_energy_j;
+  p.negative_ticks = t.negative_ticks;
+  p.max_damping = t.max_damping;
+  p.damping_work_j = t.damping_work_j;
   return p;
 }
 
@@ -360,6 +373,7 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
   }
   write_zero();  // the last command must not outlive the loop that was servoing it
   if (options_.law_swap != nullptr) options_.law_swap->loop_ended();  // no more takes
+  if (options_.scene_swap != nullptr) options_.scene_swap->loop_ended();
   next_tick_ += res.ticks;
   run_counts(before, res);
   res.wall_energy_j = wall_work_j() - work_before;

@@ -48,6 +48,9 @@ struct LoopOptions {
   // kinematics and observers, stepped in place of the one-joint law, which is then unused, as
   // are `observer`, `probe` and `law_swap` (null: a device of one joint). Owned by the caller.
   SceneState* scene = nullptr;
+  // Live reload at several joints: the mailbox new walls arrive through (null: none). Refused
+  // reloads are noted on either mailbox.
+  SceneSwap* scene_swap = nullptr;
 };
 
 // What the loop is doing, readable from any thread while it runs (relaxed atomics, stored

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <numbers>
 #include <stdexcept>
 #include <string>
@@ -104,13 +105,15 @@ class NormalSweep final : public FrequencySweep {
       q.push_back(s.q);
     }
     ImposedJoints device(q, m_.n);
-    control::Scene scene(std::vector<control::WallGeometry>{{m_.point, m_.normal}},
-                         std::vector<control::ControlLaw>{m_.law});
     control::ObserverParams off;
     off.mode = config::PassivityControl::kOff;
     off.sample_period = t;
-    loop::SceneState state(m_.cfg.device.kinematics, scene,
-                           Vec3::Constant(std::numeric_limits<double>::max()), {off});
+    loop::SceneWalls walls(
+        std::make_unique<control::Scene>(std::vector<control::WallGeometry>{{m_.point, m_.normal}},
+                                         std::vector<control::ControlLaw>{m_.law}),
+        {off});
+    loop::SceneState state(m_.cfg.device.kinematics, walls,
+                           Vec3::Constant(std::numeric_limits<double>::max()));
     loop::LoopOptions lo;
     lo.sample.realtime = false;
     lo.sample.period_ns = m_.cfg.loop.period_ns();

@@ -26,10 +26,10 @@ using kinematics::Vec3;
 loop::LoopResult run_scene(const config::Config& cfg, Device& device, std::uint64_t ticks,
                            telemetry::SpscRing<telemetry::TickRecord>* ring) {
   control::Controller controller(control::make_control_law(cfg));  // unused at several joints
-  control::Scene scene = control::make_scene(cfg);
-  loop::SceneState state(
-      cfg.device.kinematics, scene, cfg.device.max_force.per_joint(),
+  loop::SceneWalls walls(
+      std::make_unique<control::Scene>(control::make_scene(cfg)),
       std::vector<control::ObserverParams>(cfg.walls.size(), control::observer_params(cfg, 0)));
+  loop::SceneState state(cfg.device.kinematics, walls, cfg.device.max_force.per_joint());
   loop::LoopOptions o;
   o.sample.realtime = false;
   o.sample.period_ns = std::llround(cfg.loop.sample_period_s() * 1e9);

@@ -43,10 +43,10 @@ struct SceneRig {
       : cfg(c),
         device(cfg.device, cfg.loop.sample_period_s()),
         controller(control::make_control_law(cfg)),
-        scene(control::make_scene(cfg)),
-        state(cfg.device.kinematics, scene, cfg.device.max_force.per_joint(),
+        walls(std::make_unique<control::Scene>(control::make_scene(cfg)),
               std::vector<control::ObserverParams>(cfg.walls.size(),
-                                                   control::observer_params(cfg, 0))) {
+                                                   control::observer_params(cfg, 0))),
+        state(cfg.device.kinematics, walls, cfg.device.max_force.per_joint()) {
     device.configure();
     device.enable();
   }
@@ -58,7 +58,7 @@ struct SceneRig {
   config::Config cfg;
   sim::SimDevice device;
   control::Controller controller;  // unused at several joints, as the loop's signature asks
-  control::Scene scene;
+  SceneWalls walls;
   SceneState state;
 };
 
@@ -185,9 +185,9 @@ TEST(SceneLoop, LeavingTheWorkspaceIsANamedPoseFaultWithZeroTorque) {
   // No wall below: the hand drags the effector down through the workspace's floor at z = 0.07.
   SceneRig rig(delta_config("direction: [1, 1, -1]", "direction: [0, 0, -1]"));
   rig.cfg.walls.pop_back();
-  control::Scene open = control::make_scene(rig.cfg);
-  SceneState state(rig.cfg.device.kinematics, open, rig.cfg.device.max_force.per_joint(),
-                   std::vector<control::ObserverParams>(5, control::observer_params(rig.cfg, 0)));
+  SceneWalls open(std::make_unique<control::Scene>(control::make_scene(rig.cfg)),
+                  std::vector<control::ObserverParams>(5, control::observer_params(rig.cfg, 0)));
+  SceneState state(rig.cfg.device.kinematics, open, rig.cfg.device.max_force.per_joint());
   LoopOptions o = freerun(2000);
   o.scene = &state;
   ServoLoop loop(rig.device, rig.controller, nullptr, o);
@@ -196,6 +196,47 @@ TEST(SceneLoop, LeavingTheWorkspaceIsANamedPoseFaultWithZeroTorque) {
   ASSERT_EQ(r.fault.cause, FaultCause::kPose);
   EXPECT_NE(describe(r.fault).find("outside workspace"), std::string::npos) << describe(r.fault);
   for (std::size_t j = 0; j < 3; ++j) EXPECT_EQ(rig.device.last_command(j), 0.0);
+}
+
+// A live reload of the walls (SceneSwap): offered off the RT thread, taken at the next tick
+// boundary without allocating, every wall going on from its own (the observers' energy kept),
+// and the delta pressed into its corner follows the +x face moved 10 mm out (its rest point by
+// 10 mm K / (K + k_h): the hand's spring gives way too).
+TEST(SceneLoop, NewWallsAreTakenAtATickBoundaryWithoutAllocatingAndTheEffectorFollows) {
+  SceneRig rig(delta_config("hold: 1.5", "hold: 200"));
+  SceneSwap swap;
+  LoopOptions o = rig.options(1500);
+  o.scene_swap = &swap;
+  ServoLoop loop(rig.device, rig.controller, nullptr, o);
+  const std::atomic<bool> stop{false};
+  swap.loop_starting();
+  ASSERT_EQ(loop.run(stop).fault.cause, FaultCause::kNone);
+  const double x0 = rig.device.joint_plant()->task_position()[0];
+  const double energy = rig.walls.totals().energy_j;
+  ASSERT_GT(x0, 0.02) << "pressed beyond the +x face";
+
+  config::Config moved = rig.cfg;
+  moved.walls[0].point[0] = 0.03;
+  auto next = std::make_unique<SceneWalls>(
+      std::make_unique<control::Scene>(control::make_scene(moved)),
+      std::vector<control::ObserverParams>(moved.walls.size(), control::observer_params(moved, 0)));
+  for (std::size_t i = 0; i < moved.walls.size(); ++i) next->continues[i] = static_cast<int>(i);
+  ASSERT_TRUE(swap.offer(next.get()));
+  LoopResult r;
+  {
+    hapticd::testing::AllocationScope scope;
+    r = loop.run(stop);
+    EXPECT_EQ(scope.count(), 0u) << "the swap and the ticks after it allocate nothing";
+  }
+  ASSERT_EQ(r.fault.cause, FaultCause::kNone) << describe(r.fault);
+  EXPECT_EQ(swap.swaps(), 1u);
+  EXPECT_EQ(swap.retire(), &rig.walls) << "the replaced walls come back to be destroyed";
+  EXPECT_EQ(rig.state.walls, next.get());
+  EXPECT_EQ(r.count(kCounterReloads), 1u);
+  // The hand's spring and the face share the move: the rest point goes Delta K / (K + k_h).
+  const double k = rig.cfg.walls[0].law.stiffness, kh = rig.cfg.device.sim.op.stiffness;
+  EXPECT_NEAR(rig.device.joint_plant()->task_position()[0], x0 + 0.01 * k / (k + kh), 2e-4);
+  EXPECT_GE(next->totals().energy_j, energy) << "the observers went on from the old ones";
 }
 
 }  // namespace

@@ -21,14 +21,6 @@ namespace {
 using nlohmann::json;
 using telemetry::TickRecord;
 
-std::string write(const std::string& name, const std::string& text) {
-  const std::string path = temp_path(name);
-  const std::string tmp = path + ".tmp";
-  std::ofstream(tmp) << text;
-  std::filesystem::rename(tmp, path);  // whole, as an editor saves it
-  return path;
-}
-
 // Every ordinary tick in contact must carry f = K p exactly (an undamped wall, no coupling):
 // K_before before the boundary, K_after from it on.
 void expect_wall_switches_at(const std::vector<TickRecord>& records, std::uint64_t boundary,
@@ -46,7 +38,7 @@ void expect_wall_switches_at(const std::vector<TickRecord>& records, std::uint64
 }
 
 TEST(ControlSocket, StatusReloadsAndStopThroughHapticctl) {
-  const std::string base = write("base.yaml", pressing_config(2000));
+  const std::string base = write_temp("base.yaml", pressing_config(2000));
   Daemon d({"--config", base, "--duration", "120"});
   ASSERT_TRUE(d.ready());
   struct stat st {};
@@ -72,7 +64,8 @@ TEST(ControlSocket, StatusReloadsAndStopThroughHapticctl) {
   EXPECT_TRUE(has(human.out, "passivity     observed energy")) << human.out;
 
   // A passing reload: the new wall governs from the tick the daemon names.
-  const ProcessResult ok = d.ctl({"--json", "reload", write("k3000.yaml", pressing_config(3000))});
+  const ProcessResult ok =
+      d.ctl({"--json", "reload", write_temp("k3000.yaml", pressing_config(3000))});
   ASSERT_EQ(ok.exit_code, 0) << ok.out << ok.err;
   const json accepted = json::parse(ok.out)["reload"];
   ASSERT_TRUE(accepted["applied_at_tick"].is_number()) << ok.out;
@@ -80,15 +73,15 @@ TEST(ControlSocket, StatusReloadsAndStopThroughHapticctl) {
   EXPECT_EQ(accepted["gate"]["verdict"], "pass");
 
   // Refused: the gate (exit 3, its reason), a restart-only change and bad YAML (exit 2).
-  const ProcessResult gate = d.ctl({"reload", write("k5000.yaml", pressing_config(5000))});
+  const ProcessResult gate = d.ctl({"reload", write_temp("k5000.yaml", pressing_config(5000))});
   EXPECT_EQ(gate.exit_code, 3) << gate.err;
   EXPECT_TRUE(has(gate.err, "the gate refuses it")) << gate.err;
   EXPECT_TRUE(has(gate.err, "wall.stiffness must be <= 3600 N/m to pass (now 5000)")) << gate.err;
   const ProcessResult rate =
-      d.ctl({"reload", write("rate.yaml", pressing_config(3000, "  rate_hz: 500\n"))});
+      d.ctl({"reload", write_temp("rate.yaml", pressing_config(3000, "  rate_hz: 500\n"))});
   EXPECT_EQ(rate.exit_code, 2) << rate.err;
   EXPECT_TRUE(has(rate.err, "loop.rate_hz: a new sample rate; that needs a restart")) << rate.err;
-  const std::string bad = write("bad.yaml", pressing_config(-5));
+  const std::string bad = write_temp("bad.yaml", pressing_config(-5));
   const ProcessResult yaml = d.ctl({"reload", bad});
   EXPECT_EQ(yaml.exit_code, 2) << yaml.err;
   EXPECT_TRUE(has(yaml.err, bad + ":12: wall.stiffness: must be >= 0")) << yaml.err;
@@ -133,19 +126,19 @@ TEST(ControlSocket, StatusReloadsAndStopThroughHapticctl) {
 }
 
 TEST(ControlSocket, SighupReloadsTheFileTheRunWasStartedWith) {
-  const std::string file = write("hup.yaml", pressing_config(2000));
+  const std::string file = write_temp("hup.yaml", pressing_config(2000));
   Daemon d({"--config", file, "--duration", "120"});
   ASSERT_TRUE(d.ready());
   d.wait_status(
       [](const json& j) { return j["counters"]["loop"]["contact_ticks"].get<int>() > 100; });
-  write("hup.yaml", pressing_config(2500));
+  write_temp("hup.yaml", pressing_config(2500));
   d.signal(SIGHUP);
   json s = d.wait_status([](const json& j) { return j["reloads"].get<int>() == 1; });
   EXPECT_EQ(s["wall"]["stiffness"], 2500.0) << s.dump();
   const auto reloaded_at = s["tick"].get<std::uint64_t>();
   s = d.wait_status(
       [&](const json& j) { return j["tick"].get<std::uint64_t>() > reloaded_at + 200; });
-  write("hup.yaml", pressing_config(9000));  // the gate refuses this one
+  write_temp("hup.yaml", pressing_config(9000));  // the gate refuses this one
   d.signal(SIGHUP);
   EXPECT_EQ(d.ctl({"stop"}).exit_code, 0);  // the SIGHUP is taken before the stop
   const ProcessResult end = d.wait();
@@ -215,8 +208,7 @@ TEST(ControlSocket, ClearFaultIsRefusedWhileTheDeviceIsInsideTheWall) {
   EXPECT_EQ(json::parse(read_file(d.summary()))["device"]["output_enabled"], false);
 }
 
-// A device of several joints: the status names each wall, each joint and the pose (schema 4),
-// and refuses a reload (its walls are built as output is enabled).
+// A device of several joints: the status names each wall, each joint and the pose (schema 4).
 TEST(ControlSocket, StatusOfADeltaShowsEveryJointAndThePose) {
   Daemon d({"--config", source_dir() + "/config/sim-delta.yaml", "--duration", "120", "--set",
             "loop.clock=realtime", "--set", "device.sim.operator.setpoint.hold=200"});
@@ -238,10 +230,6 @@ TEST(ControlSocket, StatusOfADeltaShowsEveryJointAndThePose) {
   EXPECT_TRUE(has(human.out, "walls[5]      K 500 N/m")) << human.out;
   EXPECT_TRUE(has(human.out, "joint 3       position")) << human.out;
   EXPECT_TRUE(has(human.out, "task position (")) << human.out;
-  const ProcessResult reload = d.ctl({"reload", source_dir() + "/config/sim-delta.yaml"});
-  EXPECT_NE(reload.exit_code, 0);
-  EXPECT_TRUE(has(reload.out + reload.err, "walls: the walls of a device of several joints"))
-      << reload.out << reload.err;
 }
 
 TEST(ControlSocket, HapticctlSaysWhenNoDaemonAnswers) {

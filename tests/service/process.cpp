@@ -207,4 +207,12 @@ std::string read_file(const std::string& path) {
   return ss.str();
 }
 
+std::string write_temp(const std::string& name, const std::string& text) {
+  const std::string path = temp_path(name);
+  const std::string tmp = path + ".tmp";
+  std::ofstream(tmp) << text;
+  std::filesystem::rename(tmp, path);
+  return path;
+}
+
 }  // namespace hapticd::testing

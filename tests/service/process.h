@@ -77,6 +77,8 @@ std::string coupling_example();  // config/coupling-example.yaml (Example 1 of t
 std::string build_dir();         // the build tree the tests belong to
 std::string temp_path(const std::string& name);  // a fresh path under the test's temp dir
 std::string read_file(const std::string& path);
+// Writes `text` to temp_path(name) whole (renamed into place, as an editor saves): its path.
+std::string write_temp(const std::string& name, const std::string& text);
 // Whether `text` (a command's output, a file) holds `part`.
 inline bool has(std::string_view text, std::string_view part) {
   return text.find(part) != std::string_view::npos;

@@ -1,0 +1,61 @@
+#include "service/run/scene_edit.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include "service/control/control_server.h"
+#include "service/exit_codes.h"
+
+namespace hapticd::service {
+
+namespace {
+
+// A JSON value as a YAML node: JSON is YAML's flow style.
+YAML::Node node_of(const nlohmann::json& value) {
+  return YAML::Load(value.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
+}
+
+}  // namespace
+
+EditedScene edit_walls(const std::string& document, const SceneEdit& edit) {
+  YAML::Node root = YAML::Load(document);
+  YAML::Node walls = root.IsMap() ? root["walls"] : YAML::Node();
+  if (!walls.IsSequence()) {
+    throw ControlRefusal("scene: the running configuration has no walls list", kExitUsage);
+  }
+  const std::size_t n = walls.size();
+  if (edit.op != SceneEdit::Op::kAdd && edit.index >= n) {
+    throw ControlRefusal("scene: \"index\": " + std::to_string(edit.index) + " names no wall (" +
+                             std::to_string(n) + " walls: 0.." + std::to_string(n - 1) + ")",
+                         kExitUsage);
+  }
+  if (edit.op != SceneEdit::Op::kRemove && !edit.wall.is_object()) {
+    throw ControlRefusal("scene: \"wall\" must be an object of a wall's keys (walls[i])",
+                         kExitUsage);
+  }
+  EditedScene out;
+  YAML::Node next(YAML::NodeType::Sequence);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (edit.op == SceneEdit::Op::kRemove && i == edit.index) continue;
+    YAML::Node wall = YAML::Clone(walls[i]);
+    if (edit.op == SceneEdit::Op::kChange && i == edit.index) {
+      for (auto it = edit.wall.begin(); it != edit.wall.end(); ++it) {
+        wall[it.key()] = node_of(it.value());
+      }
+    }
+    next.push_back(wall);
+    out.continues.push_back(static_cast<int>(i));
+  }
+  out.index = edit.index;
+  if (edit.op == SceneEdit::Op::kAdd) {
+    next.push_back(node_of(edit.wall));
+    out.continues.push_back(-1);
+    out.index = n;
+  }
+  root["walls"] = next;
+  YAML::Emitter text;
+  text << root;
+  out.yaml = text.c_str();
+  return out;
+}
+
+}  // namespace hapticd::service
