@@ -206,7 +206,9 @@ struct SafetyConfig {
   GateMode gate = GateMode::kEnforce;
   double operator_passivity_shortage = 0.0;  // eta (N s/m), >= 0
   double passivity_margin = 0.1;             // pass needs b_req <= (1 - margin) b; in [0, 1)
-  double max_speed = 10.0;    // |dx/dt| between samples above this is an encoder fault (m/s)
+  double max_speed = 10.0;  // |dx/dt| between samples above this is an encoder fault (m/s)
+  // How fast a wall a reload or a scene request moved slides to its new place (m/s).
+  double max_wall_speed = 0.25;
   int stale_fault_ticks = 3;  // consecutive reads with no new position that fault the loop
   // A gap of this many samples or more in the device's own sequence counter faults the loop
   // (the loop ran on data older than it knew); 0: gaps are counted and logged only.

@@ -42,6 +42,7 @@ void read_safety(MapReader& top, SafetyConfig& safety) {
          safety.operator_passivity_shortage);
   number(m, "passivity_margin", Range::interval(0.0, true, 1.0, false), safety.passivity_margin);
   number(m, "max_speed", Range::greater_than(0.0), safety.max_speed);
+  number(m, "max_wall_speed", Range::greater_than(0.0), safety.max_wall_speed);
   integer(m, "stale_fault_ticks", IntRange::at_least(1, INT_MAX), safety.stale_fault_ticks);
   if (const auto v =
           read_integer(m.diag(), m.take("sequence_gap_fault"), IntRange::between(0, 65535))) {

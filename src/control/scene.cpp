@@ -7,7 +7,10 @@
 
 namespace hapticd::control {
 
-Scene::Scene(std::span<const WallGeometry> geometry, std::span<const ControlLaw> laws) {
+Scene::Scene(std::span<const WallGeometry> geometry, std::span<const ControlLaw> laws,
+             double max_move)
+    : max_move_(max_move) {
+  if (!(max_move > 0.0)) throw std::invalid_argument("a scene's walls must be able to move");
   if (geometry.size() != laws.size()) {
     throw std::invalid_argument("a scene needs one law per wall");
   }
@@ -23,6 +26,7 @@ Scene::Scene(std::span<const WallGeometry> geometry, std::span<const ControlLaw>
                                   ": its point must be finite and its normal a unit vector");
     }
     geometry_[i] = g;
+    place_[i] = g.point;
     walls_.emplace_back(laws[i]);
   }
 }
@@ -37,7 +41,24 @@ void Scene::continue_from(const Scene& from, std::span<const int> continues) noe
     const int j = continues[i];
     if (j >= 0 && static_cast<std::size_t>(j) < from.walls_.size()) {
       walls_[i].continue_from(from.walls_[static_cast<std::size_t>(j)]);
+      geometry_[i].point = from.geometry_[static_cast<std::size_t>(j)].point;
+      sliding_ = sliding_ || geometry_[i].point != place_[i];
     }
+  }
+}
+
+void Scene::slide() noexcept {
+  if (!sliding_) return;  // the usual tick
+  sliding_ = false;
+  for (std::size_t i = 0; i < walls_.size(); ++i) {
+    const kinematics::Vec3 way = place_[i] - geometry_[i].point;
+    const double length = way.norm();
+    // Within a step (or a way that is not finite: never here, the places are checked) it
+    // arrives; otherwise one step of max_move_ along the way.
+    geometry_[i].point = length <= max_move_ || !std::isfinite(length)
+                             ? place_[i]
+                             : geometry_[i].point + way * (max_move_ / length);
+    sliding_ = sliding_ || geometry_[i].point != place_[i];
   }
 }
 
@@ -47,6 +68,7 @@ void Scene::step_walls(const kinematics::Pose& pose, SceneStep& out) noexcept {
   // A pose without a position (no assembly, no convergence) steps the walls where the
   // mechanism was last: the walls' histories must not jump, and no torque is written anyway.
   if (pose.x.allFinite()) last_x_ = pose.x;
+  slide();
   out.force.setZero();
   for (std::size_t i = 0; i < walls_.size(); ++i) {
     out.walls[i] = walls_[i].step(coordinate(i, last_x_));
@@ -109,7 +131,7 @@ Scene make_scene(const config::Config& cfg) {
     laws.push_back(task_wall_law(cfg, w));
     geometry.push_back({w.point, w.normal});
   }
-  return Scene(geometry, laws);
+  return Scene(geometry, laws, cfg.safety.max_wall_speed * cfg.loop.sample_period_s());
 }
 
 }  // namespace hapticd::control

@@ -9,6 +9,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <vector>
 
@@ -39,10 +40,13 @@ struct SceneStep {
 class Scene {
  public:
   // Not RT-safe: builds each wall's controller (its delay line). `laws[i]` is wall i's law
-  // along its normal, with wall_position 0 and normal +1 (control_law.h). Throws
-  // std::invalid_argument for more than kMaxWalls walls, sizes that differ, or a normal that is
-  // not unit (within 1e-9) or not finite.
-  Scene(std::span<const WallGeometry> geometry, std::span<const ControlLaw> laws);
+  // along its normal, with wall_position 0 and normal +1 (control_law.h). `max_move`: how far
+  // (m) a wall's point may slide in one tick towards its place after a swap
+  // (continue_from; safety.max_wall_speed T). Throws std::invalid_argument for more than
+  // kMaxWalls walls, sizes that differ, a normal that is not unit (within 1e-9) or not finite,
+  // or a max_move that is not positive.
+  Scene(std::span<const WallGeometry> geometry, std::span<const ControlLaw> laws,
+        double max_move = std::numeric_limits<double>::infinity());
 
   // RT-safe: called every tick. Steps every wall on the task position of `pose` and maps the
   // sum through its Jacobian; `limit` holds each joint's force limit. A pose that is not kOk,
@@ -63,11 +67,13 @@ class Scene {
   // RT-safe. Every wall's filters cleared and disarmed (as at construction).
   void reset() noexcept;
   // RT-safe: a swap at a tick boundary. Wall i goes on from `from`'s wall continues[i] (its
-  // filters, delay line and arming: Controller::continue_from), a wall with -1 starts afresh;
-  // the last task position carries over.
+  // filters, delay line and arming: Controller::continue_from) and from where that wall's
+  // point was, sliding to its own at most max_move a tick; a wall with -1 starts afresh, in
+  // its place. The last task position carries over.
   void continue_from(const Scene& from, std::span<const int> continues) noexcept;
 
   std::size_t size() const noexcept { return walls_.size(); }
+  // Where wall i is now (its point on the way to its place after a swap).
   const WallGeometry& geometry(std::size_t i) const noexcept { return geometry_[i]; }
 
  private:
@@ -76,8 +82,14 @@ class Scene {
     return geometry_[i].normal.dot(x - geometry_[i].point);
   }
 
+  // RT-safe. Each wall's point a step of at most max_move_ nearer its place.
+  void slide() noexcept;
+
   std::array<WallGeometry, kMaxWalls> geometry_{};
-  std::vector<Controller> walls_;                       // built once, never resized
+  std::array<kinematics::Vec3, kMaxWalls> place_{};  // each wall's configured point
+  double max_move_;
+  bool sliding_ = false;           // a wall is not at its place yet (after a swap)
+  std::vector<Controller> walls_;  // built once, never resized
   kinematics::Vec3 last_x_ = kinematics::Vec3::Zero();  // the last finite task position
 };
 

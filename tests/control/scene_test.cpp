@@ -208,5 +208,32 @@ walls:
   EXPECT_EQ(s.saturation, kinematics::SaturationStatus::kWithin);
 }
 
+// A wall a swap moved (a reload, a scene request) slides to its new place at most max_move a
+// tick (safety.max_wall_speed T): a device held still feels its penetration grow by that much a
+// tick, never a step; a wall that stayed where it was does not move at all.
+TEST(Scene, AWallMovedByASwapSlidesToItsPlaceAtMostMaxMoveATick) {
+  const kinematics::Kinematics k = cartesian_of(2);
+  const std::vector<ControlLaw> laws = {wall_law(1000), wall_law(1000)};
+  Scene before(
+      std::vector<WallGeometry>{{Vec3::Zero(), Vec3(1, 0, 0)}, {Vec3(0, -0.1, 0), Vec3(0, -1, 0)}},
+      laws, 0.001);
+  const Vec3 q(0.005, 0.0, 0.0);  // 5 mm into the first wall
+  EXPECT_NEAR(hold_at(before, k, q).walls[0].penetration, 0.005, 1e-12);
+  // The first face 3.5 mm towards -x (deeper in), the second where it was.
+  Scene after(std::vector<WallGeometry>{{Vec3(-0.0035, 0, 0), Vec3(1, 0, 0)},
+                                        {Vec3(0, -0.1, 0), Vec3(0, -1, 0)}},
+              laws, 0.001);
+  after.continue_from(before, std::vector<int>{0, 1});
+  for (const double expected : {0.006, 0.007, 0.008, 0.0085, 0.0085}) {
+    const SceneStep s = hold_at(after, k, q, 1);
+    EXPECT_NEAR(s.walls[0].penetration, expected, 1e-12);
+    EXPECT_NEAR(s.walls[1].penetration, -0.1, 1e-12);
+  }
+  EXPECT_EQ(after.geometry(0).point, Vec3(-0.0035, 0, 0)) << "arrived exactly";
+  EXPECT_THROW(Scene(std::vector<WallGeometry>{{Vec3::Zero(), Vec3(1, 0, 0)}},
+                     std::vector<ControlLaw>{wall_law(1000)}, 0.0),
+               std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace hapticd::control

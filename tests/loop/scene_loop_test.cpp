@@ -4,9 +4,13 @@
 // tick, zero torque on every joint after a fault, a pose fault named.
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <chrono>
+#include <cmath>
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <thread>
 
 #include "alloc_counter.h"
 #include "config/config_loader.h"
@@ -198,45 +202,92 @@ TEST(SceneLoop, LeavingTheWorkspaceIsANamedPoseFaultWithZeroTorque) {
   for (std::size_t j = 0; j < 3; ++j) EXPECT_EQ(rig.device.last_command(j), 0.0);
 }
 
-// A live reload of the walls (SceneSwap): offered off the RT thread, taken at the next tick
-// boundary without allocating, every wall going on from its own (the observers' energy kept),
-// and the delta pressed into its corner follows the +x face moved 10 mm out (its rest point by
-// 10 mm K / (K + k_h): the hand's spring gives way too).
+// A live reload of the walls (SceneSwap): offered from another thread while the loop runs,
+// taken at a tick boundary without allocating, every wall going on from its own (armed, its
+// observer's energy kept), and the delta pressed into its corner follows the +x face moved
+// 10 mm out (its rest point by 10 mm K / (K + k_h): the hand's spring gives way too).
 TEST(SceneLoop, NewWallsAreTakenAtATickBoundaryWithoutAllocatingAndTheEffectorFollows) {
   SceneRig rig(delta_config("hold: 1.5", "hold: 200"));
   SceneSwap swap;
-  LoopOptions o = rig.options(1500);
+  LoopOptions o = rig.options(1'000'000);  // until the offering thread has seen enough
   o.scene_swap = &swap;
   ServoLoop loop(rig.device, rig.controller, nullptr, o);
-  const std::atomic<bool> stop{false};
-  swap.loop_starting();
-  ASSERT_EQ(loop.run(stop).fault.cause, FaultCause::kNone);
-  const double x0 = rig.device.joint_plant()->task_position()[0];
-  const double energy = rig.walls.totals().energy_j;
-  ASSERT_GT(x0, 0.02) << "pressed beyond the +x face";
-
   config::Config moved = rig.cfg;
   moved.walls[0].point[0] = 0.03;
   auto next = std::make_unique<SceneWalls>(
       std::make_unique<control::Scene>(control::make_scene(moved)),
       std::vector<control::ObserverParams>(moved.walls.size(), control::observer_params(moved, 0)));
   for (std::size_t i = 0; i < moved.walls.size(); ++i) next->continues[i] = static_cast<int>(i);
-  ASSERT_TRUE(swap.offer(next.get()));
+
+  std::atomic<bool> stop{false};
+  double x0 = 0.0, energy = 0.0;
+  const auto contact = [&] { return loop.counters()[kCounterContactTicks].value(); };
+  const auto wait_for = [&](auto done) {
+    while (!done()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  };
+  swap.loop_starting();
+  std::thread client([&] {
+    wait_for([&] { return contact() > 1000; });  // pressed into the corner, at rest
+    x0 = loop.live().task_position[0].load();
+    energy = loop.live().observer_energy_j.load();
+    swap.offer(next.get());
+    wait_for([&] { return swap.swaps() == 1; });
+    const std::uint64_t swapped = contact();
+    wait_for([&] { return contact() > swapped + 2000; });  // 2 s on: at rest again
+    stop = true;
+  });
   LoopResult r;
   {
     hapticd::testing::AllocationScope scope;
     r = loop.run(stop);
-    EXPECT_EQ(scope.count(), 0u) << "the swap and the ticks after it allocate nothing";
+    EXPECT_EQ(scope.count(), 0u) << "the swap and the ticks around it allocate nothing";
   }
+  client.join();
   ASSERT_EQ(r.fault.cause, FaultCause::kNone) << describe(r.fault);
+  ASSERT_GT(x0, 0.02) << "pressed beyond the +x face";
   EXPECT_EQ(swap.swaps(), 1u);
   EXPECT_EQ(swap.retire(), &rig.walls) << "the replaced walls come back to be destroyed";
   EXPECT_EQ(rig.state.walls, next.get());
   EXPECT_EQ(r.count(kCounterReloads), 1u);
-  // The hand's spring and the face share the move: the rest point goes Delta K / (K + k_h).
+  EXPECT_EQ(r.count(kCounterUnarmedTicks), 0u) << "every wall went on armed";
   const double k = rig.cfg.walls[0].law.stiffness, kh = rig.cfg.device.sim.op.stiffness;
   EXPECT_NEAR(rig.device.joint_plant()->task_position()[0], x0 + 0.01 * k / (k + kh), 2e-4);
-  EXPECT_GE(next->totals().energy_j, energy) << "the observers went on from the old ones";
+  // The face moving into the hand did work on it, which the wall's observer counts: less
+  // energy than before the move, and still above zero (passive overall).
+  EXPECT_LT(next->totals().energy_j, energy);
+  EXPECT_GT(next->totals().energy_j, 0.0);
+}
+
+// What a swap carries over (SceneWalls::continue_from): each continued wall's observer its
+// energies exactly, a removed wall's into `ended` (the run's totals keep it), a new wall
+// nothing.
+TEST(SceneLoop, ASwapCarriesEachObserverOnAndKeepsWhatRemovedWallsObserved) {
+  const config::Config cfg = delta_config();
+  const auto walls_of = [&](std::size_t n) {
+    config::Config c = cfg;
+    c.walls.resize(n);
+    return std::make_unique<SceneWalls>(
+        std::make_unique<control::Scene>(control::make_scene(c)),
+        std::vector<control::ObserverParams>(n, control::observer_params(c, 0)));
+  };
+  auto running = walls_of(3);
+  for (std::size_t i = 0; i < 3; ++i) {  // each wall's coordinate pushed in and out again
+    control::PassivityObserver& o = running->observers[i];
+    for (int k = 0; k < 50; ++k) {
+      o.observe(1e-3 * (i + 1) * std::sin(0.2 * k), true, 1);
+      o.commanded(-0.5 * (i + 1) * std::sin(0.2 * k), 0.0);
+    }
+  }
+  const SceneWalls::Totals before = running->totals();
+  auto next = walls_of(3);
+  next->continues = {2, 0, -1};  // wall 1 removed, wall 2 moved first, a new one last
+  next->continue_from(*running);
+  EXPECT_EQ(next->observers[0].energy_j(), running->observers[2].energy_j());
+  EXPECT_EQ(next->observers[1].wall_work_j(), running->observers[0].wall_work_j());
+  EXPECT_EQ(next->observers[2].energy_j(), 0.0);
+  EXPECT_EQ(next->ended.energy_j, running->observers[1].energy_j());
+  EXPECT_NEAR(next->totals().energy_j, before.energy_j, 1e-15);
+  EXPECT_NEAR(next->totals().wall_work_j, before.wall_work_j, 1e-15);
 }
 
 }  // namespace
