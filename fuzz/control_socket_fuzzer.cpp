@@ -2,8 +2,9 @@
 // input is what one client writes to a running ControlServer before it half-closes, as a
 // hostile or broken client would: any bytes, many lines, partial lines, invalid UTF-8. The
 // handler answers as the daemon does for the parts that do not need a running loop: status, stop,
-// clear-fault refused, and reload through the real configuration loader and the real check of
-// what a reload may change (reload_blockers) against the embedded default.
+// clear-fault refused, reload through the real configuration loader and the real check of
+// what a reload may change (reload_blockers) against the embedded default, and scene requests
+// through the real edit of a gantry's walls (edit_walls) and the loader.
 // Invariants: the server never crashes or hangs; every complete line gets exactly one answer,
 // in order, and a line with no newline at the end of input gets none; every answer is one line
 // of JSON with "v": 1, "ok" true or false, and when false a non-empty "error" and a code of
@@ -26,6 +27,7 @@
 #include "config/config_loader.h"
 #include "service/control/control_server.h"
 #include "service/run/reload_check.h"
+#include "service/run/scene_edit.h"
 #include "support/check.h"
 
 namespace {
@@ -47,6 +49,8 @@ class DaemonLikeHandler : public service::ControlHandler {
         throw service::ControlRefusal("no fault to clear", 1);
       case service::Command::kReload:
         return reload(r);
+      case service::Command::kScene:
+        return scene(r);
     }
     throw service::ControlRefusal("unknown command");
   }
@@ -64,6 +68,26 @@ class DaemonLikeHandler : public service::ControlHandler {
     return {{"reload", {{"accepted", true}}}};
   }
 
+  // A scene request through the real edit of the document (scene_edit.h) and the real
+  // loader, on a gantry of two walls.
+  json scene(const service::Request& r) {
+    const service::EditedScene e = service::edit_walls(kGantry, r.scene);  // ControlRefusal
+    require(e.continues.size() == (r.scene.op == service::SceneEdit::Op::kAdd      ? 3u
+                                   : r.scene.op == service::SceneEdit::Op::kRemove ? 1u
+                                                                                   : 2u),
+            "an edit adds, keeps or removes exactly one wall");
+    try {
+      config::load_config_text(e.yaml, "scene request");
+    } catch (const config::ConfigError& error) {
+      throw service::ControlRefusal(std::string("scene refused: ") + error.what(), 2);
+    }
+    return {{"scene", {{"accepted", true}, {"walls", e.continues.size()}}}};
+  }
+
+  static constexpr const char* kGantry =
+      "device:\n  kinematics: {kind: cartesian, joints: 2, scale: [1, 1], sign: [1, 1]}\n"
+      "walls:\n  - {point: [0.02, 0], normal: [1, 0], stiffness: 500}\n"
+      "  - {point: [0, 0.02], normal: [0, 1], stiffness: 500}\n";
   config::Config running_ = config::load_embedded_default();
 };
 

@@ -9,9 +9,15 @@ namespace hapticd::service {
 
 namespace {
 
-// A JSON value as a YAML node: JSON is YAML's flow style.
+// A JSON value as a YAML node: JSON is YAML's flow style. ControlRefusal (code 2) for what
+// yaml-cpp cannot take back.
 YAML::Node node_of(const nlohmann::json& value) {
-  return YAML::Load(value.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
+  try {
+    return YAML::Load(value.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
+  } catch (const YAML::Exception& e) {
+    throw ControlRefusal(std::string("scene: \"wall\": not a wall's keys: ") + e.what(),
+                         kExitUsage);
+  }
 }
 
 }  // namespace
