@@ -39,11 +39,14 @@ void Scene::continue_from(const Scene& from, std::span<const int> continues) noe
   last_x_ = from.last_x_;
   for (std::size_t i = 0; i < walls_.size() && i < continues.size(); ++i) {
     const int j = continues[i];
-    if (j >= 0 && static_cast<std::size_t>(j) < from.walls_.size()) {
-      walls_[i].continue_from(from.walls_[static_cast<std::size_t>(j)]);
-      geometry_[i].point = from.geometry_[static_cast<std::size_t>(j)].point;
-      sliding_ = sliding_ || geometry_[i].point != place_[i];
-    }
+    if (j < 0 || static_cast<std::size_t>(j) >= from.walls_.size()) continue;
+    const WallGeometry& was = from.geometry_[static_cast<std::size_t>(j)];
+    // A new normal turns the half-space at once (flipped, a device outside is suddenly deep
+    // inside): that wall starts afresh, armed only once the device is outside it.
+    if (was.normal != geometry_[i].normal) continue;
+    walls_[i].continue_from(from.walls_[static_cast<std::size_t>(j)]);
+    geometry_[i].point = was.point;
+    sliding_ = sliding_ || geometry_[i].point != place_[i];
   }
 }
 

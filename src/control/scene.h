@@ -68,8 +68,9 @@ class Scene {
   void reset() noexcept;
   // RT-safe: a swap at a tick boundary. Wall i goes on from `from`'s wall continues[i] (its
   // filters, delay line and arming: Controller::continue_from) and from where that wall's
-  // point was, sliding to its own at most max_move a tick; a wall with -1 starts afresh, in
-  // its place. The last task position carries over.
+  // point was, sliding to its own at most max_move a tick; a wall with -1, or whose normal
+  // changed, starts afresh in its place (unarmed while the device is inside it, as at
+  // start-up). The last task position carries over.
   void continue_from(const Scene& from, std::span<const int> continues) noexcept;
 
   std::size_t size() const noexcept { return walls_.size(); }

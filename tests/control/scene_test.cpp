@@ -210,7 +210,8 @@ walls:
 
 // A wall a swap moved (a reload, a scene request) slides to its new place at most max_move a
 // tick (safety.max_wall_speed T): a device held still feels its penetration grow by that much a
-// tick, never a step; a wall that stayed where it was does not move at all.
+// tick, never a step; a wall that stayed where it was does not move at all; a wall whose normal
+// a swap turned starts afresh.
 TEST(Scene, AWallMovedByASwapSlidesToItsPlaceAtMostMaxMoveATick) {
   const kinematics::Kinematics k = cartesian_of(2);
   const std::vector<ControlLaw> laws = {wall_law(1000), wall_law(1000)};
@@ -230,6 +231,20 @@ TEST(Scene, AWallMovedByASwapSlidesToItsPlaceAtMostMaxMoveATick) {
     EXPECT_NEAR(s.walls[1].penetration, -0.1, 1e-12);
   }
   EXPECT_EQ(after.geometry(0).point, Vec3(-0.0035, 0, 0)) << "arrived exactly";
+
+  // The second wall's normal flipped: the device, 100 mm outside it, is now 100 mm inside a
+  // wall that starts afresh and stays off until the device has left it, never a 100 N step.
+  ControlLaw fresh = wall_law(1000);
+  fresh.require_outside_start = true;
+  Scene flipped(std::vector<WallGeometry>{{Vec3(-0.0035, 0, 0), Vec3(1, 0, 0)},
+                                          {Vec3(0, -0.1, 0), Vec3(0, 1, 0)}},
+                std::vector<ControlLaw>{wall_law(1000), fresh}, 0.001);
+  flipped.continue_from(after, std::vector<int>{0, 1});
+  const SceneStep s = hold_at(flipped, k, q, 3);
+  EXPECT_NEAR(s.walls[1].penetration, 0.1, 1e-12);
+  EXPECT_EQ(s.walls[1].force_commanded, 0.0);
+  EXPECT_TRUE(s.walls[1].flags & kControlUnarmed);
+  EXPECT_NEAR(s.walls[0].force_commanded, -8.5, 1e-9) << "the first wall went on pushing";
   EXPECT_THROW(Scene(std::vector<WallGeometry>{{Vec3::Zero(), Vec3(1, 0, 0)}},
                      std::vector<ControlLaw>{wall_law(1000)}, 0.0),
                std::invalid_argument);
