@@ -143,6 +143,12 @@ SceneParts make_scene_parts(const config::Config& cfg, const DeviceInfo& info,
   return parts;
 }
 
+std::string joined(const std::vector<std::string>& lines) {
+  std::string out;
+  for (const std::string& l : lines) out += (out.empty() ? "" : "; ") + l;
+  return out;
+}
+
 std::string describe_fault(const loop::Fault& fault, const Device& device) {
   std::string f = loop::describe(fault);
   if (device.fault().fault_class != FaultClass::kNone) f += ": " + device.describe_fault();

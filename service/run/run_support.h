@@ -54,6 +54,9 @@ std::unique_ptr<loop::SceneWalls> make_scene_walls(const config::Config& cfg,
                                                    const loop::SceneWalls* running = nullptr,
                                                    const std::vector<int>* continues = nullptr);
 
+// The lines as one, each after a "; ": reasons in one refusal.
+std::string joined(const std::vector<std::string>& lines);
+
 // `advice`: what to change, after the fault's sentence (direction_report.h).
 void summarise_fault(const loop::LoopResult& result, const Device& device, RunSummary& s,
                      const std::string& advice = "");
