@@ -1,5 +1,9 @@
 #include "service/control/control_protocol.h"
 
+#include <algorithm>
+#include <iterator>
+#include <utility>
+
 namespace hapticd::service {
 namespace {
 
@@ -14,20 +18,22 @@ std::optional<Command> command_named(const std::string& name) {
   return std::nullopt;
 }
 
+// The scene requests' operations by name: what parse_scene reads and scene_op_name says.
+constexpr std::pair<const char*, SceneEdit::Op> kSceneOps[] = {{"add", SceneEdit::Op::kAdd},
+                                                               {"change", SceneEdit::Op::kChange},
+                                                               {"remove", SceneEdit::Op::kRemove}};
+
 // A scene request's members (control_protocol.h); false with `error` naming the member.
 bool parse_scene(const json& j, SceneEdit& out, std::string& error) {
   const auto op = j.find("op");
   const std::string name = op != j.end() && op->is_string() ? op->get<std::string>() : "";
-  if (name == "add") {
-    out.op = SceneEdit::Op::kAdd;
-  } else if (name == "change") {
-    out.op = SceneEdit::Op::kChange;
-  } else if (name == "remove") {
-    out.op = SceneEdit::Op::kRemove;
-  } else {
+  const auto* known = std::find_if(std::begin(kSceneOps), std::end(kSceneOps),
+                                   [&](const auto& o) { return name == o.first; });
+  if (known == std::end(kSceneOps)) {
     error = "scene: \"op\" must be one of add, change, remove";
     return false;
   }
+  out.op = known->second;
   if (out.op != SceneEdit::Op::kAdd) {
     const auto index = j.find("index");
     if (index == j.end() || !index->is_number_unsigned()) {
@@ -97,13 +103,8 @@ std::optional<Request> parse_request(std::string_view text, std::string& error, 
 }
 
 const char* scene_op_name(SceneEdit::Op op) noexcept {
-  switch (op) {
-    case SceneEdit::Op::kAdd:
-      return "add";
-    case SceneEdit::Op::kChange:
-      return "change";
-    case SceneEdit::Op::kRemove:
-      return "remove";
+  for (const auto& [name, o] : kSceneOps) {
+    if (o == op) return name;
   }
   return "?";
 }

@@ -8,20 +8,13 @@
 
 #include <chrono>
 #include <cmath>
-#include <filesystem>
-#include <optional>
 #include <thread>
 
-#include "config/config_loader.h"
-#include "gate/gate_report_format.h"
 #include "gate/number_format.h"
-#include "service/config_source.h"
 #include "service/exit_codes.h"
 #include "service/run/counters_report.h"
 #include "service/run/gate_derate.h"
-#include "service/run/reload_check.h"
 #include "service/run/run_session.h"
-#include "service/run/scene_edit.h"
 
 namespace hapticd::service {
 namespace {

@@ -6,9 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <stdexcept>
 
-#include "config/config_loader.h"
 #include "drivers/can/can_settings.h"
 #include "sim/peers/can/can_peer_entry.h"
 
@@ -17,12 +15,8 @@ namespace hapticd::sim {
 namespace can = drivers::can;
 
 CanBusPeer::CanBusPeer(const config::Config& cfg, can::CanSocket bus, bool realtime)
-    : bus_(std::move(bus)) {
-  try {
-    mechanism_ = std::make_unique<Mechanism>(cfg.device, cfg.loop.sample_period_s());
-  } catch (const std::invalid_argument& e) {
-    throw config::ConfigError({cfg.locate("device.sim") + ": device.sim: " + e.what()});
-  }
+    : mechanism_(std::make_unique<Mechanism>(cfg.device, cfg.loop.sample_period_s())),
+      bus_(std::move(bus)) {
   const can::CanSettings& s = can::can_settings(cfg);
   for (std::size_t i = 0; i < s.nodes.size(); ++i) {
     config::Config node = cfg;

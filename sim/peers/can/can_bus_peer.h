@@ -27,7 +27,7 @@ namespace hapticd::sim {
 class CanBusPeer final : public LoopbackPeer {
  public:
   // Not RT-safe. One drive of cfg's profile per node, joint i at nodes[i]. Throws
-  // config::ConfigError for a mechanism (device.sim) that cannot be simulated.
+  // std::invalid_argument for a mechanism (device.sim) that cannot be simulated.
   CanBusPeer(const config::Config& cfg, drivers::can::CanSocket bus, bool realtime);
 
   void service() override;

@@ -66,23 +66,23 @@ PeerEntry can_peer_entry() {
 
 std::unique_ptr<LoopbackPeer> make_can_peer(const config::Config& cfg,
                                             drivers::can::CanSocket socket, bool realtime) {
-  if (can::can_settings(cfg).nodes.size() > 1) {
-    return std::make_unique<CanBusPeer>(cfg, std::move(socket), realtime);
+  try {
+    if (can::can_settings(cfg).nodes.size() > 1) {
+      return std::make_unique<CanBusPeer>(cfg, std::move(socket), realtime);
+    }
+    return make_can_drive(cfg, std::move(socket), realtime, {});
+  } catch (const std::invalid_argument& e) {
+    throw config::ConfigError({cfg.locate("device.sim") + ": device.sim: " + e.what()});
   }
-  return make_can_drive(cfg, std::move(socket), realtime, {});
 }
 
 std::unique_ptr<CanPeerBase> make_can_drive(const config::Config& cfg,
                                             drivers::can::CanSocket socket, bool realtime,
                                             const SharedJoint& joint) {
-  try {
-    if (can::can_settings(cfg).profile == can::Profile::kOdrive) {
-      return std::make_unique<OdrivePeer>(cfg, std::move(socket), realtime, joint);
-    }
-    return std::make_unique<Cia402Peer>(cfg, std::move(socket), realtime, joint);
-  } catch (const std::invalid_argument& e) {
-    throw config::ConfigError({cfg.locate("device.sim") + ": device.sim: " + e.what()});
+  if (can::can_settings(cfg).profile == can::Profile::kOdrive) {
+    return std::make_unique<OdrivePeer>(cfg, std::move(socket), realtime, joint);
   }
+  return std::make_unique<Cia402Peer>(cfg, std::move(socket), realtime, joint);
 }
 
 }  // namespace hapticd::sim

@@ -21,6 +21,7 @@ PeerEntry can_peer_entry();
 std::unique_ptr<LoopbackPeer> make_can_peer(const config::Config& cfg,
                                             drivers::can::CanSocket socket, bool realtime);
 // The drive of cfg's profile at its first node, moving `joint` (none: an axis of its own).
+// Throws std::invalid_argument for a plant that cannot be simulated.
 std::unique_ptr<CanPeerBase> make_can_drive(const config::Config& cfg,
                                             drivers::can::CanSocket socket, bool realtime,
                                             const SharedJoint& joint);
