@@ -15,6 +15,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
@@ -71,6 +72,11 @@ class DaemonLikeHandler : public service::ControlHandler {
   // A scene request through the real edit of the document (scene_edit.h) and the real
   // loader, on a gantry of two walls.
   json scene(const service::Request& r) {
+    if (r.scene.op == service::SceneEdit::Op::kMove) {  // what the parser promises a move
+      require(r.scene.axes >= 1 && r.scene.axes <= 3, "a move's point has 1 to 3 numbers");
+      for (const double v : r.scene.point) require(std::isfinite(v), "a move's point is finite");
+      return {{"scene", {{"op", "move"}, {"index", r.scene.index}}}};
+    }
     const service::EditedScene e = service::edit_walls(kGantry, r.scene);  // ControlRefusal
     require(e.continues.size() == (r.scene.op == service::SceneEdit::Op::kAdd      ? 3u
                                    : r.scene.op == service::SceneEdit::Op::kRemove ? 1u

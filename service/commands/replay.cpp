@@ -82,6 +82,10 @@ struct Walker {
     next->continue_from(*law);
     law = std::move(next);
   }
+  // A client's move (kMarkerWallMoved), as the loop took it.
+  void move(std::size_t wall, const kinematics::Vec3& place) {
+    if (scene.walls) scene.walls->scene->move_to(wall, place);
+  }
   // One ordinary record: the loop's tick on its position when the loop stepped it, then what
   // was written (zero on a tick that faulted). The record this law makes of it, for a tick
   // stepped without a fault (the ones whose forces the log must reproduce).
@@ -170,9 +174,14 @@ struct State {
   std::unique_ptr<control::PassivityObserver> logged_work;  // of the logged commands
 };
 
-// A marker record: a reload swaps the own law (continuing it), a re-arming starts both afresh.
-// False when the replay cannot go on (a reload whose configuration is not in the log).
+// A marker record: a reload swaps the own law (continuing it), a client's move moves the own
+// wall, a re-arming starts both afresh. False when the replay cannot go on (a reload whose
+// configuration is not in the log).
 bool take_marker(State& st, const TickRecord& r, ReplayResult& out) {
+  if (r.marker == telemetry::kMarkerWallMoved) {
+    st.own.move(r.deepest_wall, {r.task_position[0], r.task_position[1], r.task_position[2]});
+    return true;
+  }
   if (r.marker != telemetry::kMarkerReloadAccepted && r.marker != telemetry::kMarkerRearmed) {
     return true;  // a refused reload changes nothing
   }

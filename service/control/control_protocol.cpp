@@ -1,6 +1,7 @@
 #include "service/control/control_protocol.h"
 
 #include <algorithm>
+#include <cmath>
 #include <iterator>
 #include <utility>
 
@@ -21,7 +22,28 @@ std::optional<Command> command_named(const std::string& name) {
 // The scene requests' operations by name: what parse_scene reads and scene_op_name says.
 constexpr std::pair<const char*, SceneEdit::Op> kSceneOps[] = {{"add", SceneEdit::Op::kAdd},
                                                                {"change", SceneEdit::Op::kChange},
-                                                               {"remove", SceneEdit::Op::kRemove}};
+                                                               {"remove", SceneEdit::Op::kRemove},
+                                                               {"move", SceneEdit::Op::kMove}};
+
+// A move's "point": 1 to 3 finite numbers; false with `error` naming what is wrong.
+bool parse_point(const json& j, SceneEdit& out, std::string& error) {
+  const auto point = j.find("point");
+  if (point == j.end() || !point->is_array() || point->empty() || point->size() > 3) {
+    error = "scene: move needs \"point\": the wall's new point, [x], [x, y] or [x, y, z] (m)";
+    return false;
+  }
+  for (std::size_t a = 0; a < point->size(); ++a) {
+    const json& v = (*point)[a];
+    if (!v.is_number() || !std::isfinite(v.get<double>())) {
+      error = "scene: \"point\"[" + std::to_string(a) + "]: must be a finite number (m), got " +
+              v.dump(-1, ' ', false, json::error_handler_t::replace);
+      return false;
+    }
+    out.point[a] = v.get<double>();
+  }
+  out.axes = point->size();
+  return true;
+}
 
 // A scene request's members (control_protocol.h); false with `error` naming the member.
 bool parse_scene(const json& j, SceneEdit& out, std::string& error) {
@@ -30,7 +52,7 @@ bool parse_scene(const json& j, SceneEdit& out, std::string& error) {
   const auto* known = std::find_if(std::begin(kSceneOps), std::end(kSceneOps),
                                    [&](const auto& o) { return name == o.first; });
   if (known == std::end(kSceneOps)) {
-    error = "scene: \"op\" must be one of add, change, remove";
+    error = "scene: \"op\" must be one of add, change, remove, move";
     return false;
   }
   out.op = known->second;
@@ -43,6 +65,7 @@ bool parse_scene(const json& j, SceneEdit& out, std::string& error) {
     }
     out.index = index->get<std::size_t>();
   }
+  if (out.op == SceneEdit::Op::kMove) return parse_point(j, out, error);
   if (out.op != SceneEdit::Op::kRemove) {
     const auto wall = j.find("wall");
     if (wall == j.end() || !wall->is_object()) {

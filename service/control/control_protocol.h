@@ -6,6 +6,8 @@
 //            "config": "<YAML text>", "source": "<name for messages>"}    (config: reload only)
 //           {"v": 1, "cmd": "scene", "op": "add" | "change" | "remove", "index": <n>,
 //            "wall": {<a wall's keys>}}      (a device of several joints; index: change, remove)
+//           {"v": 1, "cmd": "scene", "op": "move", "index": <n>, "point": [x, y, z]}
+//                                            (1 to 3 finite numbers: the wall's new point, m)
 // Response: {"v": 1, "id": <echoed>, "ok": true, ...the command's members}
 //           {"v": 1, "id": <echoed>, "ok": false, "error": "<why>", "code": <exit code>}
 // `code` is the exit code of docs/operations.md a client reports for the failure: 2 a malformed
@@ -13,6 +15,7 @@
 // 1 anything else (no fault to clear, a device that faults again, permission denied).
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -28,13 +31,15 @@ enum class Command { kStatus, kStop, kReload, kClearFault, kScene };
 
 // A scene request: a change to the walls of the running scene.
 struct SceneEdit {
-  enum class Op { kAdd, kChange, kRemove };
+  enum class Op { kAdd, kChange, kRemove, kMove };
   Op op = Op::kAdd;
-  std::size_t index = 0;  // change, remove: which wall (walls[index])
-  nlohmann::json wall;    // add: the new wall's keys; change: the keys that change
+  std::size_t index = 0;          // change, remove, move: which wall (walls[index])
+  nlohmann::json wall;            // add: the new wall's keys; change: the keys that change
+  std::array<double, 3> point{};  // move: the new point (m), finite; zero past `axes`
+  std::size_t axes = 0;           // move: how many numbers "point" held (1 to 3)
 };
 
-// "add", "change", "remove".
+// "add", "change", "remove", "move".
 const char* scene_op_name(SceneEdit::Op op) noexcept;
 
 struct Request {

@@ -125,6 +125,15 @@ std::string status_text(const json& s) {
 
 std::string reload_text(const json& r) {
   std::ostringstream out;
+  if (r.value("op", "") == "move") {
+    out << "scene move accepted: walls[" << num(r["index"]) << "] ";
+    if (r["applied_at_tick"].is_number()) {
+      out << "slides to its new point from tick " << num(r["applied_at_tick"]) << "\n";
+    } else {
+      out << "slides to its new point when output is next enabled\n";
+    }
+    return out.str();
+  }
   if (r.contains("op")) {
     out << "scene " << r["op"].get<std::string>() << " accepted: walls[" << num(r["index"]) << "], "
         << num(r["walls"]) << " walls; ";

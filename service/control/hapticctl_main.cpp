@@ -101,6 +101,15 @@ int main(int argc, char** argv) {
   scene->add_subcommand("remove", "Remove walls[INDEX]")
       ->add_option("INDEX", index, "The wall's place in walls (0, 1, ...)")
       ->required();
+  std::vector<double> point;
+  CLI::App* move = scene->add_subcommand(
+      "move",
+      "Move walls[INDEX] to POINT, with no new gate: refused unless the gate proved the walls "
+      "passive wherever they move (hapticd check: 'moved by clients')");
+  move->add_option("INDEX", index, "The wall's place in walls (0, 1, ...)")->required();
+  move->add_option("POINT", point, "The wall's new point, one number per task axis (m)")
+      ->required()
+      ->expected(1, 3);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -124,7 +133,8 @@ int main(int argc, char** argv) {
     const std::string op = scene->get_subcommands().front()->get_name();
     req["op"] = op;
     if (op != "add") req["index"] = index;
-    if (op != "remove") {
+    if (op == "move") req["point"] = point;
+    if (op != "remove" && op != "move") {
       req["wall"] = json::parse(wall_text, nullptr, false);
       if (!req["wall"].is_object()) {
         std::cerr << "hapticctl: scene " << op << ": WALL must be a JSON object, e.g. "

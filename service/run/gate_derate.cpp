@@ -77,4 +77,9 @@ bool gate_allows(const gate::GateReport& report, const config::Config& cfg) {
   return report.pass || cfg.safety.gate == config::GateMode::kWarn;
 }
 
+std::string why_not_movable(const gate::GateReport& report) {
+  if (!report.workspace) return "a device of one joint has no walls to move (walls:)";
+  return report.workspace->movable ? "" : report.workspace->not_movable;
+}
+
 }  // namespace hapticd::service

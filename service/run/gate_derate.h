@@ -32,4 +32,8 @@ std::vector<Derating> derate_stiffness(config::Config& cfg, int device_delay_sam
 // Whether a gate report lets output be enabled under cfg's safety.gate (after any derating).
 bool gate_allows(const gate::GateReport& report, const config::Config& cfg);
 
+// Why a client may not move the walls the report judged (gate/workspace_gate.h, movable), with
+// the gate's numbers; "" when it may.
+std::string why_not_movable(const gate::GateReport& report);
+
 }  // namespace hapticd::service

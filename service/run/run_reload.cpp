@@ -4,12 +4,14 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <optional>
 
 #include "config/config_loader.h"
 #include "gate/gate_report_format.h"
 #include "gate/number_format.h"
+#include "kinematics/kinematics.h"
 #include "service/config_source.h"
 #include "service/exit_codes.h"
 #include "service/run/gate_derate.h"
@@ -26,6 +28,33 @@ using nlohmann::json;
 // next tick, so only an RT thread starved for this long fails to (then the reload is refused).
 constexpr std::chrono::milliseconds kSwapTimeout{10000};
 
+// A point as YAML's flow sequence, every digit kept.
+std::string point_yaml(const kinematics::Vec3& x, std::size_t m) {
+  std::string s = "[";
+  for (std::size_t a = 0; a < m; ++a) {
+    s += (a ? ", " : "") + gate::format_number(x[static_cast<int>(a)], 17);
+  }
+  return s + "]";
+}
+
+// A move's point within reach: inside the workspace box grown by its own extent each way (a
+// wall further out covers all of it or none of it). ControlRefusal (code 2) otherwise.
+void check_in_reach(const kinematics::Kinematics& k, const kinematics::Vec3& x, std::size_t m) {
+  const kinematics::Box& box = kinematics::workspace(k);
+  for (std::size_t a = 0; a < m; ++a) {
+    const int i = static_cast<int>(a);
+    const double extent = box.upper[i] - box.lower[i];
+    if (!std::isfinite(extent)) continue;  // an unbounded workspace (cartesian, joints)
+    if (x[i] >= box.lower[i] - extent && x[i] <= box.upper[i] + extent) continue;
+    throw ControlRefusal(
+        "scene move refused: \"point\"[" + std::to_string(a) + "]: " + gate::format_number(x[i]) +
+            " m is out of reach: the workspace is " + gate::format_number(box.lower[i]) + " to " +
+            gate::format_number(box.upper[i]) +
+            " m along it, and a wall's point may lie at most its extent beyond",
+        kExitUsage);
+  }
+}
+
 }  // namespace
 
 // Parsed, checked, gated and built off the RT thread; swapped in at a tick boundary.
@@ -36,6 +65,7 @@ json RunSession::reload(const std::string& text, const std::string& source,
 }
 
 json RunSession::scene(const SceneEdit& edit) {
+  if (edit.op == SceneEdit::Op::kMove) return move(edit);
   std::lock_guard serial(reload_mutex_);
   const std::string what = std::string("scene ") + scene_op_name(edit.op);
   std::string document;
@@ -60,6 +90,66 @@ json RunSession::scene(const SceneEdit& edit) {
   out["index"] = edited.index;
   out["walls"] = edited.continues.size();
   return {{"scene", out}};
+}
+
+// Checked here, then handed to the loop: the gate proved the walls passive wherever they move,
+// and the loop slides each no faster than safety.max_wall_speed.
+json RunSession::move(const SceneEdit& edit) {
+  std::lock_guard serial(reload_mutex_);
+  const auto refuse = [&](const std::string& why, int code) {
+    throw ControlRefusal("scene move refused: " + why, code);
+  };
+  if (!scene_.walls) {
+    refuse("scene requests move the walls of a device of several joints (walls:)", kExitUsage);
+  }
+  std::string not_movable;
+  config::Config running;
+  Phase phase = Phase::kStarting;
+  {
+    std::lock_guard lock(mutex_);
+    not_movable = not_movable_;
+    running = cfg_;
+    phase = phase_;
+  }
+  const std::size_t walls = running.walls.size();
+  if (edit.index >= walls) {
+    refuse("\"index\": " + std::to_string(edit.index) + " names no wall (" + std::to_string(walls) +
+               " walls)",
+           kExitUsage);
+  }
+  const kinematics::Kinematics& k = running.device.kinematics;
+  const auto m = static_cast<std::size_t>(kinematics::joint_count(k));
+  if (edit.axes != m) {
+    refuse("\"point\": the device has " + std::to_string(m) + " task axes, the point " +
+               std::to_string(edit.axes) + " numbers",
+           kExitUsage);
+  }
+  const kinematics::Vec3 place(edit.point[0], edit.point[1], edit.point[2]);
+  check_in_reach(k, place, m);
+  if (!not_movable.empty()) {
+    refuse("the walls are not proven passive wherever they move (" + not_movable +
+               "); scene change gates a new place instead",
+           kExitGateRefused);
+  }
+  if (phase == Phase::kStarting || phase == Phase::kEnded) {
+    refuse(std::string("the run is ") + name(phase) + "; no walls to move", 1);
+  }
+  const std::uint64_t offer = moves_.offer(edit.index, place);
+  std::optional<loop::WallMoves::Taken> taken;
+  if (phase == Phase::kRunning) taken = moves_.await(offer, kSwapTimeout);
+  {
+    std::lock_guard lock(mutex_);
+    cfg_.walls[edit.index].point = place;  // what status, the next edit and the log's next
+    cfg_.effective_yaml =                  // configuration say
+        config::with_setting(
+            cfg_.effective_yaml,
+            {"walls[" + std::to_string(edit.index) + "].point", point_yaml(place, m), {}});
+  }
+  return {{"scene",
+           {{"op", "move"},
+            {"index", edit.index},
+            {"applied_at_tick", taken ? json(taken->tick) : json(nullptr)},
+            {"applied_at_ns", taken ? json(taken->time_ns) : json(nullptr)}}}};
 }
 
 json RunSession::apply(const std::string& text, const std::string& source,
@@ -98,6 +188,7 @@ json RunSession::apply(const std::string& text, const std::string& source,
     cfg_ = std::move(next.cfg);
     ++reloads_;
     gate_ = out["gate"];
+    not_movable_ = why_not_movable(next.report);
     summary_.gate = gate_;
     if (next.walls) pending_walls_ = std::move(next.walls);  // not swapped: for the next arming
     if (!next.derated.empty()) {                             // the last derating stays said

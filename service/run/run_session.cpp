@@ -112,6 +112,7 @@ bool RunSession::start_up(gate::GateReport& report) {
     cfg_ = std::move(cfg);
     derated_ = summary_.derated;
     gate_ = summary_.gate;
+    not_movable_ = why_not_movable(report);
   }
   if (!pass) return false;
   const int cpus = static_cast<int>(std::thread::hardware_concurrency());
@@ -134,6 +135,7 @@ bool RunSession::start_up(gate::GateReport& report) {
     scene_ = make_scene_parts(cfg_, session_->device().info(), report);
     lo.scene = scene_.state.get();
     lo.scene_swap = &scene_swap_;
+    lo.wall_moves = &moves_;
   }
   auto servo = std::make_unique<loop::ServoLoop>(session_->device(), *active_, log_.ring.get(), lo);
   summary_.wake_latency = &servo->wake_latency();
@@ -228,6 +230,7 @@ loop::LoopResult RunSession::arm() {
     // started right after: a drive's watchdog sees commands within a period of the enable.
     swap_.loop_starting();  // before the phase says running: a reload then waits for this loop
     scene_swap_.loop_starting();
+    moves_.loop_starting();
     RtThread rt(*servo_, cfg.loop.rt_priority, cfg.loop.cpu, realtime_, rt_);
     if (const std::string error = rt.wait_ready(); !error.empty()) {
       throw config::ConfigError({cfg.locate("loop.cpu") + ": " + error});

@@ -21,6 +21,7 @@
 #include "loop/law_swap.h"
 #include "loop/rt_setup.h"
 #include "loop/servo_loop.h"
+#include "loop/wall_moves.h"
 #include "service/control/control_server.h"
 #include "service/run/device_session.h"
 #include "service/run/run_command.h"
@@ -71,6 +72,9 @@ class RunSession final : public ControlHandler {
   // A client's change to the walls (scene_edit.h), applied as a reload of the running
   // configuration with its walls edited.
   nlohmann::json scene(const SceneEdit& edit);
+  // A client's move of one wall (scene_edit.h): no new gate, when the gate proved the walls
+  // movable; handed to the loop through moves_ and answered once a tick has taken it.
+  nlohmann::json move(const SceneEdit& edit);
   // reload() and scene() under reload_mutex_: `what` names it in messages ("reload", "scene
   // add"), `continues` (null: wall i goes on from wall i) says which running wall each new
   // one goes on from.
@@ -102,6 +106,7 @@ class RunSession final : public ControlHandler {
   std::optional<loop::CpuDmaLatencyRequest> pm_qos_;
   loop::LawSwap swap_;
   loop::SceneSwap scene_swap_;                   // several joints: new walls
+  loop::WallMoves moves_;                        // several joints: a client's wall moves
   std::unique_ptr<control::Controller> active_;  // the law the loop runs
   SceneParts scene_;  // a device of several joints: the walls the loop steps instead
   // Walls a reload accepted while no loop ran (a held fault): the next arming takes them.
@@ -114,6 +119,7 @@ class RunSession final : public ControlHandler {
   mutable std::mutex mutex_;   // guards what the control thread reads or asks for, below
   config::Config cfg_;         // replaced by an accepted reload
   nlohmann::json gate_;        // the verdict on cfg_, as JSON
+  std::string not_movable_;    // why cfg_'s walls may not be moved ("": they may)
   std::uint64_t reloads_ = 0;  // accepted reloads: cfg_ and the law swapped in agree
   Phase phase_ = Phase::kStarting;
   std::string fault_;  // the last fault, described

@@ -50,6 +50,12 @@ void Scene::continue_from(const Scene& from, std::span<const int> continues) noe
   }
 }
 
+void Scene::move_to(std::size_t i, const kinematics::Vec3& place) noexcept {
+  if (i >= walls_.size() || !place.allFinite()) return;
+  place_[i] = place;
+  sliding_ = sliding_ || geometry_[i].point != place;
+}
+
 void Scene::slide() noexcept {
   if (!sliding_) return;  // the usual tick
   sliding_ = false;

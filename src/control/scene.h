@@ -73,6 +73,11 @@ class Scene {
   // start-up). The last task position carries over.
   void continue_from(const Scene& from, std::span<const int> continues) noexcept;
 
+  // RT-safe: at a tick boundary (a client's move, loop/wall_moves.h). Wall i's place becomes
+  // `place`; its point slides there at most max_move a tick, its law and history going on.
+  // Ignored for an i past the walls (the move named a wall a swap removed meanwhile).
+  void move_to(std::size_t i, const kinematics::Vec3& place) noexcept;
+
   std::size_t size() const noexcept { return walls_.size(); }
   // Where wall i is now (its point on the way to its place after a swap).
   const WallGeometry& geometry(std::size_t i) const noexcept { return geometry_[i]; }

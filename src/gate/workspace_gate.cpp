@@ -122,10 +122,11 @@ kinematics::Box around_walls(const std::vector<config::TaskWallConfig>& walls, i
   return b;
 }
 
-// Pattern search from `best` for a lower b_n where wall w acts: each axis both ways, the step
-// halved when nothing is lower, down to 1e-4 of a cell.
+// Pattern search from `best` for a lower b_n where wall w acts (`anywhere`: wherever it could
+// be moved to): each axis both ways, the step halved when nothing is lower, down to 1e-4 of a
+// cell.
 void refine(const config::Config& cfg, const config::TaskWallConfig& w, const Grid& g,
-            WallVerdict& v) {
+            WallVerdict& v, bool anywhere = false) {
   const Vec3 upper = g.lower + (g.per_axis - 1) * g.cell;
   Vec3 step = 0.5 * g.cell;
   const Vec3 stop = 1e-4 * g.cell;
@@ -138,7 +139,7 @@ void refine(const config::Config& cfg, const config::TaskWallConfig& w, const Gr
         y[a] += sign * step[a];
         ++evaluations;
         analysis::DeviceDamping d;
-        if (y[a] < g.lower[a] || y[a] > upper[a] || depth(w, y) < -g.reach ||
+        if (y[a] < g.lower[a] || y[a] > upper[a] || (!anywhere && depth(w, y) < -g.reach) ||
             !device_at(cfg, y, d)) {
           continue;
         }
@@ -220,6 +221,48 @@ void judge_corners(const config::Config& cfg, const Grid& g, WorkspaceReport& r)
   }
 }
 
+// Whether the walls may be moved anywhere without a new gate (scene moves): each wall's b_req
+// against the least b_n over the whole workspace, and every wall acting at once at every
+// sample (moved walls can meet anywhere, even overlap). Only for walls that pass where they are.
+void judge_movable(const config::Config& cfg, const Grid& g, WorkspaceReport& r) {
+  const double keep = 1.0 - cfg.safety.passivity_margin;
+  const auto refuse = [&](std::string why) {
+    r.movable = false;
+    r.not_movable = std::move(why);
+  };
+  r.movable = true;
+  if (!r.pass) return refuse("the gate refuses the walls where they are");
+  std::vector<analysis::NormalDemand> demands;
+  for (std::size_t i = 0; i < cfg.walls.size(); ++i) {
+    const config::TaskWallConfig& w = cfg.walls[i];
+    WallVerdict v = r.walls[i];
+    v.worst_damping = kInf;
+    for (std::size_t k = 0; k < g.x.size(); ++k) {
+      const double b = analysis::normal_damping(g.device[k], w.normal);
+      if (b < v.worst_damping) {
+        v.worst_damping = b;
+        v.worst_position = g.x[k];
+      }
+    }
+    refine(cfg, w, g, v, /*anywhere=*/true);
+    demands.push_back({w.normal, v.required_damping / keep});
+    if (v.required_damping <= keep * v.worst_damping) continue;
+    return refuse("walls[" + std::to_string(i) + "]: b_req " + format_number(v.required_damping) +
+                  " exceeds (1 - " + format_number(cfg.safety.passivity_margin) +
+                  ") b_n = " + format_number(keep * v.worst_damping) +
+                  " at x = " + point_text(v.worst_position, g.m) + ", where it could be moved to");
+  }
+  if (demands.size() < 2) return;
+  for (std::size_t k = 0; k < g.x.size(); ++k) {
+    const double margin = analysis::contact_margin(g.device[k], demands);
+    if (margin >= 0.0) continue;
+    return refuse("every wall acting at once at x = " + point_text(g.x[k], g.m) +
+                  ", where moved walls could meet: B_c - sum b_req_i / (1 - margin) n_i n_i^T has "
+                  "least eigenvalue " +
+                  format_number(margin) + " < 0");
+  }
+}
+
 }  // namespace
 
 WorkspaceReport evaluate_workspace(const config::Config& cfg, int device_delay_samples) {
@@ -282,6 +325,7 @@ WorkspaceReport evaluate_workspace(const config::Config& cfg, int device_delay_s
                         format_number(r.corner_margin) + " < 0 (docs/math.md, several axes)");
   }
   r.pass = r.reasons.empty();
+  judge_movable(cfg, g, r);
   return r;
 }
 

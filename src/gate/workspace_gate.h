@@ -48,6 +48,12 @@ struct WorkspaceReport {
   bool configuration_independent = false;
   bool pass = false;
   std::vector<std::string> reasons;
+  // Whether a client may move the walls (docs/operations.md, scene requests: move) with no new
+  // gate: they pass where they are, each passes wherever in the workspace it could be put, and
+  // all of them pass acting at once anywhere (moved walls may meet, even overlap). Otherwise
+  // `not_movable` says the first reason, with its numbers.
+  bool movable = false;
+  std::string not_movable;
 };
 
 // Not RT-safe. Pure function of cfg (its walls, kinematics, device damping per joint, T,

@@ -51,7 +51,9 @@ json workspace_to_json(const WorkspaceReport& w) {
            std::isfinite(w.corner_margin) ? position(w.corner_position, m) : json(nullptr)},
           {"neighbour_change", w.neighbour_change},
           {"configuration_independent", w.configuration_independent},
-          {"pass", w.pass}};
+          {"pass", w.pass},
+          {"movable", w.movable},
+          {"not_movable", w.movable ? json(nullptr) : json(w.not_movable)}};
 }
 
 void workspace_rows(const WorkspaceReport& w, const config::Config& cfg, std::ostream& os) {
@@ -82,6 +84,10 @@ void workspace_rows(const WorkspaceReport& w, const config::Config& cfg, std::os
      << (std::isfinite(w.corner_margin) ? "least eigenvalue " + format_number(w.corner_margin) +
                                               " N s/m at " + position_text(w.corner_position, m)
                                         : std::string("none meet in the workspace"))
+     << "\n";
+  os << "  moved by clients          "
+     << (w.movable ? std::string("anywhere in the workspace, with no new gate")
+                   : "each move refused: " + w.not_movable)
      << "\n";
 }
 

@@ -4,9 +4,9 @@
 // (two command histories as long as the device's delay, allocated before the loop), the
 // DirectionProbe until the wall is armed (its rest ring and fit window, allocated before the
 // loop), this ServoLoop (options, two 4 KB LatencyHistograms, its counters, the LiveStatus
-// atomics), the LawSwap mailbox (one atomic load a tick), the Schedule, SampleCheck and
-// TickRecord on the stack, and one slot of the SPSC ring. Nothing else: no allocation, no
-// lock, no log, no throw.
+// atomics), the LawSwap and WallMoves mailboxes (one atomic load a tick each), the Schedule,
+// SampleCheck and TickRecord on the stack, and one slot of the SPSC ring. Nothing else: no
+// allocation, no lock, no log, no throw.
 #include "loop/servo_loop.h"
 
 #include <sched.h>
@@ -107,6 +107,21 @@ void ServoLoop::take_reloads(std::uint64_t tick, std::int64_t scheduled_ns,
     marker.marker = telemetry::kMarkerReloadRefused;
     log(marker, stop);
   }
+}
+
+void ServoLoop::take_moves(std::uint64_t tick, std::int64_t scheduled_ns,
+                           const std::atomic<bool>& stop) noexcept {
+  if (options_.wall_moves == nullptr || options_.scene == nullptr) return;
+  options_.wall_moves->take(tick, [&](std::size_t wall, const kinematics::Vec3& place) {
+    options_.scene->walls->scene->move_to(wall, place);
+    telemetry::TickRecord marker;
+    marker.tick = tick;
+    marker.scheduled_ns = scheduled_ns;
+    marker.marker = telemetry::kMarkerWallMoved;
+    marker.deepest_wall = static_cast<std::uint8_t>(wall);
+    for (int a = 0; a < 3; ++a) marker.task_position[a] = place[a];
+    log(marker, stop);
+  });
 }
 
 void ServoLoop::mark_rearmed(const std::atomic<bool>& stop) noexcept {
@@ -351,6 +366,7 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
     rec.tick = tick;
     const std::int64_t wake = schedule.wait(tick, rec);
     take_reloads(tick, rec.scheduled_ns, stop);
+    take_moves(tick, rec.scheduled_ns, stop);
     const Sensed sensed = device_tick(tick, wake, schedule.periods(), checks, rec, res);
     std::int64_t compute_ns = 0;
     const Fault late = schedule.judge(tick, wake, rec, compute_ns);
@@ -374,6 +390,7 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
   write_zero();  // the last command must not outlive the loop that was servoing it
   if (options_.law_swap != nullptr) options_.law_swap->loop_ended();  // no more takes
   if (options_.scene_swap != nullptr) options_.scene_swap->loop_ended();
+  if (options_.wall_moves != nullptr) options_.wall_moves->loop_ended();
   next_tick_ += res.ticks;
   run_counts(before, res);
   res.wall_energy_j = wall_work_j() - work_before;

@@ -20,6 +20,7 @@
 #include "loop/sample_check.h"
 #include "loop/scene_tick.h"
 #include "loop/schedule.h"
+#include "loop/wall_moves.h"
 #include "telemetry/spsc_ring.h"
 #include "telemetry/tick_record.h"
 
@@ -51,6 +52,9 @@ struct LoopOptions {
   // Live reload at several joints: the mailbox new walls arrive through (null: none). Refused
   // reloads are noted on either mailbox.
   SceneSwap* scene_swap = nullptr;
+  // A client's wall moves at several joints (null: none): taken at a tick boundary, each
+  // marked in the tick log (kMarkerWallMoved).
+  WallMoves* wall_moves = nullptr;
 };
 
 // What the loop is doing, readable from any thread while it runs (relaxed atomics, stored
@@ -182,6 +186,10 @@ class ServoLoop {
   // RT-safe: called every tick (one atomic load when nothing is offered).
   void take_reloads(std::uint64_t tick, std::int64_t scheduled_ns,
                     const std::atomic<bool>& stop) noexcept;
+  // Moves the walls a client moved, and marks each in the log. RT-safe: called every tick
+  // (one atomic load when nothing is offered).
+  void take_moves(std::uint64_t tick, std::int64_t scheduled_ns,
+                  const std::atomic<bool>& stop) noexcept;
   // Marks where a run after a cleared fault starts its fresh law (kMarkerRearmed). RT-safe.
   void mark_rearmed(const std::atomic<bool>& stop) noexcept;
   // Counts what the tick's record says and stores what `hapticctl status` reads.

@@ -98,7 +98,8 @@ V load_field(const std::byte* at) noexcept {
 }
 
 inline constexpr std::array<char, 8> kFileMagic = {'H', 'A', 'P', 'T', 'L', 'O', 'G', '\0'};
-inline constexpr std::uint32_t kFormatVersion = 4;
+// Version 5 is version 4's layout with one more marker (kMarkerWallMoved).
+inline constexpr std::uint32_t kFormatVersion = 5;
 inline constexpr std::uint32_t kRecordSize = 176;
 inline constexpr std::uint32_t kRecordSizeV1 = 72;       // version 1: the first 72 bytes
 inline constexpr std::uint32_t kRecordSizeV2 = 96;       // version 2: the first 96 bytes
@@ -156,6 +157,7 @@ constexpr std::size_t record_size_of_version(std::uint32_t version) {
   return version == 1                ? kRecordSizeV1
          : version == 2              ? kRecordSizeV2
          : version == 3              ? kRecordSizeV3
+         : version == 4              ? kRecordSize
          : version == kFormatVersion ? kRecordSize
                                      : 0;
 }

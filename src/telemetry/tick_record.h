@@ -40,6 +40,9 @@ enum TickMarker : std::uint32_t {
   kMarkerReloadAccepted = 1,  // a live reload swapped the control law in from `tick` on
   kMarkerReloadRefused = 2,   // a live reload was refused; the law in force stays
   kMarkerRearmed = 3,  // output enabled again after a cleared fault: a fresh law from `tick` on
+  // Version 5: a client moved wall `deepest_wall` to `task_position` (m) from `tick` on (its
+  // point slides there at safety.max_wall_speed); the other fields are zero.
+  kMarkerWallMoved = 4,
 };
 
 struct TickRecord {

@@ -157,6 +157,24 @@ TEST(Scene, WhatCannotBeAWallIsRefusedBeforeTheFirstTick) {
   EXPECT_THROW(Scene(many, laws), std::invalid_argument);
 }
 
+// A client's move (Scene::move_to): the wall slides to its new place at most max_move a tick,
+// its law going on; a move past the walls is ignored.
+TEST(Scene, AMovedWallSlidesToItsPlaceAtMostMaxMoveATick) {
+  const std::vector<WallGeometry> one{{Vec3::Zero(), Vec3::UnitX()}};
+  const std::vector<ControlLaw> laws{wall_law(1000.0)};
+  Scene scene(one, laws, 0.001);
+  const kinematics::Pose at = kinematics::forward(cartesian_of(3), Vec3::Zero(), Vec3::Zero());
+  scene.move_to(0, Vec3(-0.0035, 0.0, 0.0));
+  scene.move_to(5, Vec3(1.0, 0.0, 0.0));  // no wall 5: nothing
+  const double expected[] = {-0.001, -0.002, -0.003, -0.0035, -0.0035};
+  for (const double x : expected) {
+    scene.step(at, Vec3::Constant(100.0));
+    EXPECT_NEAR(scene.geometry(0).point.x(), x, 1e-15);
+  }
+  // At x = 0 the wall at -3.5 mm along +x holds the device 3.5 mm deep: 3.5 N out.
+  EXPECT_NEAR(scene.step(at, Vec3::Constant(100.0)).force.x(), -3.5, 1e-9);
+}
+
 TEST(Scene, ABoxOnADeltaStepsWithoutAllocating) {
   std::vector<WallGeometry> box;
   for (int a = 0; a < 3; ++a) {

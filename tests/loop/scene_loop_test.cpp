@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -114,6 +115,45 @@ TEST(SceneLoop, NoHeapAllocationPerTick) {
   EXPECT_EQ(scope.count(), 0u) << "allocations on the RT path over " << r.ticks << " ticks";
   EXPECT_EQ(r.fault.cause, FaultCause::kNone);
   EXPECT_GT(r.count(kCounterContactTicks), 100u);
+}
+
+// A client's move (wall_moves.h) is taken at the next tick boundary without allocating and
+// marked in the log: the +x face moved 10 mm out, the delta pressed along +x rests against it
+// where it went, at F/K beyond it.
+TEST(SceneLoop, AMovedFaceIsTakenAtATickBoundaryWithoutAllocatingAndMarked) {
+  SceneRig rig(delta_config("direction: [1, 1, -1]", "direction: [1, 0, 0]"));
+  telemetry::SpscRing<telemetry::TickRecord> ring(4096);
+  WallMoves moves;
+  LoopOptions o = rig.options(2000);
+  o.wall_moves = &moves;
+  ServoLoop loop(rig.device, rig.controller, &ring, o);
+  moves.loop_starting();
+  const std::uint64_t offer = moves.offer(0, Vec3(0.03, 0.0, 0.11));
+  EXPECT_EQ(offer, 1u);
+  const std::atomic<bool> stop{false};
+  LoopResult r;
+  {
+    hapticd::testing::AllocationScope scope;
+    r = loop.run(stop);
+    EXPECT_EQ(scope.count(), 0u) << "allocations on the RT path over " << r.ticks << " ticks";
+  }
+  ASSERT_EQ(r.fault.cause, FaultCause::kNone) << describe(r.fault);
+  const std::optional<WallMoves::Taken> taken = moves.await(offer, std::chrono::milliseconds(0));
+  ASSERT_TRUE(taken.has_value());
+  EXPECT_EQ(taken->tick, 0u);
+  std::vector<telemetry::TickRecord> records(ring.size_approx());
+  records.resize(ring.pop_many(records.data(), records.size()));
+  ASSERT_GT(records.size(), 1u);
+  EXPECT_EQ(records[0].marker, telemetry::kMarkerWallMoved);
+  EXPECT_EQ(records[0].tick, 0u);
+  EXPECT_EQ(records[0].deepest_wall, 0);
+  EXPECT_EQ(records[0].task_position[0], 0.03);
+  EXPECT_EQ(records[1].marker, telemetry::kMarkerNone);
+  const sim::JointPlant& plant = *rig.device.joint_plant();
+  const double along = plant.hand_force().x();
+  EXPECT_NEAR(plant.task_position().x() - 0.03, along / 500.0, 0.02 * along / 500.0);
+  // Nothing more was offered: the next run takes nothing and marks nothing.
+  EXPECT_EQ(moves.take(99, [](std::size_t, const Vec3&) { FAIL() << "taken twice"; }), 0u);
 }
 
 TEST(SceneLoop, RecordsCarryEveryJointAndTheTaskPosition) {

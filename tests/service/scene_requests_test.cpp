@@ -158,12 +158,13 @@ TEST(SceneRequests, AddChangeAndRemoveOneWallAtATimeOrRefuseWithTheReason) {
   EXPECT_NE(answer["error"].get<std::string>().find("walls[2].stiffness"), std::string::npos)
       << answer.dump();
   RawClient raw(d.socket());
-  ASSERT_TRUE(raw.send(R"({"v": 1, "cmd": "scene", "op": "move", "index": 0})"
+  ASSERT_TRUE(raw.send(R"({"v": 1, "cmd": "scene", "op": "rotate", "index": 0})"
                        "\n"));
   const json malformed = json::parse(raw.line());
   EXPECT_EQ(malformed["ok"], false);
-  EXPECT_NE(malformed["error"].get<std::string>().find("\"op\" must be one of add, change, remove"),
-            std::string::npos)
+  EXPECT_NE(
+      malformed["error"].get<std::string>().find("\"op\" must be one of add, change, remove, move"),
+      std::string::npos)
       << malformed.dump();
   ASSERT_TRUE(raw.send(R"({"v": 1, "cmd": "scene", "op": "remove", "index": -1})"
                        "\n"));
