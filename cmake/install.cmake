@@ -5,6 +5,19 @@
 
 install(CODE "set(CMAKE_INSTALL_DO_STRIP ON)")  # before the targets: they honour it
 install(TARGETS hapticd hapticctl RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+# The client library applications link (docs/clients.md), its headers and its pkg-config file,
+# which is written at install time for the prefix installed to (as the unit is).
+install(TARGETS hapticd_client LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
+install(FILES ${PROJECT_SOURCE_DIR}/client/connection.h ${PROJECT_SOURCE_DIR}/client/state_reader.h
+              ${PROJECT_SOURCE_DIR}/client/state_layout.h
+        DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/hapticd/client)
+install(CODE "
+  set(_pc \"${PROJECT_BINARY_DIR}/hapticd-client.pc\")
+  set(PROJECT_VERSION \"${PROJECT_VERSION}\")
+  set(CMAKE_INSTALL_LIBDIR \"${CMAKE_INSTALL_LIBDIR}\")
+  set(CMAKE_INSTALL_INCLUDEDIR \"${CMAKE_INSTALL_INCLUDEDIR}\")
+  configure_file(\"${PROJECT_SOURCE_DIR}/client/hapticd-client.pc.in\" \"\${_pc}\" @ONLY)
+  file(INSTALL \"\${_pc}\" DESTINATION \"\${CMAKE_INSTALL_PREFIX}/${CMAKE_INSTALL_LIBDIR}/pkgconfig\")")
 
 # The default instance's configuration is installed with the unit (cmake/install_unit.cmake):
 # /usr installs it in /etc (the FHS), every other prefix in PREFIX/etc, decided for the prefix

@@ -33,24 +33,29 @@ ALLOWED = {
     "src/config": {"config", "kinematics", "base"},
     "src/control": {"control", "analysis", "config", "kinematics", "base"},
     "src/gate": {"gate", "analysis", "config", "kinematics", "control", "base"},
-    "src/telemetry": {"telemetry", "base"},
+    # The state block's writer includes its layout from the client library.
+    "src/telemetry": {"telemetry", "base", "client"},
+    # What may use telemetry may use the state block's layout its writer takes (client).
     "src/loop": {"loop", "control", "analysis", "config", "kinematics", "telemetry", "drivers",
-                 "base"},
+                 "base", "client"},
     "src/verify": {"verify", "loop", "control", "analysis", "config", "kinematics", "sim",
-                   "drivers", "telemetry", "base"},
+                   "drivers", "telemetry", "base", "client"},
     "drivers": {"drivers", "config", "kinematics", "base"},
-    "sim": {"sim", "drivers", "config", "kinematics", "telemetry", "base"},
+    "sim": {"sim", "drivers", "config", "kinematics", "telemetry", "base", "client"},
     # The composition root: each driver's device joined with its simulated device.
     "wiring": {"wiring", "drivers", "sim", "config", "kinematics", "base"},
     "service": None,  # main() and the commands use everything
+    # The client library applications link (installed on its own): nothing of the daemon, not
+    # even the floor; its headers include each other by bare name.
+    "client": set(),
     # Reference devices are written from a firmware's published source or a specification,
     # never from our codecs: a device that shares the driver's reading of a spec cannot find
     # where that reading is wrong (tests/reference/README.md).
     "tests/reference": {"reference"},
 }
 # The modules of the picture, in its order (tests/reference is no module of the daemon).
-MODULES = ("base", "analysis", "kinematics", "config", "control", "gate", "telemetry", "loop", "verify",
-           "drivers", "sim", "wiring", "service")
+MODULES = ("base", "client", "analysis", "kinematics", "config", "control", "gate", "telemetry", "loop",
+           "verify", "drivers", "sim", "wiring", "service")
 
 # A driver's pure codecs: no OS header, no Device (checked below). A driver's simulated
 # device speaks the driver's bytes through them, so both read the protocol the same way.

@@ -53,6 +53,8 @@ test_packages=(
   udev iproute2                                         # udevd applying an instance's rules there; ip
   strace                                                # the evdev kernel tests: the loop's system calls
   clang llvm                                            # the asan stage; llvm-symbolizer
+  python3-venv python3-setuptools python3-wheel         # the Python client installed with pip,
+                                                        # offline, in its tests
 )
 
 as_root=()
@@ -180,12 +182,14 @@ run_stage() {
 
 # The Release build runs what needs it: the kernel and systemd test machines (timed against an
 # emulator, and what a user runs), the coupling designs end to end (minutes of CPU under a
-# sanitizer), the plot tool and the layering probes. The rest of the suite runs once, under
+# sanitizer), the plot tool, the layering probes and the Python client against the daemon a
+# user runs. The rest of the suite runs once, under
 # the sanitizers (stage asan), which catch there what a Release run of it would and more; gcc
 # compiles the daemon and every test the machines run with warnings as errors, clang the rest.
 stage_main() {
   configure_and_build "$1" -DCMAKE_BUILD_TYPE=Release -- hapticd_release_tests || return
-  cd "$1" && ctest --output-on-failure -j "$(nproc)" -L "^(kernel|systemd|design|slow|plot|layering)$"
+  cd "$1" && ctest --output-on-failure -j "$(nproc)" \
+    -L "^(kernel|systemd|design|slow|plot|layering|python)$"
 }
 # clang, because libFuzzer ships with it: one instrumented build serves both the suite under
 # the sanitizers and the fuzz targets (fuzz/README.md), where two builds of the same code
@@ -208,7 +212,7 @@ stage_asan() {
   # runs both, and a sanitizer finds nothing in them. Nor the coupling designs end to end
   # (labels design and slow: 20 s and 50 s of CPU in Release, SDP solves and long simulated
   # `verify` runs): the analysis tests run the design's code, one whole design included.
-  cd "$1" && ctest --output-on-failure -j "$(nproc)" -LE "^(layering|plot|design|slow)$"
+  cd "$1" && ctest --output-on-failure -j "$(nproc)" -LE "^(layering|plot|design|slow|python)$"
 }
 # Without the CAN, GPIO, HID and evdev drivers: the loop, telemetry and service tests run the sim
 # device, so those drivers' threads are not exercised here (their own tests run in asan and in

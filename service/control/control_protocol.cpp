@@ -16,6 +16,7 @@ std::optional<Command> command_named(const std::string& name) {
   if (name == "reload") return Command::kReload;
   if (name == "clear-fault") return Command::kClearFault;
   if (name == "scene") return Command::kScene;
+  if (name == "state") return Command::kState;
   return std::nullopt;
 }
 
@@ -105,7 +106,7 @@ std::optional<Request> parse_request(std::string_view text, std::string& error, 
   const std::optional<Command> c =
       cmd != j.end() && cmd->is_string() ? command_named(cmd->get<std::string>()) : std::nullopt;
   if (!c) {
-    error = "\"cmd\" must be one of status, stop, reload, clear-fault, scene";
+    error = "\"cmd\" must be one of status, stop, reload, clear-fault, scene, state";
     return std::nullopt;
   }
   Request r;

@@ -2,12 +2,14 @@
 // each direction, at most kMaxRequestBytes a line. Pure: no sockets here, so it is tested on
 // its own.
 //
-// Request:  {"v": 1, "cmd": "status" | "stop" | "reload" | "clear-fault", "id": <any>,
+// Request:  {"v": 1, "cmd": "status" | "stop" | "reload" | "clear-fault" | "state", "id": <any>,
 //            "config": "<YAML text>", "source": "<name for messages>"}    (config: reload only)
 //           {"v": 1, "cmd": "scene", "op": "add" | "change" | "remove", "index": <n>,
 //            "wall": {<a wall's keys>}}      (a device of several joints; index: change, remove)
 //           {"v": 1, "cmd": "scene", "op": "move", "index": <n>, "point": [x, y, z]}
 //                                            (1 to 3 finite numbers: the wall's new point, m)
+// "state" is answered with the state block's shape, and its descriptor passed with the answer's
+// first byte (SCM_RIGHTS; client/state_layout.h).
 // Response: {"v": 1, "id": <echoed>, "ok": true, ...the command's members}
 //           {"v": 1, "id": <echoed>, "ok": false, "error": "<why>", "code": <exit code>}
 // `code` is the exit code of docs/operations.md a client reports for the failure: 2 a malformed
@@ -22,12 +24,14 @@
 #include <string>
 #include <string_view>
 
+#include "client/connection.h"
+
 namespace hapticd::service {
 
-inline constexpr int kProtocolVersion = 1;
-inline constexpr std::size_t kMaxRequestBytes = 256 * 1024;  // a configuration fits with room
+inline constexpr int kProtocolVersion = client::kProtocolVersion;  // one version, both ends
+inline constexpr std::size_t kMaxRequestBytes = 256 * 1024;        // a configuration fits with room
 
-enum class Command { kStatus, kStop, kReload, kClearFault, kScene };
+enum class Command { kStatus, kStop, kReload, kClearFault, kScene, kState };
 
 // A scene request: a change to the walls of the running scene.
 struct SceneEdit {

@@ -13,6 +13,9 @@
 #include <cerrno>
 #include <chrono>
 #include <cstring>
+#include <deque>
+#include <string_view>
+#include <utility>
 #include <vector>
 
 #include "base/errno_text.h"
@@ -25,10 +28,29 @@ struct ControlServer::Client {
   std::string out;
   bool closing = false;  // its input ended: close once every line is answered and written
   bool gone = false;     // it cannot take answers any more (it closed, or a send failed)
+  // Answers that carry a descriptor: where each starts in `out`, and the descriptor.
+  std::deque<std::pair<std::size_t, int>> passing;
   std::chrono::steady_clock::time_point last_active = std::chrono::steady_clock::now();
 };
 
 namespace {
+
+// Sends `bytes` with `fd` passed along with the first of them (SCM_RIGHTS).
+ssize_t send_passing(int socket, std::string_view bytes, int fd) {
+  iovec io{const_cast<char*>(bytes.data()), bytes.size()};
+  alignas(cmsghdr) char control[CMSG_SPACE(sizeof(int))] = {};
+  msghdr msg{};
+  msg.msg_iov = &io;
+  msg.msg_iovlen = 1;
+  msg.msg_control = control;
+  msg.msg_controllen = sizeof control;
+  cmsghdr* c = CMSG_FIRSTHDR(&msg);
+  c->cmsg_level = SOL_SOCKET;
+  c->cmsg_type = SCM_RIGHTS;
+  c->cmsg_len = CMSG_LEN(sizeof(int));
+  std::memcpy(CMSG_DATA(c), &fd, sizeof(int));
+  return sendmsg(socket, &msg, MSG_NOSIGNAL | MSG_DONTWAIT);
+}
 
 std::runtime_error failure(const std::string& path, const std::string& what) {
   return std::runtime_error(path + ": control socket: " + what + ": " + base::errno_text(errno));
@@ -189,7 +211,7 @@ void ControlServer::accept_clients(std::vector<Client>& clients) {
       close(fd);
       continue;
     }
-    clients.push_back(Client{fd, {}, {}, false, false, std::chrono::steady_clock::now()});
+    clients.push_back(Client{fd, {}, {}, false, false, {}, std::chrono::steady_clock::now()});
   }
 }
 
@@ -225,7 +247,9 @@ void ControlServer::serve(Client& c) {
       continue;
     }
     try {
-      c.out += ok_response(r->id, handler_.handle(*r));
+      std::string answer = ok_response(r->id, handler_.handle(*r));
+      if (const int fd = handler_.descriptor(*r); fd >= 0) c.passing.emplace_back(c.out.size(), fd);
+      c.out += answer;
     } catch (const ControlRefusal& e) {
       c.out += error_response(r->id, e.what(), e.code());
     } catch (const std::exception& e) {
@@ -240,13 +264,25 @@ void ControlServer::serve(Client& c) {
     c.closing = true;
   }
   while (!c.out.empty()) {
-    const ssize_t n = send(c.fd, c.out.data(), c.out.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
+    // An answer that carries a descriptor starts a send of its own, which passes it.
+    const bool passes = !c.passing.empty() && c.passing.front().first == 0;
+    std::size_t length = c.out.size();
+    if (!c.passing.empty()) {
+      const std::size_t end = passes && c.passing.size() > 1 ? c.passing[1].first : length;
+      length = passes ? end : c.passing.front().first;
+    }
+    const std::string_view bytes(c.out.data(), length);
+    const ssize_t n = passes ? send_passing(c.fd, bytes, c.passing.front().second)
+                             : send(c.fd, bytes.data(), bytes.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
     if (n < 0 && !not_now(errno)) {
       c.gone = true;  // EPIPE, ECONNRESET: what it asked can no longer be answered
       return;
     }
     if (n <= 0) break;
-    c.out.erase(0, static_cast<std::size_t>(n));
+    if (passes) c.passing.pop_front();  // gone with the first byte
+    const auto sent = static_cast<std::size_t>(n);
+    for (auto& [at, fd] : c.passing) at -= sent;
+    c.out.erase(0, sent);
   }
 }
 

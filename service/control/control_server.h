@@ -31,6 +31,9 @@ class ControlHandler {
  public:
   virtual ~ControlHandler() = default;
   virtual nlohmann::json handle(const Request& request) = 0;
+  // The descriptor passed with the answer to `request` (SCM_RIGHTS, with its first byte), once
+  // handle() answered it: -1 for none. The handler keeps owning it.
+  virtual int descriptor(const Request& /*request*/) { return -1; }
 };
 
 class ControlRefusal : public std::runtime_error {

@@ -10,7 +10,7 @@
 #include <sstream>
 
 #include "base/errno_text.h"
-#include "service/control/control_client.h"
+#include "client/connection.h"
 #include "service/control/ctl_output.h"
 #include "service/exit_codes.h"
 
@@ -143,12 +143,11 @@ int main(int argc, char** argv) {
       }
     }
   }
-  if (socket.empty()) socket = hapticd::service::instance_socket(instance);
+  if (socket.empty()) socket = hapticd::client::instance_socket(instance);
   try {
-    const json answer =
-        hapticd::service::request(socket, req, static_cast<int>(timeout_s * 1000.0));
+    const json answer = hapticd::client::request(socket, req, static_cast<int>(timeout_s * 1000.0));
     return report(answer, command, as_json);
-  } catch (const hapticd::service::ClientError& e) {
+  } catch (const hapticd::client::ClientError& e) {
     std::cerr << "hapticctl: " << e.what() << "\n";
     return hapticd::kExitRuntimeFault;
   }

@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "gate/number_format.h"
+#include "kinematics/kinematics.h"
 #include "service/exit_codes.h"
 #include "service/run/counters_report.h"
 #include "service/run/gate_derate.h"
@@ -49,8 +50,24 @@ json RunSession::handle(const Request& request) {
       return clear_fault();
     case Command::kScene:
       return scene(request.scene);
+    case Command::kState: {
+      // The block is made with the socket, before any request can arrive (run()).
+      std::lock_guard lock(mutex_);
+      return {{"state",
+               {{"layout", client::kStateLayout},
+                {"header_bytes", client::kStateHeaderBytes},
+                {"slot_bytes", client::kStateSlotBytes},
+                {"slots", state_->slots()},
+                {"sample_period_ns", cfg_.loop.period_ns()},
+                {"joints", kinematics::joint_count(cfg_.device.kinematics)},
+                {"axes", kinematics::joint_count(cfg_.device.kinematics)}}}};
+    }
   }
   throw ControlRefusal("unknown command");
+}
+
+int RunSession::descriptor(const Request& request) {
+  return request.command == Command::kState ? state_->fd() : -1;
 }
 
 json RunSession::status() const {
@@ -75,8 +92,16 @@ json RunSession::status() const {
   const int joints = kinematics::joint_count(cfg_.device.kinematics);
   if (joints > 1) {
     json walls = json::array();
+    const auto axes = [joints](const kinematics::Vec3& v) {
+      json a = json::array();
+      for (int i = 0; i < joints; ++i) a.push_back(v[i]);
+      return a;
+    };
     for (const config::TaskWallConfig& w : cfg_.walls) {
-      walls.push_back({{"stiffness", w.law.stiffness}, {"damping", w.law.damping}});
+      walls.push_back({{"stiffness", w.law.stiffness},
+                       {"damping", w.law.damping},
+                       {"point", axes(w.point)},
+                       {"normal", axes(w.normal)}});
     }
     j["wall"] = nullptr;
     j["walls"] = walls;

@@ -16,6 +16,7 @@
 #include <thread>
 
 #include "config/config_loader.h"
+#include "kinematics/kinematics.h"
 #include "service/exit_codes.h"
 #include "service/run/counters_report.h"
 #include "service/run/crash_guard.h"
@@ -23,6 +24,10 @@
 
 namespace hapticd::service {
 namespace {
+
+// The clients' state block holds the last 4096 ticks (4 s at 1 kHz; 768 KiB): a reader that
+// wakes every frame of a 60 Hz display, or every 100 ms, misses nothing.
+constexpr std::uint32_t kStateSlots = 4096;
 
 void drain(int fd) {
   std::uint64_t n = 0;
@@ -137,6 +142,7 @@ bool RunSession::start_up(gate::GateReport& report) {
     lo.scene_swap = &scene_swap_;
     lo.wall_moves = &moves_;
   }
+  lo.state = state_.get();
   auto servo = std::make_unique<loop::ServoLoop>(session_->device(), *active_, log_.ring.get(), lo);
   summary_.wake_latency = &servo->wake_latency();
   summary_.compute_time = &servo->compute_time();
@@ -154,6 +160,10 @@ int RunSession::run() {
   session_.emplace(cfg_, options_.loopback, realtime_);
   check_clock(cfg_, session_->peer() != nullptr);
   if (!options_.socket_path.empty()) {
+    // Each task axis is a joint's (kinematics.h): the device is not configured yet to ask it.
+    const auto axes = static_cast<std::uint32_t>(kinematics::joint_count(cfg_.device.kinematics));
+    state_ =
+        std::make_unique<telemetry::StateBlock>(kStateSlots, cfg_.loop.period_ns(), axes, axes);
     try {
       server_ = std::make_unique<ControlServer>(options_.socket_path, *this);
     } catch (const std::runtime_error& e) {

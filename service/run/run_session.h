@@ -29,6 +29,7 @@
 #include "service/run/run_support.h"
 #include "service/run/run_threads.h"
 #include "service/stop_signals.h"
+#include "telemetry/state_block.h"
 
 namespace hapticd::service {
 
@@ -40,8 +41,10 @@ class RunSession final : public ControlHandler {
   // The whole run; returns the exit code (docs/operations.md).
   int run();
 
-  // Control socket thread: status, stop, reload, clear-fault.
+  // Control socket thread: status, stop, reload, clear-fault, scene, state.
   nlohmann::json handle(const Request& request) override;
+  // The state block's descriptor, passed with the answer to "state".
+  int descriptor(const Request& request) override;
 
  private:
   enum class Phase { kStarting, kRunning, kHeld, kEnded };
@@ -111,6 +114,8 @@ class RunSession final : public ControlHandler {
   SceneParts scene_;  // a device of several joints: the walls the loop steps instead
   // Walls a reload accepted while no loop ran (a held fault): the next arming takes them.
   std::unique_ptr<loop::SceneWalls> pending_walls_;
+  // The clients' state block (with a control socket): made before the socket, gone after it.
+  std::unique_ptr<telemetry::StateBlock> state_;
   std::unique_ptr<loop::ServoLoop> servo_;
   std::unique_ptr<ControlServer> server_;
   int wake_fd_ = -1;  // eventfd: the control thread wakes the supervisor (stop, clear-fault)

@@ -137,7 +137,10 @@ JointCommand step_scene_tick(SceneState& st, const JointInput& in,
   if (c.runaway) rec.flags |= telemetry::kFlagRunaway;
   c.pose_fault = !step.pose_ok;
   c.scale = step.scale;
-  if (!c.faulted()) c.tau = step.tau;
+  if (!c.faulted()) {
+    c.tau = step.tau;
+    c.force = step.scale * step.force;
+  }
   return c;
 }
 

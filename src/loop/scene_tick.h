@@ -45,11 +45,12 @@ struct JointInput {
 };
 
 struct JointCommand {
-  kinematics::Vec3 tau = kinematics::Vec3::Zero();  // each joint's torque to write
-  std::array<double, config::kMaxWalls> wall{};     // each wall's force along its normal
-  std::array<double, config::kMaxWalls> added{};    // the passivity controller's part of it
-  double scale = 1.0;                               // the joint saturation's factor
-  bool non_finite = false;                          // a non-finite force or torque: the loop faults
+  kinematics::Vec3 tau = kinematics::Vec3::Zero();    // each joint's torque to write
+  std::array<double, config::kMaxWalls> wall{};       // each wall's force along its normal
+  std::array<double, config::kMaxWalls> added{};      // the passivity controller's part of it
+  double scale = 1.0;                                 // the joint saturation's factor
+  kinematics::Vec3 force = kinematics::Vec3::Zero();  // the task force that acts (N), scaled
+  bool non_finite = false;  // a non-finite force or torque: the loop faults
   bool runaway = false;     // a wall's runaway guard tripped: the loop faults
   bool pose_fault = false;  // the pose was not ok (rec.pose_status says why): the loop faults
 

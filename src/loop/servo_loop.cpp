@@ -5,7 +5,8 @@
 // DirectionProbe until the wall is armed (its rest ring and fit window, allocated before the
 // loop), this ServoLoop (options, two 4 KB LatencyHistograms, its counters, the LiveStatus
 // atomics), the LawSwap and WallMoves mailboxes (one atomic load a tick each), the Schedule,
-// SampleCheck and TickRecord on the stack, and one slot of the SPSC ring. Nothing else: no
+// SampleCheck and TickRecord on the stack, one slot of the SPSC ring and one of the clients'
+// state block (a shared mapping, prefaulted). Nothing else: no
 // allocation, no lock, no log, no throw.
 #include "loop/servo_loop.h"
 
@@ -45,7 +46,8 @@ ServoLoop::ServoLoop(Device& device, control::Controller& controller,
       ring_(ring),
       options_(options),
       observer_(with_period(options.observer, options.sample.period_ns)),
-      probe_(options.probe) {}
+      probe_(options.probe),
+      publisher_(options.state, options.sample.period_ns) {}
 
 void ServoLoop::set_fault(Fault f, telemetry::TickRecord& rec, LoopResult& res) const noexcept {
   res.fault = f;
@@ -262,6 +264,7 @@ void ServoLoop::scene_tick(std::uint64_t tick, const Sensed& sensed, const kinem
   const bool faulted = res.fault.cause != FaultCause::kNone;
   if (faulted) write_zero();  // zero on every joint at once; the service disables output
   end_scene_tick(st, faulted ? nullptr : &c, rec);
+  task_force_ = faulted ? kinematics::Vec3::Zero() : c.force;
 }
 
 PassivityResult ServoLoop::scene_passivity() const noexcept {
@@ -352,6 +355,7 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
   observer_.restart();  // nothing in flight from an earlier run
   probe_.restart();     // every arming checks the direction again
   if (options_.scene != nullptr) options_.scene->restart();
+  publisher_.restart();
   live_.direction.store(probe_.result().state, std::memory_order_relaxed);
   live_.direction_gain.store(0.0, std::memory_order_relaxed);
   live_.armed.store(probe_.ended(), std::memory_order_release);
@@ -380,6 +384,10 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
     }
     account(rec, sensed, res);
     log(rec, stop);
+    publisher_.publish(rec, schedule.periods(), wake,
+                       options_.scene != nullptr && res.fault.cause == FaultCause::kNone
+                           ? task_force_
+                           : kinematics::Vec3(rec.force_commanded, 0.0, 0.0));
     ++res.ticks;
     ticks_done_.store(next_tick_ + res.ticks, std::memory_order_relaxed);
     if (res.fault.cause != FaultCause::kNone) break;

@@ -20,6 +20,7 @@
 #include "loop/sample_check.h"
 #include "loop/scene_tick.h"
 #include "loop/schedule.h"
+#include "loop/state_publish.h"
 #include "loop/wall_moves.h"
 #include "telemetry/spsc_ring.h"
 #include "telemetry/tick_record.h"
@@ -55,6 +56,8 @@ struct LoopOptions {
   // A client's wall moves at several joints (null: none): taken at a tick boundary, each
   // marked in the tick log (kMarkerWallMoved).
   WallMoves* wall_moves = nullptr;
+  // The clients' state block (null: none): every tick published into it.
+  telemetry::StateBlock* state = nullptr;
 };
 
 // What the loop is doing, readable from any thread while it runs (relaxed atomics, stored
@@ -220,6 +223,8 @@ class ServoLoop {
   std::atomic<std::uint64_t> ticks_done_{0};
   std::uint64_t next_tick_ = 0;           // the first tick of the next run()
   std::uint64_t scene_damped_ticks_ = 0;  // several joints: ticks any wall's controller damped
+  StatePublisher publisher_;
+  kinematics::Vec3 task_force_ = kinematics::Vec3::Zero();  // several joints: what acted this tick
   LiveStatus live_;
   using K = base::CounterKind;
   std::array<base::Counter, kLoopCounterCount> counters_{{

@@ -2,6 +2,7 @@
 // inside a box of six walls, a task-space hand pushing into a face, an edge and a corner; it
 // comes to rest at F/K along each normal. And what the loop owes every device: no allocation a
 // tick, zero torque on every joint after a fault, a pose fault named.
+#include <fcntl.h>
 #include <gtest/gtest.h>
 
 #include <atomic>
@@ -14,11 +15,13 @@
 #include <thread>
 
 #include "alloc_counter.h"
+#include "client/state_reader.h"
 #include "config/config_loader.h"
 #include "control/scene.h"
 #include "freerun.h"
 #include "loop/servo_loop.h"
 #include "sim/sim_device.h"
+#include "telemetry/state_block.h"
 
 namespace hapticd::loop {
 namespace {
@@ -105,16 +108,52 @@ TEST(SceneLoop, DeltaPressedIntoACornerRestsAtForceOverStiffnessAlongAllThreeNor
   expect_rest_at_f_over_k("[1, 1, -1]", 3);
 }
 
+// With every tick published to the clients' state block too.
 TEST(SceneLoop, NoHeapAllocationPerTick) {
   SceneRig rig(delta_config());
   telemetry::SpscRing<telemetry::TickRecord> ring(4096);
-  ServoLoop loop(rig.device, rig.controller, &ring, rig.options(3000));
+  telemetry::StateBlock block(4096, rig.cfg.loop.period_ns(), 3, 3);
+  LoopOptions o = rig.options(3000);
+  o.state = &block;
+  ServoLoop loop(rig.device, rig.controller, &ring, o);
   const std::atomic<bool> stop{false};
   hapticd::testing::AllocationScope scope;
   const LoopResult r = loop.run(stop);
   EXPECT_EQ(scope.count(), 0u) << "allocations on the RT path over " << r.ticks << " ticks";
   EXPECT_EQ(r.fault.cause, FaultCause::kNone);
   EXPECT_GT(r.count(kCounterContactTicks), 100u);
+  EXPECT_EQ(block.published(), 3000u);
+}
+
+// What the clients read each tick is what the tick did: the task position and the force that
+// acted through the walls, each joint's torque, the contact bits; velocities by difference.
+TEST(SceneLoop, TheStateBlockSaysWhatEachTickDid) {
+  SceneRig rig(delta_config("direction: [1, 1, -1]", "direction: [1, 0, 0]"));
+  telemetry::SpscRing<telemetry::TickRecord> ring(4096);
+  telemetry::StateBlock block(4096, rig.cfg.loop.period_ns(), 3, 3);
+  LoopOptions o = rig.options(2000);
+  o.state = &block;
+  ServoLoop loop(rig.device, rig.controller, &ring, o);
+  const std::atomic<bool> stop{false};
+  ASSERT_EQ(loop.run(stop).fault.cause, FaultCause::kNone);
+  std::vector<telemetry::TickRecord> records(ring.size_approx());
+  records.resize(ring.pop_many(records.data(), records.size()));
+  client::StateReader reader(fcntl(block.fd(), F_DUPFD_CLOEXEC, 0));
+  client::StateSample s, before;
+  ASSERT_EQ(reader.read(1998, before), client::StateReader::Read::kOk);
+  ASSERT_EQ(reader.read(1999, s), client::StateReader::Read::kOk);
+  const telemetry::TickRecord& last = records.back();
+  EXPECT_EQ(s.tick, last.tick);
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(s.x[i], last.task_position[i]);
+  EXPECT_EQ(s.effort[0], last.force_commanded);
+  EXPECT_EQ(s.effort[2], last.joint_force[1]);
+  EXPECT_EQ(s.wall_contact, last.wall_contact);
+  EXPECT_EQ(s.wall_contact, 1u) << "at rest against the +x face alone";
+  // At rest: the walls push back on the hand along -x, K times the depth beyond the face.
+  const double depth = s.x[0] - 0.02;
+  EXPECT_NEAR(s.f[0], -500.0 * depth, 0.02 * 500.0 * depth);
+  EXPECT_NEAR(s.f[1], 0.0, 1e-9);
+  EXPECT_NEAR(s.v[0], (s.x[0] - before.x[0]) / 1e-3, 1e-9);
 }
 
 // A client's move (wall_moves.h) is taken at the next tick boundary without allocating and

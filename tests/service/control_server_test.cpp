@@ -3,6 +3,9 @@
 // tested end to end in control_socket_test.cpp.)
 #include "service/control/control_server.h"
 
+#include "client/connection.h"
+#include "telemetry/state_block.h"
+
 #include <gtest/gtest.h>
 #include <poll.h>
 #include <sys/socket.h>
@@ -28,7 +31,12 @@ class ScriptedHandler : public ControlHandler {
     if (r.command == Command::kReload) throw std::runtime_error("disk on fire");
     return {{"seen", ++seen}};
   }
+  // "state" passes the test's block, as the daemon passes its own.
+  int descriptor(const Request& r) override {
+    return r.command == Command::kState && block ? block->fd() : -1;
+  }
   int seen = 0;
+  telemetry::StateBlock* block = nullptr;
 };
 
 // Connects, writes `bytes`, half-closes, and returns every answer line until the server
@@ -162,6 +170,32 @@ TEST_F(ServerRig, ARefusalKeepsItsCodeAndAnyOtherExceptionIsCodeOne) {
   EXPECT_EQ(failed["id"], "r");
   EXPECT_EQ(malformed["code"], 2);
   EXPECT_TRUE(malformed["id"].is_null());
+}
+
+// A descriptor goes with its own answer's first byte, between answers that carry none: the
+// client library maps the block it passed and reads what was published into it.
+TEST_F(ServerRig, TheStateBlockIsPassedWithItsAnswerAndMapsForReading) {
+  telemetry::StateBlock block(16, 1000000, 3, 3);
+  handler.block = &block;
+  client::StateSample s;
+  s.tick = 7;
+  s.x[2] = 0.11;
+  block.publish(s);
+  client::Connection c(path, 5000);
+  EXPECT_EQ(c.status()["state"], nullptr);  // the scripted status: {"seen": 1}
+  client::StateReader reader = c.state();
+  EXPECT_EQ(c.call({{"cmd", "status"}})["seen"], 3);  // the answer after it is whole too
+  client::StateSample read;
+  ASSERT_TRUE(reader.latest(read));
+  EXPECT_EQ(read.tick, 7u);
+  EXPECT_EQ(read.x[2], 0.11);
+  handler.block = nullptr;  // no descriptor passed: the client says so
+  try {
+    c.state();
+    FAIL() << "a state answer without a descriptor was taken";
+  } catch (const client::ClientError& e) {
+    EXPECT_NE(std::string(e.what()).find("carried no descriptor"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

@@ -1,0 +1,195 @@
+#include "connection.h"
+
+#include <poll.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cstring>
+#include <utility>
+
+namespace hapticd::client {
+namespace {
+
+using nlohmann::json;
+
+ClientError failure(const std::string& socket, const std::string& what, int err) {
+  return ClientError(socket + ": " + what + ": " + std::strerror(err));
+}
+
+int connect_to(const std::string& socket) {
+  sockaddr_un addr{};
+  addr.sun_family = AF_UNIX;
+  if (socket.size() >= sizeof addr.sun_path) throw failure(socket, "cannot connect", ENAMETOOLONG);
+  std::memcpy(addr.sun_path, socket.c_str(), socket.size() + 1);
+  const int fd = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  if (fd < 0) throw failure(socket, "cannot create a socket", errno);
+  if (connect(fd, reinterpret_cast<const sockaddr*>(&addr), sizeof addr) != 0) {
+    const int err = errno;
+    close(fd);
+    throw failure(socket, "cannot connect", err);
+  }
+  return fd;
+}
+
+// 0, or the errno that stopped the sending.
+int send_all(int fd, const std::string& text) {
+  for (std::size_t sent = 0; sent < text.size();) {
+    const ssize_t n = send(fd, text.data() + sent, text.size() - sent, MSG_NOSIGNAL);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return n < 0 ? errno : EPIPE;
+    sent += static_cast<std::size_t>(n);
+  }
+  return 0;
+}
+
+std::string request_line(json request) {
+  request["v"] = kProtocolVersion;
+  return request.dump(-1, ' ', false, json::error_handler_t::replace) + "\n";
+}
+
+json parsed(const std::string& socket, const std::string& line) {
+  json answer = json::parse(line, nullptr, /*allow_exceptions=*/false);
+  if (answer.is_discarded() || !answer.is_object() || !answer.contains("ok")) {
+    throw ClientError(socket +
+                      ": the answer is not a control-protocol object: " + line.substr(0, 200));
+  }
+  return answer;
+}
+
+// recvmsg with room for one passed descriptor, which goes to `passed` (any earlier one closed).
+ssize_t receive(int fd, char* buf, std::size_t size, int& passed) {
+  iovec io{buf, size};
+  alignas(cmsghdr) char control[CMSG_SPACE(sizeof(int))];
+  msghdr msg{};
+  msg.msg_iov = &io;
+  msg.msg_iovlen = 1;
+  msg.msg_control = control;
+  msg.msg_controllen = sizeof control;
+  const ssize_t n = recvmsg(fd, &msg, MSG_CMSG_CLOEXEC);
+  for (cmsghdr* c = n > 0 ? CMSG_FIRSTHDR(&msg) : nullptr; c != nullptr; c = CMSG_NXTHDR(&msg, c)) {
+    if (c->cmsg_level != SOL_SOCKET || c->cmsg_type != SCM_RIGHTS) continue;
+    if (passed >= 0) close(passed);
+    std::memcpy(&passed, CMSG_DATA(c), sizeof(int));
+  }
+  return n;
+}
+
+}  // namespace
+
+std::string instance_socket(const std::string& name) {
+  return "/run/hapticd/" + name + "/control.sock";
+}
+
+json request(const std::string& socket, json request, int timeout_ms) {
+  Connection c(socket, timeout_ms);
+  return c.request(std::move(request));
+}
+
+Connection::Connection(const std::string& socket, int timeout_ms)
+    : socket_(socket), timeout_ms_(timeout_ms), fd_(connect_to(socket)) {}
+
+Connection::~Connection() {
+  if (fd_ >= 0) close(fd_);
+  if (passed_fd_ >= 0) close(passed_fd_);
+}
+
+json Connection::request(json request) {
+  if (fd_ < 0) throw ClientError(socket_ + ": the connection was closed after an error");
+  const std::string text = request_line(std::move(request));
+  try {
+    if (const int err = send_all(fd_, text); err != 0) {
+      // A daemon that refuses this peer answers at once and hangs up, maybe before the request
+      // was sent: its answer is still there to read.
+      timeout_ms_ = std::min(timeout_ms_, 1000);
+      try {
+        return parsed(socket_, line());
+      } catch (const ClientError&) {
+        throw failure(socket_, "cannot send the request", err);
+      }
+    }
+    return parsed(socket_, line());
+  } catch (const ClientError&) {
+    close(fd_);
+    fd_ = -1;
+    throw;
+  }
+}
+
+json Connection::call(json request) {
+  json answer = this->request(std::move(request));
+  if (!answer["ok"].is_boolean() || !answer["ok"].get<bool>()) {
+    const json& error = answer["error"];
+    throw Refused(error.is_string() ? error.get<std::string>() : "refused without a reason",
+                  answer.value("code", 1));
+  }
+  return answer;
+}
+
+std::string Connection::line() {
+  using clock = std::chrono::steady_clock;
+  const auto deadline = clock::now() + std::chrono::milliseconds(timeout_ms_);
+  char buf[65536];
+  for (;;) {
+    if (const auto nl = in_.find('\n'); nl != std::string::npos) {
+      std::string l = in_.substr(0, nl);
+      in_.erase(0, nl + 1);
+      return l;
+    }
+    const auto left =
+        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - clock::now()).count();
+    if (left <= 0) {
+      throw ClientError(socket_ + ": no answer within " + std::to_string(timeout_ms_) + " ms");
+    }
+    pollfd p{fd_, POLLIN, 0};
+    if (poll(&p, 1, static_cast<int>(left)) < 0 && errno != EINTR) {
+      throw failure(socket_, "poll", errno);
+    }
+    if (p.revents == 0) continue;
+    const ssize_t n = receive(fd_, buf, sizeof buf, passed_fd_);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) throw failure(socket_, "cannot read the answer", errno);
+    if (n == 0) throw ClientError(socket_ + ": the daemon closed the connection without an answer");
+    in_.append(buf, static_cast<std::size_t>(n));
+  }
+}
+
+json Connection::status() { return call({{"cmd", "status"}})["status"]; }
+
+StateReader Connection::state() {
+  if (passed_fd_ >= 0) close(std::exchange(passed_fd_, -1));  // nothing stale stands for it
+  call({{"cmd", "state"}});
+  if (passed_fd_ < 0) {
+    throw ClientError(socket_ + ": the state answer carried no descriptor (SCM_RIGHTS)");
+  }
+  return StateReader(std::exchange(passed_fd_, -1));
+}
+
+std::size_t Connection::add_wall(const json& wall) {
+  return call({{"cmd", "scene"}, {"op", "add"}, {"wall", wall}})["scene"]["index"]
+      .get<std::size_t>();
+}
+
+json Connection::change_wall(std::size_t index, const json& keys) {
+  return call({{"cmd", "scene"}, {"op", "change"}, {"index", index}, {"wall", keys}})["scene"];
+}
+
+json Connection::remove_wall(std::size_t index) {
+  return call({{"cmd", "scene"}, {"op", "remove"}, {"index", index}})["scene"];
+}
+
+Applied Connection::move_wall(std::size_t index, const std::array<double, 3>& point,
+                              std::size_t axes) {
+  json p = json::array();
+  for (std::size_t a = 0; a < axes && a < point.size(); ++a) p.push_back(point[a]);
+  const json s = call({{"cmd", "scene"}, {"op", "move"}, {"index", index}, {"point", p}})["scene"];
+  Applied out;
+  if (s["applied_at_tick"].is_number()) out.tick = s["applied_at_tick"].get<std::uint64_t>();
+  if (s["applied_at_ns"].is_number()) out.time_ns = s["applied_at_ns"].get<std::int64_t>();
+  return out;
+}
+
+}  // namespace hapticd::client

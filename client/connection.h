@@ -1,0 +1,93 @@
+// hapticd's C++ client (docs/clients.md): a connection to a running daemon's control socket
+// (one JSON object per line each way, docs/operations.md) and what an application asks through
+// it: the state, the scene's walls. Blocking, with a time-out on every answer; one connection
+// per thread. Installed with the daemon (`pkg-config --cflags --libs hapticd-client`); hapticctl
+// is built on it.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <stdexcept>
+#include <string>
+
+#include "state_reader.h"
+
+namespace hapticd::client {
+
+// The control protocol's version this client speaks ("v" of every request and answer).
+inline constexpr int kProtocolVersion = 1;
+
+// The socket could not be reached, or gave no well-formed answer: what() names the socket and
+// what went wrong ("/run/hapticd/x.sock: cannot connect: No such file or directory").
+class ClientError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// The daemon answered "ok": false: what() is its reason, code() the exit code it stands for
+// (2 a malformed request or invalid configuration, 3 the gate refused it, 1 anything else).
+class Refused : public std::runtime_error {
+ public:
+  Refused(const std::string& why, int code) : std::runtime_error(why), code_(code) {}
+  int code() const noexcept { return code_; }
+
+ private:
+  int code_;
+};
+
+// The socket of instance `name` of the template unit hapticd@.service:
+// /run/hapticd/NAME/control.sock.
+std::string instance_socket(const std::string& name);
+
+// One request on a connection of its own: connects to `socket`, sends `request` (its "v" set)
+// and returns the answer parsed, "ok" true or false. Throws ClientError when it cannot
+// connect, the daemon hangs up without an answer, the answer is not a protocol object, or none
+// arrives within `timeout_ms`.
+nlohmann::json request(const std::string& socket, nlohmann::json request, int timeout_ms);
+
+// When a move took effect: the first tick that rendered it and CLOCK_MONOTONIC then (both
+// none while the daemon's output is off: the next arming takes it).
+struct Applied {
+  std::optional<std::uint64_t> tick;
+  std::optional<std::int64_t> time_ns;
+};
+
+class Connection {
+ public:
+  // Connects; throws ClientError.
+  explicit Connection(const std::string& socket, int timeout_ms = 30000);
+  ~Connection();
+  Connection(const Connection&) = delete;
+  Connection& operator=(const Connection&) = delete;
+
+  // Sends `request` (its "v" set) and returns the answer, "ok" true or false. ClientError as
+  // request() above; after one the connection is closed (a late answer must not be taken for
+  // the next request's), and every later call throws.
+  nlohmann::json request(nlohmann::json request);
+  // request(), throwing Refused for "ok": false.
+  nlohmann::json call(nlohmann::json request);
+
+  nlohmann::json status();  // the "status" member
+  // The state block: the daemon's descriptor, mapped (state_reader.h).
+  StateReader state();
+  // Scene requests: the answer's "scene" member. add_wall returns the new wall's index.
+  std::size_t add_wall(const nlohmann::json& wall);
+  nlohmann::json change_wall(std::size_t index, const nlohmann::json& keys);
+  nlohmann::json remove_wall(std::size_t index);
+  // Moves walls[index] to `point`, its first `axes` numbers (the device's task axes).
+  Applied move_wall(std::size_t index, const std::array<double, 3>& point, std::size_t axes = 3);
+
+ private:
+  std::string line();  // the next answer line, receiving any descriptor passed with it
+
+  std::string socket_;
+  int timeout_ms_;
+  int fd_ = -1;
+  std::string in_;
+  int passed_fd_ = -1;  // the descriptor the last answer carried, until taken
+};
+
+}  // namespace hapticd::client
