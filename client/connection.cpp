@@ -168,9 +168,10 @@ StateReader Connection::state() {
   return StateReader(std::exchange(passed_fd_, -1));
 }
 
-std::size_t Connection::add_wall(const json& wall) {
-  return call({{"cmd", "scene"}, {"op", "add"}, {"wall", wall}})["scene"]["index"]
-      .get<std::size_t>();
+std::size_t Connection::add_wall(const json& wall, std::optional<bool> keep) {
+  json request = {{"cmd", "scene"}, {"op", "add"}, {"wall", wall}};
+  if (keep) request["keep"] = *keep;
+  return call(std::move(request))["scene"]["index"].get<std::size_t>();
 }
 
 json Connection::change_wall(std::size_t index, const json& keys) {
@@ -181,10 +182,9 @@ json Connection::remove_wall(std::size_t index) {
   return call({{"cmd", "scene"}, {"op", "remove"}, {"index", index}})["scene"];
 }
 
-Applied Connection::move_wall(std::size_t index, const std::array<double, 3>& point,
-                              std::size_t axes) {
+Applied Connection::move_wall(std::size_t index, std::span<const double> point) {
   json p = json::array();
-  for (std::size_t a = 0; a < axes && a < point.size(); ++a) p.push_back(point[a]);
+  for (const double v : point) p.push_back(v);
   const json s = call({{"cmd", "scene"}, {"op", "move"}, {"index", index}, {"point", p}})["scene"];
   Applied out;
   if (s["applied_at_tick"].is_number()) out.tick = s["applied_at_tick"].get<std::uint64_t>();

@@ -5,11 +5,11 @@
 // is built on it.
 #pragma once
 
-#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <span>
 #include <stdexcept>
 #include <string>
 
@@ -73,12 +73,14 @@ class Connection {
   nlohmann::json status();  // the "status" member
   // The state block: the daemon's descriptor, mapped (state_reader.h).
   StateReader state();
-  // Scene requests: the answer's "scene" member. add_wall returns the new wall's index.
-  std::size_t add_wall(const nlohmann::json& wall);
+  // Scene requests: the answer's "scene" member. add_wall returns the new wall's index; the wall
+  // goes when this connection closes unless `keep` (none: as the daemon's
+  // safety.client_walls_on_leave says).
+  std::size_t add_wall(const nlohmann::json& wall, std::optional<bool> keep = std::nullopt);
   nlohmann::json change_wall(std::size_t index, const nlohmann::json& keys);
   nlohmann::json remove_wall(std::size_t index);
-  // Moves walls[index] to `point`, its first `axes` numbers (the device's task axes).
-  Applied move_wall(std::size_t index, const std::array<double, 3>& point, std::size_t axes = 3);
+  // Moves walls[index] to `point`: one number per task axis of the device (StateReader::axes).
+  Applied move_wall(std::size_t index, std::span<const double> point);
 
  private:
   std::string line();  // the next answer line, receiving any descriptor passed with it

@@ -101,9 +101,8 @@ bool StateReader::latest(StateSample& out) const noexcept {
 bool StateReader::next(StateSample& out) noexcept {
   const std::uint64_t h = head();
   if (!started_) {
-    if (h == 0) return false;
     started_ = true;
-    next_ = h - 1;
+    next_ = h;
   }
   while (next_ < h) {
     const Read r = read(next_, out);

@@ -26,8 +26,9 @@ class StateReader {
   Read read(std::uint64_t n, StateSample& out) const noexcept;
   // The newest whole sample; false when there is none yet.
   bool latest(StateSample& out) const noexcept;
-  // The sample after the one next() returned last (the first: the newest), every tick in order;
-  // false when none is new yet. Samples overwritten before it got to them are counted (missed).
+  // The sample after the one next() returned last (the first: the first written after the
+  // first call), every tick in order; false when none is new yet. Samples overwritten before it
+  // got to them are counted (missed).
   bool next(StateSample& out) noexcept;
 
   std::uint64_t head() const noexcept;  // samples written so far

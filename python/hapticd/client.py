@@ -208,10 +208,13 @@ class Client:
         return self._member(answer, "scene", f"scene {op}")
 
     def add_wall(self, point: Iterable[float], normal: Iterable[float], stiffness: float,
-                 damping: float | None = None, **keys: Any) -> int:
-        """Adds a wall (``keys``: more of a wall's keys, docs/kinematics.md); its index."""
+                 damping: float | None = None, keep: bool | None = None, **keys: Any) -> int:
+        """Adds a wall (``keys``: more of a wall's keys, docs/kinematics.md); its index. It goes
+        when this connection closes unless ``keep`` (None: as the daemon's
+        safety.client_walls_on_leave says)."""
         wall = _wall(point, normal, stiffness=stiffness, damping=damping, **keys)
-        index = self._member(self.scene("add", wall=wall), "index", "scene add")
+        members = {} if keep is None else {"keep": bool(keep)}
+        index = self._member(self.scene("add", wall=wall, **members), "index", "scene add")
         if not isinstance(index, int):
             raise ClientError(f"{self.socket_path}: scene add: index {index!r} is no integer")
         return index

@@ -67,6 +67,15 @@ bool parse_scene(const json& j, SceneEdit& out, std::string& error) {
     out.index = index->get<std::size_t>();
   }
   if (out.op == SceneEdit::Op::kMove) return parse_point(j, out, error);
+  if (const auto keep = j.find("keep"); keep != j.end()) {
+    if (out.op != SceneEdit::Op::kAdd || !keep->is_boolean()) {
+      error =
+          "scene: \"keep\" is for add alone, true or false (whether the wall outlives its "
+          "client)";
+      return false;
+    }
+    out.keep = keep->get<bool>();
+  }
   if (out.op != SceneEdit::Op::kRemove) {
     const auto wall = j.find("wall");
     if (wall == j.end() || !wall->is_object()) {

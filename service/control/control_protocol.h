@@ -6,6 +6,7 @@
 //            "config": "<YAML text>", "source": "<name for messages>"}    (config: reload only)
 //           {"v": 1, "cmd": "scene", "op": "add" | "change" | "remove", "index": <n>,
 //            "wall": {<a wall's keys>}}      (a device of several joints; index: change, remove)
+//            add may say "keep": true | false (the wall outlives its client or not)
 //           {"v": 1, "cmd": "scene", "op": "move", "index": <n>, "point": [x, y, z]}
 //                                            (1 to 3 finite numbers: the wall's new point, m)
 // "state" is answered with the state block's shape, and its descriptor passed with the answer's
@@ -19,6 +20,7 @@
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -41,6 +43,9 @@ struct SceneEdit {
   nlohmann::json wall;            // add: the new wall's keys; change: the keys that change
   std::array<double, 3> point{};  // move: the new point (m), finite; zero past `axes`
   std::size_t axes = 0;           // move: how many numbers "point" held (1 to 3)
+  // add: whether the wall outlives the client that added it ("keep"); none: as
+  // safety.client_walls_on_leave says.
+  std::optional<bool> keep;
 };
 
 // "add", "change", "remove", "move".
@@ -48,10 +53,11 @@ const char* scene_op_name(SceneEdit::Op op) noexcept;
 
 struct Request {
   Command command = Command::kStatus;
-  nlohmann::json id;        // echoed in the response; null when absent
-  std::string config_text;  // reload
-  std::string source;       // reload: the name messages about the configuration use
-  SceneEdit scene;          // scene
+  nlohmann::json id;         // echoed in the response; null when absent
+  std::string config_text;   // reload
+  std::string source;        // reload: the name messages about the configuration use
+  SceneEdit scene;           // scene
+  std::uint64_t client = 0;  // the connection it came on (the server's number; 0: none)
 };
 
 // Parses one line (without its newline). On a malformed request returns nothing and sets

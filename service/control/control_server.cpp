@@ -24,6 +24,7 @@ namespace hapticd::service {
 
 struct ControlServer::Client {
   int fd = -1;
+  std::uint64_t id = 0;  // Request::client
   std::string in;
   std::string out;
   bool closing = false;  // its input ended: close once every line is answered and written
@@ -172,13 +173,15 @@ bool ControlServer::allowed(int fd) const {
 
 namespace {
 
-// The client idle longest that may give up its slot: one with nothing left to send it.
+// The client idle longest that may give up its slot: one with nothing left to send it, holding
+// nothing of the daemon's.
 template <typename Clients>
-auto idlest(Clients& clients) {
+auto idlest(Clients& clients, const ControlHandler& handler) {
   const auto now = std::chrono::steady_clock::now();
   auto best = clients.end();
   for (auto it = clients.begin(); it != clients.end(); ++it) {
     if (!it->out.empty() || it->in.find('\n') != std::string::npos) continue;
+    if (handler.holds(it->id)) continue;
     if (now - it->last_active < std::chrono::milliseconds(ControlServer::kEvictAfterMs)) continue;
     if (best == clients.end() || it->last_active < best->last_active) best = it;
   }
@@ -187,15 +190,26 @@ auto idlest(Clients& clients) {
 
 }  // namespace
 
-bool ControlServer::room(const std::vector<Client>& clients) {
-  return clients.size() < static_cast<std::size_t>(kMaxClients) || idlest(clients) != clients.end();
+bool ControlServer::room(const std::vector<Client>& clients) const {
+  return clients.size() < static_cast<std::size_t>(kMaxClients) ||
+         idlest(clients, handler_) != clients.end();
 }
 
 void ControlServer::evict_idlest(std::vector<Client>& clients) {
-  const auto it = idlest(clients);
+  const auto it = idlest(clients, handler_);
   if (it == clients.end()) return;
-  close(it->fd);
+  end(*it);
   clients.erase(it);
+}
+
+void ControlServer::end(Client& c) {
+  close(c.fd);
+  c.fd = -1;
+  try {
+    handler_.left(c.id);
+  } catch (const std::exception& e) {
+    spdlog::error("control socket {}: a client left and that failed: {}", path_, e.what());
+  }
 }
 
 void ControlServer::accept_clients(std::vector<Client>& clients) {
@@ -211,7 +225,8 @@ void ControlServer::accept_clients(std::vector<Client>& clients) {
       close(fd);
       continue;
     }
-    clients.push_back(Client{fd, {}, {}, false, false, {}, std::chrono::steady_clock::now()});
+    clients.push_back(
+        Client{fd, next_client_++, {}, {}, false, false, {}, std::chrono::steady_clock::now()});
   }
 }
 
@@ -241,11 +256,12 @@ void ControlServer::serve(Client& c) {
     c.in.erase(0, nl + 1);
     std::string error;
     nlohmann::json id;
-    const std::optional<Request> r = parse_request(line, error, id);
+    std::optional<Request> r = parse_request(line, error, id);
     if (!r) {
       c.out += error_response(id, error, 2);
       continue;
     }
+    r->client = c.id;
     try {
       std::string answer = ok_response(r->id, handler_.handle(*r));
       if (const int fd = handler_.descriptor(*r); fd >= 0) c.passing.emplace_back(c.out.size(), fd);
@@ -315,17 +331,15 @@ void ControlServer::run() noexcept {
         Client& c = clients[i];
         const short ev = i + 2 < fds.size() ? fds[i + 2].revents : 0;
         if ((ev & (POLLIN | POLLOUT)) || c.in.find('\n') != std::string::npos) serve(c);
-        const bool idle = now - c.last_active > std::chrono::seconds(kIdleSeconds);
+        const bool idle =
+            now - c.last_active > std::chrono::seconds(kIdleSeconds) && !handler_.holds(c.id);
         // POLLHUP: it closed both ways (not a half-close), so no answer can reach it; kept, it
         // would hold a slot it can never give up and make poll return at once until idle.
         const bool gone = c.gone || (ev & (POLLHUP | POLLERR));
         // A client that ended its input is answered every complete line it sent before the
         // hang-up, not only those of the turn its end of input arrived in.
         const bool answered = c.out.empty() && c.in.find('\n') == std::string::npos;
-        if (gone || idle || c.out.size() > kMaxPendingOutput || (c.closing && answered)) {
-          close(c.fd);
-          c.fd = -1;
-        }
+        if (gone || idle || c.out.size() > kMaxPendingOutput || (c.closing && answered)) end(c);
       }
       std::erase_if(clients, [](const Client& c) { return c.fd < 0; });
     }

@@ -34,6 +34,12 @@ class ControlHandler {
   // The descriptor passed with the answer to `request` (SCM_RIGHTS, with its first byte), once
   // handle() answered it: -1 for none. The handler keeps owning it.
   virtual int descriptor(const Request& /*request*/) { return -1; }
+  // Client `client` (Request::client) is gone: it closed, its connection failed, or the server
+  // closed it. Not called for the clients still connected when the server stops.
+  virtual void left(std::uint64_t /*client*/) {}
+  // Whether `client` holds something of the daemon's (a scene's wall): the server then never
+  // closes it for being idle or evicts it for a newcomer; only its own leaving ends it.
+  virtual bool holds(std::uint64_t /*client*/) const { return false; }
 };
 
 class ControlRefusal : public std::runtime_error {
@@ -72,8 +78,10 @@ class ControlServer {
   bool allowed(int fd) const;
   void accept_clients(std::vector<Client>& clients);
   // Whether a client may connect now: a slot is free, or one can be freed (evict).
-  static bool room(const std::vector<Client>& clients);
-  static void evict_idlest(std::vector<Client>& clients);
+  bool room(const std::vector<Client>& clients) const;
+  void evict_idlest(std::vector<Client>& clients);
+  // Closes `c` and tells the handler it left.
+  void end(Client& c);
   void serve(Client& c);
 
   std::string path_;
@@ -81,6 +89,7 @@ class ControlServer {
   int listen_fd_ = -1;
   int stop_fd_ = -1;
   gid_t group_ = 0;
+  std::uint64_t next_client_ = 1;  // the server thread's: each connection's Request::client
   std::atomic<std::uint64_t> refused_{0};
   std::thread thread_;
 };

@@ -134,6 +134,8 @@ int main(int argc, char** argv) {
     req["op"] = op;
     if (op != "add") req["index"] = index;
     if (op == "move") req["point"] = point;
+    // An operator's wall stays when hapticctl exits, as a reload's would.
+    if (op == "add") req["keep"] = true;
     if (op != "remove" && op != "move") {
       req["wall"] = json::parse(wall_text, nullptr, false);
       if (!req["wall"].is_object()) {

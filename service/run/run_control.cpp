@@ -49,7 +49,7 @@ json RunSession::handle(const Request& request) {
     case Command::kClearFault:
       return clear_fault();
     case Command::kScene:
-      return scene(request.scene);
+      return scene(request.scene, request.client);
     case Command::kState: {
       // The block is made with the socket, before any request can arrive (run()).
       std::lock_guard lock(mutex_);

@@ -64,7 +64,7 @@ json RunSession::reload(const std::string& text, const std::string& source,
   return {{"reload", apply(text, source, sets, "reload", nullptr)}};
 }
 
-json RunSession::scene(const SceneEdit& edit) {
+json RunSession::scene(const SceneEdit& edit, std::uint64_t client) {
   if (edit.op == SceneEdit::Op::kMove) return move(edit);
   std::lock_guard serial(reload_mutex_);
   const std::string what = std::string("scene ") + scene_op_name(edit.op);
@@ -85,7 +85,12 @@ json RunSession::scene(const SceneEdit& edit) {
   } catch (const ControlRefusal& e) {
     throw ControlRefusal(what + " refused: " + e.what(), e.code());
   }
-  json out = apply(edited.yaml, "scene request", {}, what, &edited.continues);
+  bool keep = false;
+  {
+    std::lock_guard lock(mutex_);
+    keep = edit.keep.value_or(cfg_.safety.client_walls_on_leave == config::ClientWalls::kKeep);
+  }
+  json out = apply(edited.yaml, "scene request", {}, what, &edited.continues, keep ? 0 : client);
   out["op"] = scene_op_name(edit.op);
   out["index"] = edited.index;
   out["walls"] = edited.continues.size();
@@ -154,7 +159,7 @@ json RunSession::move(const SceneEdit& edit) {
 
 json RunSession::apply(const std::string& text, const std::string& source,
                        const std::vector<std::string>& sets, const std::string& what,
-                       const std::vector<int>* continues) {
+                       const std::vector<int>* continues, std::uint64_t owner) {
   config::Config running;
   Phase phase = Phase::kStarting;
   {
@@ -174,6 +179,15 @@ json RunSession::apply(const std::string& text, const std::string& source,
     const auto* refusal = dynamic_cast<const ControlRefusal*>(&e);
     throw ControlRefusal(what + " refused: " + e.what(), refusal != nullptr ? refusal->code() : 1);
   }
+  return commit(next, phase, source, what, continues, owner);
+}
+
+// Swaps `next` in (the loop running) or keeps it for the next arming (a held fault), and makes
+// it what the daemon says it runs. Wall i's owner is the owner of the running wall it goes on
+// from (continues; none: the configuration's), a new wall's `owner`.
+json RunSession::commit(Prepared& next, Phase phase, const std::string& source,
+                        const std::string& what, const std::vector<int>* continues,
+                        std::uint64_t owner) {
   std::optional<std::uint64_t> first_tick;
   if (phase == Phase::kRunning) first_tick = swap_in(next, source);
   const double k = next.cfg.wall.stiffness, b = next.cfg.wall.damping;
@@ -185,9 +199,19 @@ json RunSession::apply(const std::string& text, const std::string& source,
   derated_to_json(next.derated, out);
   {
     std::lock_guard lock(mutex_);
+    std::vector<std::uint64_t> owners(next.cfg.walls.size(), 0);
+    for (std::size_t i = 0; continues != nullptr && i < owners.size(); ++i) {
+      const int from = i < continues->size() ? (*continues)[i] : -1;
+      owners[i] = from < 0 ? owner
+                  : static_cast<std::size_t>(from) < owners_.size()
+                      ? owners_[static_cast<std::size_t>(from)]
+                      : 0;
+    }
+    owners_ = std::move(owners);
     cfg_ = std::move(next.cfg);
     ++reloads_;
     gate_ = out["gate"];
+    report_ = next.report;
     not_movable_ = why_not_movable(next.report);
     summary_.gate = gate_;
     if (next.walls) pending_walls_ = std::move(next.walls);  // not swapped: for the next arming

@@ -117,6 +117,8 @@ bool RunSession::start_up(gate::GateReport& report) {
     cfg_ = std::move(cfg);
     derated_ = summary_.derated;
     gate_ = summary_.gate;
+    report_ = report;
+    owners_.assign(cfg_.walls.size(), 0);
     not_movable_ = why_not_movable(report);
   }
   if (!pass) return false;

@@ -74,16 +74,26 @@ class RunSession final : public ControlHandler {
                         const std::vector<std::string>& sets);
   // A client's change to the walls (scene_edit.h), applied as a reload of the running
   // configuration with its walls edited.
-  nlohmann::json scene(const SceneEdit& edit);
+  nlohmann::json scene(const SceneEdit& edit, std::uint64_t client);
   // A client's move of one wall (scene_edit.h): no new gate, when the gate proved the walls
   // movable; handed to the loop through moves_ and answered once a tick has taken it.
   nlohmann::json move(const SceneEdit& edit);
   // reload() and scene() under reload_mutex_: `what` names it in messages ("reload", "scene
   // add"), `continues` (null: wall i goes on from wall i) says which running wall each new
   // one goes on from.
+  // `owner`: the client a new wall belongs to (0: none; docs/clients.md, a client leaving).
   nlohmann::json apply(const std::string& text, const std::string& source,
                        const std::vector<std::string>& sets, const std::string& what,
-                       const std::vector<int>* continues);
+                       const std::vector<int>* continues, std::uint64_t owner = 0);
+  nlohmann::json commit(Prepared& next, Phase phase, const std::string& source,
+                        const std::string& what, const std::vector<int>* continues,
+                        std::uint64_t owner);
+  // A client left (ControlHandler): the walls it added go at the next tick boundary (or stay,
+  // safety.client_walls_on_leave), with no new gate: fewer walls only ask less of the device.
+  void left(std::uint64_t client) override;
+  bool holds(std::uint64_t client) const override;
+  // The walls at `gone` removed through commit(), judged by the verdicts the running walls had.
+  void remove_walls(const std::vector<std::size_t>& gone, const std::string& why);
   Prepared prepare(const config::Config& running, const std::string& text,
                    const std::string& source, const std::vector<std::string>& sets,
                    const std::vector<int>* continues) const;
@@ -121,11 +131,13 @@ class RunSession final : public ControlHandler {
   int wake_fd_ = -1;  // eventfd: the control thread wakes the supervisor (stop, clear-fault)
   bool reload_pending_ = false;  // a SIGHUP taken before the servo ran (supervisor thread)
 
-  mutable std::mutex mutex_;   // guards what the control thread reads or asks for, below
-  config::Config cfg_;         // replaced by an accepted reload
-  nlohmann::json gate_;        // the verdict on cfg_, as JSON
-  std::string not_movable_;    // why cfg_'s walls may not be moved ("": they may)
-  std::uint64_t reloads_ = 0;  // accepted reloads: cfg_ and the law swapped in agree
+  mutable std::mutex mutex_;           // guards what the control thread reads or asks for, below
+  config::Config cfg_;                 // replaced by an accepted reload
+  nlohmann::json gate_;                // the verdict on cfg_, as JSON
+  std::string not_movable_;            // why cfg_'s walls may not be moved ("": they may)
+  gate::GateReport report_;            // the verdict on cfg_
+  std::vector<std::uint64_t> owners_;  // each of cfg_.walls' client (0: the configuration's)
+  std::uint64_t reloads_ = 0;          // accepted reloads: cfg_ and the law swapped in agree
   Phase phase_ = Phase::kStarting;
   std::string fault_;  // the last fault, described
   bool stop_asked_ = false;

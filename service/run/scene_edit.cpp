@@ -2,6 +2,9 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
+#include <functional>
+
 #include "service/control/control_server.h"
 #include "service/exit_codes.h"
 
@@ -61,6 +64,29 @@ EditedScene edit_walls(const std::string& document, const SceneEdit& edit) {
   YAML::Emitter text;
   text << root;
   out.yaml = text.c_str();
+  return out;
+}
+
+EditedScene without_walls(const std::string& document, std::vector<std::size_t> gone) {
+  std::sort(gone.begin(), gone.end(), std::greater<>());
+  gone.erase(std::unique(gone.begin(), gone.end()), gone.end());
+  EditedScene out;
+  out.yaml = document;
+  std::vector<int> was;                   // remaining wall i was wall was[i] of `document`
+  for (const std::size_t index : gone) {  // the highest first: the lower keep their places
+    SceneEdit edit;
+    edit.op = SceneEdit::Op::kRemove;
+    edit.index = index;
+    EditedScene step = edit_walls(out.yaml, edit);
+    if (was.empty()) {
+      was = std::move(step.continues);
+    } else {
+      for (int& w : step.continues) w = was[static_cast<std::size_t>(w)];
+      was = std::move(step.continues);
+    }
+    out.yaml = std::move(step.yaml);
+  }
+  out.continues = std::move(was);
   return out;
 }
 

@@ -23,4 +23,8 @@ struct EditedScene {
 // that is not an object, a document without walls.
 EditedScene edit_walls(const std::string& document, const SceneEdit& edit);
 
+// Not RT-safe. The document without the walls at `gone` (each an index of its walls), and which
+// wall each remaining one was. ControlRefusal as edit_walls.
+EditedScene without_walls(const std::string& document, std::vector<std::size_t> gone);
+
 }  // namespace hapticd::service

@@ -202,6 +202,8 @@ struct DirectionCheckConfig {
   friend bool operator==(const DirectionCheckConfig&, const DirectionCheckConfig&) = default;
 };
 
+enum class ClientWalls { kRemove, kKeep };
+
 struct SafetyConfig {
   GateMode gate = GateMode::kEnforce;
   double operator_passivity_shortage = 0.0;  // eta (N s/m), >= 0
@@ -209,6 +211,9 @@ struct SafetyConfig {
   double max_speed = 10.0;  // |dx/dt| between samples above this is an encoder fault (m/s)
   // How fast a wall a reload or a scene request moved slides to its new place (m/s).
   double max_wall_speed = 0.25;
+  // What the walls a client added do when its connection to the control socket ends
+  // (docs/clients.md): removed at the next tick boundary, or kept (then the configuration's).
+  ClientWalls client_walls_on_leave = ClientWalls::kRemove;
   int stale_fault_ticks = 3;  // consecutive reads with no new position that fault the loop
   // A gap of this many samples or more in the device's own sequence counter faults the loop
   // (the loop ran on data older than it knew); 0: gaps are counted and logged only.

@@ -15,6 +15,8 @@ const Options<PassivityControl> kPassivityControls{{"off", PassivityControl::kOf
                                                    {"damp", PassivityControl::kDamp}};
 const Options<DirectionCheckMode> kDirectionModes{{"enforce", DirectionCheckMode::kEnforce},
                                                   {"off", DirectionCheckMode::kOff}};
+const Options<ClientWalls> kClientWalls{{"remove", ClientWalls::kRemove},
+                                        {"keep", ClientWalls::kKeep}};
 const Options<NoMotionAction> kNoMotionActions{{"refuse", NoMotionAction::kRefuse},
                                                {"run", NoMotionAction::kRun}};
 
@@ -43,6 +45,9 @@ void read_safety(MapReader& top, SafetyConfig& safety) {
   number(m, "passivity_margin", Range::interval(0.0, true, 1.0, false), safety.passivity_margin);
   number(m, "max_speed", Range::greater_than(0.0), safety.max_speed);
   number(m, "max_wall_speed", Range::greater_than(0.0), safety.max_wall_speed);
+  if (const auto v = choice(m.diag(), m.take("client_walls_on_leave"), kClientWalls)) {
+    safety.client_walls_on_leave = *v;
+  }
   integer(m, "stale_fault_ticks", IntRange::at_least(1, INT_MAX), safety.stale_fault_ticks);
   if (const auto v =
           read_integer(m.diag(), m.take("sequence_gap_fault"), IntRange::between(0, 65535))) {

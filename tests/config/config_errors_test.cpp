@@ -26,7 +26,7 @@ TEST(ConfigErrors, UnknownKeyWithoutNeighbourListsTheAllowedKeys) {
   EXPECT_EQ(errors_of("safety:\n  colour: red\n"),
             Lines{"t.yaml:2: safety.colour: unknown key; expected one of: gate, "
                   "operator_passivity_shortage, passivity_margin, max_speed, max_wall_speed, "
-                  "stale_fault_ticks, "
+                  "client_walls_on_leave, stale_fault_ticks, "
                   "sequence_gap_fault, passivity_controller, passivity_max_damping, "
                   "direction_check, max_penetration"});
   EXPECT_EQ(errors_of("plugins: []\n"),

@@ -12,11 +12,16 @@
 #include <sys/un.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cstring>
+#include <memory>
+#include <mutex>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace hapticd::service {
@@ -29,8 +34,20 @@ class ScriptedHandler : public ControlHandler {
   json handle(const Request& r) override {
     if (r.command == Command::kClearFault) throw ControlRefusal("no fault to clear", 1);
     if (r.command == Command::kReload) throw std::runtime_error("disk on fire");
-    return {{"seen", ++seen}};
+    return {{"seen", ++seen}, {"client", r.client}};
   }
+  void left(std::uint64_t client) override {
+    std::lock_guard lock(mutex);
+    gone.push_back(client);
+  }
+  bool holds(std::uint64_t client) const override { return client == held.load(); }
+  std::vector<std::uint64_t> left_so_far() {
+    std::lock_guard lock(mutex);
+    return gone;
+  }
+  std::mutex mutex;
+  std::vector<std::uint64_t> gone;
+  std::atomic<std::uint64_t> held{0};
   // "state" passes the test's block, as the daemon passes its own.
   int descriptor(const Request& r) override {
     return r.command == Command::kState && block ? block->fd() : -1;
@@ -172,6 +189,40 @@ TEST_F(ServerRig, ARefusalKeepsItsCodeAndAnyOtherExceptionIsCodeOne) {
   EXPECT_TRUE(malformed["id"].is_null());
 }
 
+// Each connection is a client of its own number; when it ends, the handler hears which. One the
+// handler says holds something is never evicted for a newcomer, however idle.
+TEST_F(ServerRig, AClientThatLeavesIsNamedAndOneHoldingSomethingIsNeverEvicted) {
+  client::Connection keeper(path, 5000);
+  const auto kept = keeper.call({{"cmd", "status"}})["client"].get<std::uint64_t>();
+  handler.held = kept;
+  std::uint64_t first_gone = 0;
+  {
+    client::Connection passer(path, 5000);
+    first_gone = passer.call({{"cmd", "status"}})["client"].get<std::uint64_t>();
+    EXPECT_NE(first_gone, kept);
+  }
+  const auto left_includes = [&](std::uint64_t id) {
+    const std::vector<std::uint64_t> g = handler.left_so_far();
+    return std::find(g.begin(), g.end(), id) != g.end();
+  };
+  for (int i = 0; i < 200 && !left_includes(first_gone); ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  EXPECT_TRUE(left_includes(first_gone));
+  // Every other slot taken by idle clients, idle past the eviction age: a newcomer evicts one
+  // of them, never the keeper.
+  std::vector<std::unique_ptr<client::Connection>> idle;
+  for (int i = 0; i < ControlServer::kMaxClients - 1; ++i) {
+    idle.push_back(std::make_unique<client::Connection>(path, 5000));
+    idle.back()->call({{"cmd", "status"}});
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(ControlServer::kEvictAfterMs + 200));
+  client::Connection newcomer(path, 5000);
+  EXPECT_EQ(newcomer.call({{"cmd", "status"}})["ok"], true);
+  EXPECT_FALSE(left_includes(kept));
+  EXPECT_EQ(keeper.call({{"cmd", "status"}})["client"], kept);
+}
+
 // A descriptor goes with its own answer's first byte, between answers that carry none: the
 // client library maps the block it passed and reads what was published into it.
 TEST_F(ServerRig, TheStateBlockIsPassedWithItsAnswerAndMapsForReading) {
@@ -182,7 +233,7 @@ TEST_F(ServerRig, TheStateBlockIsPassedWithItsAnswerAndMapsForReading) {
   s.x[2] = 0.11;
   block.publish(s);
   client::Connection c(path, 5000);
-  EXPECT_EQ(c.status()["state"], nullptr);  // the scripted status: {"seen": 1}
+  EXPECT_EQ(c.status()["state"], nullptr);  // the scripted status: {"seen": 1, "client": 1}
   client::StateReader reader = c.state();
   EXPECT_EQ(c.call({{"cmd", "status"}})["seen"], 3);  // the answer after it is whole too
   client::StateSample read;

@@ -46,7 +46,7 @@ StateReader reader_of(const StateBlock& b) {
   return StateReader(fcntl(b.fd(), F_DUPFD_CLOEXEC, 0));
 }
 
-TEST(StateBlock, AReaderGetsTheNewestThenEveryTickInOrder) {
+TEST(StateBlock, AReaderGetsEveryTickFromItsFirstLookInOrder) {
   StateBlock block(16, 1000000, 3, 3);
   StateReader r = reader_of(block);
   EXPECT_EQ(r.slots(), 16u);
@@ -54,18 +54,24 @@ TEST(StateBlock, AReaderGetsTheNewestThenEveryTickInOrder) {
   EXPECT_EQ(r.joints(), 3u);
   StateSample s;
   EXPECT_FALSE(r.latest(s));
-  EXPECT_FALSE(r.next(s));
+  EXPECT_FALSE(r.next(s));  // its first look: from here on, every tick
   for (std::uint64_t n = 0; n < 5; ++n) block.publish(sample(n));
   ASSERT_TRUE(r.latest(s));
   EXPECT_EQ(s.tick, 4u);
-  ASSERT_TRUE(r.next(s));  // where a reader starts: the newest
-  EXPECT_EQ(s.tick, 4u);
-  EXPECT_FALSE(r.next(s));
-  for (std::uint64_t n = 5; n < 9; ++n) block.publish(sample(n));
-  for (std::uint64_t n = 5; n < 9; ++n) {
+  for (std::uint64_t n = 0; n < 5; ++n) {
     ASSERT_TRUE(r.next(s));
     EXPECT_EQ(s.tick, n);
     EXPECT_TRUE(whole(s));
+  }
+  EXPECT_FALSE(r.next(s));
+  StateReader late = reader_of(block);  // a reader that first looks now starts at tick 5
+  EXPECT_FALSE(late.next(s));
+  for (std::uint64_t n = 5; n < 9; ++n) block.publish(sample(n));
+  ASSERT_TRUE(late.next(s));
+  EXPECT_EQ(s.tick, 5u);
+  for (std::uint64_t n = 5; n < 9; ++n) {
+    ASSERT_TRUE(r.next(s));
+    EXPECT_EQ(s.tick, n);
   }
   EXPECT_FALSE(r.next(s));
   EXPECT_EQ(r.missed(), 0u);
@@ -74,8 +80,9 @@ TEST(StateBlock, AReaderGetsTheNewestThenEveryTickInOrder) {
 TEST(StateBlock, AReaderLappedByTheLoopCountsWhatItMissedAndGoesOn) {
   StateBlock block(16, 1000000, 1, 1);
   StateReader r = reader_of(block);
-  block.publish(sample(0));
   StateSample s;
+  EXPECT_FALSE(r.next(s));
+  block.publish(sample(0));
   ASSERT_TRUE(r.next(s));
   for (std::uint64_t n = 1; n <= 40; ++n) block.publish(sample(n));  // 40 new, 16 held
   ASSERT_TRUE(r.next(s));

@@ -1,0 +1,63 @@
+// RunSession and its clients (docs/clients.md, a client leaving): the walls a client added
+// belong to its connection, and go when it does - at the next tick boundary, with no new gate
+// (fewer walls only ask less of the device: each wall's verdict stands alone, and the condition
+// on walls acting together only gains margin without one) - unless they were added to be kept
+// ("keep", or by default with safety.client_walls_on_leave: keep), which belong to no client.
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+
+#include "gate/gate_report_format.h"
+#include "service/config_source.h"
+#include "service/run/gate_derate.h"
+#include "service/run/run_session.h"
+#include "service/run/scene_edit.h"
+
+namespace hapticd::service {
+
+bool RunSession::holds(std::uint64_t client) const {
+  std::lock_guard lock(mutex_);
+  return std::find(owners_.begin(), owners_.end(), client) != owners_.end();
+}
+
+void RunSession::left(std::uint64_t client) {
+  std::lock_guard serial(reload_mutex_);
+  std::vector<std::size_t> gone;
+  {
+    std::lock_guard lock(mutex_);
+    for (std::size_t i = 0; i < owners_.size(); ++i) {
+      if (owners_[i] == client) gone.push_back(i);
+    }
+    if (gone.empty()) return;
+  }
+  remove_walls(gone, "client " + std::to_string(client) + " left");
+}
+
+void RunSession::remove_walls(const std::vector<std::size_t>& gone, const std::string& why) {
+  config::Config running;
+  Phase phase = Phase::kStarting;
+  Prepared next;
+  {
+    std::lock_guard lock(mutex_);
+    running = cfg_;
+    phase = phase_;
+    next.report = report_;
+  }
+  if (phase == Phase::kStarting || phase == Phase::kEnded || !scene_.walls ||
+      !next.report.workspace) {
+    return;
+  }
+  const EditedScene edited = without_walls(running.effective_yaml, gone);
+  // The running configuration less some walls: what was valid stays valid.
+  next.cfg = load_config_text_checked(edited.yaml, why, ".", {});
+  std::vector<gate::WallVerdict>& verdicts = next.report.workspace->walls;
+  std::vector<gate::WallVerdict> kept;
+  for (const int from : edited.continues) kept.push_back(verdicts[static_cast<std::size_t>(from)]);
+  verdicts = std::move(kept);
+  next.law = std::make_unique<control::Controller>(control::make_control_law(next.cfg));
+  next.walls = make_scene_walls(next.cfg, session_->device().info(), next.report,
+                                scene_.walls.get(), &edited.continues);
+  commit(next, phase, why, "scene remove (" + why + ")", &edited.continues, 0);
+}
+
+}  // namespace hapticd::service
