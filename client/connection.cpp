@@ -192,4 +192,10 @@ Applied Connection::move_wall(std::size_t index, std::span<const double> point) 
   return out;
 }
 
+json Connection::servo_cf(std::span<const double> force) {
+  json f = json::array();
+  for (const double v : force) f.push_back(v);
+  return call({{"cmd", "servo_cf"}, {"force", f}})["servo_cf"];
+}
+
 }  // namespace hapticd::client

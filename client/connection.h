@@ -81,6 +81,11 @@ class Connection {
   nlohmann::json remove_wall(std::size_t index);
   // Moves walls[index] to `point`: one number per task axis of the device (StateReader::axes).
   Applied move_wall(std::size_t index, std::span<const double> point);
+  // Commands a force (N, one number per task axis; CRTK's servo_cf), added to the walls'. Send
+  // it again within the daemon's safety.client_force_hold_ms or it fades to zero; it goes at
+  // once when this connection closes. The answer's "servo_cf": the force taken (saturated to
+  // safety.client_force_limit) and whether it was saturated.
+  nlohmann::json servo_cf(std::span<const double> force);
 
  private:
   std::string line();  // the next answer line, receiving any descriptor passed with it

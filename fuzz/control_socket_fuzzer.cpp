@@ -52,6 +52,12 @@ class DaemonLikeHandler : public service::ControlHandler {
         return reload(r);
       case service::Command::kScene:
         return scene(r);
+      case service::Command::kState:
+        return {{"state", {{"layout", 1}}}};
+      case service::Command::kServoCf:  // what the parser promises a force
+        require(r.force_axes >= 1 && r.force_axes <= 3, "a force has 1 to 3 numbers");
+        for (const double v : r.force) require(std::isfinite(v), "a force is finite");
+        return {{"servo_cf", {{"saturated", false}}}};
     }
     throw service::ControlRefusal("unknown command");
   }

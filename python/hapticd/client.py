@@ -234,6 +234,14 @@ class Client:
         applied_at_ns (CLOCK_MONOTONIC, as time.monotonic_ns()), null when no tick took it."""
         return self.scene("move", index=index, point=_vector("point", point))
 
+    def servo_cf(self, force: Iterable[float]) -> dict[str, Any]:
+        """Commands a force (N, one number per task axis; CRTK's servo_cf), added to the walls'.
+        Send it again within the daemon's safety.client_force_hold_ms or it fades to zero; it
+        goes at once when this connection closes. The answer says the force taken (saturated
+        to safety.client_force_limit, and whether it was)."""
+        return self._member(self.request({"cmd": "servo_cf", "force": _vector("force", force)}),
+                            "servo_cf", "servo_cf")
+
     def state(self) -> State:
         """The state block, mapped; close it when done (a context manager)."""
         answer, fds = self._exchange({"cmd": "state"})

@@ -25,7 +25,8 @@ void write_rows(const telemetry::LogContents& log, std::ostream& out) {
          "unarmed,non_finite,sequence_gap,no_position,device_status,sample_time_s,sequence,"
          "fault_cause,fault_class,fault_code,marker,observer_energy_j,passivity_damping,"
          "passivity_damped,stepped,held,runaway,probe,joints,joint2_position,joint3_position,"
-         "joint2_force,joint3_force,task_x,task_y,task_z,deepest_wall,wall_contact,pose_status\n";
+         "joint2_force,joint3_force,task_x,task_y,task_z,deepest_wall,wall_contact,pose_status,"
+         "client_fx,client_fy,client_fz,client_force_limited\n";
   char row[768];
   for (const telemetry::TickRecord& r : log.records) {
     const auto bit = [&](std::uint32_t f) { return (r.flags & f) ? 1 : 0; };
@@ -46,11 +47,15 @@ void write_rows(const telemetry::LogContents& log, std::ostream& out) {
         bit(telemetry::kFlagHeld), bit(telemetry::kFlagRunaway), bit(telemetry::kFlagProbe));
     out << row;
     // Format 4's fields (a device of several joints; `joints` 1 for a log before it).
-    std::snprintf(row, sizeof row, ",%u,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%u,%u,%u\n",
+    std::snprintf(row, sizeof row, ",%u,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%u,%u,%u",
                   r.joints == 0 ? 1u : unsigned{r.joints}, r.joint_position[0], r.joint_position[1],
                   r.joint_force[0], r.joint_force[1], r.task_position[0], r.task_position[1],
                   r.task_position[2], unsigned{r.deepest_wall}, unsigned{r.wall_contact},
                   unsigned{r.pose_status});
+    out << row;
+    // Format 5's: a client's commanded force (0 in a log before it).
+    std::snprintf(row, sizeof row, ",%.17g,%.17g,%.17g,%d\n", r.client_force[0], r.client_force[1],
+                  r.client_force[2], bit(telemetry::kFlagClientForceLimited));
     out << row;
   }
 }

@@ -17,6 +17,7 @@ std::optional<Command> command_named(const std::string& name) {
   if (name == "clear-fault") return Command::kClearFault;
   if (name == "scene") return Command::kScene;
   if (name == "state") return Command::kState;
+  if (name == "servo_cf") return Command::kServoCf;
   return std::nullopt;
 }
 
@@ -26,24 +27,30 @@ constexpr std::pair<const char*, SceneEdit::Op> kSceneOps[] = {{"add", SceneEdit
                                                                {"remove", SceneEdit::Op::kRemove},
                                                                {"move", SceneEdit::Op::kMove}};
 
-// A move's "point": 1 to 3 finite numbers; false with `error` naming what is wrong.
-bool parse_point(const json& j, SceneEdit& out, std::string& error) {
-  const auto point = j.find("point");
-  if (point == j.end() || !point->is_array() || point->empty() || point->size() > 3) {
-    error = "scene: move needs \"point\": the wall's new point, [x], [x, y] or [x, y, z] (m)";
+// A vector member `key` of 1 to 3 finite numbers (one per task axis, in `unit`); false with
+// `error` naming what is wrong (`what` says what the request needs it for).
+bool parse_vector(const json& j, const char* key, const std::string& what, const char* unit,
+                  std::array<double, 3>& out, std::size_t& axes, std::string& error) {
+  const auto v = j.find(key);
+  if (v == j.end() || !v->is_array() || v->empty() || v->size() > 3) {
+    error = what + " needs \"" + key + "\": one number per task axis (" + unit + ")";
     return false;
   }
-  for (std::size_t a = 0; a < point->size(); ++a) {
-    const json& v = (*point)[a];
-    if (!v.is_number() || !std::isfinite(v.get<double>())) {
-      error = "scene: \"point\"[" + std::to_string(a) + "]: must be a finite number (m), got " +
-              v.dump(-1, ' ', false, json::error_handler_t::replace);
+  for (std::size_t a = 0; a < v->size(); ++a) {
+    const json& x = (*v)[a];
+    if (!x.is_number() || !std::isfinite(x.get<double>())) {
+      error = what + ": \"" + key + "\"[" + std::to_string(a) + "]: must be a finite number (" +
+              unit + "), got " + x.dump(-1, ' ', false, json::error_handler_t::replace);
       return false;
     }
-    out.point[a] = v.get<double>();
+    out[a] = x.get<double>();
   }
-  out.axes = point->size();
+  axes = v->size();
   return true;
+}
+
+bool parse_point(const json& j, SceneEdit& out, std::string& error) {
+  return parse_vector(j, "point", "scene: move", "m", out.point, out.axes, error);
 }
 
 // A scene request's members (control_protocol.h); false with `error` naming the member.
@@ -115,7 +122,7 @@ std::optional<Request> parse_request(std::string_view text, std::string& error, 
   const std::optional<Command> c =
       cmd != j.end() && cmd->is_string() ? command_named(cmd->get<std::string>()) : std::nullopt;
   if (!c) {
-    error = "\"cmd\" must be one of status, stop, reload, clear-fault, scene, state";
+    error = "\"cmd\" must be one of status, stop, reload, clear-fault, scene, state, servo_cf";
     return std::nullopt;
   }
   Request r;
@@ -132,6 +139,10 @@ std::optional<Request> parse_request(std::string_view text, std::string& error, 
     r.source = source != j.end() && source->is_string() ? source->get<std::string>() : "reload";
   }
   if (*c == Command::kScene && !parse_scene(j, r.scene, error)) return std::nullopt;
+  if (*c == Command::kServoCf &&
+      !parse_vector(j, "force", "servo_cf", "N", r.force, r.force_axes, error)) {
+    return std::nullopt;
+  }
   return r;
 }
 

@@ -9,6 +9,7 @@
 //            add may say "keep": true | false (the wall outlives its client or not)
 //           {"v": 1, "cmd": "scene", "op": "move", "index": <n>, "point": [x, y, z]}
 //                                            (1 to 3 finite numbers: the wall's new point, m)
+//           {"v": 1, "cmd": "servo_cf", "force": [fx, fy, fz]}   (N, one per task axis)
 // "state" is answered with the state block's shape, and its descriptor passed with the answer's
 // first byte (SCM_RIGHTS; client/state_layout.h).
 // Response: {"v": 1, "id": <echoed>, "ok": true, ...the command's members}
@@ -33,7 +34,7 @@ namespace hapticd::service {
 inline constexpr int kProtocolVersion = client::kProtocolVersion;  // one version, both ends
 inline constexpr std::size_t kMaxRequestBytes = 256 * 1024;        // a configuration fits with room
 
-enum class Command { kStatus, kStop, kReload, kClearFault, kScene, kState };
+enum class Command { kStatus, kStop, kReload, kClearFault, kScene, kState, kServoCf };
 
 // A scene request: a change to the walls of the running scene.
 struct SceneEdit {
@@ -53,10 +54,12 @@ const char* scene_op_name(SceneEdit::Op op) noexcept;
 
 struct Request {
   Command command = Command::kStatus;
-  nlohmann::json id;         // echoed in the response; null when absent
-  std::string config_text;   // reload
-  std::string source;        // reload: the name messages about the configuration use
-  SceneEdit scene;           // scene
+  nlohmann::json id;              // echoed in the response; null when absent
+  std::string config_text;        // reload
+  std::string source;             // reload: the name messages about the configuration use
+  SceneEdit scene;                // scene
+  std::array<double, 3> force{};  // servo_cf: the force (N), finite; zero past force_axes
+  std::size_t force_axes = 0;
   std::uint64_t client = 0;  // the connection it came on (the server's number; 0: none)
 };
 

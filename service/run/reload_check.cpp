@@ -69,6 +69,11 @@ std::vector<std::string> reload_blockers(const config::Config& running,
               s.passivity_max_damping != t.passivity_max_damping,
           "device.mass/damping, safety.passivity_controller/passivity_max_damping",
           "new passivity observer settings");
+  differs(s.client_force_hold_ms != t.client_force_hold_ms ||
+              s.client_force_ramp_ms != t.client_force_ramp_ms ||
+              s.client_force_energy_j != t.client_force_energy_j,
+          "safety.client_force_hold_ms/ramp_ms/energy_j",
+          "a new observer of the clients' force (it spans the run)");
   differs(running.telemetry.log_path != next.telemetry.log_path ||
               running.telemetry.ring_capacity != next.telemetry.ring_capacity,
           "telemetry", "a different tick log");

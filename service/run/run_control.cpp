@@ -50,6 +50,8 @@ json RunSession::handle(const Request& request) {
       return clear_fault();
     case Command::kScene:
       return scene(request.scene, request.client);
+    case Command::kServoCf:
+      return servo_cf(request);
     case Command::kState: {
       // The block is made with the socket, before any request can arrive (run()).
       std::lock_guard lock(mutex_);

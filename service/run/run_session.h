@@ -91,6 +91,8 @@ class RunSession final : public ControlHandler {
   // A client left (ControlHandler): the walls it added go at the next tick boundary (or stay,
   // safety.client_walls_on_leave), with no new gate: fewer walls only ask less of the device.
   void left(std::uint64_t client) override;
+  // A client's commanded force (loop/client_force.h): checked, saturated, handed to the loop.
+  nlohmann::json servo_cf(const Request& request);
   bool holds(std::uint64_t client) const override;
   // The walls at `gone` removed through commit(), judged by the verdicts the running walls had.
   void remove_walls(const std::vector<std::size_t>& gone, const std::string& why);
@@ -118,9 +120,10 @@ class RunSession final : public ControlHandler {
   loop::RtStatus rt_;
   std::optional<loop::CpuDmaLatencyRequest> pm_qos_;
   loop::LawSwap swap_;
-  loop::SceneSwap scene_swap_;                   // several joints: new walls
-  loop::WallMoves moves_;                        // several joints: a client's wall moves
-  std::unique_ptr<control::Controller> active_;  // the law the loop runs
+  loop::SceneSwap scene_swap_;                       // several joints: new walls
+  loop::WallMoves moves_;                            // several joints: a client's wall moves
+  std::unique_ptr<loop::ClientForce> client_force_;  // several joints: a client's force
+  std::unique_ptr<control::Controller> active_;      // the law the loop runs
   SceneParts scene_;  // a device of several joints: the walls the loop steps instead
   // Walls a reload accepted while no loop ran (a held fault): the next arming takes them.
   std::unique_ptr<loop::SceneWalls> pending_walls_;
@@ -137,6 +140,7 @@ class RunSession final : public ControlHandler {
   std::string not_movable_;            // why cfg_'s walls may not be moved ("": they may)
   gate::GateReport report_;            // the verdict on cfg_
   std::vector<std::uint64_t> owners_;  // each of cfg_.walls' client (0: the configuration's)
+  std::uint64_t force_owner_ = 0;      // the client whose force client_force_ renders (0: none)
   std::uint64_t reloads_ = 0;          // accepted reloads: cfg_ and the law swapped in agree
   Phase phase_ = Phase::kStarting;
   std::string fault_;  // the last fault, described

@@ -214,6 +214,14 @@ struct SafetyConfig {
   // What the walls a client added do when its connection to the control socket ends
   // (docs/clients.md): removed at the next tick boundary, or kept (then the configuration's).
   ClientWalls client_walls_on_leave = ClientWalls::kRemove;
+  // A force a client commands directly (servo_cf, docs/clients.md): saturated to this norm (N;
+  // 0: no client may command a force); held this long after it arrives, then ramped to zero
+  // over client_force_ramp_ms; and off while it has put more than client_force_energy_j into
+  // the device (its observer refills that much a second).
+  double client_force_limit = 0.0;
+  double client_force_hold_ms = 100.0;
+  double client_force_ramp_ms = 50.0;
+  double client_force_energy_j = 1.0;
   int stale_fault_ticks = 3;  // consecutive reads with no new position that fault the loop
   // A gap of this many samples or more in the device's own sequence counter faults the loop
   // (the loop ran on data older than it knew); 0: gaps are counted and logged only.

@@ -48,6 +48,12 @@ void read_safety(MapReader& top, SafetyConfig& safety) {
   if (const auto v = choice(m.diag(), m.take("client_walls_on_leave"), kClientWalls)) {
     safety.client_walls_on_leave = *v;
   }
+  number(m, "client_force_limit", Range::at_least(0.0), safety.client_force_limit);
+  number(m, "client_force_hold_ms", Range::interval(0.0, false, 10000.0, true),
+         safety.client_force_hold_ms);
+  number(m, "client_force_ramp_ms", Range::interval(0.0, false, 10000.0, true),
+         safety.client_force_ramp_ms);
+  number(m, "client_force_energy_j", Range::greater_than(0.0), safety.client_force_energy_j);
   integer(m, "stale_fault_ticks", IntRange::at_least(1, INT_MAX), safety.stale_fault_ticks);
   if (const auto v =
           read_integer(m.diag(), m.take("sequence_gap_fault"), IntRange::between(0, 65535))) {

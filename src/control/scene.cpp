@@ -88,8 +88,9 @@ void Scene::step_walls(const kinematics::Pose& pose, SceneStep& out) noexcept {
 }
 
 void Scene::map(const kinematics::Pose& pose, std::span<const double> commands,
-                const kinematics::Vec3& limit, SceneStep& out) const noexcept {
-  out.force.setZero();
+                const kinematics::Vec3& limit, SceneStep& out,
+                const kinematics::Vec3& added) const noexcept {
+  out.force = added;
   for (std::size_t i = 0; i < walls_.size() && i < commands.size(); ++i) {
     out.force += commands[i] * geometry_[i].normal;
   }

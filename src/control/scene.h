@@ -57,10 +57,12 @@ class Scene {
   // The two halves of step(), for a loop that adds to each wall's force in between (the
   // passivity controller along each normal). RT-safe: called every tick. step_walls steps
   // every wall (out.walls, flags, pose_ok, their summed force); map puts `commands` (one per
-  // wall, along its normal) through J^T and the saturation into out.force and out.tau.
+  // wall, along its normal) and `added` (a task force of a client's, N) through J^T and the
+  // saturation into out.force and out.tau.
   void step_walls(const kinematics::Pose& pose, SceneStep& out) noexcept;
   void map(const kinematics::Pose& pose, std::span<const double> commands,
-           const kinematics::Vec3& limit, SceneStep& out) const noexcept;
+           const kinematics::Vec3& limit, SceneStep& out,
+           const kinematics::Vec3& added = kinematics::Vec3::Zero()) const noexcept;
   // RT-safe. Wall i's law (a live reload does not reach a scene yet).
   const ControlLaw& law(std::size_t i) const noexcept { return walls_[i].law(); }
 

@@ -130,7 +130,9 @@ JointCommand step_scene_tick(SceneState& st, const JointInput& in,
     }
   }
   rec.observer_energy_j = energy;
-  st.walls->scene->map(pose, std::span<const double>(c.wall.data(), step.count), st.limit, step);
+  for (int a = 0; a < 3; ++a) rec.client_force[a] = in.client_force[a];
+  st.walls->scene->map(pose, std::span<const double>(c.wall.data(), step.count), st.limit, step,
+                       in.client_force);
   rec.flags |= step.flags;  // the joints' saturation, a non-finite torque
   c.non_finite = (step.flags & control::kControlNonFinite) != 0;
   c.runaway = running_away(st, step, rec.penetration, rec.deepest_wall);

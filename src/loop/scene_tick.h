@@ -33,11 +33,14 @@ struct JointInput {
   kinematics::Vec3 q = kinematics::Vec3::Zero();  // each joint's position (held when stale)
   bool fresh = true;                              // new measurements, none held or stale
   std::uint32_t periods = 1;                      // sample periods since the previous tick
+  // A client's commanded force this tick (task space, N; loop/client_force.h).
+  kinematics::Vec3 client_force = kinematics::Vec3::Zero();
 
   // RT-safe. What a log recorded of a tick the loop stepped (kFlagStepped).
   static JointInput recorded(const telemetry::TickRecord& r, std::uint32_t periods) noexcept {
     JointInput in;
     in.q = {r.position, r.joint_position[0], r.joint_position[1]};
+    in.client_force = {r.client_force[0], r.client_force[1], r.client_force[2]};
     in.fresh = (r.flags & (telemetry::kFlagStale | telemetry::kFlagHeld)) == 0;
     in.periods = periods;
     return in;

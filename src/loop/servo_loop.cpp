@@ -239,13 +239,16 @@ Sensed ServoLoop::read_joints(std::uint64_t tick, std::int64_t wake, std::uint32
   return all;
 }
 
-void ServoLoop::scene_tick(std::uint64_t tick, const Sensed& sensed, const kinematics::Vec3& q,
-                           std::uint32_t periods, telemetry::TickRecord& rec,
-                           LoopResult& res) noexcept {
+void ServoLoop::scene_tick(std::uint64_t tick, std::int64_t wake, const Sensed& sensed,
+                           const kinematics::Vec3& q, std::uint32_t periods,
+                           telemetry::TickRecord& rec, LoopResult& res) noexcept {
   SceneState& st = *options_.scene;
+  ClientForce* client = options_.client_force;
+  const kinematics::Vec3 commanded = client ? client->step(wake) : kinematics::Vec3::Zero();
+  if (client != nullptr && client->limited()) rec.flags |= telemetry::kFlagClientForceLimited;
   JointCommand c;
   if (sensed.has_position) {
-    c = step_scene_tick(st, {q, sensed.fresh, periods}, rec);
+    c = step_scene_tick(st, {q, sensed.fresh, periods, commanded}, rec);
     if (c.non_finite) set_fault({FaultCause::kNonFiniteForce, tick, rec.force_computed}, rec, res);
     if (c.runaway) {
       // What the walls can hold: the penetration at which they ask kRunawayMargin times what
@@ -265,6 +268,12 @@ void ServoLoop::scene_tick(std::uint64_t tick, const Sensed& sensed, const kinem
   if (faulted) write_zero();  // zero on every joint at once; the service disables output
   end_scene_tick(st, faulted ? nullptr : &c, rec);
   task_force_ = faulted ? kinematics::Vec3::Zero() : c.force;
+  // What of the client's force acted: its share of what the saturation let through.
+  const bool acted = !faulted && sensed.has_position;
+  if (client != nullptr) {
+    client->acted(acted ? kinematics::Vec3(c.scale * commanded) : kinematics::Vec3::Zero(),
+                  st.guess, st.guess.allFinite());
+  }
 }
 
 PassivityResult ServoLoop::scene_passivity() const noexcept {
@@ -295,7 +304,7 @@ PassivityResult ServoLoop::scene_passivity() const noexcept {
     rec.flags |= telemetry::kFlagNoPosition;
   }
   if (options_.scene != nullptr) {
-    scene_tick(tick, sensed, q, periods, rec, res);
+    scene_tick(tick, wake, sensed, q, periods, rec, res);
     return sensed;
   }
   TickCommand c;
@@ -355,6 +364,7 @@ LoopResult ServoLoop::run(const std::atomic<bool>& stop) noexcept {
   observer_.restart();  // nothing in flight from an earlier run
   probe_.restart();     // every arming checks the direction again
   if (options_.scene != nullptr) options_.scene->restart();
+  if (options_.client_force != nullptr) options_.client_force->restart();
   publisher_.restart();
   live_.direction.store(probe_.result().state, std::memory_order_relaxed);
   live_.direction_gain.store(0.0, std::memory_order_relaxed);

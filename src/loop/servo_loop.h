@@ -14,6 +14,7 @@
 #include "control/direction_probe.h"
 #include "control/passivity_observer.h"
 #include "drivers/device.h"
+#include "loop/client_force.h"
 #include "loop/latency_histogram.h"
 #include "loop/law_swap.h"
 #include "loop/loop_fault.h"
@@ -58,6 +59,8 @@ struct LoopOptions {
   WallMoves* wall_moves = nullptr;
   // The clients' state block (null: none): every tick published into it.
   telemetry::StateBlock* state = nullptr;
+  // A client's commanded force at several joints (null: none), added to the walls' each tick.
+  ClientForce* client_force = nullptr;
 };
 
 // What the loop is doing, readable from any thread while it runs (relaxed atomics, stored
@@ -174,8 +177,9 @@ class ServoLoop {
                      std::span<SampleCheck> checks, kinematics::Vec3& q,
                      telemetry::TickRecord& rec) noexcept;
   // device_tick's step and write for several joints. RT-safe: called every tick.
-  void scene_tick(std::uint64_t tick, const Sensed& sensed, const kinematics::Vec3& q,
-                  std::uint32_t periods, telemetry::TickRecord& rec, LoopResult& res) noexcept;
+  void scene_tick(std::uint64_t tick, std::int64_t wake, const Sensed& sensed,
+                  const kinematics::Vec3& q, std::uint32_t periods, telemetry::TickRecord& rec,
+                  LoopResult& res) noexcept;
   // Zero force on every joint. RT-safe.
   void write_zero() noexcept;
   // Records a fault on this tick (the device's class and code for device and transport ones).

@@ -1,11 +1,12 @@
-// The binary tick log, format version 4. Everything is little-endian, with no padding and
-// no alignment between fields; offsets below are in bytes. Versions 1, 2 and 3 differ only in
-// their records: 72, 96 and 112 bytes, the first bytes of version 4's (record_size says which).
+// The binary tick log, format version 5. Everything is little-endian, with no padding and
+// no alignment between fields; offsets below are in bytes. Versions 1 to 4 differ only in
+// their records: 72, 96, 112 and 176 bytes, the first bytes of version 5's (record_size says
+// which), and version 4 has no marker 4.
 //
 // File header (44 + config_len bytes):
 //   0   u8[8]  magic "HAPTLOG\0" (48 41 50 54 4C 4F 47 00)
-//   8   u32    version = 4 (1, 2 and 3 are still read)
-//   12  u32    record_size = 176 (72 in version 1, 96 in version 2, 112 in version 3)
+//   8   u32    version = 5 (1 to 4 are still read)
+//   12  u32    record_size = 200 (72, 96, 112 and 176 in versions 1 to 4)
 //   16  f64    sample_period_s (IEEE-754 binary64)
 //   24  i64    start_unix_ns: wall-clock time of tick 0 in ns since the Unix epoch, 0 = unknown
 //   32  u32    clock_mode: 0 = realtime, 1 = freerun
@@ -13,7 +14,7 @@
 //   40  u8[config_len]  the whole effective configuration as UTF-8 YAML (not NUL-terminated)
 //   40+config_len  u32  CRC-32 of bytes [0, 40+config_len)
 //
-// Then zero or more blocks, back to back until the end of the file. Block (28 + 176*n bytes):
+// Then zero or more blocks, back to back until the end of the file. Block (28 + 200*n bytes):
 //   0   u8[4]  magic "HBLK" (48 42 4C 4B)
 //   4   u32    record_count n, 0..kMaxBlockRecords
 //   8   u64    first_tick: the tick of the first record. In a block with n = 0 it is the tick
@@ -21,22 +22,23 @@
 //   16  u64    dropped_before: records the RT ring dropped (or that failed to reach the
 //              disk) between the previous block's last record and this block's first one.
 //              A block with n = 0 and dropped_before > 0 is a pure loss marker.
-//   24  u32    CRC-32 of block bytes [0, 24) followed by the n*176 record bytes
-//   28  n records of 176 bytes:
+//   24  u32    CRC-32 of block bytes [0, 24) followed by the n*200 record bytes
+//   28  n records of 200 bytes:
 //        0 u64 tick, 8 i64 scheduled_ns, 16 i32 wake_latency_ns, 20 i32 compute_ns,
 //        24 f64 position, 32 f64 penetration, 40 f64 velocity, 48 f64 force_computed,
 //        56 f64 force_commanded, 64 u32 flags (TickFlag bits), 68 u32 device_status,
 //        72 i64 sample_time_ns, 80 u32 sequence, 84 u8 fault_cause, 85 u8 fault_class,
 //        86 u16 sequence_gap, 88 u32 fault_code, 92 u32 marker (TickMarker: 0 for a tick,
-//        1 reload accepted, 2 reload refused, 3 re-armed after a cleared fault: an event at a
-//        tick boundary, not a tick), 96 f64 observer_energy_j (the passivity observer's
-//        energy, J), 104 f64 passivity_damping (N s/m the passivity controller added),
-//        version 4 (a device of several joints; zero for one): 112 f64[2] joint_position
-//        (joints 2 and 3; position is joint 1's), 128 f64[2] joint_force (likewise
-//        force_commanded), 144 f64[3] task_position (m), 168 u8 joints (0: one), 169 u8
+//        1 reload accepted, 2 reload refused, 3 re-armed after a cleared fault, 4 a client
+//        moved a wall (version 5): an event at a tick boundary, not a tick), 96 f64
+//        observer_energy_j (the passivity observer's energy, J), 104 f64 passivity_damping (N s/m
+//        the passivity controller added), version 4 (a device of several joints; zero for one): 112
+//        f64[2] joint_position (joints 2 and 3; position is joint 1's), 128 f64[2] joint_force
+//        (likewise force_commanded), 144 f64[3] task_position (m), 168 u8 joints (0: one), 169 u8
 //        deepest_wall (penetration, velocity and force_computed are that wall's), 170 u8
 //        wall_contact (bit per wall), 171 u8 pose_status (0 ok, 1 outside workspace, 2 near
-//        singularity, 3 no convergence), 172 u32 reserved (0)
+//        singularity, 3 no convergence), 172 u32 reserved (0),
+//        version 5: 176 f64[3] client_force (a client's servo_cf this tick, task space, N)
 //
 // A live reload that swapped a new control law in (marker 1), and a re-arming (marker 3, a
 // law started afresh), add a config block right after the block holding their marker record,
@@ -98,9 +100,9 @@ V load_field(const std::byte* at) noexcept {
 }
 
 inline constexpr std::array<char, 8> kFileMagic = {'H', 'A', 'P', 'T', 'L', 'O', 'G', '\0'};
-// Version 5 is version 4's layout with one more marker (kMarkerWallMoved).
 inline constexpr std::uint32_t kFormatVersion = 5;
-inline constexpr std::uint32_t kRecordSize = 176;
+inline constexpr std::uint32_t kRecordSize = 200;
+inline constexpr std::uint32_t kRecordSizeV4 = 176;      // version 4: the first 176 bytes
 inline constexpr std::uint32_t kRecordSizeV1 = 72;       // version 1: the first 72 bytes
 inline constexpr std::uint32_t kRecordSizeV2 = 96;       // version 2: the first 96 bytes
 inline constexpr std::uint32_t kRecordSizeV3 = 112;      // version 3: the first 112 bytes
@@ -134,7 +136,7 @@ static_assert(
     offsetof(TickRecord, joint_force) == 128 && offsetof(TickRecord, task_position) == 144 &&
     offsetof(TickRecord, joints) == 168 && offsetof(TickRecord, deepest_wall) == 169 &&
     offsetof(TickRecord, wall_contact) == 170 && offsetof(TickRecord, pose_status) == 171 &&
-    offsetof(TickRecord, reserved) == 172);
+    offsetof(TickRecord, reserved) == 172 && offsetof(TickRecord, client_force) == 176);
 
 // What the file header carries besides the constants.
 struct LogHeader {
@@ -157,7 +159,7 @@ constexpr std::size_t record_size_of_version(std::uint32_t version) {
   return version == 1                ? kRecordSizeV1
          : version == 2              ? kRecordSizeV2
          : version == 3              ? kRecordSizeV3
-         : version == 4              ? kRecordSize
+         : version == 4              ? kRecordSizeV4
          : version == kFormatVersion ? kRecordSize
                                      : 0;
 }

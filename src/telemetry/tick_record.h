@@ -1,7 +1,7 @@
 // One fixed-size record per tick, written by the RT thread into the SPSC ring and appended
-// to the binary log by the writer thread. The layout is part of the log format (version 4):
-// little-endian, no padding, 176 bytes. Version 1, 2 and 3 logs (72-, 96- and 112-byte records,
-// the first bytes of this layout) are still read, with the later fields zero.
+// to the binary log by the writer thread. The layout is part of the log format (version 5):
+// little-endian, no padding, 200 bytes. Version 1 to 4 logs (72-, 96-, 112- and 176-byte
+// records, the first bytes of this layout) are still read, with the later fields zero.
 #pragma once
 
 #include <cstdint>
@@ -31,6 +31,9 @@ enum TickFlag : std::uint32_t {
   // The direction check's tick (docs/devices.md): the wall not armed yet; the force commanded
   // is the check's pulse (or zero while it waits for rest). Logs before this bit leave it 0.
   kFlagProbe = 1u << 14,
+  // Version 5: a client's commanded force was held off this tick by its energy observer
+  // (loop/client_force.h). Logs before this bit leave it 0.
+  kFlagClientForceLimited = 1u << 15,
 };
 
 // A record that is not a tick but an event at a tick boundary (TickRecord::marker): `tick` is
@@ -80,9 +83,12 @@ struct TickRecord {
   std::uint8_t wall_contact = 0;  // bit i: wall i in contact
   std::uint8_t pose_status = 0;   // kinematics::Status of the tick's pose, 0: ok
   std::uint32_t reserved = 0;
+  // Version 5: the force a client commanded (servo_cf) that this tick added to the walls',
+  // before the joints' saturation (task space, N; 0 when none).
+  double client_force[3] = {0.0, 0.0, 0.0};
 };
 
 static_assert(std::is_trivially_copyable_v<TickRecord>);
-static_assert(sizeof(TickRecord) == 176, "TickRecord is part of the log format");
+static_assert(sizeof(TickRecord) == 200, "TickRecord is part of the log format");
 
 }  // namespace hapticd::telemetry

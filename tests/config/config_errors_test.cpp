@@ -26,7 +26,8 @@ TEST(ConfigErrors, UnknownKeyWithoutNeighbourListsTheAllowedKeys) {
   EXPECT_EQ(errors_of("safety:\n  colour: red\n"),
             Lines{"t.yaml:2: safety.colour: unknown key; expected one of: gate, "
                   "operator_passivity_shortage, passivity_margin, max_speed, max_wall_speed, "
-                  "client_walls_on_leave, stale_fault_ticks, "
+                  "client_walls_on_leave, client_force_limit, client_force_hold_ms, "
+                  "client_force_ramp_ms, client_force_energy_j, stale_fault_ticks, "
                   "sequence_gap_fault, passivity_controller, passivity_max_damping, "
                   "direction_check, max_penetration"});
   EXPECT_EQ(errors_of("plugins: []\n"),

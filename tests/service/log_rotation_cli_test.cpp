@@ -19,7 +19,7 @@ using nlohmann::json;
 
 TEST(CliRotation, ARunUnderASmallCapKeepsItsNewestSegmentsAndExportReadsThemInOrder) {
   const std::string log = temp_path("rotated.hlog"), sum = temp_path("rotated.json");
-  // 60000 ticks of 176 bytes are 10 MB: eleven segments of 1 MB, of which the 3 MB cap keeps two.
+  // 60000 ticks of 200 bytes are 12 MB: twelve segments of 1 MB, of which the 3 MB cap keeps two.
   const ProcessResult r =
       run_process({hapticd_binary(), "run", "--duration", "60", "--log", log, "--summary-json", sum,
                    "--set", "loop.clock=freerun", "--set", "telemetry.max_segment_mb=1", "--set",

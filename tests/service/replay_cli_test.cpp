@@ -119,7 +119,7 @@ TEST(CliReplay, ARotatedLogIsReplayedAcrossItsSegments) {
   args.insert(args.end(), kCoupledDelayed.begin(), kCoupledDelayed.end());
   ASSERT_EQ(run_process(args).exit_code, 0);
   const json j = replay_json(log);
-  EXPECT_EQ(j["segments"].size(), 3u);  // 15000 records of 176 bytes: 2.5 MB
+  EXPECT_EQ(j["segments"].size(), 3u);  // 15000 records of 200 bytes: 2.9 MB
   expect_reproduced(j, 15000);
 }
 

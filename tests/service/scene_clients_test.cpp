@@ -11,8 +11,10 @@
 #include <thread>
 #include <vector>
 
+#include "client/connection.h"
 #include "daemon.h"
 #include "process.h"
+#include "telemetry/log_reader.h"
 
 namespace hapticd::testing {
 namespace {
@@ -106,6 +108,127 @@ TEST(SceneClients, KeptByConfigurationTheyStayAndBecomeTheConfigurations) {
   EXPECT_TRUE(comes_to(d, 2));
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
   EXPECT_EQ(walls(d), 2u);
+}
+
+// What servo_cf refuses, by name: no force configured, a force of the wrong size or not finite,
+// a device of one joint.
+TEST(SceneClients, ACommandedForceIsRefusedWhereItMayNotBe) {
+  Daemon d({"--config", source_dir() + "/config/sim-delta-scene.yaml", "--duration", "120"});
+  ASSERT_TRUE(d.ready());
+  RawClient c(d.socket());
+  const auto ask = [&](const std::string& force) {
+    EXPECT_TRUE(c.send(R"({"v":1,"cmd":"servo_cf","force":)" + force + "}\n"));
+    return json::parse(c.line(), nullptr, false);
+  };
+  json a = ask("[0, 0, 1]");
+  EXPECT_EQ(a["code"], 2);
+  EXPECT_NE(a["error"].get<std::string>().find("safety.client_force_limit is 0"), std::string::npos)
+      << a.dump();
+  a = ask(R"([0, 0, "inf"])");
+  EXPECT_EQ(a["code"], 2);
+  EXPECT_NE(a["error"].get<std::string>().find("\"force\"[2]: must be a finite number (N)"),
+            std::string::npos)
+      << a.dump();
+  Daemon one({"--duration", "120", "--set", "loop.clock=realtime"});
+  ASSERT_TRUE(one.ready());
+  RawClient c1(one.socket());
+  ASSERT_TRUE(c1.send(R"({"v":1,"cmd":"servo_cf","force":[1]})"
+                      "\n"));
+  a = json::parse(c1.line(), nullptr, false);
+  EXPECT_EQ(a["code"], 2);
+  EXPECT_NE(a["error"].get<std::string>().find("a device of several joints"), std::string::npos)
+      << a.dump();
+}
+
+TEST(SceneClients, ACommandedForceOfTheWrongSizeIsRefusedAndATooLargeOneSaturated) {
+  Daemon d({"--config", source_dir() + "/config/sim-delta-scene.yaml", "--duration", "120", "--set",
+            "safety.client_force_limit=2"});
+  ASSERT_TRUE(d.ready());
+  client::Connection c(d.socket(), 5000);
+  const std::vector<double> two = {0.0, 1.0};
+  try {
+    c.servo_cf(two);
+    ADD_FAILURE() << "a force of two numbers was taken by a device of three axes";
+  } catch (const client::Refused& e) {
+    EXPECT_EQ(e.code(), 2);
+    EXPECT_NE(std::string(e.what()).find("the device has 3 task axes, the force 2 numbers"),
+              std::string::npos)
+        << e.what();
+  }
+  const std::vector<double> big = {0.0, 3.0, 4.0};
+  const json taken = c.servo_cf(big);
+  EXPECT_EQ(taken["saturated"], true);
+  EXPECT_NEAR(taken["force"][1].get<double>(), 1.2, 1e-12);  // 5 N along (0, 0.6, 0.8) -> 2 N
+  EXPECT_NEAR(taken["force"][2].get<double>(), 1.6, 1e-12);
+}
+
+// A client pushing up on the delta at 100 Hz (servo_cf), killed: its force is gone within a few
+// ticks (its leaving, not the hold's 100 ms); another, stopped (SIGSTOP: connected, silent):
+// its force holds, then fades to zero over the 50 ms ramp. The log replays both bit for bit.
+TEST(SceneClients, AKilledClientsForceGoesAtOnceAndASilentOnesFadesOverTheRamp) {
+  Daemon d({"--config", source_dir() + "/config/sim-delta-scene.yaml", "--duration", "120", "--set",
+            "safety.client_force_limit=2"});
+  ASSERT_TRUE(d.ready());
+  const std::string pusher =
+      "import sys, time, hapticd\n"
+      "c = hapticd.Client(sys.argv[1])\n"
+      "while True:\n"
+      "    c.servo_cf([0, 0, 1.0])\n"
+      "    time.sleep(0.01)\n";
+  const std::vector<std::string> env = {"PYTHONPATH=" + source_dir() + "/python"};
+  client::Connection c(d.socket(), 5000);
+  const client::StateReader state = c.state();
+  const auto now_tick = [&] {
+    client::StateSample s;
+    EXPECT_TRUE(state.latest(s));
+    return s.tick;
+  };
+  std::uint64_t killed_at = 0, stopped_at = 0;
+  {
+    BackgroundProcess p({"/usr/bin/python3", "-c", pusher, d.socket()}, env);
+    std::this_thread::sleep_for(std::chrono::milliseconds(700));
+    killed_at = now_tick();
+    p.signal(SIGKILL);
+    p.wait();
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  {
+    BackgroundProcess p({"/usr/bin/python3", "-c", pusher, d.socket()}, env);
+    std::this_thread::sleep_for(std::chrono::milliseconds(700));
+    stopped_at = now_tick();
+    p.signal(SIGSTOP);
+    std::this_thread::sleep_for(std::chrono::milliseconds(400));
+    p.signal(SIGKILL);
+    p.wait();
+  }
+  ASSERT_EQ(d.ctl({"stop"}).exit_code, 0);
+  EXPECT_EQ(d.wait().exit_code, 0);
+  std::vector<telemetry::TickRecord> ticks;
+  for (const telemetry::TickRecord& r : telemetry::read_log(d.log()).records) {
+    if (r.marker == telemetry::kMarkerNone) ticks.push_back(r);
+  }
+  const auto first_zero_from = [&](std::uint64_t tick) -> std::size_t {
+    for (std::size_t i = 0; i < ticks.size(); ++i) {
+      if (ticks[i].tick >= tick && ticks[i].client_force[2] == 0.0) return i;
+    }
+    return ticks.size();
+  };
+  const std::size_t gone = first_zero_from(killed_at);
+  ASSERT_LT(gone, ticks.size());
+  EXPECT_EQ(ticks[gone - 1].client_force[2], 1.0) << "it pushed until it was killed";
+  EXPECT_LT(ticks[gone].tick - killed_at, 50u) << "the killed client's force stayed";
+  const std::size_t faded = first_zero_from(stopped_at);
+  ASSERT_LT(faded, ticks.size());
+  std::size_t full = faded;
+  while (full > 0 && ticks[full - 1].client_force[2] < 1.0) --full;
+  // From the last tick at full force, down the ramp: 50 ms of ticks, each less than the last.
+  EXPECT_NEAR(static_cast<double>(ticks[faded].tick - ticks[full - 1].tick), 50.0, 3.0);
+  for (std::size_t i = full; i < faded; ++i) {
+    EXPECT_LT(ticks[i].client_force[2], ticks[i - 1].client_force[2]) << "tick " << ticks[i].tick;
+  }
+  const ProcessResult replay = run_process({hapticd_binary(), "replay", d.log(), "--json"});
+  ASSERT_EQ(replay.exit_code, 0) << replay.err;
+  EXPECT_EQ(json::parse(replay.out)["reproduced"]["identical"], true) << replay.out;
 }
 
 }  // namespace

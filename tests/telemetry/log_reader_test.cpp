@@ -35,7 +35,7 @@ struct FiveBlockLog {
   LogHeader header = sample_header();
   std::vector<TickRecord> records = make_records(1000, kBlocks* kPerBlock);
   std::size_t header_size = 44 + header.config_text.size();
-  std::size_t block_bytes = 28 + kPerBlock * 176;
+  std::size_t block_bytes = 28 + kPerBlock * kRecordSize;
   std::vector<std::byte> bytes;
 
   FiveBlockLog() {

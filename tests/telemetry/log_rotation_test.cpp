@@ -27,7 +27,7 @@ using test::make_records;
 using test::records_identical;
 using test::sample_header;
 
-constexpr std::uint64_t kSegment = 64 * 1024;  // about 370 records of 176 bytes per segment
+constexpr std::uint64_t kSegment = 64 * 1024;  // about 330 records of 200 bytes per segment
 
 // Writes `records` through a LogWriter with `rotation`, in blocks of 32; the writer, stopped.
 std::vector<std::string> write_rotated(const std::string& path,
@@ -61,7 +61,7 @@ TEST(LogRotation, EverySegmentIsACompleteLogAndTheSetReadsBackWhole) {
   const std::vector<TickRecord> records = make_records(0, 5000);
   const auto events = write_rotated(path, records, {kSegment, 0, {}});
   const std::vector<FamilyFile> set = list_log_set(path);
-  ASSERT_GE(set.size(), 7u) << "5000 records of 176 bytes are 880 KB: 14 segments of 64 KB";
+  ASSERT_GE(set.size(), 7u) << "5000 records of 200 bytes are 1 MB: 16 segments of 64 KB";
   std::vector<TickRecord> joined;
   for (std::size_t i = 0; i < set.size(); ++i) {
     EXPECT_EQ(set[i].path, segment_path(path, static_cast<std::uint32_t>(i + 1)));
