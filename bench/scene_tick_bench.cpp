@@ -15,6 +15,7 @@
 #include "control/scene.h"
 #include "full_tick.h"
 #include "loop/servo_loop.h"
+#include "telemetry/state_block.h"
 
 namespace {
 
@@ -64,22 +65,33 @@ class PathDevice final : public hapticd::Device {
 };
 
 // What one run drives: the path, the scene of config/sim-delta.yaml's six walls with their
-// observers, and the loop over them.
+// observers, and the loop over them; with `clients`, what a daemon with a control socket adds
+// each tick (the state block published, the moves and a client's force looked at).
 struct DeltaRig {
   DeltaRig(const hapticd::config::Config& cfg, hapticd::bench::TickRing& ring,
-           hapticd::loop::LoopOptions o)
-      : device(cfg.device.kinematics),
+           hapticd::loop::LoopOptions o, bool clients)
+      : block(4096, cfg.loop.period_ns(), 3, 3),
+        force({2.0, 100000000, 50000000, 1.0, cfg.loop.sample_period_s()}),
+        device(cfg.device.kinematics),
         unused(hapticd::control::make_control_law(cfg)),
         walls(std::make_unique<hapticd::control::Scene>(hapticd::control::make_scene(cfg)),
               std::vector<hapticd::control::ObserverParams>(
                   cfg.walls.size(), hapticd::control::observer_params(cfg, 0))),
         state(cfg.device.kinematics, walls, cfg.device.max_force.per_joint()),
-        loop(device, unused, &ring, with_scene(o, &state)) {}
+        loop(device, unused, &ring, with_scene(o, &state, clients ? this : nullptr)) {}
   static hapticd::loop::LoopOptions with_scene(hapticd::loop::LoopOptions o,
-                                               hapticd::loop::SceneState* s) {
+                                               hapticd::loop::SceneState* s, DeltaRig* clients) {
     o.scene = s;
+    if (clients != nullptr) {
+      o.state = &clients->block;
+      o.wall_moves = &clients->moves;
+      o.client_force = &clients->force;
+    }
     return o;
   }
+  hapticd::telemetry::StateBlock block;
+  hapticd::loop::WallMoves moves;
+  hapticd::loop::ClientForce force;
   PathDevice device;
   hapticd::control::Controller unused;
   hapticd::loop::SceneWalls walls;
@@ -92,10 +104,14 @@ void BM_FullTick_Delta(benchmark::State& state) {
   hapticd::bench::run_full_ticks(
       state, static_cast<std::uint64_t>(state.range(0)), {},
       [&](hapticd::bench::TickRing& ring, const hapticd::loop::LoopOptions& o) {
-        return std::make_unique<DeltaRig>(cfg, ring, o);
+        return std::make_unique<DeltaRig>(cfg, ring, o, state.range(1) != 0);
       });
 }
 
-BENCHMARK(BM_FullTick_Delta)->Arg(100000)->ArgName("ticks")->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_FullTick_Delta)
+    ->Args({100000, 0})
+    ->Args({100000, 1})
+    ->ArgNames({"ticks", "clients"})
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace

@@ -81,8 +81,11 @@ int main(int argc, char** argv) {
     line += "contact\n";
     std::fputs(line.c_str(), out);
 
-    // Sleep only once caught up with the writer: samples already there cost no system call.
-    const std::int64_t poll_ns = static_cast<std::int64_t>(state.sample_period_ns() / 2);
+    // Sleep only once caught up with the writer, 10 ms at a time: samples already there cost no
+    // system call, and the block holds seconds of them, so every tick is read with 100 wake-ups
+    // a second rather than one a tick (what 32 readers waking each tick would cost the loop's
+    // CPUs: BENCHMARKS.md).
+    constexpr std::int64_t poll_ns = 10'000'000;
     const std::int64_t until = monotonic_ns() + static_cast<std::int64_t>(duration * 1e9);
     std::uint64_t read = 0;
     for (hc::StateSample s;;) {

@@ -238,7 +238,7 @@ class State:
                          f"(head {self.head}): is the writer stuck mid-sample?")
 
     def follow(self, *, start: int | None = None, until_ns: int | None = None,
-               poll_s: float = 0.0005) -> Follower:
+               poll_s: float = 0.01) -> Follower:
         """Every sample from ``start`` (default: the next one written) on, in order."""
         return Follower(self, self.head if start is None else start, until_ns, poll_s)
 
