@@ -146,8 +146,8 @@ TEST(CliDirectionCheck, TheCheckIsInTheTickLogAndReplayReproducesTheRunBitForBit
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::string rows = read_file(csv);
   EXPECT_TRUE(has(rows.substr(0, rows.find('\n')), ",runaway,probe")) << "the check's columns";
-  // runaway 0, probe 1, then format 4's columns of one joint.
-  EXPECT_TRUE(has(rows, ",0,1,1,0,0,0,0,0,0,0,0,0,0\n")) << "ticks of the check are marked";
+  // runaway 0, probe 1, then format 4's columns of one joint and format 5's four.
+  EXPECT_TRUE(has(rows, ",0,1,1,0,0,0,0,0,0,0,0,0,0,0,0,0,0\n")) << "ticks of the check are marked";
   r = run_process({hapticd_binary(), "replay", log, "--json"});
   ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
   const json j = json::parse(r.out);

@@ -216,8 +216,9 @@ TEST(CliReplay, ADeltaLogIsReproducedOnEveryJointAndExported) {
     std::vector<std::string> cells;
     std::istringstream fields(row);
     for (std::string c; std::getline(fields, c, ',');) cells.push_back(c);
-    ASSERT_GE(cells.size(), 11u);
-    const std::size_t first = cells.size() - 11;  // the format 4 columns, the last eleven
+    ASSERT_GE(cells.size(), 15u);
+    // Format 4's eleven columns, before format 5's four (a client's force).
+    const std::size_t first = cells.size() - 15;
     EXPECT_EQ(cells[first], "3") << row;
     contact |= static_cast<unsigned>(std::stoul(cells[first + 9]));
     ++rows_read;
@@ -238,7 +239,13 @@ TEST(CliReplay, AVersion3LogIsStillReplayedAndExported) {
   const std::string bytes = read_file(log);
   const telemetry::LogContents now =
       telemetry::read_log_bytes(std::as_bytes(std::span(bytes)), log);
-  ASSERT_EQ(now.version, 4u);
+  ASSERT_EQ(now.version, 5u);
+  // Format 4 (176-byte records, before a client's force) replays as it is too.
+  const std::string v4_log = temp_path("replay_v4.hlog");
+  const std::vector<std::byte> v4 = older_log(4, now.header, now.records);
+  std::ofstream(v4_log, std::ios::binary)
+      .write(reinterpret_cast<const char*>(v4.data()), static_cast<std::streamsize>(v4.size()));
+  expect_reproduced(replay_json(v4_log), 1000);
   const std::vector<std::byte> v3 = older_log(3, now.header, now.records);
   std::ofstream(old, std::ios::binary)
       .write(reinterpret_cast<const char*>(v3.data()), static_cast<std::streamsize>(v3.size()));
@@ -248,7 +255,8 @@ TEST(CliReplay, AVersion3LogIsStillReplayedAndExported) {
   std::string header, row;
   std::getline(rows, header);
   std::getline(rows, row);
-  const std::string one_joint = ",1,0,0,0,0,0,0,0,0,0,0";  // joints 1, the rest zero
+  // Joints 1 and the rest of format 4 zero, then format 5's four columns (no client force).
+  const std::string one_joint = ",1,0,0,0,0,0,0,0,0,0,0,0,0,0,0";
   ASSERT_GT(row.size(), one_joint.size());
   EXPECT_EQ(row.substr(row.size() - one_joint.size()), one_joint) << row;
 }

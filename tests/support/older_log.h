@@ -1,6 +1,6 @@
 // A tick log in an older format version as the daemon of that version wrote it: the same file
 // header with its version and record size, and one block of records cut to that version's size
-// (version 1: 72 bytes, 2: 96, 3: 112; what follows in today's record is dropped).
+// (version 1: 72 bytes, 2: 96, 3: 112, 4: 176; what follows in today's record is dropped).
 #pragma once
 
 #include <cstring>

@@ -46,8 +46,8 @@ TEST(LogFormat, FileMatchesTheDocumentedLayout) {
   ASSERT_EQ(b.size(), block1 + 28 + 2 * kRecordSize);
 
   EXPECT_EQ(std::memcmp(b.data(), "HAPTLOG\0", 8), 0);
-  EXPECT_EQ(at<std::uint32_t>(b, 8), 4u);
-  EXPECT_EQ(at<std::uint32_t>(b, 12), 176u);
+  EXPECT_EQ(at<std::uint32_t>(b, 8), 5u);
+  EXPECT_EQ(at<std::uint32_t>(b, 12), 200u);
   EXPECT_EQ(at<double>(b, 16), header.sample_period_s);
   EXPECT_EQ(at<std::int64_t>(b, 24), header.start_unix_ns);
   EXPECT_EQ(at<std::uint32_t>(b, 32), 1u);  // freerun
@@ -88,6 +88,7 @@ TEST(LogFormat, FileMatchesTheDocumentedLayout) {
       EXPECT_EQ(at<std::uint8_t>(b, r + 168), want.joints);
       EXPECT_EQ(at<std::uint8_t>(b, r + 170), want.wall_contact);
       EXPECT_EQ(at<std::uint8_t>(b, r + 171), want.pose_status);
+      EXPECT_EQ(at<double>(b, r + 192), want.client_force[2]);
       EXPECT_EQ(std::memcmp(b.data() + r, &want, kRecordSize), 0);
     }
   }

@@ -248,7 +248,7 @@ TEST(LogReader, RejectsFilesThatAreNotTickLogs) {
     return format_error(b);
   };
   EXPECT_EQ(damaged(0, std::byte{'h'}), "mem.htl: not a hapticd tick log (bad magic)");
-  EXPECT_EQ(damaged(8, std::byte{5}), "mem.htl: unsupported log version 5");
+  EXPECT_EQ(damaged(8, std::byte{6}), "mem.htl: unsupported log version 6");
   EXPECT_EQ(damaged(41, std::byte{'#'}), "mem.htl: header CRC mismatch");   // config text
   EXPECT_EQ(damaged(17, std::byte{0x11}), "mem.htl: header CRC mismatch");  // sample period
   EXPECT_EQ(damaged(39, std::byte{0x7f}),
