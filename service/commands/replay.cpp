@@ -67,12 +67,14 @@ struct Walker {
     }
     observer->restart();
   }
-  void swap_to(const config::Config& cfg) {
+  // `continues` (null: wall i from wall i, as before format 5) says which running wall each
+  // new one goes on from, as the loop took it.
+  void swap_to(const config::Config& cfg, const std::vector<int>* continues = nullptr) {
     if (scene.state) {  // the walls of several joints, going on from the running ones
       DeviceInfo info;
       info.transport_delay_samples = device_delay(cfg);
       auto next = make_scene_walls(cfg, info, gate::evaluate_gate(cfg, device_delay(cfg)),
-                                   scene.walls.get());
+                                   scene.walls.get(), continues);
       next->continue_from(*scene.walls);
       scene.state->walls = next.get();
       scene.walls = std::move(next);
@@ -200,7 +202,11 @@ bool take_marker(State& st, const TickRecord& r, ReplayResult& out) {
                     ": a reload whose configuration is not in the log (its block is missing)";
       return false;
     }
-    st.own.swap_to(st.own_cfg);
+    std::vector<int> continues;  // format 5 says it (several joints); before: wall i from i
+    for (std::size_t i = 0; i < st.own_cfg.walls.size(); ++i) {
+      continues.push_back(telemetry::continued_from(r.sequence, i));
+    }
+    st.own.swap_to(st.own_cfg, st.log.version >= 5 ? &continues : nullptr);
     ++out.reloads;
     return true;
   }

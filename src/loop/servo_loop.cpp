@@ -95,6 +95,7 @@ void ServoLoop::take_reloads(std::uint64_t tick, std::int64_t scheduled_ns,
   if (options_.scene_swap != nullptr && options_.scene != nullptr) {
     if (SceneWalls* next = options_.scene_swap->take(options_.scene->walls, tick)) {
       options_.scene->walls = next;
+      marker.sequence = telemetry::continues_code(next->continues.data(), next->scene->size());
       taken = true;
     }
   }

@@ -38,7 +38,9 @@
 //        deepest_wall (penetration, velocity and force_computed are that wall's), 170 u8
 //        wall_contact (bit per wall), 171 u8 pose_status (0 ok, 1 outside workspace, 2 near
 //        singularity, 3 no convergence), 172 u32 reserved (0),
-//        version 5: 176 f64[3] client_force (a client's servo_cf this tick, task space, N)
+//        version 5: 176 f64[3] client_force (a client's servo_cf this tick, task space, N);
+//        a marker 1 of several joints has in `sequence` which running wall each new one went
+//        on from (telemetry::continues_code)
 //
 // A live reload that swapped a new control law in (marker 1), and a re-arming (marker 3, a
 // law started afresh), add a config block right after the block holding their marker record,

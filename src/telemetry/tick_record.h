@@ -4,6 +4,7 @@
 // records, the first bytes of this layout) are still read, with the later fields zero.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <type_traits>
 
@@ -39,14 +40,30 @@ enum TickFlag : std::uint32_t {
 // A record that is not a tick but an event at a tick boundary (TickRecord::marker): `tick` is
 // the first tick the event applies to, the other fields are those of the tick before it.
 enum TickMarker : std::uint32_t {
-  kMarkerNone = 0,            // an ordinary tick
-  kMarkerReloadAccepted = 1,  // a live reload swapped the control law in from `tick` on
-  kMarkerReloadRefused = 2,   // a live reload was refused; the law in force stays
+  kMarkerNone = 0,  // an ordinary tick
+  // A live reload swapped the control law in from `tick` on. Version 5, a device of several
+  // joints: `sequence` says which running wall each new wall went on from (continues_code).
+  kMarkerReloadAccepted = 1,
+  kMarkerReloadRefused = 2,  // a live reload was refused; the law in force stays
   kMarkerRearmed = 3,  // output enabled again after a cleared fault: a fresh law from `tick` on
   // Version 5: a client moved wall `deepest_wall` to `task_position` (m) from `tick` on (its
   // point slides there at safety.max_wall_speed); the other fields are zero.
   kMarkerWallMoved = 4,
 };
+
+// Which running wall each of a swap's walls goes on from, as a reload marker carries it
+// (version 5): bits 4i..4i+3 are 1 + the running wall's index for wall i, 0 a new wall (8
+// walls at most, config::kMaxWalls). RT-safe.
+constexpr std::uint32_t continues_code(const int* continues, std::size_t walls) noexcept {
+  std::uint32_t code = 0;
+  for (std::size_t i = 0; i < walls && i < 8; ++i) {
+    code |= static_cast<std::uint32_t>((continues[i] + 1) & 0xf) << (4 * i);
+  }
+  return code;
+}
+constexpr int continued_from(std::uint32_t code, std::size_t wall) noexcept {
+  return static_cast<int>((code >> (4 * wall)) & 0xf) - 1;
+}
 
 struct TickRecord {
   std::uint64_t tick = 0;

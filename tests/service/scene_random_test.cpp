@@ -88,7 +88,7 @@ TEST(SceneRandom, EachChangeIsAdmittedAndMeasuredPassiveOrRefusedWithTheNumbers)
     std::string request;
     std::string what;
     double stiffness = 0.0;
-    if (kind == 0 || walls.size() < 2) {  // add
+    if (kind == 0) {  // add
       next.push_back(r.wall());
       stiffness = next.back().stiffness;
       request =
