@@ -79,10 +79,11 @@ StateReader::Read StateReader::read(std::uint64_t n, StateSample& out) const noe
   if (before < whole) return Read::kNotYet;
   if (before > whole) return Read::kMissed;
   std::uint64_t words[kStateWords];
+  // Each word an acquire: the second look at the sequence comes after them, and sees the odd
+  // sequence of any write whose word it read (the writer stores each word as a release).
   for (std::size_t i = 0; i < kStateWords; ++i) {
-    words[i] = s.words[i].load(std::memory_order_relaxed);
+    words[i] = s.words[i].load(std::memory_order_acquire);
   }
-  std::atomic_thread_fence(std::memory_order_acquire);  // the words before the second look
   if (s.sequence.load(std::memory_order_relaxed) != whole) return Read::kMissed;
   std::memcpy(&out, words, sizeof out);
   return Read::kOk;

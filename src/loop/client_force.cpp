@@ -7,9 +7,10 @@ namespace hapticd::loop {
 void ClientForce::offer(const kinematics::Vec3& force, std::int64_t received_ns) noexcept {
   const std::uint64_t was = sequence_.load(std::memory_order_relaxed);
   sequence_.store(was + 1, std::memory_order_relaxed);
-  std::atomic_thread_fence(std::memory_order_release);  // odd before the force
-  for (int a = 0; a < 3; ++a) offered_[a].store(force[a], std::memory_order_relaxed);
-  received_ns_.store(received_ns, std::memory_order_relaxed);
+  // Each a release (no fence: ThreadSanitizer does not follow fences): a reader that sees one
+  // sees the odd sequence before it.
+  for (int a = 0; a < 3; ++a) offered_[a].store(force[a], std::memory_order_release);
+  received_ns_.store(received_ns, std::memory_order_release);
   sequence_.store(was + 2, std::memory_order_release);
 }
 
@@ -27,9 +28,9 @@ kinematics::Vec3 ClientForce::step(std::int64_t now_ns) noexcept {
   const std::uint64_t before = sequence_.load(std::memory_order_acquire);
   if (before != taken_ && (before & 1u) == 0) {
     kinematics::Vec3 f;
-    for (int a = 0; a < 3; ++a) f[a] = offered_[a].load(std::memory_order_relaxed);
-    const std::int64_t at = received_ns_.load(std::memory_order_relaxed);
-    std::atomic_thread_fence(std::memory_order_acquire);        // the force before the second look
+    // Each an acquire: the second look at the sequence comes after them.
+    for (int a = 0; a < 3; ++a) f[a] = offered_[a].load(std::memory_order_acquire);
+    const std::int64_t at = received_ns_.load(std::memory_order_acquire);
     if (sequence_.load(std::memory_order_relaxed) == before) {  // else torn: the next tick
       command_ = f.allFinite() ? f : kinematics::Vec3::Zero();
       received_ = at;

@@ -10,8 +10,9 @@ std::uint64_t WallMoves::offer(std::size_t wall, const kinematics::Vec3& place) 
   Slot& s = slots_[wall];
   const std::uint64_t was = s.sequence.load(std::memory_order_relaxed);
   s.sequence.store(was + 1, std::memory_order_relaxed);
-  std::atomic_thread_fence(std::memory_order_release);  // odd before any of the place
-  for (int a = 0; a < 3; ++a) s.place[a].store(place[a], std::memory_order_relaxed);
+  // Each coordinate a release (no fence: ThreadSanitizer does not follow fences): a reader that
+  // sees one sees the odd sequence before it.
+  for (int a = 0; a < 3; ++a) s.place[a].store(place[a], std::memory_order_release);
   s.sequence.store(was + 2, std::memory_order_release);
   return offered_.fetch_add(1, std::memory_order_acq_rel) + 1;
 }
@@ -19,8 +20,8 @@ std::uint64_t WallMoves::offer(std::size_t wall, const kinematics::Vec3& place) 
 bool WallMoves::read(Slot& s, kinematics::Vec3& place, bool& torn) noexcept {
   const std::uint64_t before = s.sequence.load(std::memory_order_acquire);
   if (before == s.taken) return false;
-  for (int a = 0; a < 3; ++a) place[a] = s.place[a].load(std::memory_order_relaxed);
-  std::atomic_thread_fence(std::memory_order_acquire);  // the place before the second read
+  // Each an acquire: the second read of the sequence comes after them.
+  for (int a = 0; a < 3; ++a) place[a] = s.place[a].load(std::memory_order_acquire);
   const std::uint64_t after = s.sequence.load(std::memory_order_relaxed);
   if ((before & 1u) != 0 || before != after) {
     torn = true;
