@@ -4,7 +4,6 @@
 #include <sys/socket.h>
 
 #include <cerrno>
-#include <cstring>
 
 #include "base/errno_text.h"
 #include "drivers/device.h"
@@ -21,21 +20,8 @@ SocketTransport::SocketTransport(io::UniqueFd fd, std::chrono::milliseconds time
 // The device's end of a new socketpair, passed to it with SCM_RIGHTS; this end stays.
 void SocketTransport::hand_over_answers() {
   auto [mine, theirs] = io::seqpacket_pair();
-  std::uint8_t type = static_cast<std::uint8_t>(Type::kAnswers);
-  iovec iov{&type, 1};
-  alignas(cmsghdr) char control[CMSG_SPACE(sizeof(int))] = {};
-  msghdr msg{};
-  msg.msg_iov = &iov;
-  msg.msg_iovlen = 1;
-  msg.msg_control = control;
-  msg.msg_controllen = sizeof control;
-  cmsghdr* c = CMSG_FIRSTHDR(&msg);
-  c->cmsg_level = SOL_SOCKET;
-  c->cmsg_type = SCM_RIGHTS;
-  c->cmsg_len = CMSG_LEN(sizeof(int));
-  const int fd = theirs.get();
-  std::memcpy(CMSG_DATA(c), &fd, sizeof fd);
-  if (::sendmsg(fd_.get(), &msg, MSG_DONTWAIT | MSG_NOSIGNAL) < 0) {
+  const auto type = static_cast<std::uint8_t>(Type::kAnswers);
+  if (io::send_with_fd(fd_.get(), &type, 1, theirs.get()) < 0) {
     throw DeviceError("evdev loopback: the simulated device is gone: " + base::errno_text(errno));
   }
   answers_ = std::move(mine);  // theirs closes here: the device holds its own copy

@@ -4,8 +4,10 @@
 // where marked.
 #pragma once
 
+#include <sys/types.h>
 #include <unistd.h>
 
+#include <cstddef>
 #include <utility>
 
 namespace hapticd::io {
@@ -40,5 +42,9 @@ class UniqueFd {
 // A connected pair of non-blocking, close-on-exec SOCK_SEQPACKET sockets. Throws
 // std::system_error when the kernel refuses.
 std::pair<UniqueFd, UniqueFd> seqpacket_pair();
+
+// Sends `size` bytes on `socket` with `fd` passed along with the first of them (SCM_RIGHTS),
+// never blocking or raising SIGPIPE (MSG_DONTWAIT | MSG_NOSIGNAL): sendmsg's result.
+ssize_t send_with_fd(int socket, const void* data, std::size_t size, int fd) noexcept;
 
 }  // namespace hapticd::io

@@ -8,13 +8,14 @@
 #include <hapticd/client/connection.h>
 #include <hapticd/client/state_reader.h>
 
+#include "options.h"
+
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
 #include <exception>
 #include <string>
-#include <string_view>
 #include <thread>
 #include <utility>
 #include <vector>
@@ -39,16 +40,6 @@ std::vector<std::pair<Vec, Vec>> box(const Vec& centre, double half) {
   return faces;
 }
 
-std::string fmt(const Vec& v) {
-  std::string s = "[";
-  for (std::size_t i = 0; i < v.size(); ++i) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%s%.4f", i ? ", " : "", v[i]);
-    s += buf;
-  }
-  return s + "]";
-}
-
 int usage() {
   std::fprintf(stderr,
                "usage: box_scene --socket PATH [--half M] [--stiffness N/M] "
@@ -59,30 +50,11 @@ int usage() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string socket;
-  double half = 0.03, stiffness = 500.0, damping = 0.05, hold = 0.5;
-  try {
-    for (int i = 1; i < argc; i += 2) {
-      const std::string_view name = argv[i];
-      if (i + 1 >= argc) return usage();
-      const std::string value = argv[i + 1];
-      if (name == "--socket")
-        socket = value;
-      else if (name == "--half")
-        half = std::stod(value);
-      else if (name == "--stiffness")
-        stiffness = std::stod(value);
-      else if (name == "--damping")
-        damping = std::stod(value);
-      else if (name == "--hold")
-        hold = std::stod(value);
-      else
-        return usage();
-    }
-  } catch (const std::exception&) {
-    return usage();
-  }
-  if (socket.empty() || !(hold >= 0)) return usage();
+  examples::Options o(argc, argv, {"--socket", "--half", "--stiffness", "--damping", "--hold"});
+  const std::string socket = o.text("--socket");
+  const double half = o.number("--half", 0.03), stiffness = o.number("--stiffness", 500.0),
+               damping = o.number("--damping", 0.05), hold = o.number("--hold", 0.5);
+  if (!o.ok() || socket.empty() || !(hold >= 0)) return usage();
 
   int code = 0;
   try {
@@ -97,7 +69,7 @@ int main(int argc, char** argv) {
       }
       centre.assign(sample.x, sample.x + state.axes());
     }
-    std::printf("box_scene: the device is at %s\n", fmt(centre).c_str());
+    std::printf("box_scene: the device is at %s\n", examples::format(centre, "%.4f").c_str());
 
     std::vector<std::size_t> added;
     try {
@@ -105,8 +77,9 @@ int main(int argc, char** argv) {
         const std::size_t index = client.add_wall(
             {{"point", point}, {"normal", normal}, {"stiffness", stiffness}, {"damping", damping}});
         added.push_back(index);
-        std::printf("added wall %zu: point %s, normal %s\n", index, fmt(point).c_str(),
-                    fmt(normal).c_str());
+        std::printf("added wall %zu: point %s, normal %s\n", index,
+                    examples::format(point, "%.4f").c_str(),
+                    examples::format(normal, "%.4f").c_str());
       }
       std::this_thread::sleep_for(std::chrono::duration<double>(hold));
     } catch (const hc::Refused& e) {  // a wall refused: still take down those added

@@ -8,12 +8,13 @@
 #include <hapticd/client/state_reader.h>
 #include <time.h>
 
+#include "options.h"
+
 #include <charconv>
 #include <cstdint>
 #include <cstdio>
 #include <exception>
 #include <string>
-#include <string_view>
 
 namespace {
 
@@ -42,26 +43,10 @@ int usage() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string socket, output = "-";
-  double duration = 2.0;
-  try {
-    for (int i = 1; i < argc; i += 2) {
-      const std::string_view name = argv[i];
-      if (i + 1 >= argc) return usage();
-      const std::string value = argv[i + 1];
-      if (name == "--socket")
-        socket = value;
-      else if (name == "--duration")
-        duration = std::stod(value);
-      else if (name == "--output")
-        output = value;
-      else
-        return usage();
-    }
-  } catch (const std::exception&) {
-    return usage();
-  }
-  if (socket.empty() || !(duration >= 0)) return usage();
+  examples::Options o(argc, argv, {"--socket", "--duration", "--output"});
+  const std::string socket = o.text("--socket"), output = o.text("--output", "-");
+  const double duration = o.number("--duration", 2.0);
+  if (!o.ok() || socket.empty() || !(duration >= 0)) return usage();
   // The count goes where the CSV does not, so standard output stays CSV alone.
   std::FILE* report = output == "-" ? stderr : stdout;
 

@@ -9,6 +9,8 @@
 #include <hapticd/client/connection.h>
 #include <time.h>
 
+#include "options.h"
+
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
@@ -17,9 +19,7 @@
 #include <cstdio>
 #include <exception>
 #include <numbers>
-#include <sstream>
 #include <string>
-#include <string_view>
 #include <vector>
 
 namespace {
@@ -41,23 +41,6 @@ void sleep_until(std::int64_t t_ns) {
   }
 }
 
-std::vector<double> numbers(const std::string& text) {  // "x,y,z"
-  std::vector<double> out;
-  std::stringstream in(text);
-  for (std::string item; std::getline(in, item, ',');) out.push_back(std::stod(item));
-  return out;
-}
-
-std::string fmt(const std::vector<double>& v) {
-  std::string s = "[";
-  for (std::size_t i = 0; i < v.size(); ++i) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%s%g", i ? ", " : "", v[i]);
-    s += buf;
-  }
-  return s + "]";
-}
-
 // Nearest rank: a value that was measured, not an interpolation.
 std::int64_t percentile(const std::vector<std::int64_t>& ordered, double q) {
   const auto rank = static_cast<std::ptrdiff_t>(std::ceil(q * static_cast<double>(ordered.size())));
@@ -75,38 +58,21 @@ int usage() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string socket;
-  std::size_t index = 0;
-  std::vector<double> point, normal;  // empty: the wall's own
-  double amplitude = 0.005, frequency = 0.5, duration = 3.0, rate = 100.0;
-  try {
-    for (int i = 1; i < argc; i += 2) {
-      const std::string_view name = argv[i];
-      if (i + 1 >= argc) return usage();
-      const std::string value = argv[i + 1];
-      if (name == "--socket")
-        socket = value;
-      else if (name == "--index")
-        index = std::stoul(value);
-      else if (name == "--point")
-        point = numbers(value);
-      else if (name == "--normal")
-        normal = numbers(value);
-      else if (name == "--amplitude")
-        amplitude = std::stod(value);
-      else if (name == "--frequency")
-        frequency = std::stod(value);
-      else if (name == "--duration")
-        duration = std::stod(value);
-      else if (name == "--rate")
-        rate = std::stod(value);
-      else
-        return usage();
-    }
-  } catch (const std::exception&) {  // std::stod and std::stoul on something not a number
+  examples::Options o(argc, argv,
+                      {"--socket", "--index", "--point", "--normal", "--amplitude", "--frequency",
+                       "--duration", "--rate"});
+  const std::string socket = o.text("--socket");
+  const double wall = o.number("--index", 0.0);
+  // Empty: the wall's own point and normal.
+  std::vector<double> point = o.numbers("--point"), normal = o.numbers("--normal");
+  const double amplitude = o.number("--amplitude", 0.005);
+  const double frequency = o.number("--frequency", 0.5);
+  const double duration = o.number("--duration", 3.0), rate = o.number("--rate", 100.0);
+  if (!o.ok() || socket.empty() || !(wall >= 0) || wall != static_cast<std::size_t>(wall) ||
+      !(rate > 0) || !(duration >= 0)) {
     return usage();
   }
-  if (socket.empty() || !(rate > 0) || !(duration >= 0)) return usage();
+  const auto index = static_cast<std::size_t>(wall);
 
   std::vector<std::int64_t> latencies;
   int moves = 0, not_applied = 0, late = 0;
@@ -166,8 +132,8 @@ int main(int argc, char** argv) {
   std::printf(
       "sine_wall: wall %zu moved %d times along %s by %g mm at %g Hz over %g s: "
       "%zu applied, %d not applied, %d sent late\n",
-      index, moves + 1, fmt(normal).c_str(), amplitude * 1e3, frequency, duration, latencies.size(),
-      not_applied, late);
+      index, moves + 1, examples::format(normal).c_str(), amplitude * 1e3, frequency, duration,
+      latencies.size(), not_applied, late);
   if (!latencies.empty()) {
     std::sort(latencies.begin(), latencies.end());
     std::printf("send->applied latency: p50 %.1f us, p99 %.1f us, max %.1f us\n",

@@ -7,13 +7,13 @@
 // refused for another reason, 2 a bad argument.
 #include <hapticd/client/connection.h>
 
+#include "options.h"
+
 #include <cmath>
 #include <cstddef>
 #include <cstdio>
 #include <exception>
-#include <sstream>
 #include <string>
-#include <string_view>
 #include <vector>
 
 namespace {
@@ -21,13 +21,6 @@ namespace {
 namespace hc = hapticd::client;
 
 constexpr int kGateRefused = 3;  // the daemon's code for a refusal by the passivity gate
-
-std::vector<double> numbers(const std::string& text) {  // "x,y,z"
-  std::vector<double> out;
-  std::stringstream in(text);
-  for (std::string item; std::getline(in, item, ',');) out.push_back(std::stod(item));
-  return out;
-}
 
 // A point 1 cm from the device along `normal`: the wall's face is within reach and the device
 // is outside the wall (inside is n . (x - point) > 0). A wall out of reach is passive at any
@@ -59,31 +52,12 @@ int usage() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string socket;
-  double stiffness = 1e7, damping = 0.05;
-  std::vector<double> point, normal{0.0, 0.0, 1.0};
-  try {
-    for (int i = 1; i < argc; i += 2) {
-      const std::string_view name = argv[i];
-      if (i + 1 >= argc) return usage();
-      const std::string value = argv[i + 1];
-      if (name == "--socket")
-        socket = value;
-      else if (name == "--stiffness")
-        stiffness = std::stod(value);
-      else if (name == "--damping")
-        damping = std::stod(value);
-      else if (name == "--point")
-        point = numbers(value);
-      else if (name == "--normal")
-        normal = numbers(value);
-      else
-        return usage();
-    }
-  } catch (const std::exception&) {
-    return usage();
-  }
-  if (socket.empty()) return usage();
+  examples::Options o(argc, argv, {"--socket", "--stiffness", "--damping", "--point", "--normal"});
+  const std::string socket = o.text("--socket");
+  const double stiffness = o.number("--stiffness", 1e7), damping = o.number("--damping", 0.05);
+  std::vector<double> point = o.numbers("--point");
+  const std::vector<double> normal = o.numbers("--normal", {0.0, 0.0, 1.0});
+  if (!o.ok() || socket.empty()) return usage();
 
   try {
     hc::Connection client(socket);

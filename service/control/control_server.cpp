@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "base/errno_text.h"
+#include "drivers/io/unique_fd.h"
 
 namespace hapticd::service {
 
@@ -35,23 +36,6 @@ struct ControlServer::Client {
 };
 
 namespace {
-
-// Sends `bytes` with `fd` passed along with the first of them (SCM_RIGHTS).
-ssize_t send_passing(int socket, std::string_view bytes, int fd) {
-  iovec io{const_cast<char*>(bytes.data()), bytes.size()};
-  alignas(cmsghdr) char control[CMSG_SPACE(sizeof(int))] = {};
-  msghdr msg{};
-  msg.msg_iov = &io;
-  msg.msg_iovlen = 1;
-  msg.msg_control = control;
-  msg.msg_controllen = sizeof control;
-  cmsghdr* c = CMSG_FIRSTHDR(&msg);
-  c->cmsg_level = SOL_SOCKET;
-  c->cmsg_type = SCM_RIGHTS;
-  c->cmsg_len = CMSG_LEN(sizeof(int));
-  std::memcpy(CMSG_DATA(c), &fd, sizeof(int));
-  return sendmsg(socket, &msg, MSG_NOSIGNAL | MSG_DONTWAIT);
-}
 
 std::runtime_error failure(const std::string& path, const std::string& what) {
   return std::runtime_error(path + ": control socket: " + what + ": " + base::errno_text(errno));
@@ -288,8 +272,9 @@ void ControlServer::serve(Client& c) {
       length = passes ? end : c.passing.front().first;
     }
     const std::string_view bytes(c.out.data(), length);
-    const ssize_t n = passes ? send_passing(c.fd, bytes, c.passing.front().second)
-                             : send(c.fd, bytes.data(), bytes.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
+    const ssize_t n =
+        passes ? io::send_with_fd(c.fd, bytes.data(), bytes.size(), c.passing.front().second)
+               : send(c.fd, bytes.data(), bytes.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
     if (n < 0 && !not_now(errno)) {
       c.gone = true;  // EPIPE, ECONNRESET: what it asked can no longer be answered
       return;

@@ -112,7 +112,7 @@ json RunSession::move(const SceneEdit& edit) {
   Phase phase = Phase::kStarting;
   {
     std::lock_guard lock(mutex_);
-    not_movable = not_movable_;
+    not_movable = why_not_movable(report_);
     running = cfg_;
     phase = phase_;
   }
@@ -212,7 +212,6 @@ json RunSession::commit(Prepared& next, Phase phase, const std::string& source,
     ++reloads_;
     gate_ = out["gate"];
     report_ = next.report;
-    not_movable_ = why_not_movable(next.report);
     summary_.gate = gate_;
     if (next.walls) pending_walls_ = std::move(next.walls);  // not swapped: for the next arming
     if (!next.derated.empty()) {                             // the last derating stays said

@@ -119,7 +119,6 @@ bool RunSession::start_up(gate::GateReport& report) {
     gate_ = summary_.gate;
     report_ = report;
     owners_.assign(cfg_.walls.size(), 0);
-    not_movable_ = why_not_movable(report);
   }
   if (!pass) return false;
   const int cpus = static_cast<int>(std::thread::hardware_concurrency());

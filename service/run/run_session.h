@@ -137,7 +137,6 @@ class RunSession final : public ControlHandler {
   mutable std::mutex mutex_;           // guards what the control thread reads or asks for, below
   config::Config cfg_;                 // replaced by an accepted reload
   nlohmann::json gate_;                // the verdict on cfg_, as JSON
-  std::string not_movable_;            // why cfg_'s walls may not be moved ("": they may)
   gate::GateReport report_;            // the verdict on cfg_
   std::vector<std::uint64_t> owners_;  // each of cfg_.walls' client (0: the configuration's)
   std::uint64_t force_owner_ = 0;      // the client whose force client_force_ renders (0: none)

@@ -21,10 +21,10 @@ void StatePublisher::publish(const telemetry::TickRecord& rec, std::uint32_t per
   const bool fresh =
       (rec.flags & (telemetry::kFlagStale | telemetry::kFlagHeld | telemetry::kFlagNoPosition)) ==
       0;
-  const double dt = period_s_ * (periods > 0 ? periods : 1);
+  const double per_s = rate_hz_ / (periods > 0 ? periods : 1);  // one division a tick
   for (int i = 0; i < 3; ++i) {
-    s.qd[i] = !previous_ ? 0.0 : fresh ? (s.q[i] - last_.q[i]) / dt : last_.qd[i];
-    s.v[i] = !previous_ ? 0.0 : fresh ? (s.x[i] - last_.x[i]) / dt : last_.v[i];
+    s.qd[i] = !previous_ ? 0.0 : fresh ? (s.q[i] - last_.q[i]) * per_s : last_.qd[i];
+    s.v[i] = !previous_ ? 0.0 : fresh ? (s.x[i] - last_.x[i]) * per_s : last_.v[i];
   }
   s.observer_energy_j = rec.observer_energy_j;
   s.flags = rec.flags;

@@ -16,7 +16,7 @@ class StatePublisher {
  public:
   // Not RT-safe to build. `block` null: nothing is published.
   StatePublisher(telemetry::StateBlock* block, std::int64_t period_ns) noexcept
-      : block_(block), period_s_(static_cast<double>(period_ns) * 1e-9) {}
+      : block_(block), rate_hz_(1e9 / static_cast<double>(period_ns)) {}
 
   // RT-safe: called every tick, with the tick's record as logged, the sample periods since the
   // previous tick, when the tick woke, and the task force that acted (zero after a fault).
@@ -27,7 +27,7 @@ class StatePublisher {
 
  private:
   telemetry::StateBlock* block_;
-  double period_s_;
+  double rate_hz_;  // 1 / T: the differences are divided by the periods between ticks
   bool previous_ = false;
   client::StateSample last_{};
 };

@@ -2,8 +2,8 @@
 """ctest client.examples: builds examples/cpp/ the way an application is built, against hapticd
 installed from the build directory into a temporary prefix and found through pkg-config, then
 runs each example against a real daemon, the simulated delta of config/sim-delta-scene.yaml on
-the realtime clock, and checks what each says it did (as tests/python/examples_test.py does for
-the Python examples).
+the realtime clock, and checks what each says it did (tests/python/example_runs.py, shared with
+the Python examples' test).
 
   examples_test.py --hapticd BIN --build-dir DIR --source-dir REPO --work-dir DIR
       (with /usr/bin/python3; the standard library only)
@@ -12,18 +12,16 @@ the Python examples).
 from __future__ import annotations
 
 import argparse
-import contextlib
-import json
 import os
 import re
 import shutil
-import socket
 import subprocess
 import sys
 import tempfile
-import time
-from collections.abc import Iterator
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "python"))
+from example_runs import Examples, run_all  # noqa: E402
 
 EXAMPLES = ("sine_wall", "logger", "box_scene", "too_stiff")
 
@@ -88,99 +86,6 @@ def check_linked(exe: Path, libdir: Path) -> str | None:
     return None
 
 
-def running(sock: Path) -> bool:
-    """Whether the daemon at ``sock`` answers status with its loop running."""
-    try:
-        with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as s:
-            s.settimeout(2)
-            s.connect(str(sock))
-            s.sendall(b'{"v":1,"cmd":"status"}\n')
-            line = s.makefile("rb").readline()
-        return json.loads(line).get("status", {}).get("state") == "running"
-    except (OSError, ValueError):
-        return False
-
-
-@contextlib.contextmanager
-def daemon(hapticd: Path, root: Path, config: str, where: Path,
-           duration: float) -> Iterator[Path]:
-    """``hapticd run`` serving a socket in ``where``; stopped (SIGTERM) on leaving."""
-    sock = where / "s.sock"
-    sock.unlink(missing_ok=True)
-    log_path = where / "hapticd.log"
-    command = [str(hapticd), "run", "--config", config, "--socket", str(sock),
-               "--duration", str(duration)]
-    print("+", " ".join(command), flush=True)
-    with open(log_path, "wb") as log:
-        proc = subprocess.Popen(command, cwd=root, stdout=log, stderr=subprocess.STDOUT)
-        try:
-            deadline = time.monotonic() + 20
-            while not running(sock):
-                if proc.poll() is not None or time.monotonic() > deadline:
-                    raise RuntimeError(f"hapticd did not come up (exit {proc.poll()}):\n"
-                                       + log_path.read_text(errors="replace"))
-                time.sleep(0.1)
-            yield sock
-        finally:
-            proc.terminate()
-            try:
-                proc.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait()
-            print(f"hapticd exited {proc.returncode}", flush=True)
-
-
-class Examples:
-    def __init__(self, bin_dir: Path, libdir: Path) -> None:
-        self.bin_dir = bin_dir
-        self.libdir = libdir
-        self.failures: list[str] = []
-
-    def run(self, name: str, sock: Path, *args: str) -> tuple[int, str]:
-        command = [str(self.bin_dir / name), "--socket", str(sock), *args]
-        print("+", " ".join(command), flush=True)
-        done = subprocess.run(command, capture_output=True, text=True,
-                              env=run_env(self.libdir), timeout=120)
-        print(done.stdout + done.stderr, f"(exit {done.returncode})", flush=True)
-        return done.returncode, done.stdout + done.stderr
-
-    def expect(self, name: str, ok: bool, why: str) -> None:
-        print(f"{'ok' if ok else 'FAIL'}: {name}: {why}", flush=True)
-        if not ok:
-            self.failures.append(f"{name}: {why}")
-
-
-def check_scene(ex: Examples, sock: Path, where: Path) -> None:
-    rc, out = ex.run("too_stiff", sock)
-    ex.expect("too_stiff", rc == 0 and "refused as expected (code 3)" in out,
-              "exits 0 saying the gate refused the wall")
-
-    rc, out = ex.run("box_scene", sock, "--hold", "0.2")
-    added = re.findall(r"^added wall (\d+)", out, re.M)
-    removed = re.findall(r"^removed wall (\d+)", out, re.M)
-    ex.expect("box_scene", rc == 0 and len(added) == 6 and sorted(removed) == sorted(added),
-              f"adds six walls and removes each of them (added {added}, removed {removed})")
-
-    csv_path = where / "ticks.csv"
-    rc, out = ex.run("logger", sock, "--duration", "2", "--output", str(csv_path))
-    counts = re.search(r"read (\d+) samples, missed (\d+)", out)
-    read, missed = (int(counts[1]), int(counts[2])) if counts else (0, -1)
-    rows = len(csv_path.read_text().splitlines()) - 1 if csv_path.exists() else -1
-    # 2 s at 1 kHz; a reader descheduled longer than the ring holds may miss a few.
-    ex.expect("logger", rc == 0 and read > 1000 and 0 <= missed <= max(5, read // 100)
-              and rows == read, f"read {read} ticks in 2 s, missed {missed}, {rows} CSV rows")
-
-
-def check_moving_wall(ex: Examples, sock: Path) -> None:
-    rc, out = ex.run("sine_wall", sock, "--index", "0", "--amplitude", "0.004", "--duration", "2")
-    counts = re.search(r"(\d+) applied, (\d+) not applied", out)
-    latency = re.search(r"p50 [\d.]+ us, p99 [\d.]+ us", out)
-    ex.expect("sine_wall", rc == 0 and counts is not None and int(counts[1]) > 0
-              and counts[2] == "0" and latency is not None,
-              "every move applied, the latency's p50 and p99 printed")
-
-
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--hapticd", type=Path, required=True, help="the daemon's binary")
@@ -202,22 +107,15 @@ def main() -> int:
             libdir = install(args.cmake, args.build_dir.resolve(), where / "prefix")
             bin_dir = build_examples(args.cmake, args.cxx, root,
                                      args.work_dir.resolve() / "build-examples", libdir)
-            ex = Examples(bin_dir, libdir)
             for name in EXAMPLES:
-                problem = check_linked(bin_dir / name, libdir)
-                ex.expect(name, problem is None, problem or "links the installed library")
-            if ex.failures:
-                raise RuntimeError("the examples do not link the installed library")
-            with daemon(args.hapticd.resolve(), root, "config/sim-delta-scene.yaml", where,
-                        args.duration) as sock:
-                check_scene(ex, sock, where)
-                check_moving_wall(ex, sock)
+                if problem := check_linked(bin_dir / name, libdir):
+                    print(f"examples_test: {name}: {problem}", file=sys.stderr)
+                    return 1
+            ex = Examples(lambda name: [str(bin_dir / name)], run_env(libdir))
+            return run_all(ex, args.hapticd.resolve(), root, where, args.duration)
     except (RuntimeError, OSError, subprocess.SubprocessError) as e:
         print(f"examples_test: {e}", file=sys.stderr)
         return 1
-    for failure in ex.failures:
-        print(f"examples_test: FAILED {failure}", file=sys.stderr)
-    return 1 if ex.failures else 0
 
 
 if __name__ == "__main__":
