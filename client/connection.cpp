@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cstring>
 #include <utility>
+#include <vector>
 
 namespace hapticd::client {
 namespace {
@@ -172,6 +173,17 @@ std::size_t Connection::add_wall(const json& wall, std::optional<bool> keep) {
   json request = {{"cmd", "scene"}, {"op", "add"}, {"wall", wall}};
   if (keep) request["keep"] = *keep;
   return call(std::move(request))["scene"]["index"].get<std::size_t>();
+}
+
+std::size_t Connection::add_attractor(std::span<const double> point, double stiffness,
+                                      double damping, std::optional<double> max_force,
+                                      std::optional<bool> keep) {
+  json wall = {{"kind", "attractor"},
+               {"point", json(std::vector<double>(point.begin(), point.end()))},
+               {"stiffness", stiffness},
+               {"damping", damping}};
+  if (max_force) wall["max_force"] = *max_force;
+  return add_wall(wall, keep);
 }
 
 json Connection::change_wall(std::size_t index, const json& keys) {

@@ -77,6 +77,12 @@ class Connection {
   // goes when this connection closes unless `keep` (none: as the daemon's
   // safety.client_walls_on_leave says).
   std::size_t add_wall(const nlohmann::json& wall, std::optional<bool> keep = std::nullopt);
+  // An attractor (a spring-damper pulling to `point` along every task axis, gated like a wall):
+  // add_wall of {"kind": "attractor", point, stiffness, damping, max_force (N; none: the joints'
+  // limits alone)}; its index among the walls.
+  std::size_t add_attractor(std::span<const double> point, double stiffness, double damping,
+                            std::optional<double> max_force = std::nullopt,
+                            std::optional<bool> keep = std::nullopt);
   nlohmann::json change_wall(std::size_t index, const nlohmann::json& keys);
   nlohmann::json remove_wall(std::size_t index);
   // Moves walls[index] to `point`: one number per task axis of the device (StateReader::axes).

@@ -207,17 +207,31 @@ class Client:
         answer = self.request({"cmd": "scene", "op": op, **members})
         return self._member(answer, "scene", f"scene {op}")
 
+    def _add(self, wall: dict[str, Any], keep: bool | None) -> int:
+        members = {} if keep is None else {"keep": bool(keep)}
+        index = self._member(self.scene("add", wall=wall, **members), "index", "scene add")
+        if not isinstance(index, int):
+            raise ClientError(f"{self.socket_path}: scene add: index {index!r} is no integer")
+        return index
+
     def add_wall(self, point: Iterable[float], normal: Iterable[float], stiffness: float,
                  damping: float | None = None, keep: bool | None = None, **keys: Any) -> int:
         """Adds a wall (``keys``: more of a wall's keys, docs/kinematics.md); its index. It goes
         when this connection closes unless ``keep`` (None: as the daemon's
         safety.client_walls_on_leave says)."""
         wall = _wall(point, normal, stiffness=stiffness, damping=damping, **keys)
-        members = {} if keep is None else {"keep": bool(keep)}
-        index = self._member(self.scene("add", wall=wall, **members), "index", "scene add")
-        if not isinstance(index, int):
-            raise ClientError(f"{self.socket_path}: scene add: index {index!r} is no integer")
-        return index
+        return self._add(wall, keep)
+
+    def add_attractor(self, point: Iterable[float], stiffness: float,
+                      damping: float | None = None, max_force: float | None = None,
+                      keep: bool | None = None, **keys: Any) -> int:
+        """Adds an attractor: a spring-damper pulling the device to ``point`` along every task
+        axis (bilateral, gated like a wall; docs/kinematics.md). ``max_force`` (N) bounds its
+        force's norm (None: the joints' limits alone). Its index among the walls; it goes when
+        this connection closes unless ``keep``, as a wall does."""
+        wall = _wall(point, kind="attractor", stiffness=stiffness, damping=damping,
+                     max_force=max_force, **keys)
+        return self._add(wall, keep)
 
     def change_wall(self, index: int, **keys: Any) -> dict[str, Any]:
         """Changes only the keys given (point and normal as vectors)."""

@@ -40,7 +40,7 @@ int verify_walls(const config::Config& cfg, bool as_json) {
   std::ostringstream os;
   using gate::format_number;
   os << "hapticd verify: " << cfg.source_name << " (each wall along its normal at its worst "
-     << "configuration)\n"
+     << "configuration; an attractor along the way the device is least damped there)\n"
      << "  imposed motion           x* + d A cos(wt), A = " << format_number(r.amplitude * 1e3)
      << " mm along the least dissipating d (n . d = 1)\n"
      << "  delay                    driver " << delay << " samples + each wall's delay_samples\n";

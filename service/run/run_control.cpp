@@ -100,10 +100,14 @@ json RunSession::status() const {
       return a;
     };
     for (const config::TaskWallConfig& w : cfg_.walls) {
-      walls.push_back({{"stiffness", w.law.stiffness},
+      const bool attractor = w.kind == config::WallKind::kAttractor;
+      walls.push_back({{"kind", attractor ? "attractor" : "wall"},  // schema 7
+                       {"stiffness", w.law.stiffness},
                        {"damping", w.law.damping},
                        {"point", axes(w.point)},
-                       {"normal", axes(w.normal)}});
+                       {"normal", attractor ? json(nullptr) : axes(w.normal)},
+                       {"max_force", attractor && std::isfinite(w.max_force) ? json(w.max_force)
+                                                                             : json(nullptr)}});
     }
     j["wall"] = nullptr;
     j["walls"] = walls;

@@ -21,7 +21,7 @@ namespace hapticd::service {
 // key; 2 added it, direction_check, and the status answer's direction_check; 3 added the
 // gate's workspace (several task axes); 4 the runs of several joints; 5 the workspace's
 // joint_damping (device.damping per joint).
-inline constexpr int kSummarySchemaVersion = 6;
+inline constexpr int kSummarySchemaVersion = 7;
 
 struct RunSummary {
   bool realtime = true;

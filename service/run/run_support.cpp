@@ -111,23 +111,25 @@ std::unique_ptr<loop::SceneWalls> make_scene_walls(const config::Config& cfg,
                                                    const gate::GateReport& report,
                                                    const loop::SceneWalls* running,
                                                    const std::vector<int>* continues) {
+  auto scene = std::make_unique<control::Scene>(control::make_scene(cfg));
   std::vector<control::ObserverParams> observers;
-  for (std::size_t i = 0; i < cfg.walls.size(); ++i) {
+  for (std::size_t c = 0; c < scene->channels(); ++c) {
+    const std::size_t i = scene->wall_of(c);
     control::ObserverParams p = control::observer_params(cfg, info.transport_delay_samples);
     // A wall the device cannot reach (+inf, or no report) is credited nothing: its observer
-    // only ever errs towards damping.
+    // only ever errs towards damping. An attractor's axes are each credited the least damping
+    // the device has in any direction (the gate's lambda_min of B_c).
     const double b = report.workspace && i < report.workspace->walls.size()
                          ? report.workspace->walls[i].worst_damping
                          : 0.0;
     p.device_damping = std::isfinite(b) ? b : 0.0;
     observers.push_back(p);
   }
-  auto walls = std::make_unique<loop::SceneWalls>(
-      std::make_unique<control::Scene>(control::make_scene(cfg)), observers);
+  auto walls = std::make_unique<loop::SceneWalls>(std::move(scene), observers);
   for (std::size_t i = 0; running != nullptr && i < cfg.walls.size(); ++i) {
     const int from =
         continues != nullptr ? (i < continues->size() ? (*continues)[i] : -1) : static_cast<int>(i);
-    if (from >= 0 && static_cast<std::size_t>(from) < running->observers.size()) {
+    if (from >= 0 && static_cast<std::size_t>(from) < running->scene->size()) {
       walls->continues[i] = from;
     }
   }

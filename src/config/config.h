@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <map>
 #include <memory>
 #include <string>
@@ -173,12 +174,21 @@ inline constexpr std::size_t kMaxWalls = 8;
 
 // One of `walls`: a half-space in task space (docs/kinematics.md, walls in task space), the
 // task coordinates where a point p satisfies n . (x - p) > 0. Its law acts along n.
+// What an entry of `walls` is: a half-space (a wall) or a spring-damper to a point (an
+// attractor: bilateral, pulling towards its point along every task axis).
+enum class WallKind { kWall, kAttractor };
+
 struct TaskWallConfig {
+  WallKind kind = WallKind::kWall;
   kinematics::Vec3 point = kinematics::Vec3::Zero();   // on the face (m), first m entries
-  kinematics::Vec3 normal = kinematics::Vec3::Zero();  // unit (normalised as read), into the wall
+  kinematics::Vec3 normal = kinematics::Vec3::Zero();  // unit (normalised as read), into the wall;
+                                                       // zero for an attractor
   // stiffness, damping, discretization, delay_samples, no_pull, coupling along n; its
-  // position and normal are the one-joint law's 0 and +1 on the coordinate n . (x - p).
+  // position and normal are the one-joint law's 0 and +1 on the coordinate n . (x - p). An
+  // attractor runs it along each task axis e_k, on e_k . (x - p), with the contact never open.
   WallConfig law;
+  // An attractor's largest force (N, the norm of its task force); +inf: the joints' limits alone.
+  double max_force = std::numeric_limits<double>::infinity();
 };
 
 // safety.direction_check: before the wall is armed, a small force pulse and the sign of the

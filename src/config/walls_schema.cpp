@@ -1,6 +1,7 @@
 // The section `walls`: the task-space walls of a device with several task axes
 // (docs/kinematics.md, walls in task space). Each is a point, a normal into the wall and the
-// contact law `wall` has; a list of at most kMaxWalls.
+// contact law `wall` has, or (kind: attractor) a point and that law along every task axis,
+// bilateral; a list of at most kMaxWalls.
 #include <cmath>
 #include <string>
 #include <vector>
@@ -11,6 +12,7 @@ namespace hapticd::config::schema {
 namespace {
 
 constexpr const char* kPerAxis = "numbers (one per task axis)";
+const Options<WallKind> kWallKinds{{"wall", WallKind::kWall}, {"attractor", WallKind::kAttractor}};
 
 // `point` or `normal` of a wall (`f`, its field `key`): both are needed.
 bool task_vector(MapReader& w, const Field& f, std::string_view key, int m, kinematics::Vec3& out) {
@@ -57,11 +59,27 @@ void read_walls(MapReader& top, int task_axes, std::vector<TaskWallConfig>& wall
     MapReader w(d, entry);
     if (!w.ok()) continue;
     TaskWallConfig wall;
+    if (const auto v = choice(d, w.take("kind"), kWallKinds)) wall.kind = *v;
     const bool point = task_vector(w, w.take("point"), "point", task_axes, wall.point);
-    const Field normal_field = w.take("normal");
-    const bool normal = task_vector(w, normal_field, "normal", task_axes, wall.normal) &&
-                        unit_direction(d, normal_field, "a direction into the wall", wall.normal);
+    bool normal = true;
     read_wall_law(w, wall.law);
+    if (wall.kind == WallKind::kAttractor) {
+      w.not_used("normal", "an attractor: it pulls towards its point along every task axis");
+      const Field pull = w.take("no_pull");
+      if (pull.present && wall.law.no_pull) {
+        d.error(pull.key_mark, pull.path,
+                "an attractor pulls towards its point: no_pull: true "
+                "would leave half of it; use a wall");
+      }
+      number(w, "max_force", Range::greater_than(0.0), wall.max_force);
+    } else {
+      const Field normal_field = w.take("normal");
+      normal = task_vector(w, normal_field, "normal", task_axes, wall.normal) &&
+               unit_direction(d, normal_field, "a direction into the wall", wall.normal);
+      w.not_used("max_force",
+                 "a wall (the joints' device.max_force limits it; an attractor's "
+                 "own limit)");
+    }
     w.finish();
     if (point && normal) walls.push_back(std::move(wall));
   }

@@ -10,6 +10,8 @@ namespace {
 
 using nlohmann::json;
 
+}  // namespace
+
 std::string stiffness_note(const analysis::StiffnessLimit& lim) {
   switch (lim.kind) {
     case analysis::StiffnessLimit::Kind::kBounded:
@@ -21,8 +23,6 @@ std::string stiffness_note(const analysis::StiffnessLimit& lim) {
   }
   return "";
 }
-
-}  // namespace
 
 json finite_or_null(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
 

@@ -19,6 +19,10 @@ std::string gate_to_text(const GateReport& r, const config::Config& cfg);
 // A number for JSON, or null where it is not finite (JSON has no infinity).
 nlohmann::json finite_or_null(double v);
 
+// What a largest passing stiffness that is not a bound says: unbounded, or none at all ("" for
+// a bound).
+std::string stiffness_note(const analysis::StiffnessLimit& lim);
+
 // The `workspace` member and the table's rows for a device with several task axes
 // (workspace_report_format.cpp).
 nlohmann::json workspace_to_json(const WorkspaceReport& w);

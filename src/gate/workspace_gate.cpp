@@ -100,7 +100,30 @@ Grid sample(const config::Config& cfg, const kinematics::Box& box, int m) {
   return g;
 }
 
-double depth(const config::TaskWallConfig& w, const Vec3& x) { return w.normal.dot(x - w.point); }
+bool attractor(const config::TaskWallConfig& w) { return w.kind == config::WallKind::kAttractor; }
+
+// How deep x is in wall w; an attractor acts everywhere.
+double depth(const config::TaskWallConfig& w, const Vec3& x) {
+  return attractor(w) ? kInf : w.normal.dot(x - w.point);
+}
+
+// The least damping the device has where wall w acts, along the way the wall pushes: b_n along
+// a wall's normal; an attractor pushes every way, so the least of them, lambda_min(B_c).
+double damping_for(const config::TaskWallConfig& w, const analysis::DeviceDamping& d) {
+  return attractor(w) ? std::max(0.0, analysis::contact_margin(d, {}))
+                      : analysis::normal_damping(d, w.normal);
+}
+
+// Wall w's demands on B_c (`required`: its b_req over the margin kept): b_req along its normal;
+// an attractor's along each task axis, b_req I in all (its axes' laws each need b_req).
+void add_demands(const config::TaskWallConfig& w, double required, int m,
+                 std::vector<analysis::NormalDemand>& demands) {
+  if (!attractor(w)) {
+    demands.push_back({w.normal, required});
+    return;
+  }
+  for (int k = 0; k < m; ++k) demands.push_back({Vec3::Unit(k), required});
+}
 
 // Where to sample a mechanism whose Jacobian is the same everywhere and whose workspace is
 // unbounded: only which walls act together depends on x, so a box around the walls' points,
@@ -143,7 +166,7 @@ void refine(const config::Config& cfg, const config::TaskWallConfig& w, const Gr
             !device_at(cfg, y, d)) {
           continue;
         }
-        const double b = analysis::normal_damping(d, w.normal);
+        const double b = damping_for(w, d);
         if (b < v.worst_damping) {
           v.worst_damping = b;
           v.worst_position = y;
@@ -170,7 +193,7 @@ WallVerdict judge_wall(const config::Config& cfg, const config::TaskWallConfig& 
   for (std::size_t i = 0; i < g.x.size(); ++i) {
     if (!g.ok[i] || depth(w, g.x[i]) < -g.reach) continue;
     v.reached = true;
-    b[i] = analysis::normal_damping(g.device[i], w.normal);
+    b[i] = damping_for(w, g.device[i]);
     if (b[i] < v.worst_damping) {
       v.worst_damping = b[i];
       v.worst_position = g.x[i];
@@ -200,7 +223,8 @@ WallVerdict judge_wall(const config::Config& cfg, const config::TaskWallConfig& 
   return v;
 }
 
-// Walls acting together: the least matrix margin over the samples where two or more act.
+// Walls acting together: the least matrix margin over the samples where two or more act (an
+// attractor's axes are as many walls, acting everywhere).
 void judge_corners(const config::Config& cfg, const Grid& g, WorkspaceReport& r) {
   r.corner_margin = kInf;
   const double keep = 1.0 - cfg.safety.passivity_margin;
@@ -210,7 +234,7 @@ void judge_corners(const config::Config& cfg, const Grid& g, WorkspaceReport& r)
     demands.clear();
     for (std::size_t w = 0; w < cfg.walls.size(); ++w) {
       if (depth(cfg.walls[w], g.x[i]) < -g.reach) continue;
-      demands.push_back({cfg.walls[w].normal, r.walls[w].required_damping / keep});
+      add_demands(cfg.walls[w], r.walls[w].required_damping / keep, g.m, demands);
     }
     if (demands.size() < 2) continue;
     const double margin = analysis::contact_margin(g.device[i], demands);
@@ -238,18 +262,19 @@ void judge_movable(const config::Config& cfg, const Grid& g, WorkspaceReport& r)
     WallVerdict v = r.walls[i];
     v.worst_damping = kInf;
     for (std::size_t k = 0; k < g.x.size(); ++k) {
-      const double b = analysis::normal_damping(g.device[k], w.normal);
+      const double b = damping_for(w, g.device[k]);
       if (b < v.worst_damping) {
         v.worst_damping = b;
         v.worst_position = g.x[k];
       }
     }
     refine(cfg, w, g, v, /*anywhere=*/true);
-    demands.push_back({w.normal, v.required_damping / keep});
+    add_demands(w, v.required_damping / keep, g.m, demands);
     if (v.required_damping <= keep * v.worst_damping) continue;
     return refuse("walls[" + std::to_string(i) + "]: b_req " + format_number(v.required_damping) +
-                  " exceeds (1 - " + format_number(cfg.safety.passivity_margin) +
-                  ") b_n = " + format_number(keep * v.worst_damping) +
+                  " exceeds (1 - " + format_number(cfg.safety.passivity_margin) + ") " +
+                  (attractor(w) ? "lambda_min(B_c)" : "b_n") + " = " +
+                  format_number(keep * v.worst_damping) +
                   " at x = " + point_text(v.worst_position, g.m) + ", where it could be moved to");
   }
   if (demands.size() < 2) return;
@@ -306,12 +331,14 @@ WorkspaceReport evaluate_workspace(const config::Config& cfg, int device_delay_s
     const WallVerdict& v = r.walls.back();
     if (v.passive) continue;
     const std::string wall = "walls[" + std::to_string(i) + "]";
-    std::string why = wall + ": b_req " + format_number(v.required_damping) + " exceeds (1 - " +
-                      format_number(cfg.safety.passivity_margin) +
-                      ") b_n = " + format_number(v.available_damping) +
-                      ", b_n = " + format_number(v.worst_damping) +
-                      " the least damping the device has along its normal (at x = " +
-                      point_text(v.worst_position, m) + ")";
+    const bool pulls = attractor(cfg.walls[i]);
+    const std::string b = pulls ? "lambda_min(B_c)" : "b_n";
+    std::string why =
+        wall + (pulls ? " (an attractor)" : "") + ": b_req " + format_number(v.required_damping) +
+        " exceeds (1 - " + format_number(cfg.safety.passivity_margin) + ") " + b + " = " +
+        format_number(v.available_damping) + ", " + b + " = " + format_number(v.worst_damping) +
+        " the least damping the device has " + (pulls ? "in any direction" : "along its normal") +
+        " (at x = " + point_text(v.worst_position, m) + ")";
     if (v.max_stiffness.kind == analysis::StiffnessLimit::Kind::kBounded) {
       why += "; " + wall + ".stiffness must be <= " + format_number(v.max_stiffness.value) +
              " to pass (now " + format_number(cfg.walls[i].law.stiffness) + ")";

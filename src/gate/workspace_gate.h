@@ -1,10 +1,11 @@
 // The gate over a workspace (docs/math.md, several axes): for a device with several task axes,
 // each wall's one-axis bound b_req (its K, B, T, delays, coupling) against the device's damping
 // along the wall's normal, b_n(q) = 1 / (n^T J(q) B_j^-1 J(q)^T n), at the worst configuration
-// where the wall can act; and walls acting together (an edge, a corner) against the matrix
-// condition B_c(q) - sum_i b_req_i n_i n_i^T >= 0. The workspace is sampled on a grid and the
-// worst sample refined by a local search: what the grid can miss is measured (the largest change
-// of b_n between neighbouring samples), not proven.
+// where the wall can act (an attractor: against lambda_min(B_c(q)) everywhere, as it pulls every
+// way, and b_req I in the matrix condition: its law runs along each task axis); and walls acting
+// together (an edge, a corner) against the matrix condition B_c(q) - sum_i b_req_i n_i n_i^T >= 0.
+// The workspace is sampled on a grid and the worst sample refined by a local search: what the grid
+// can miss is measured (the largest change of b_n between neighbouring samples), not proven.
 #pragma once
 
 #include <string>
@@ -24,6 +25,7 @@ struct WallVerdict {
   double required_damping = 0.0;    // b_req along the normal (+inf: no damping suffices)
   double available_damping = 0.0;   // (1 - passivity_margin) worst_damping: the most b_req may be
   double worst_damping = 0.0;       // least b_n where the wall can act, after refinement
+                                    // (an attractor: least lambda_min(B_c) anywhere)
   double grid_worst_damping = 0.0;  // least b_n on the grid alone
   kinematics::Vec3 worst_position = kinematics::Vec3::Zero();  // x there (m)
   bool reached = false;                    // the wall can act somewhere in the workspace

@@ -1,6 +1,6 @@
 // The gate over a workspace as `hapticd check` shows it: per wall its demand, the least damping
-// the device has along its normal and where, the largest stiffness that passes there; then the
-// walls acting together and what the sampling measured.
+// the device has along its normal (an attractor: in any direction) and where, the largest stiffness
+// that passes there; then the walls acting together and what the sampling measured.
 #include <cmath>
 
 #include "gate/gate_report_format.h"
@@ -71,13 +71,14 @@ void workspace_rows(const WorkspaceReport& w, const config::Config& cfg, std::os
       os << "never reached in the workspace\n";
       continue;
     }
-    os << "b_req " << format_number(v.required_damping)
+    const bool attractor = cfg.walls[i].kind == config::WallKind::kAttractor;
+    os << (attractor ? "attractor, " : "") << "b_req " << format_number(v.required_damping)
        << " <= " << format_number(v.available_damping) << " N s/m? " << (v.passive ? "yes" : "NO")
-       << " (b_n " << format_number(v.worst_damping) << " at " << position_text(v.worst_position, m)
-       << "; largest passing K "
+       << (attractor ? " (lambda_min(B_c) " : " (b_n ") << format_number(v.worst_damping) << " at "
+       << position_text(v.worst_position, m) << "; largest passing K "
        << (v.max_stiffness.kind == analysis::StiffnessLimit::Kind::kBounded
                ? format_number(v.max_stiffness.value) + " N/m"
-               : std::string("unbounded"))
+               : stiffness_note(v.max_stiffness))
        << ", configured " << format_number(cfg.walls[i].law.stiffness) << ")\n";
   }
   os << "  walls acting together     "

@@ -11,8 +11,8 @@ using kinematics::Vec3;
 SceneWalls::SceneWalls(std::unique_ptr<control::Scene> s,
                        const std::vector<control::ObserverParams>& params)
     : scene(std::move(s)) {
-  if (scene == nullptr || params.size() != scene->size()) {
-    throw std::invalid_argument("a scene's loop needs one passivity observer per wall");
+  if (scene == nullptr || params.size() != scene->channels()) {
+    throw std::invalid_argument("a scene's loop needs one passivity observer per channel");
   }
   observers.reserve(params.size());
   for (const control::ObserverParams& p : params) observers.emplace_back(p);
@@ -30,12 +30,19 @@ void SceneWalls::Totals::add(const control::PassivityObserver& o) noexcept {
 
 void SceneWalls::continue_from(SceneWalls& running) noexcept {
   scene->continue_from(*running.scene, continues);
-  std::array<bool, config::kMaxWalls> continued{};
-  for (std::size_t i = 0; i < observers.size(); ++i) {
+  std::array<bool, control::kMaxChannels> continued{};
+  const control::Scene& was = *running.scene;
+  for (std::size_t i = 0; i < scene->size(); ++i) {
     const int j = continues[i];
-    if (j < 0 || static_cast<std::size_t>(j) >= running.observers.size()) continue;
-    observers[i].continue_from(running.observers[static_cast<std::size_t>(j)]);
-    continued[static_cast<std::size_t>(j)] = true;
+    if (j < 0 || static_cast<std::size_t>(j) >= was.size()) continue;
+    const std::size_t mine = scene->first_channel(i), n = scene->first_channel(i + 1) - mine;
+    const std::size_t theirs = was.first_channel(static_cast<std::size_t>(j));
+    // A wall that became an attractor (or one of other axes) starts its observers afresh.
+    if (was.first_channel(static_cast<std::size_t>(j) + 1) - theirs != n) continue;
+    for (std::size_t k = 0; k < n; ++k) {
+      observers[mine + k].continue_from(running.observers[theirs + k]);
+      continued[theirs + k] = true;
+    }
   }
   ended = running.ended;
   for (std::size_t j = 0; j < running.observers.size(); ++j) {
@@ -70,7 +77,7 @@ bool running_away(SceneState& st, const control::SceneStep& step, double s,
   ++st.stepped;
   const bool saturated = step.saturation == kinematics::SaturationStatus::kSaturated;
   const double explicit_bound =
-      step.count > 0 ? st.walls->scene->law(wall).runaway_penetration : 0.0;
+      st.walls->scene->size() > 0 ? st.walls->scene->wall_law(wall).runaway_penetration : 0.0;
   const bool deeper = std::isfinite(explicit_bound)
                           ? s > explicit_bound
                           : step.scale * config::kRunawayMargin < 1.0 && s > 0.0;
@@ -81,16 +88,20 @@ bool running_away(SceneState& st, const control::SceneStep& step, double s,
   return last >= before;  // not braked: pulled in, pushed through, or held there
 }
 
-// The record's fields of the walls' step: the deepest wall's, the contact bits, the flags.
-void record_walls(const control::SceneStep& step, telemetry::TickRecord& rec) noexcept {
-  std::size_t deepest = 0;
-  for (std::size_t i = 0; i < step.count; ++i) {
-    if (step.walls[i].penetration > step.walls[deepest].penetration) deepest = i;
-    if (step.walls[i].flags & control::kControlContact) rec.wall_contact |= 1u << i;
+// The record's fields of the walls' step: the deepest wall's (an attractor is not one: it is
+// meant to pull from afar, its axes' coordinates no depth), the contact bits, the flags.
+void record_walls(const control::Scene& scene, const control::SceneStep& step,
+                  telemetry::TickRecord& rec) noexcept {
+  std::size_t deepest = step.count;
+  for (std::size_t c = 0; c < step.count; ++c) {
+    if (scene.geometry(scene.wall_of(c)).attractor()) continue;
+    if (deepest == step.count || step.channels[c].penetration > step.channels[deepest].penetration)
+      deepest = c;
   }
-  if (step.count > 0) {
-    const control::ControlOutput& w = step.walls[deepest];
-    rec.deepest_wall = static_cast<std::uint8_t>(deepest);
+  rec.wall_contact |= step.contact;
+  if (deepest < step.count) {
+    const control::ControlOutput& w = step.channels[deepest];
+    rec.deepest_wall = static_cast<std::uint8_t>(scene.wall_of(deepest));
     rec.penetration = w.penetration;
     rec.velocity = w.velocity;
     rec.force_computed = w.force_computed;
@@ -114,15 +125,15 @@ JointCommand step_scene_tick(SceneState& st, const JointInput& in,
 
   control::SceneStep step;
   st.walls->scene->step_walls(pose, step);
-  record_walls(step, rec);
+  record_walls(*st.walls->scene, step, rec);
   JointCommand c;
   double energy = st.walls->ended.energy_j;  // the walls a reload ended still count
   for (std::size_t i = 0; i < step.count; ++i) {
     control::PassivityObserver& o = st.walls->observers[i];
-    o.observe(step.walls[i].penetration, in.fresh, in.periods);  // s_i: the law's penetration
+    o.observe(step.channels[i].penetration, in.fresh, in.periods);  // s_i: the law's penetration
     energy += o.energy_j();
-    const control::Damping d = o.damp(step.walls[i].force_commanded, st.walls->scene->law(i));
-    c.wall[i] = d.command;
+    const control::Damping d = o.damp(step.channels[i].force_commanded, st.walls->scene->law(i));
+    c.channel[i] = d.command;
     c.added[i] = d.added;
     if (d.alpha > 0.0) {
       rec.flags |= telemetry::kFlagPassivityDamped;
@@ -131,7 +142,7 @@ JointCommand step_scene_tick(SceneState& st, const JointInput& in,
   }
   rec.observer_energy_j = energy;
   for (int a = 0; a < 3; ++a) rec.client_force[a] = in.client_force[a];
-  st.walls->scene->map(pose, std::span<const double>(c.wall.data(), step.count), st.limit, step,
+  st.walls->scene->map(pose, std::span<const double>(c.channel.data(), step.count), st.limit, step,
                        in.client_force);
   rec.flags |= step.flags;  // the joints' saturation, a non-finite torque
   c.non_finite = (step.flags & control::kControlNonFinite) != 0;
@@ -153,8 +164,8 @@ void end_scene_tick(SceneState& st, const JointCommand* c, telemetry::TickRecord
   rec.joint_force[1] = tau[2];
   const bool acted = c != nullptr && !c->faulted();
   for (std::size_t i = 0; i < st.walls->observers.size(); ++i) {
-    // What acted along the wall's normal: its force, scaled with the joints' saturation.
-    st.walls->observers[i].commanded(acted ? c->scale * c->wall[i] : 0.0,
+    // What acted along the channel: its force, scaled with the joints' saturation.
+    st.walls->observers[i].commanded(acted ? c->scale * c->channel[i] : 0.0,
                                      acted ? c->scale * c->added[i] : 0.0);
   }
 }

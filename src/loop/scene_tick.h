@@ -4,15 +4,15 @@
 // recorded, so a log's torques come back bit for bit by construction (docs/kinematics.md, the
 // loop at several joints).
 //
-// Each tick: the pose x = fk(q) (the previous x the delta's guess); every wall stepped on its
-// coordinate s_i = n_i . (x - p_i); each wall's passivity observer (control/passivity_observer.h
-// on s_i, crediting the least damping the device has along n_i over the workspace, the gate's
-// b_n) and, in damp mode, its damping along n_i; the walls' forces through J^T, saturated by one
-// factor. A pose that is not ok is a fault with zero torque. The runaway guard is one joint's
-// (controller.h) on the deepest wall: saturated, deeper than the walls can hold, and not
-// slowing. Deeper than they can hold: the saturation scaled the walls' force below
-// 1 / config::kRunawayMargin of what they asked (in one dimension exactly the penetration
-// kRunawayMargin max_force / K), or past an explicit safety.max_penetration.
+// Each tick: the pose x = fk(q) (the previous x the delta's guess); every channel stepped on its
+// coordinate s_i = n_i . (x - p_i) (an attractor's axes: e_k . (x - p)); each channel's passivity
+// observer (control/passivity_observer.h on s_i, crediting the least damping the device has along
+// n_i over the workspace, the gate's b_n) and, in damp mode, its damping along n_i; the walls'
+// forces through J^T, saturated by one factor. A pose that is not ok is a fault with zero torque.
+// The runaway guard is one joint's (controller.h) on the deepest wall: saturated, deeper than the
+// walls can hold, and not slowing. Deeper than they can hold: the saturation scaled the walls'
+// force below 1 / config::kRunawayMargin of what they asked (in one dimension exactly the
+// penetration kRunawayMargin max_force / K), or past an explicit safety.max_penetration.
 #pragma once
 
 #include <array>
@@ -48,11 +48,11 @@ struct JointInput {
 };
 
 struct JointCommand {
-  kinematics::Vec3 tau = kinematics::Vec3::Zero();    // each joint's torque to write
-  std::array<double, config::kMaxWalls> wall{};       // each wall's force along its normal
-  std::array<double, config::kMaxWalls> added{};      // the passivity controller's part of it
-  double scale = 1.0;                                 // the joint saturation's factor
-  kinematics::Vec3 force = kinematics::Vec3::Zero();  // the task force that acts (N), scaled
+  kinematics::Vec3 tau = kinematics::Vec3::Zero();      // each joint's torque to write
+  std::array<double, control::kMaxChannels> channel{};  // each channel's force along it
+  std::array<double, control::kMaxChannels> added{};    // the passivity controller's part of it
+  double scale = 1.0;                                   // the joint saturation's factor
+  kinematics::Vec3 force = kinematics::Vec3::Zero();    // the task force that acts (N), scaled
   bool non_finite = false;  // a non-finite force or torque: the loop faults
   bool runaway = false;     // a wall's runaway guard tripped: the loop faults
   bool pose_fault = false;  // the pose was not ok (rec.pose_status says why): the loop faults
@@ -61,18 +61,19 @@ struct JointCommand {
   bool faulted() const noexcept { return non_finite || runaway || pose_fault; }
 };
 
-// What a scene of several joints renders: its walls and an observer each, built off the RT
-// thread, and swapped in whole at a tick boundary by a live reload (SceneSwap). What the walls
-// that a swap ended had observed stays in the run's totals (`ended`).
+// What a scene of several joints renders: its walls and an observer per channel (a wall's
+// normal, an attractor's axes; control/scene.h), built off the RT thread, and swapped in whole at a
+// tick boundary by a live reload (SceneSwap). What the walls that a swap ended had observed stays
+// in the run's totals (`ended`).
 struct SceneWalls {
   // Not RT-safe. Throws std::invalid_argument when `observers` does not hold one set of
-  // parameters per wall of `scene`.
+  // parameters per channel of `scene`.
   SceneWalls(std::unique_ptr<control::Scene> scene,
              const std::vector<control::ObserverParams>& observers);
 
   // RT-safe: taken at a tick boundary. Wall i goes on from `running`'s wall continues[i]
-  // (its filters and its observer's energies; -1: a new wall, which starts afresh), and the
-  // observations of `running`'s walls that no wall continues join `ended`.
+  // (its filters and its observers' energies; -1: a new wall, which starts afresh), and the
+  // observations of `running`'s channels that no channel continues join `ended`.
   void continue_from(SceneWalls& running) noexcept;
 
   // The walls' observations together: energies and works add, each minimum adds into a
@@ -90,7 +91,7 @@ struct SceneWalls {
   Totals totals() const noexcept;
 
   std::unique_ptr<control::Scene> scene;
-  std::vector<control::PassivityObserver> observers;  // one per wall
+  std::vector<control::PassivityObserver> observers;  // one per channel
   std::array<int, config::kMaxWalls> continues;       // set before the offer; -1: a new wall
   Totals ended;
 };

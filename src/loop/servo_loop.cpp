@@ -196,7 +196,7 @@ void ServoLoop::scene_tick(std::uint64_t tick, std::int64_t wake, const Sensed& 
     if (c.runaway) {
       // What the walls can hold: the penetration at which they ask kRunawayMargin times what
       // the saturated joints render, or the explicit bound.
-      const double bound = st.walls->scene->law(rec.deepest_wall).runaway_penetration;
+      const double bound = st.walls->scene->wall_law(rec.deepest_wall).runaway_penetration;
       set_fault({FaultCause::kRunaway, tick, rec.penetration,
                  std::isfinite(bound) ? bound : config::kRunawayMargin * c.scale * rec.penetration},
                 rec, res);

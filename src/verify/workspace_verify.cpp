@@ -1,5 +1,6 @@
 #include "verify/workspace_verify.h"
 
+#include <Eigen/Eigenvalues>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -152,6 +153,32 @@ class NormalSweep final : public FrequencySweep {
   double normal_damping_ = 0.0;
 };
 
+// An attractor's law along any unit direction u is its one-axis law on u . (x - p) (the same
+// filter on every axis, linear): measured as a wall whose normal is the direction in which the
+// device at x has the least damping, lambda_min(B_c)'s eigenvector, where the gate judged it.
+config::TaskWallConfig as_wall(const config::Config& cfg, const config::TaskWallConfig& w,
+                               const Vec3& x) {
+  if (w.kind != config::WallKind::kAttractor) return w;
+  const kinematics::JointSolution s = kinematics::inverse(cfg.device.kinematics, x);
+  const kinematics::Pose pose = kinematics::forward(cfg.device.kinematics, s.q, x);
+  analysis::DeviceDamping dd;
+  dd.jacobian = pose.J;
+  dd.m = pose.m;
+  dd.n = pose.n;
+  dd.joint_damping = cfg.device.damping.per_joint();
+  analysis::Mat3 b_c;
+  if (s.status != kinematics::Status::kOk || pose.status != kinematics::Status::kOk ||
+      !analysis::task_damping(dd, b_c)) {
+    throw std::invalid_argument("verify: the attractor's worst configuration has no B_c");
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(b_c.topLeftCorner(dd.m, dd.m));
+  config::TaskWallConfig one = w;
+  one.kind = config::WallKind::kWall;
+  one.normal = Vec3::Zero();
+  one.normal.head(dd.m) = eig.eigenvectors().col(0).normalized();  // the least eigenvalue's
+  return one;
+}
+
 Measured measured_wall(const config::Config& cfg, const config::TaskWallConfig& w, int total_delay,
                        const Vec3& x_star) {
   Measured m;
@@ -199,7 +226,7 @@ WallVerify verify_wall(const config::Config& cfg, const config::TaskWallConfig& 
   WallVerify v;
   v.position = x_star;
   const int total = w.law.delay_samples + device_delay;
-  const Measured m = measured_wall(cfg, w, total, x_star);
+  const Measured m = measured_wall(cfg, as_wall(cfg, w, x_star), total, x_star);
   config::Config one = cfg;
   one.wall = w.law;
   const analysis::TransferFunction e =

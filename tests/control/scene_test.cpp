@@ -92,7 +92,7 @@ TEST(Scene, ACornerPushesAlongBothFacesAtOnce) {
   const SceneStep s = hold_at(scene, cartesian_of(2), Vec3(0.023, 0.014, 0.0));
   EXPECT_NEAR(s.force.x(), -1000.0 * 0.003, 1e-12);
   EXPECT_NEAR(s.force.y(), -500.0 * 0.004, 1e-12);
-  EXPECT_NEAR(s.walls[1].penetration, 0.004, 1e-15);
+  EXPECT_NEAR(s.channels[1].penetration, 0.004, 1e-15);
 }
 
 TEST(Scene, JointTorquesAreJTransposedForceThroughTheGantrysScaleAndSign) {
@@ -237,7 +237,7 @@ TEST(Scene, AWallMovedByASwapSlidesToItsPlaceAtMostMaxMoveATick) {
       std::vector<WallGeometry>{{Vec3::Zero(), Vec3(1, 0, 0)}, {Vec3(0, -0.1, 0), Vec3(0, -1, 0)}},
       laws, 0.001);
   const Vec3 q(0.005, 0.0, 0.0);  // 5 mm into the first wall
-  EXPECT_NEAR(hold_at(before, k, q).walls[0].penetration, 0.005, 1e-12);
+  EXPECT_NEAR(hold_at(before, k, q).channels[0].penetration, 0.005, 1e-12);
   // The first face 3.5 mm towards -x (deeper in), the second where it was.
   Scene after(std::vector<WallGeometry>{{Vec3(-0.0035, 0, 0), Vec3(1, 0, 0)},
                                         {Vec3(0, -0.1, 0), Vec3(0, -1, 0)}},
@@ -245,8 +245,8 @@ TEST(Scene, AWallMovedByASwapSlidesToItsPlaceAtMostMaxMoveATick) {
   after.continue_from(before, std::vector<int>{0, 1});
   for (const double expected : {0.006, 0.007, 0.008, 0.0085, 0.0085}) {
     const SceneStep s = hold_at(after, k, q, 1);
-    EXPECT_NEAR(s.walls[0].penetration, expected, 1e-12);
-    EXPECT_NEAR(s.walls[1].penetration, -0.1, 1e-12);
+    EXPECT_NEAR(s.channels[0].penetration, expected, 1e-12);
+    EXPECT_NEAR(s.channels[1].penetration, -0.1, 1e-12);
   }
   EXPECT_EQ(after.geometry(0).point, Vec3(-0.0035, 0, 0)) << "arrived exactly";
 
@@ -259,10 +259,10 @@ TEST(Scene, AWallMovedByASwapSlidesToItsPlaceAtMostMaxMoveATick) {
                 std::vector<ControlLaw>{wall_law(1000), fresh}, 0.001);
   flipped.continue_from(after, std::vector<int>{0, 1});
   const SceneStep s = hold_at(flipped, k, q, 3);
-  EXPECT_NEAR(s.walls[1].penetration, 0.1, 1e-12);
-  EXPECT_EQ(s.walls[1].force_commanded, 0.0);
-  EXPECT_TRUE(s.walls[1].flags & kControlUnarmed);
-  EXPECT_NEAR(s.walls[0].force_commanded, -8.5, 1e-9) << "the first wall went on pushing";
+  EXPECT_NEAR(s.channels[1].penetration, 0.1, 1e-12);
+  EXPECT_EQ(s.channels[1].force_commanded, 0.0);
+  EXPECT_TRUE(s.channels[1].flags & kControlUnarmed);
+  EXPECT_NEAR(s.channels[0].force_commanded, -8.5, 1e-9) << "the first wall went on pushing";
   EXPECT_THROW(Scene(std::vector<WallGeometry>{{Vec3::Zero(), Vec3(1, 0, 0)}},
                      std::vector<ControlLaw>{wall_law(1000)}, 0.0),
                std::invalid_argument);

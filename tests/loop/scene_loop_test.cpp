@@ -20,6 +20,7 @@
 #include "control/scene.h"
 #include "freerun.h"
 #include "loop/servo_loop.h"
+#include "scene_rig.h"
 #include "sim/sim_device.h"
 #include "telemetry/state_block.h"
 
@@ -27,48 +28,6 @@ namespace hapticd::loop {
 namespace {
 
 using kinematics::Vec3;
-
-std::string delta_yaml() {
-  std::ifstream in(std::string(HAPTICD_SOURCE_DIR) + "/config/sim-delta.yaml");
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-// config/sim-delta.yaml with its text `from` replaced by `to`.
-config::Config delta_config(const std::string& from = "", const std::string& to = "") {
-  std::string yaml = delta_yaml();
-  if (!from.empty()) {
-    const auto at = yaml.find(from);
-    EXPECT_NE(at, std::string::npos) << from;
-    if (at != std::string::npos) yaml.replace(at, from.size(), to);
-  }
-  return config::load_config_text(yaml, "sim-delta.yaml");
-}
-
-struct SceneRig {
-  explicit SceneRig(const config::Config& c)
-      : cfg(c),
-        device(cfg.device, cfg.loop.sample_period_s()),
-        controller(control::make_control_law(cfg)),
-        walls(std::make_unique<control::Scene>(control::make_scene(cfg)),
-              std::vector<control::ObserverParams>(cfg.walls.size(),
-                                                   control::observer_params(cfg, 0))),
-        state(cfg.device.kinematics, walls, cfg.device.max_force.per_joint()) {
-    device.configure();
-    device.enable();
-  }
-  LoopOptions options(std::uint64_t ticks) {
-    LoopOptions o = freerun(ticks);
-    o.scene = &state;
-    return o;
-  }
-  config::Config cfg;
-  sim::SimDevice device;
-  control::Controller controller;  // unused at several joints, as the loop's signature asks
-  SceneWalls walls;
-  SceneState state;
-};
 
 // At rest after the press has held (t = 2 s): along each wall the hand pushes into, the depth
 // is the hand's force along its normal over K, within 2 %.

@@ -92,6 +92,21 @@ class ClientTest(unittest.TestCase):
         self.assertEqual((removed["op"], removed["walls"]), ("remove", 1))
         self.assertEqual(self.scene.walls[0]["stiffness"], 300)
 
+    def test_add_attractor_sends_an_attractors_keys_without_a_normal(self) -> None:
+        index = self.client.add_attractor([0.01, 0, 0.11], 100, 0.05, max_force=2.0, keep=True)
+        self.assertEqual(index, 1)
+        request = self.daemon.requests[-1]
+        self.assertEqual(request["wall"],
+                         {"kind": "attractor", "point": [0.01, 0.0, 0.11], "stiffness": 100,
+                          "damping": 0.05, "max_force": 2.0})
+        self.assertIs(request["keep"], True)
+        self.client.add_attractor([0, 0, 0.1], 50)
+        self.assertEqual(self.daemon.requests[-1]["wall"],
+                         {"kind": "attractor", "point": [0.0, 0.0, 0.1], "stiffness": 50})
+        self.assertNotIn("keep", self.daemon.requests[-1])  # as the daemon's default says
+        with self.assertRaises(ValueError):
+            self.client.add_attractor([0, float("nan"), 0.1], 50)
+
     def test_move_returns_the_tick_and_time_it_was_applied_at(self) -> None:
         sent = time.monotonic_ns()
         answer = self.client.move_wall(0, [0.025, 0, 0.11])

@@ -1,4 +1,5 @@
-// Twenty random scene changes on the running delta (docs/clients.md): each is either admitted,
+// Twenty random scene changes on the running delta (docs/clients.md; walls and attractors):
+// each is either admitted,
 // and then `hapticd verify` measures the scene it made passive, or refused with the gate's
 // numbers; and nothing refused reaches a tick: the log's swaps are the admitted changes alone,
 // and no configuration it recorded holds a refused wall. Label slow (a verify per admitted
@@ -25,6 +26,7 @@ struct Wall {
   double normal[3];
   double stiffness;
   double damping;
+  bool attractor = false;  // a spring-damper to its point: no normal
 };
 
 std::string num(double v) {
@@ -38,8 +40,11 @@ std::string vec(const double (&v)[3]) {
 }
 
 std::string wall_json(const Wall& w) {
-  return R"({"point": )" + vec(w.point) + R"(, "normal": )" + vec(w.normal) + R"(, "stiffness": )" +
-         num(w.stiffness) + R"(, "damping": )" + num(w.damping) + "}";
+  const std::string shape =
+      w.attractor ? R"({"kind": "attractor", "point": )" + vec(w.point)
+                  : R"({"point": )" + vec(w.point) + R"(, "normal": )" + vec(w.normal);
+  return shape + R"(, "stiffness": )" + num(w.stiffness) + R"(, "damping": )" + num(w.damping) +
+         "}";
 }
 
 // config/sim-delta-scene.yaml with `walls` as given.
@@ -64,11 +69,14 @@ struct Random {
     p[1] = uniform(-0.03, 0.03);
     p[2] = uniform(0.09, 0.13);
   }
+  // One in four an attractor, whose stiffness the delta's least damping in any direction
+  // bounds near 800 N/m: about half of them pass.
   Wall wall() {
     Wall w{};
     point(w.point);
-    w.normal[below(3)] = below(2) == 0 ? 1.0 : -1.0;
-    w.stiffness = uniform(200.0, 6000.0);
+    w.attractor = below(4) == 0;
+    if (!w.attractor) w.normal[below(3)] = below(2) == 0 ? 1.0 : -1.0;
+    w.stiffness = w.attractor ? uniform(100.0, 1600.0) : uniform(200.0, 6000.0);
     w.damping = uniform(0.0, 0.2);
     return w;
   }
@@ -82,6 +90,7 @@ TEST(SceneRandom, EachChangeIsAdmittedAndMeasuredPassiveOrRefusedWithTheNumbers)
   Random r;
   std::size_t admitted = 0, refused = 0, swaps = 0, moves = 0;
   std::vector<double> refused_stiffness;
+  std::size_t attractors = 0;  // attractors asked for
   for (int k = 0; k < 20; ++k) {
     const std::size_t kind = walls.size() < 2 ? r.below(2) * 3 : r.below(4);
     std::vector<Wall> next = walls;
@@ -91,6 +100,7 @@ TEST(SceneRandom, EachChangeIsAdmittedAndMeasuredPassiveOrRefusedWithTheNumbers)
     if (kind == 0) {  // add
       next.push_back(r.wall());
       stiffness = next.back().stiffness;
+      attractors += next.back().attractor ? 1 : 0;
       request =
           R"({"v":1,"cmd":"scene","op":"add","keep":true,"wall":)" + wall_json(next.back()) + "}";
       what = "add " + wall_json(next.back());
@@ -140,6 +150,8 @@ TEST(SceneRandom, EachChangeIsAdmittedAndMeasuredPassiveOrRefusedWithTheNumbers)
   }
   EXPECT_GT(admitted, 3u);
   EXPECT_GT(refused, 3u);
+  EXPECT_GT(attractors, 0u);
+  std::printf("admitted %zu, refused %zu, attractors asked %zu\n", admitted, refused, attractors);
   ASSERT_EQ(d.ctl({"stop"}).exit_code, 0);
   EXPECT_EQ(d.wait().exit_code, 0);
   const telemetry::LogContents log = telemetry::read_log(d.log());
