@@ -79,6 +79,16 @@ ssize_t receive(int fd, char* buf, std::size_t size, int& passed) {
   return n;
 }
 
+// A stream sample's line: {"v": 1, "stream": {...}}, never an answer (those carry "ok").
+std::optional<json> sample_of(const std::string& line) {
+  if (line.find("\"stream\"") == std::string::npos) return std::nullopt;
+  json j = json::parse(line, nullptr, /*allow_exceptions=*/false);
+  if (j.is_discarded() || !j.is_object() || j.contains("ok") || !j.contains("stream")) {
+    return std::nullopt;
+  }
+  return std::move(j["stream"]);
+}
+
 }  // namespace
 
 std::string instance_socket(const std::string& name) {
@@ -107,12 +117,12 @@ json Connection::request(json request) {
       // was sent: its answer is still there to read.
       timeout_ms_ = std::min(timeout_ms_, 1000);
       try {
-        return parsed(socket_, line());
+        return parsed(socket_, answer_line());
       } catch (const ClientError&) {
         throw failure(socket_, "cannot send the request", err);
       }
     }
-    return parsed(socket_, line());
+    return parsed(socket_, answer_line());
   } catch (const ClientError&) {
     close(fd_);
     fd_ = -1;
@@ -131,8 +141,13 @@ json Connection::call(json request) {
 }
 
 std::string Connection::line() {
+  if (std::optional<std::string> l = line_within(timeout_ms_)) return std::move(*l);
+  throw ClientError(socket_ + ": no answer within " + std::to_string(timeout_ms_) + " ms");
+}
+
+std::optional<std::string> Connection::line_within(int timeout_ms) {
   using clock = std::chrono::steady_clock;
-  const auto deadline = clock::now() + std::chrono::milliseconds(timeout_ms_);
+  const auto deadline = clock::now() + std::chrono::milliseconds(timeout_ms);
   char buf[65536];
   for (;;) {
     if (const auto nl = in_.find('\n'); nl != std::string::npos) {
@@ -142,9 +157,7 @@ std::string Connection::line() {
     }
     const auto left =
         std::chrono::duration_cast<std::chrono::milliseconds>(deadline - clock::now()).count();
-    if (left <= 0) {
-      throw ClientError(socket_ + ": no answer within " + std::to_string(timeout_ms_) + " ms");
-    }
+    if (left <= 0) return std::nullopt;
     pollfd p{fd_, POLLIN, 0};
     if (poll(&p, 1, static_cast<int>(left)) < 0 && errno != EINTR) {
       throw failure(socket_, "poll", errno);
@@ -156,6 +169,43 @@ std::string Connection::line() {
     if (n == 0) throw ClientError(socket_ + ": the daemon closed the connection without an answer");
     in_.append(buf, static_cast<std::size_t>(n));
   }
+}
+
+std::string Connection::answer_line() {
+  for (;;) {
+    std::string l = line();
+    if (std::optional<json> sample = sample_of(l)) {
+      samples_.push_back(std::move(*sample));
+      continue;
+    }
+    return l;
+  }
+}
+
+json Connection::stream(std::uint32_t every) {
+  return call({{"cmd", "stream"}, {"every", every}})["stream"];
+}
+
+std::optional<json> Connection::next_sample(int timeout_ms) {
+  if (samples_.empty()) {
+    if (fd_ < 0) throw ClientError(socket_ + ": the connection was closed after an error");
+    try {
+      std::optional<std::string> l = line_within(timeout_ms);
+      if (!l) return std::nullopt;
+      std::optional<json> sample = sample_of(*l);
+      if (!sample) {
+        throw ClientError(socket_ + ": a line that answers no request: " + l->substr(0, 200));
+      }
+      return sample;
+    } catch (const ClientError&) {
+      close(fd_);
+      fd_ = -1;
+      throw;
+    }
+  }
+  json s = std::move(samples_.front());
+  samples_.pop_front();
+  return s;
 }
 
 json Connection::status() { return call({{"cmd", "status"}})["status"]; }

@@ -7,6 +7,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <deque>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <span>
@@ -92,15 +93,27 @@ class Connection {
   // once when this connection closes. The answer's "servo_cf": the force taken (saturated to
   // safety.client_force_limit) and whether it was saturated.
   nlohmann::json servo_cf(std::span<const double> force);
+  // The state stream: every `every`-th tick's state as a line of its own on this connection
+  // (0 stops it); the answer's "stream" member (every, rate_hz, first_sample). For a reader
+  // that wants the state over the socket rather than the state block.
+  nlohmann::json stream(std::uint32_t every);
+  // The next sample of the stream (the line's "stream" member: tick, time_ns, measured_js,
+  // measured_cp, measured_cv, setpoint_cf, ..., missed), waiting up to `timeout_ms`; none when
+  // none came. Samples that arrive while a request waits for its answer are kept for this.
+  std::optional<nlohmann::json> next_sample(int timeout_ms);
 
  private:
-  std::string line();  // the next answer line, receiving any descriptor passed with it
+  std::string line();  // the next line, receiving any descriptor passed with it
+  std::optional<std::string> line_within(int timeout_ms);  // none: none within timeout_ms
+  // The next line that is not a stream sample (those go to samples_).
+  std::string answer_line();
 
   std::string socket_;
   int timeout_ms_;
   int fd_ = -1;
   std::string in_;
-  int passed_fd_ = -1;  // the descriptor the last answer carried, until taken
+  int passed_fd_ = -1;                  // the descriptor the last answer carried, until taken
+  std::deque<nlohmann::json> samples_;  // stream samples not yet taken
 };
 
 }  // namespace hapticd::client

@@ -20,6 +20,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
+#include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -58,9 +59,26 @@ class DaemonLikeHandler : public service::ControlHandler {
         require(r.force_axes >= 1 && r.force_axes <= 3, "a force has 1 to 3 numbers");
         for (const double v : r.force) require(std::isfinite(v), "a force is finite");
         return {{"servo_cf", {{"saturated", false}}}};
+      case service::Command::kStream:  // what the parser promises a stream
+        require(r.every <= service::kMaxStreamEvery, "a stream's every is in range");
+        streams_[r.client] = r.every > 0 ? kLinesPerStream : 0;
+        return {{"stream", {{"every", r.every}}}};
     }
     throw service::ControlRefusal("unknown command");
   }
+
+  static constexpr std::string_view kStreamLine = "{\"v\":1,\"stream\":{\"tick\":7}}\n";
+  // A streaming client gets a few unasked lines between its answers, as the daemon's state
+  // stream sends them: they must never split or reorder an answer.
+  bool push(std::uint64_t client, std::size_t /*pending*/, std::string& out) override {
+    int& left = streams_[client];
+    if (left <= 0) return false;
+    --left;
+    out += kStreamLine;
+    return true;
+  }
+  int push_wait_ms() const override { return 1; }
+  void left(std::uint64_t client) override { streams_.erase(client); }
 
  private:
   json reload(const service::Request& r) {
@@ -101,6 +119,8 @@ class DaemonLikeHandler : public service::ControlHandler {
       "walls:\n  - {point: [0.02, 0], normal: [1, 0], stiffness: 500}\n"
       "  - {point: [0, 0.02], normal: [0, 1], stiffness: 500}\n";
   config::Config running_ = config::load_embedded_default();
+  static constexpr int kLinesPerStream = 3;
+  std::map<std::uint64_t, int> streams_;  // the server's thread alone
 };
 
 struct Rig {
@@ -187,8 +207,18 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   // here every line is answered.
   if (size > service::kMaxRequestBytes) return 0;
   const int fd = connect_to(rig().path);
-  const std::string answers = exchange(fd, data, size);
+  const std::string received = exchange(fd, data, size);
   close(fd);
+  // The stream's lines come whole, between answers, never inside one: set aside, the rest
+  // must be the answers alone.
+  std::string answers;
+  for (std::size_t at = 0, nl; (nl = received.find('\n', at)) != std::string::npos; at = nl + 1) {
+    const std::string_view l = std::string_view(received).substr(at, nl - at + 1);
+    if (l != DaemonLikeHandler::kStreamLine) answers += l;
+  }
+  if (const std::size_t tail = received.rfind('\n'); tail + 1 < received.size()) {
+    answers += received.substr(tail == std::string::npos ? 0 : tail + 1);
+  }
 
   const std::string_view in(reinterpret_cast<const char*>(data), size);
   std::size_t q = 0, a = 0;

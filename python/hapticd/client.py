@@ -7,12 +7,13 @@ One JSON object per line each way. ``request`` sends one and waits for its answe
 from __future__ import annotations
 
 import array
+import collections
 import itertools
 import json
 import math
 import os
 import socket
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from typing import Any
 
 from .errors import ClientError, Refused
@@ -38,6 +39,19 @@ def _vector(field: str, value: Iterable[float]) -> list[float]:
     return out
 
 
+def _sample_of(raw: bytes) -> dict[str, Any] | None:
+    """A stream line's sample ({"v": 1, "stream": {...}}: never an answer, which has "ok")."""
+    if b'"stream"' not in raw:
+        return None
+    try:
+        line = json.loads(raw)
+    except ValueError:
+        return None
+    if not isinstance(line, dict) or "ok" in line or not isinstance(line.get("stream"), dict):
+        return None
+    return line["stream"]
+
+
 def _wall(point: Iterable[float] | None = None, normal: Iterable[float] | None = None,
           **keys: Any) -> dict[str, Any]:
     wall: dict[str, Any] = {}
@@ -61,6 +75,7 @@ class Client:
         self._buffer = bytearray()
         self._fds: list[int] = []  # received with the answer being read
         self._broken = ""  # why the connection is unusable, once it is
+        self._samples: collections.deque[dict[str, Any]] = collections.deque()  # stream lines
         self._sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
         self._sock.settimeout(timeout)
         try:
@@ -110,7 +125,7 @@ class Client:
         self._close_fds()
         try:
             self._sock.sendall(line)
-            raw = self._read_line(cmd)
+            raw = self._read_answer(cmd)
         except TimeoutError as e:
             raise self._fail(f"no answer to {cmd} within {self.timeout} s") from e
         except OSError as e:
@@ -156,6 +171,51 @@ class Client:
         raw = bytes(self._buffer[:end])
         del self._buffer[:end + 1]
         return raw
+
+    def _read_answer(self, cmd: str) -> bytes:
+        """The next line that is not a stream sample; those are kept for samples()."""
+        while True:
+            raw = self._read_line(cmd)
+            sample = _sample_of(raw)
+            if sample is None:
+                return raw
+            self._samples.append(sample)
+
+    def stream(self, every: int) -> dict[str, Any]:
+        """Starts the state stream: every ``every``-th tick's state as a line of its own on
+        this connection (0 stops it); the answer's ``stream`` member (every, rate_hz,
+        first_sample). Read the samples with samples()."""
+        answer = self.request({"cmd": "stream", "every": int(every)})
+        return self._member(answer, "stream", "stream")
+
+    def samples(self, timeout: float | None = None) -> Iterator[dict[str, Any]]:
+        """The stream's samples as they come (each line's ``stream`` member: tick, time_ns,
+        measured_js, measured_cp, measured_cv, setpoint_cf, ..., missed), those that arrived
+        during a request first; ends when none came within ``timeout`` s (None: the Client's
+        timeout)."""
+        wait = self.timeout if timeout is None else timeout
+        while True:
+            while self._samples:
+                yield self._samples.popleft()
+            if self._broken:
+                raise ClientError(f"{self.socket_path}: stream: the connection failed earlier "
+                                  f"({self._broken})")
+            self._sock.settimeout(wait)
+            try:
+                raw = self._read_line("stream")
+            except TimeoutError:
+                return
+            except OSError as e:
+                raise self._fail(f"stream: {e.strerror or e}") from e
+            except ClientError as e:
+                raise self._fail(str(e).removeprefix(f"{self.socket_path}: ")) from None
+            finally:
+                if not self._broken:
+                    self._sock.settimeout(self.timeout)
+            sample = _sample_of(raw)
+            if sample is None:
+                raise self._fail(f"stream: a line that answers no request: {raw[:200]!r}")
+            yield sample
 
     def _parse(self, raw: bytes, sent_id: int, cmd: str) -> dict[str, Any]:
         try:

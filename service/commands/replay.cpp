@@ -122,7 +122,7 @@ struct Walker {
       c.command = probe->step(logged.position, periods);
     }
     if (faulted || c.non_finite) c = {};
-    loop::end_tick(*observer, c.command, c.added, rec);
+    loop::end_tick(*observer, c, rec);
     series.commanded.push_back(c.command);
     series.wall_energy_j = observer->wall_work_j();
     series.min_observer_energy_j = observer->min_energy_j();

@@ -18,6 +18,7 @@ std::optional<Command> command_named(const std::string& name) {
   if (name == "scene") return Command::kScene;
   if (name == "state") return Command::kState;
   if (name == "servo_cf") return Command::kServoCf;
+  if (name == "stream") return Command::kStream;
   return std::nullopt;
 }
 
@@ -122,7 +123,9 @@ std::optional<Request> parse_request(std::string_view text, std::string& error, 
   const std::optional<Command> c =
       cmd != j.end() && cmd->is_string() ? command_named(cmd->get<std::string>()) : std::nullopt;
   if (!c) {
-    error = "\"cmd\" must be one of status, stop, reload, clear-fault, scene, state, servo_cf";
+    error =
+        "\"cmd\" must be one of status, stop, reload, clear-fault, scene, state, servo_cf, "
+        "stream";
     return std::nullopt;
   }
   Request r;
@@ -142,6 +145,16 @@ std::optional<Request> parse_request(std::string_view text, std::string& error, 
   if (*c == Command::kServoCf &&
       !parse_vector(j, "force", "servo_cf", "N", r.force, r.force_axes, error)) {
     return std::nullopt;
+  }
+  if (*c == Command::kStream) {
+    const auto every = j.find("every");
+    if (every == j.end() || !every->is_number_unsigned() ||
+        every->get<std::uint64_t>() > kMaxStreamEvery) {
+      error = "stream needs \"every\": an integer 1.." + std::to_string(kMaxStreamEvery) +
+              " (a sample every that many ticks), or 0 to stop";
+      return std::nullopt;
+    }
+    r.every = static_cast<std::uint32_t>(every->get<std::uint64_t>());
   }
   return r;
 }

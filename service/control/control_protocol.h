@@ -10,6 +10,8 @@
 //           {"v": 1, "cmd": "scene", "op": "move", "index": <n>, "point": [x, y, z]}
 //                                            (1 to 3 finite numbers: the wall's new point, m)
 //           {"v": 1, "cmd": "servo_cf", "force": [fx, fy, fz]}   (N, one per task axis)
+//           {"v": 1, "cmd": "stream", "every": <n>}  (every n-th tick's state as a line of its
+//            own, {"v": 1, "stream": {...}}, until 0 stops it: service/run/state_stream.h)
 // "state" is answered with the state block's shape, and its descriptor passed with the answer's
 // first byte (SCM_RIGHTS; client/state_layout.h).
 // Response: {"v": 1, "id": <echoed>, "ok": true, ...the command's members}
@@ -34,7 +36,8 @@ namespace hapticd::service {
 inline constexpr int kProtocolVersion = client::kProtocolVersion;  // one version, both ends
 inline constexpr std::size_t kMaxRequestBytes = 256 * 1024;        // a configuration fits with room
 
-enum class Command { kStatus, kStop, kReload, kClearFault, kScene, kState, kServoCf };
+enum class Command { kStatus, kStop, kReload, kClearFault, kScene, kState, kServoCf, kStream };
+inline constexpr std::uint64_t kMaxStreamEvery = 100000;  // the longest decimation (ticks)
 
 // A scene request: a change to the walls of the running scene.
 struct SceneEdit {
@@ -60,6 +63,7 @@ struct Request {
   SceneEdit scene;                // scene
   std::array<double, 3> force{};  // servo_cf: the force (N), finite; zero past force_axes
   std::size_t force_axes = 0;
+  std::uint32_t every = 0;   // stream: a sample every this many ticks, 0: stop
   std::uint64_t client = 0;  // the connection it came on (the server's number; 0: none)
 };
 

@@ -287,6 +287,15 @@ void ControlServer::serve(Client& c) {
   }
 }
 
+bool ControlServer::push(Client& c) {
+  try {
+    return handler_.push(c.id, c.out.size(), c.out);
+  } catch (const std::exception& e) {
+    spdlog::error("control socket {}: a line for client {} failed: {}", path_, c.id, e.what());
+    return false;
+  }
+}
+
 void ControlServer::run() noexcept {
   std::vector<Client> clients;
   std::vector<pollfd> fds;
@@ -306,8 +315,9 @@ void ControlServer::run() noexcept {
       const bool queued = std::any_of(clients.begin(), clients.end(), [](const Client& c) {
         return c.in.find('\n') != std::string::npos;
       });
-      // Full: look again soon, for a slot that becomes free to evict.
-      const int wait_ms = queued ? 0 : (space ? 1000 : 100);
+      // Full: look again soon, for a slot that becomes free to evict; a stream: when it is due.
+      int wait_ms = queued ? 0 : (space ? 1000 : 100);
+      if (const int push = handler_.push_wait_ms(); push >= 0) wait_ms = std::min(wait_ms, push);
       if (poll(fds.data(), fds.size(), wait_ms) < 0 && errno != EINTR) break;
       if (fds[0].revents != 0) break;
       if (fds[1].revents & POLLIN) accept_clients(clients);
@@ -315,7 +325,8 @@ void ControlServer::run() noexcept {
       for (std::size_t i = 0; i < clients.size(); ++i) {
         Client& c = clients[i];
         const short ev = i + 2 < fds.size() ? fds[i + 2].revents : 0;
-        if ((ev & (POLLIN | POLLOUT)) || c.in.find('\n') != std::string::npos) serve(c);
+        const bool pushed = !c.closing && push(c);
+        if ((ev & (POLLIN | POLLOUT)) || pushed || c.in.find('\n') != std::string::npos) serve(c);
         const bool idle =
             now - c.last_active > std::chrono::seconds(kIdleSeconds) && !handler_.holds(c.id);
         // POLLHUP: it closed both ways (not a half-close), so no answer can reach it; kept, it

@@ -40,6 +40,13 @@ class ControlHandler {
   // Whether `client` holds something of the daemon's (a scene's wall): the server then never
   // closes it for being idle or evicts it for a newcomer; only its own leaving ends it.
   virtual bool holds(std::uint64_t /*client*/) const { return false; }
+  // Lines the daemon sends `client` unasked (a state stream), appended to `out`; `pending` is
+  // what of its output is still unsent. Whether any were. Called every turn of the thread.
+  virtual bool push(std::uint64_t /*client*/, std::size_t /*pending*/, std::string& /*out*/) {
+    return false;
+  }
+  // How long the thread may wait before push() has lines again (ms); -1: never.
+  virtual int push_wait_ms() const { return -1; }
 };
 
 class ControlRefusal : public std::runtime_error {
@@ -83,6 +90,8 @@ class ControlServer {
   // Closes `c` and tells the handler it left.
   void end(Client& c);
   void serve(Client& c);
+  // The handler's unasked lines for `c` (ControlHandler::push); whether any.
+  bool push(Client& c);
 
   std::string path_;
   ControlHandler& handler_;

@@ -52,6 +52,31 @@ int report(const json& answer, const std::string& command, bool as_json) {
   return code >= 1 && code <= 4 ? code : hapticd::kExitRuntimeFault;
 }
 
+// hapticctl stream: the daemon's state stream, each sample a line of JSON on stdout.
+int print_stream(const std::string& socket, std::uint32_t every, std::uint64_t count,
+                 double timeout_s) {
+  try {
+    const int timeout_ms = static_cast<int>(timeout_s * 1000.0);
+    hapticd::client::Connection c(socket, timeout_ms);
+    c.stream(every);
+    for (std::uint64_t n = 0; count == 0 || n < count; ++n) {
+      const std::optional<json> sample = c.next_sample(timeout_ms);
+      if (!sample) {
+        std::cerr << "hapticctl: stream: no sample within " << timeout_s << " s\n";
+        return hapticd::kExitRuntimeFault;
+      }
+      std::cout << sample->dump() << "\n" << std::flush;
+    }
+    return hapticd::kExitOk;
+  } catch (const hapticd::client::Refused& e) {
+    std::cerr << "hapticctl: stream refused: " << e.what() << "\n";
+    return e.code();
+  } catch (const hapticd::client::ClientError& e) {
+    std::cerr << "hapticctl: " << e.what() << "\n";
+    return hapticd::kExitRuntimeFault;
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -110,6 +135,15 @@ int main(int argc, char** argv) {
   move->add_option("POINT", point, "The wall's new point, one number per task axis (m)")
       ->required()
       ->expected(1, 3);
+  std::uint32_t every = 10;
+  std::uint64_t count = 0;
+  CLI::App* stream = app.add_subcommand(
+      "stream",
+      "Print every EVERY-th tick's state as it comes, one JSON object a line (tick, time_ns, "
+      "measured_js, measured_cp, measured_cv, setpoint_cf, ..., missed)");
+  stream->add_option("--every", every, "A sample every this many ticks (default 10)")
+      ->check(CLI::Range(1, 100000));
+  stream->add_option("--count", count, "Stop after this many samples (default: until killed)");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -146,6 +180,7 @@ int main(int argc, char** argv) {
     }
   }
   if (socket.empty()) socket = hapticd::client::instance_socket(instance);
+  if (command == "stream") return print_stream(socket, every, count, timeout_s);
   try {
     const json answer = hapticd::client::request(socket, req, static_cast<int>(timeout_s * 1000.0));
     return report(answer, command, as_json);

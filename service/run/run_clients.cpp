@@ -20,6 +20,8 @@
 namespace hapticd::service {
 
 bool RunSession::holds(std::uint64_t client) const {
+  // A stream is held too: its client only reads, and is not idle for that.
+  if (stream_ != nullptr && stream_->streaming(client)) return true;
   std::lock_guard lock(mutex_);
   return force_owner_ == client ||
          std::find(owners_.begin(), owners_.end(), client) != owners_.end();
@@ -29,10 +31,8 @@ nlohmann::json RunSession::servo_cf(const Request& request) {
   const auto refuse = [](const std::string& why) {
     throw ControlRefusal("servo_cf refused: " + why, kExitUsage);
   };
-  if (!client_force_) {
-    refuse("a commanded force is for a device of several joints (walls:)");
-  }
   std::lock_guard lock(mutex_);
+  if (!client_force_) refuse("the servo loop is not running yet");
   const double limit = cfg_.safety.client_force_limit;
   if (!(limit > 0.0)) {
     refuse("safety.client_force_limit is 0: this daemon takes no force from its clients");
@@ -58,6 +58,7 @@ nlohmann::json RunSession::servo_cf(const Request& request) {
 }
 
 void RunSession::left(std::uint64_t client) {
+  if (stream_ != nullptr) stream_->leave(client);
   {
     std::lock_guard lock(mutex_);
     if (client_force_ && force_owner_ == client) {  // never a force from a client that is gone

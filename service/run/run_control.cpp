@@ -52,6 +52,8 @@ json RunSession::handle(const Request& request) {
       return scene(request.scene, request.client);
     case Command::kServoCf:
       return servo_cf(request);
+    case Command::kStream:
+      return {{"stream", stream_->subscribe(request.client, request.every)}};
     case Command::kState: {
       // The block is made with the socket, before any request can arrive (run()).
       std::lock_guard lock(mutex_);
@@ -67,6 +69,12 @@ json RunSession::handle(const Request& request) {
   }
   throw ControlRefusal("unknown command");
 }
+
+bool RunSession::push(std::uint64_t client, std::size_t pending, std::string& out) {
+  return stream_ != nullptr && stream_->push(client, pending, out);
+}
+
+int RunSession::push_wait_ms() const { return stream_ != nullptr ? stream_->wait_ms() : -1; }
 
 int RunSession::descriptor(const Request& request) {
   return request.command == Command::kState ? state_->fd() : -1;

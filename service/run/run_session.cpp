@@ -142,13 +142,13 @@ bool RunSession::start_up(gate::GateReport& report) {
     lo.scene = scene_.state.get();
     lo.scene_swap = &scene_swap_;
     lo.wall_moves = &moves_;
-    const config::SafetyConfig& s = cfg_.safety;
-    client_force_ = std::make_unique<loop::ClientForce>(
-        loop::ClientForceLimits{s.client_force_limit, std::llround(s.client_force_hold_ms * 1e6),
-                                std::llround(s.client_force_ramp_ms * 1e6), s.client_force_energy_j,
-                                cfg_.loop.sample_period_s()});
-    lo.client_force = client_force_.get();
   }
+  const config::SafetyConfig& s = cfg_.safety;
+  client_force_ = std::make_unique<loop::ClientForce>(
+      loop::ClientForceLimits{s.client_force_limit, std::llround(s.client_force_hold_ms * 1e6),
+                              std::llround(s.client_force_ramp_ms * 1e6), s.client_force_energy_j,
+                              cfg_.loop.sample_period_s()});
+  lo.client_force = client_force_.get();
   lo.state = state_.get();
   auto servo = std::make_unique<loop::ServoLoop>(session_->device(), *active_, log_.ring.get(), lo);
   summary_.wake_latency = &servo->wake_latency();
@@ -171,6 +171,7 @@ int RunSession::run() {
     const auto axes = static_cast<std::uint32_t>(kinematics::joint_count(cfg_.device.kinematics));
     state_ =
         std::make_unique<telemetry::StateBlock>(kStateSlots, cfg_.loop.period_ns(), axes, axes);
+    stream_ = std::make_unique<StateStream>(state_->fd());
     try {
       server_ = std::make_unique<ControlServer>(options_.socket_path, *this);
     } catch (const std::runtime_error& e) {

@@ -28,6 +28,7 @@
 #include "service/run/run_summary.h"
 #include "service/run/run_support.h"
 #include "service/run/run_threads.h"
+#include "service/run/state_stream.h"
 #include "service/stop_signals.h"
 #include "telemetry/state_block.h"
 
@@ -94,6 +95,9 @@ class RunSession final : public ControlHandler {
   // A client's commanded force (loop/client_force.h): checked, saturated, handed to the loop.
   nlohmann::json servo_cf(const Request& request);
   bool holds(std::uint64_t client) const override;
+  // The decimated state stream (state_stream.h), on the control socket's thread.
+  bool push(std::uint64_t client, std::size_t pending, std::string& out) override;
+  int push_wait_ms() const override;
   // The walls at `gone` removed through commit(), judged by the verdicts the running walls had.
   void remove_walls(const std::vector<std::size_t>& gone, const std::string& why);
   Prepared prepare(const config::Config& running, const std::string& text,
@@ -129,6 +133,7 @@ class RunSession final : public ControlHandler {
   std::unique_ptr<loop::SceneWalls> pending_walls_;
   // The clients' state block (with a control socket): made before the socket, gone after it.
   std::unique_ptr<telemetry::StateBlock> state_;
+  std::unique_ptr<StateStream> stream_;  // read from state_; the control socket's thread alone
   std::unique_ptr<loop::ServoLoop> servo_;
   std::unique_ptr<ControlServer> server_;
   int wake_fd_ = -1;  // eventfd: the control thread wakes the supervisor (stop, clear-fault)

@@ -1,6 +1,7 @@
-// A force a client commands directly (servo_cf, docs/clients.md), for a device of several
-// joints: handed to the RT thread through a sequence lock, and rendered in task space with the
-// walls' force (one saturation for both). What keeps it safe:
+// A force a client commands directly (servo_cf, docs/clients.md): handed to the RT thread
+// through a sequence lock, and rendered with the walls' force (one saturation for both; on a
+// device of one joint, along the joint once the direction check armed the wall). What keeps it
+// safe:
 //   - its size: the control thread saturates it to safety.client_force_limit (and says so);
 //   - its client's silence: it holds safety.client_force_hold_ms after it arrived, then ramps to
 //     zero over safety.client_force_ramp_ms; a client that leaves takes it with it at once;

@@ -250,11 +250,14 @@ PassivityResult ServoLoop::scene_passivity() const noexcept {
     scene_tick(tick, wake, sensed, q, periods, rec, res);
     return sensed;
   }
+  ClientForce* client = options_.client_force;
+  const double commanded = client ? client->step(wake)[0] : 0.0;
+  if (client != nullptr && client->limited()) rec.flags |= telemetry::kFlagClientForceLimited;
   TickCommand c;
-  if (sensed.has_position && !probe_.ended()) {
+  if (sensed.has_position && !probe_.ended()) {  // a client's force waits for the check
     c.command = probe_tick(tick, sensed.position, periods, rec, res);
   } else if (sensed.has_position) {
-    c = step_tick(*controller_, observer_, TickInput::checked(sensed, periods), rec);
+    c = step_tick(*controller_, observer_, TickInput::checked(sensed, periods, commanded), rec);
     if (c.non_finite) set_fault({FaultCause::kNonFiniteForce, tick, rec.force_computed}, rec, res);
     if (c.runaway) {
       set_fault(
@@ -267,7 +270,11 @@ PassivityResult ServoLoop::scene_passivity() const noexcept {
     c = {};
     device_.write(0.0);  // zero force at once; the service then disables output
   }
-  end_tick(observer_, c.command, c.added, rec);
+  end_tick(observer_, c, rec);
+  if (client != nullptr) {  // what of the client's force acted, and where
+    client->acted(kinematics::Vec3(c.client, 0.0, 0.0), kinematics::Vec3(rec.position, 0.0, 0.0),
+                  sensed.has_position);
+  }
   return sensed;
 }
 

@@ -1,5 +1,7 @@
 #include "loop/tick.h"
 
+#include <cmath>
+
 namespace hapticd::loop {
 namespace {
 
@@ -27,15 +29,21 @@ TickCommand step_tick(control::Controller& law, control::PassivityObserver& obse
   rec.force_computed = out.force_computed;
   rec.flags |= out.flags;
   rec.observer_energy_j = observer.energy_j();
-  if (out.flags & control::kControlNonFinite) return {0.0, 0.0, true, false};
-  if (out.flags & control::kControlRunaway) return {0.0, 0.0, false, true};
+  if (out.flags & control::kControlNonFinite) return {.non_finite = true};
+  if (out.flags & control::kControlRunaway) return {.runaway = true};
   const control::Damping d = observer.damp(out.force_commanded, law.law());
   if (d.alpha > 0.0) {
     rec.flags |= telemetry::kFlagPassivityDamped;
     rec.passivity_damping = d.alpha;
     if (d.saturated) rec.flags |= telemetry::kFlagSaturated;
   }
-  return {d.command, d.added, false, false};
+  rec.client_force[0] = in.client_force;
+  if (in.client_force == 0.0) return {.command = d.command, .added = d.added};
+  // The wall's and the client's force through one saturation, each scaled by its factor.
+  const double sum = d.command + in.client_force, limit = law.law().max_force;
+  const double scale = std::abs(sum) > limit ? limit / std::abs(sum) : 1.0;
+  if (scale < 1.0) rec.flags |= telemetry::kFlagSaturated;
+  return {.command = scale * sum, .added = scale * d.added, .client = scale * in.client_force};
 }
 
 }  // namespace hapticd::loop

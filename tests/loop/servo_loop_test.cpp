@@ -6,9 +6,11 @@
 #include <vector>
 
 #include "alloc_counter.h"
+#include "base/clock.h"
 #include "config/config_loader.h"
 #include "control/controller.h"
 #include "freerun.h"
+#include "loop/client_force.h"
 #include "loop/servo_loop.h"
 #include "sim/sim_device.h"
 
@@ -40,7 +42,12 @@ std::vector<TickRecord> drain(SpscRing<TickRecord>& ring) {
 TEST(ServoLoop, NoHeapAllocationPerTickFreerun) {
   Rig rig(config::load_embedded_default());  // the demo: a hand pushes into the wall
   SpscRing<TickRecord> ring(4096);           // no consumer: it fills after 4096 ticks
-  ServoLoop loop(rig.device, rig.controller, &ring, freerun(20000));
+  // A client's force on the joint too (loop/client_force.h), offered before the run.
+  ClientForce client({2.0, 1'000'000'000'000, 1'000'000, 1.0, 0.001});
+  client.offer(kinematics::Vec3(-0.5, 0.0, 0.0), base::monotonic_ns());
+  LoopOptions o = freerun(20000);
+  o.client_force = &client;
+  ServoLoop loop(rig.device, rig.controller, &ring, o);
   const std::atomic<bool> stop{false};
   hapticd::testing::AllocationScope scope;
   const LoopResult r = loop.run(stop);
@@ -48,6 +55,11 @@ TEST(ServoLoop, NoHeapAllocationPerTickFreerun) {
   EXPECT_EQ(r.ticks, 20000u);
   EXPECT_GT(r.count(loop::kCounterContactTicks), 1000u);  // the demo really pressed into the wall
   EXPECT_EQ(ring.dropped(), 20000u - 4096u);              // a full ring counts losses, never blocks
+  std::vector<TickRecord> kept(4096);
+  kept.resize(ring.pop_many(kept.data(), kept.size()));
+  std::size_t pushed = 0;
+  for (const TickRecord& rec : kept) pushed += rec.client_force[0] == -0.5 ? 1 : 0;
+  EXPECT_GT(pushed, 1000u) << "the client's force acted on the joint once the check armed it";
 }
 
 TEST(ServoLoop, NoHeapAllocationWhileThePassivityControllerDamps) {

@@ -91,8 +91,9 @@ Handler = Callable[[dict[str, Any]], dict[str, Any] | None]
 
 class FakeDaemon:
     """Serves a Unix socket in a thread; ``handler`` turns each request into the answer's
-    members (``{"ok": False, ...}`` for a refusal; None: no answer at all). Every request
-    read is kept in ``requests``."""
+    members (``{"ok": False, ...}`` for a refusal; None: no answer at all; ``_lines_before``:
+    lines sent before the answer, as a state stream's are). Every request read is kept in
+    ``requests``."""
 
     def __init__(self, handler: Handler, block: Block | None = None) -> None:
         self.handler = handler
@@ -124,8 +125,11 @@ class FakeDaemon:
                 members = self.handler(request)
                 if members is None:
                     continue
+                # Lines the daemon sends unasked (a state stream's), here just before the answer.
+                before = members.pop("_lines_before", [])
                 answer = {"v": 1, "id": request.get("id"), "ok": True, **members}
-                data = (json.dumps(answer) + "\n").encode()
+                data = "".join(json.dumps(x) + "\n" for x in before).encode()
+                data += (json.dumps(answer) + "\n").encode()
                 try:
                     if request.get("cmd") == "state" and self.block is not None:
                         # The descriptor rides on the answer's first bytes, as the daemon's.

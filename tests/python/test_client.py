@@ -21,18 +21,27 @@ class Scene:
         self.walls: list[dict[str, Any]] = [{"point": [0.02, 0, 0.11], "normal": [1, 0, 0],
                                              "stiffness": 500, "damping": 0.05}]
         self.tick = 100
+        self.streaming = 0  # the stream's every, 0: none
 
     def __call__(self, request: dict[str, Any]) -> dict[str, Any] | None:
         cmd = request["cmd"]
         if cmd == "status":
+            # While streaming, two samples reach the client before the answer.
+            samples = [{"v": 1, "stream": {"tick": self.tick + k * self.streaming, "missed": 0}}
+                       for k in range(2)] if self.streaming else []
             return {"status": {"schema_version": 7, "state": "running", "tick": self.tick,
-                               "walls": [{"stiffness": w["stiffness"]} for w in self.walls]}}
+                               "walls": [{"stiffness": w["stiffness"]} for w in self.walls]},
+                    "_lines_before": samples}
         if cmd == "stop":
             return {"stopping": True}
         if cmd == "reload":
             return {"reload": {"accepted": True, "applied_at_tick": self.tick, "gate": {}}}
         if cmd == "silence":
             return None
+        if cmd == "stream":
+            self.streaming = request["every"]
+            return {"stream": {"every": self.streaming, "rate_hz": 1000 / max(1, self.streaming),
+                               "first_sample": self.tick}}
         if cmd != "scene":
             return refuse(f"unknown command '{cmd}'", 2)
         op, index = request["op"], request.get("index", len(self.walls))
@@ -106,6 +115,16 @@ class ClientTest(unittest.TestCase):
         self.assertNotIn("keep", self.daemon.requests[-1])  # as the daemon's default says
         with self.assertRaises(ValueError):
             self.client.add_attractor([0, float("nan"), 0.1], 50)
+
+    def test_stream_samples_that_come_before_an_answer_are_kept_for_samples(self) -> None:
+        started = self.client.stream(10)
+        self.assertEqual((started["every"], started["rate_hz"]), (10, 100))
+        self.assertEqual(self.daemon.requests[-1]["every"], 10)
+        status = self.client.status()  # two samples arrive first: not taken for the answer
+        self.assertEqual(status["tick"], 100)
+        got = list(self.client.samples(timeout=0.2))
+        self.assertEqual([s["tick"] for s in got], [100, 110])
+        self.assertEqual(self.client.status()["state"], "running")  # still in step
 
     def test_move_returns_the_tick_and_time_it_was_applied_at(self) -> None:
         sent = time.monotonic_ns()
