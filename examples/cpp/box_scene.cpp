@@ -69,7 +69,7 @@ int main(int argc, char** argv) {
       }
       centre.assign(sample.x, sample.x + state.axes());
     }
-    std::printf("box_scene: the device is at %s\n", examples::format(centre, "%.4f").c_str());
+    std::printf("box_scene: the device is at %s\n", examples::format(centre, 4).c_str());
 
     std::vector<std::size_t> added;
     try {
@@ -78,8 +78,8 @@ int main(int argc, char** argv) {
             {{"point", point}, {"normal", normal}, {"stiffness", stiffness}, {"damping", damping}});
         added.push_back(index);
         std::printf("added wall %zu: point %s, normal %s\n", index,
-                    examples::format(point, "%.4f").c_str(),
-                    examples::format(normal, "%.4f").c_str());
+                    examples::format(point, 4).c_str(),
+                    examples::format(normal, 4).c_str());
       }
       std::this_thread::sleep_for(std::chrono::duration<double>(hold));
     } catch (const hc::Refused& e) {  // a wall refused: still take down those added

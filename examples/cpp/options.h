@@ -58,12 +58,16 @@ class Options {
   bool ok_ = true;
 };
 
-// [a, b, c], each number printed with `each`.
-inline std::string format(const std::vector<double>& v, const char* each = "%g") {
+// [a, b, c], each number with `decimals` places (-1: as %g prints it).
+inline std::string format(const std::vector<double>& v, int decimals = -1) {
   std::string s = "[";
   for (std::size_t i = 0; i < v.size(); ++i) {
     char buf[32];
-    std::snprintf(buf, sizeof buf, each, v[i]);
+    if (decimals < 0) {
+      std::snprintf(buf, sizeof buf, "%g", v[i]);
+    } else {
+      std::snprintf(buf, sizeof buf, "%.*f", decimals, v[i]);
+    }
     s += (i ? ", " : "") + std::string(buf);
   }
   return s + "]";

@@ -26,11 +26,15 @@ constexpr int kGateRefused = 3;  // the daemon's code for a refusal by the passi
 // is outside the wall (inside is n . (x - point) > 0). A wall out of reach is passive at any
 // stiffness, and the gate would rightly let it in.
 std::vector<double> beyond_device(hc::Connection& client, const std::vector<double>& normal) {
-  const nlohmann::json x = client.status().value("task_position", nlohmann::json());
-  if (!x.is_array() || x.empty()) {
+  const nlohmann::json status = client.status();
+  const nlohmann::json x = status.value("task_position", nlohmann::json());
+  const nlohmann::json joints = status.value("joints", nlohmann::json());
+  if (!x.is_array() || !joints.is_array() || x.size() < joints.size()) {
     throw hc::ClientError("status has no task_position (a device of one joint?): give --point");
   }
+  // task_position has three numbers; the device's task axes are as many as its joints.
   std::vector<double> point = x.get<std::vector<double>>();
+  point.resize(joints.size());
   double norm = 0;
   for (const double n : normal) norm += n * n;
   norm = std::sqrt(norm);

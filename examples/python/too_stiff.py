@@ -26,10 +26,15 @@ def numbers(text: str) -> list[float]:
 def beyond_device(client: hapticd.Client, normal: list[float]) -> list[float]:
     """A point 1 cm from the device along ``normal``: the wall's face is within reach and
     the device is outside the wall (inside is n . (x - point) > 0)."""
-    x = client.status().get("task_position")
-    if not x:
+    status = client.status()
+    x, joints = status.get("task_position"), status.get("joints")
+    if not x or not joints:
         raise hapticd.ClientError(f"{client.socket_path}: status has no task_position (a "
                                   "device of one joint?): give --point")
+    # task_position has three numbers; the device's task axes are as many as its joints.
+    if len(normal) != len(joints) or not any(normal):
+        raise hapticd.ClientError(f"--normal: {len(joints)} numbers (the device's task axes), "
+                                  "not zero")
     norm = math.hypot(*normal)
     return [p + 0.01 * n / norm for p, n in zip(x, normal)]
 

@@ -169,26 +169,6 @@ TEST(CanReferenceOnVcan, ADriveLimitBelowMaxTorqueIsNamedBeforeOutputIsEnabled) 
 // an EMCY of the second drive ends the run with zero torque on both and the node named (the
 // first's, and each node's heartbeat, over a socketpair: can_reference_nodes_test.cpp; one
 // run here, as the emulated guest takes most of a minute to start one).
-// `hapticd run` on config/can-gantry.yaml over vcan0 at the rig's rate, with the rig's wall
-// along the diagonal through the origin, the emulator's slack in the timeouts, and `sets`.
-std::vector<std::string> gantry_args(const Rig& rig, std::vector<std::string> sets) {
-  std::vector<std::string> a = {
-      kBin,         "run", "--config", std::string(HAPTICD_SOURCE_DIR) + "/config/can-gantry.yaml",
-      "--duration", "60"};
-  for (const std::string& set :
-       {std::string("loop.rate_hz=") + std::to_string(rig.rate_hz),
-        std::string("device.can.interface=vcan0"), std::string("device.can.sdo_timeout_ms=1000"),
-        std::string("device.can.state_timeout_ms=2000"),
-        std::string("device.can.heartbeat_timeout_ms=3000"),
-        std::string("safety.stale_fault_ticks=10"), std::string("loop.overrun_fault_streak=100"),
-        "walls=[{point: [0, 0], normal: [1, 1], damping: 0, stiffness: " +
-            std::to_string(rig.stiffness) + "}]"}) {
-    sets.push_back(set);
-  }
-  for (const std::string& set : sets) a.insert(a.end(), {"--set", set});
-  return a;
-}
-
 TEST(CanReferenceOnVcan, TwoCia402DrivesAsAGantryRenderADiagonalWallAndAFaultZeroesBoth) {
   for (const int faulty : {2}) {
     SCOPED_TRACE("the fault on node " + std::to_string(faulty));
@@ -249,12 +229,7 @@ TEST(CanReferenceOnVcan, TwoOdriveAxesAsAGantryRenderADiagonalWallAndAFaultIdles
     runners.push_back(std::make_unique<reference::ReferenceRunner>(
         *axes.back(), reference::CanPort::open("vcan0")));
   }
-  const std::vector<std::string> a = gantry_args(
-      kOdriveRig,
-      {"device.can.profile=odrive", "device.can.cia402=null",
-       "device.can.torque_per_force=0.015625", "device.can.position_per_unit=0.09817477042468103",
-       "device.can.max_torque=0.15625", "device.can.nodes=[{node_id: 1}, {node_id: 2}]",
-       "device.can.odrive.watchdog_timeout_s=1", "device.can.odrive.vel_limit=2"});
+  const std::vector<std::string> a = gantry_args(kOdriveRig, odrive_gantry_sets());
   ChildProcess run(a, "/tmp/hapticd-ref-odrive-gantry.out");
   kernel_test::wait_until([&] { return axes[0]->armed() && axes[1]->armed(); },
                           milliseconds(60'000), "both axes in closed loop");

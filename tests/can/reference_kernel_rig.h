@@ -50,6 +50,39 @@ inline std::vector<std::string> run_args(const std::string& profile, double dura
   return a;
 }
 
+// `hapticd run` on config/can-gantry.yaml over vcan0 at the rig's rate, with the rig's wall
+// along the diagonal through the origin, the emulator's slack in the timeouts, and `sets`.
+inline std::vector<std::string> gantry_args(const Rig& rig, std::vector<std::string> sets) {
+  std::vector<std::string> a = {
+      kBin,         "run", "--config", std::string(HAPTICD_SOURCE_DIR) + "/config/can-gantry.yaml",
+      "--duration", "60"};
+  for (const std::string& set :
+       {std::string("loop.rate_hz=") + std::to_string(rig.rate_hz),
+        std::string("device.can.interface=vcan0"), std::string("device.can.sdo_timeout_ms=1000"),
+        std::string("device.can.state_timeout_ms=2000"),
+        std::string("device.can.heartbeat_timeout_ms=3000"),
+        std::string("safety.stale_fault_ticks=10"), std::string("loop.overrun_fault_streak=100"),
+        "walls=[{point: [0, 0], normal: [1, 1], damping: 0, stiffness: " +
+            std::to_string(rig.stiffness) + "}]"}) {
+    sets.push_back(set);
+  }
+  for (const std::string& set : sets) a.insert(a.end(), {"--set", set});
+  return a;
+}
+
+// config/can-gantry.yaml's CiA 402 nodes as two ODrive 0.5 axes (node 1 x, node 2 y), each
+// transmission the reference axis's, the watchdog the emulator's slow start needs.
+inline std::vector<std::string> odrive_gantry_sets() {
+  return {"device.can.profile=odrive",
+          "device.can.cia402=null",
+          "device.can.torque_per_force=0.015625",
+          "device.can.position_per_unit=0.09817477042468103",
+          "device.can.max_torque=0.15625",
+          "device.can.nodes=[{node_id: 1}, {node_id: 2}]",
+          "device.can.odrive.watchdog_timeout_s=1",
+          "device.can.odrive.vel_limit=2"};
+}
+
 // The hand pushes once hapticd has output on (press_now): a wall that finds the axis already
 // inside it stays off until the axis leaves it.
 inline reference::PlantParameters hand(double force, double damping) {
