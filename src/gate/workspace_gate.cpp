@@ -288,6 +288,25 @@ void judge_movable(const config::Config& cfg, const Grid& g, WorkspaceReport& r)
   }
 }
 
+// An attractor whose point the device cannot reach would hold it against the mechanism's
+// limits with its whole force: refused, where the workspace says what can be reached.
+void refuse_attractors_outside(const config::Config& cfg, const kinematics::Box& box, int m,
+                               WorkspaceReport& r) {
+  for (std::size_t i = 0; i < cfg.walls.size(); ++i) {
+    const config::TaskWallConfig& w = cfg.walls[i];
+    if (!attractor(w)) continue;
+    bool inside = true;
+    for (int a = 0; a < m; ++a) {
+      inside = inside && w.point[a] >= box.lower[a] && w.point[a] <= box.upper[a];
+    }
+    if (inside) continue;
+    r.reasons.push_back("walls[" + std::to_string(i) + "]: an attractor's point " +
+                        point_text(w.point, m) +
+                        " lies outside device.kinematics.workspace: it would hold the device "
+                        "against the mechanism's limits with its whole force");
+  }
+}
+
 }  // namespace
 
 WorkspaceReport evaluate_workspace(const config::Config& cfg, int device_delay_samples) {
@@ -345,6 +364,7 @@ WorkspaceReport evaluate_workspace(const config::Config& cfg, int device_delay_s
     }
     r.reasons.push_back(why);
   }
+  if (finite) refuse_attractors_outside(cfg, box, m, r);
   judge_corners(cfg, g, r);
   if (r.corner_margin < 0.0 || std::isnan(r.corner_margin)) {
     r.reasons.push_back("walls acting together at x = " + point_text(r.corner_position, m) +

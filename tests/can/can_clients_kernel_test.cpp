@@ -23,17 +23,8 @@ namespace {
 
 TEST(CanClientsOnVcan, ThePythonAndCppExamplesRunAgainstAGantryOfReferenceAxes) {
   kernel_test::VcanInterface bus("vcan0");
-  std::vector<std::unique_ptr<reference::Odrive056>> axes;
-  std::vector<std::unique_ptr<reference::ReferenceRunner>> runners;
-  for (const std::uint8_t node : {1, 2}) {
-    reference::Odrive056Config c;
-    c.node = node;
-    c.watchdog_timeout_s = 1.0;  // the emulator's slow start of the RT thread
-    axes.push_back(std::make_unique<reference::Odrive056>(c, hand(kOdriveRig.hand_force, 10.0),
-                                                          reference::monotonic_ns()));
-    runners.push_back(std::make_unique<reference::ReferenceRunner>(
-        *axes.back(), reference::CanPort::open("vcan0")));
-  }
+  OdriveGantryAxes gantry(kOdriveRig.hand_force);
+  auto& axes = gantry.axes;
   const std::string socket = "/tmp/hapticd-kt-clients.sock";
   std::vector<std::string> a = gantry_args(kOdriveRig, odrive_gantry_sets());
   *(std::find(a.begin(), a.end(), "--duration") + 1) = "600";  // the examples' time, and slack
@@ -56,7 +47,7 @@ TEST(CanClientsOnVcan, ThePythonAndCppExamplesRunAgainstAGantryOfReferenceAxes) 
   EXPECT_EQ(run.wait(seconds(60)), 0) << run.output();
   kernel_test::wait_until([&] { return !axes[0]->armed() && !axes[1]->armed(); },
                           milliseconds(3000), "both axes idle after the stop");
-  for (auto& r : runners) r->stop();
+  for (auto& r : gantry.runners) r->stop();
   EXPECT_EQ(axes[0]->motor_force_n(), 0.0);
   EXPECT_EQ(axes[1]->motor_force_n(), 0.0);
 }

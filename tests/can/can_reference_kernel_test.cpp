@@ -218,17 +218,8 @@ TEST(CanReferenceOnVcan, TwoCia402DrivesAsAGantryRenderADiagonalWallAndAFaultZer
 // over K, and a motor failure on one axis ends the run naming it, both axes idle with zero force.
 TEST(CanReferenceOnVcan, TwoOdriveAxesAsAGantryRenderADiagonalWallAndAFaultIdlesBoth) {
   kernel_test::VcanInterface bus("vcan0");
-  std::vector<std::unique_ptr<reference::Odrive056>> axes;
-  std::vector<std::unique_ptr<reference::ReferenceRunner>> runners;
-  for (const std::uint8_t node : {1, 2}) {
-    reference::Odrive056Config c;
-    c.node = node;
-    c.watchdog_timeout_s = 1.0;  // the emulator's slow start of the RT thread
-    axes.push_back(std::make_unique<reference::Odrive056>(c, hand(kOdriveRig.hand_force, 10.0),
-                                                          reference::monotonic_ns()));
-    runners.push_back(std::make_unique<reference::ReferenceRunner>(
-        *axes.back(), reference::CanPort::open("vcan0")));
-  }
+  OdriveGantryAxes gantry(kOdriveRig.hand_force);
+  auto& axes = gantry.axes;
   const std::vector<std::string> a = gantry_args(kOdriveRig, odrive_gantry_sets());
   ChildProcess run(a, "/tmp/hapticd-ref-odrive-gantry.out");
   kernel_test::wait_until([&] { return axes[0]->armed() && axes[1]->armed(); },
@@ -252,7 +243,7 @@ TEST(CanReferenceOnVcan, TwoOdriveAxesAsAGantryRenderADiagonalWallAndAFaultIdles
                axes[1]->motor_force_n() == 0.0;
       },
       milliseconds(3000), "both axes idle with zero force");
-  for (auto& r : runners) r->stop();
+  for (auto& r : gantry.runners) r->stop();
 }
 
 }  // namespace

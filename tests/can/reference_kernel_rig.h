@@ -4,12 +4,16 @@
 #pragma once
 
 #include <chrono>
+#include <cstdint>
+#include <memory>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "child_process.h"
+#include "reference/can/odrive_056.h"
 #include "reference/can/reference_plant.h"
+#include "reference/can/reference_runner.h"
 
 namespace hapticd::drivers::can::testing {
 
@@ -83,6 +87,14 @@ inline std::vector<std::string> odrive_gantry_sets() {
           "device.can.odrive.vel_limit=2"};
 }
 
+// Two ODrive 0.5 reference axes on vcan0, nodes 1 and 2 (x and y of odrive_gantry_sets()),
+// each pushed by its own hand of `hand_force` once pressed, each served by its own runner.
+struct OdriveGantryAxes {
+  explicit OdriveGantryAxes(double hand_force);
+  std::vector<std::unique_ptr<reference::Odrive056>> axes;
+  std::vector<std::unique_ptr<reference::ReferenceRunner>> runners;
+};
+
 // The hand pushes once hapticd has output on (press_now): a wall that finds the axis already
 // inside it stays off until the axis leaves it.
 inline reference::PlantParameters hand(double force, double damping) {
@@ -92,6 +104,18 @@ inline reference::PlantParameters hand(double force, double damping) {
   p.hand_start_s = 1e6;
   p.hand_ramp_s = 0.5;
   return p;
+}
+
+inline OdriveGantryAxes::OdriveGantryAxes(double hand_force) {
+  for (const std::uint8_t node : {1, 2}) {
+    reference::Odrive056Config c;
+    c.node = node;
+    c.watchdog_timeout_s = 1.0;  // the emulator's slow start of the RT thread
+    axes.push_back(std::make_unique<reference::Odrive056>(c, hand(hand_force, 10.0),
+                                                          reference::monotonic_ns()));
+    runners.push_back(std::make_unique<reference::ReferenceRunner>(
+        *axes.back(), reference::CanPort::open("vcan0")));
+  }
 }
 
 // The axis at rest against the wall: the mean position over the last `ms` before now.

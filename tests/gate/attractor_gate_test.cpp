@@ -78,6 +78,21 @@ TEST(AttractorGate, AnAttractorAndAWallThatEachPassAloneAreJudgedTogether) {
   EXPECT_TRUE(alone.movable) << alone.not_movable;
 }
 
+// Its point where the device cannot go: it would press the device into the mechanism's limits.
+TEST(AttractorGate, AnAttractorWhosePointIsOutsideTheWorkspaceIsRefused) {
+  const config::Config c = config::load_config_text(
+      "device:\n  damping: 0.05\n  kinematics: {kind: delta}\nwalls:\n"
+      "  - {kind: attractor, point: [0, 0, 0.3], stiffness: 10, damping: 0}\n",
+      "attractor.yaml");
+  const WorkspaceReport r = evaluate_workspace(c, 0);
+  EXPECT_FALSE(r.pass);
+  ASSERT_FALSE(r.reasons.empty());
+  EXPECT_NE(r.reasons[0].find("walls[0]: an attractor's point (0, 0, 0.3) m lies outside "
+                              "device.kinematics.workspace"),
+            std::string::npos)
+      << r.reasons[0];
+}
+
 // On a delta, where B_c changes with the configuration: no configuration the grid never saw,
 // in no direction, has less damping than the attractor's worst.
 TEST(AttractorGate, OnTheDeltaNoPointOrDirectionTheGridMissedHasLessDampingThanItsWorst) {
