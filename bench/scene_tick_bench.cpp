@@ -21,11 +21,18 @@ namespace {
 
 using hapticd::kinematics::Vec3;
 
-hapticd::config::Config delta_config() {
+// config/sim-delta.yaml; with `attractor`, an attractor at the box's centre beside its walls.
+hapticd::config::Config delta_config(bool attractor = false) {
   std::ifstream in(std::string(HAPTICD_SOURCE_DIR) + "/config/sim-delta.yaml");
   std::stringstream text;
   text << in.rdbuf();
-  return hapticd::config::load_config_text(text.str(), "sim-delta.yaml");
+  std::string yaml = text.str();
+  if (attractor) {
+    yaml.insert(yaml.find("\nsafety:"),
+                "\n  - {kind: attractor, point: [0, 0, 0.11], "
+                "stiffness: 200, damping: 0.05}");
+  }
+  return hapticd::config::load_config_text(yaml, "sim-delta.yaml");
 }
 
 // Joint positions of a circle through the +x, +y and -z faces of the box (three walls in
@@ -74,11 +81,17 @@ struct DeltaRig {
         force({2.0, 100000000, 50000000, 1.0, cfg.loop.sample_period_s()}),
         device(cfg.device.kinematics),
         unused(hapticd::control::make_control_law(cfg)),
-        walls(std::make_unique<hapticd::control::Scene>(hapticd::control::make_scene(cfg)),
-              std::vector<hapticd::control::ObserverParams>(
-                  cfg.walls.size(), hapticd::control::observer_params(cfg, 0))),
+        walls(scene_walls(cfg)),
         state(cfg.device.kinematics, walls, cfg.device.max_force.per_joint()),
         loop(device, unused, &ring, with_scene(o, &state, clients ? this : nullptr)) {}
+  // cfg's scene with an observer on each channel (a wall's normal, an attractor's axes).
+  static hapticd::loop::SceneWalls scene_walls(const hapticd::config::Config& cfg) {
+    auto scene = std::make_unique<hapticd::control::Scene>(hapticd::control::make_scene(cfg));
+    const std::size_t channels = scene->channels();
+    return hapticd::loop::SceneWalls(std::move(scene),
+                                     std::vector<hapticd::control::ObserverParams>(
+                                         channels, hapticd::control::observer_params(cfg, 0)));
+  }
   static hapticd::loop::LoopOptions with_scene(hapticd::loop::LoopOptions o,
                                                hapticd::loop::SceneState* s, DeltaRig* clients) {
     o.scene = s;
@@ -100,7 +113,7 @@ struct DeltaRig {
 };
 
 void BM_FullTick_Delta(benchmark::State& state) {
-  const hapticd::config::Config cfg = delta_config();
+  const hapticd::config::Config cfg = delta_config(state.range(2) != 0);
   hapticd::bench::run_full_ticks(
       state, static_cast<std::uint64_t>(state.range(0)), {},
       [&](hapticd::bench::TickRing& ring, const hapticd::loop::LoopOptions& o) {
@@ -109,9 +122,10 @@ void BM_FullTick_Delta(benchmark::State& state) {
 }
 
 BENCHMARK(BM_FullTick_Delta)
-    ->Args({100000, 0})
-    ->Args({100000, 1})
-    ->ArgNames({"ticks", "clients"})
+    ->Args({100000, 0, 0})
+    ->Args({100000, 1, 0})
+    ->Args({100000, 0, 1})
+    ->ArgNames({"ticks", "clients", "attractor"})
     ->Unit(benchmark::kMillisecond);
 
 }  // namespace

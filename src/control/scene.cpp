@@ -37,6 +37,7 @@ Scene::Scene(std::span<const WallGeometry> geometry, std::span<const ControlLaw>
     geometry_[i] = g;
     place_[i] = g.point;
     fresh_[i] = g.attractor();
+    attractors_ = attractors_ || g.attractor();
     first_[i] = channels_.size();
     for (int k = 0; k < std::max(g.attractor_axes, 1); ++k) {
       wall_of_[channels_.size()] = i;
@@ -45,11 +46,13 @@ Scene::Scene(std::span<const WallGeometry> geometry, std::span<const ControlLaw>
     }
   }
   first_[geometry.size()] = channels_.size();
+  any_fresh_ = attractors_;
 }
 
 void Scene::reset() noexcept {
   for (Controller& c : channels_) c.reset();
   for (std::size_t i = 0; i < walls_; ++i) fresh_[i] = geometry_[i].attractor();
+  any_fresh_ = attractors_;
 }
 
 void Scene::continue_from(const Scene& from, std::span<const int> continues) noexcept {
@@ -70,6 +73,7 @@ void Scene::continue_from(const Scene& from, std::span<const int> continues) noe
     }
     geometry_[i].point = was.point;
     fresh_[i] = from.fresh_[static_cast<std::size_t>(j)];
+    any_fresh_ = any_fresh_ || fresh_[i];
     sliding_ = sliding_ || geometry_[i].point != place_[i];
   }
 }
@@ -116,27 +120,34 @@ void Scene::step_walls(const kinematics::Pose& pose, SceneStep& out) noexcept {
   // mechanism was last: the walls' histories must not jump, and no torque is written anyway.
   if (pose.x.allFinite()) {
     last_x_ = pose.x;
-    for (std::size_t i = 0; i < walls_; ++i) {
-      if (!fresh_[i]) continue;
-      fresh_[i] = false;  // from where the device is: no force, no filter history to kick
-      geometry_[i].point = pose.x;
-      sliding_ = true;
-    }
+    if (any_fresh_) start_attractors(pose.x);
   }
   slide();
   out.force.setZero();
   for (std::size_t c = 0; c < channels_.size(); ++c) {
     out.channels[c] = channels_[c].step(coordinate(c, last_x_));
   }
-  for (std::size_t i = 0; i < walls_; ++i) {
-    if (geometry_[i].attractor()) limit_attractor(i, out);
-    for (std::size_t c = first_[i]; c < first_[i + 1]; ++c) {
-      const ControlOutput& o = out.channels[c];
-      out.flags |= o.flags;
-      if (o.flags & kControlContact) out.contact |= 1u << i;
-      // u is along s, the channel's direction: it pushes out of a wall where it is negative.
-      out.force += o.force_commanded * direction_[c];
+  if (attractors_) {
+    for (std::size_t i = 0; i < walls_; ++i) {
+      if (geometry_[i].attractor()) limit_attractor(i, out);
     }
+  }
+  for (std::size_t c = 0; c < channels_.size(); ++c) {
+    const ControlOutput& o = out.channels[c];
+    out.flags |= o.flags;
+    if (o.flags & kControlContact) out.contact |= 1u << wall_of_[c];
+    // u is along s, the channel's direction: it pushes out of a wall where it is negative.
+    out.force += o.force_commanded * direction_[c];
+  }
+}
+
+void Scene::start_attractors(const kinematics::Vec3& x) noexcept {
+  any_fresh_ = false;
+  for (std::size_t i = 0; i < walls_; ++i) {
+    if (!fresh_[i]) continue;
+    fresh_[i] = false;  // from where the device is: no force, no filter history to kick
+    geometry_[i].point = x;
+    sliding_ = true;
   }
 }
 

@@ -114,6 +114,8 @@ class Scene {
 
   // RT-safe. Each wall's point a step of at most max_move_ nearer its place.
   void slide() noexcept;
+  // RT-safe. Every fresh attractor's point to `x`, to slide to its place from there.
+  void start_attractors(const kinematics::Vec3& x) noexcept;
   // RT-safe. Attractor i's channels scaled together to its max_force.
   void limit_attractor(std::size_t i, SceneStep& out) const noexcept;
 
@@ -126,6 +128,8 @@ class Scene {
   double max_move_;
   bool sliding_ = false;                 // a wall is not at its place yet (after a swap)
   std::array<bool, kMaxWalls> fresh_{};  // an attractor that has not yet started from x
+  bool any_fresh_ = false;               // any fresh_ set (the usual tick: none)
+  bool attractors_ = false;              // any wall an attractor
   std::vector<Controller> channels_;     // built once, never resized
   kinematics::Vec3 last_x_ = kinematics::Vec3::Zero();  // the last finite task position
 };
