@@ -78,8 +78,7 @@ int main(int argc, char** argv) {
             {{"point", point}, {"normal", normal}, {"stiffness", stiffness}, {"damping", damping}});
         added.push_back(index);
         std::printf("added wall %zu: point %s, normal %s\n", index,
-                    examples::format(point, 4).c_str(),
-                    examples::format(normal, 4).c_str());
+                    examples::format(point, 4).c_str(), examples::format(normal, 4).c_str());
       }
       std::this_thread::sleep_for(std::chrono::duration<double>(hold));
     } catch (const hc::Refused& e) {  // a wall refused: still take down those added

@@ -143,12 +143,14 @@ bool RunSession::start_up(gate::GateReport& report) {
     lo.scene_swap = &scene_swap_;
     lo.wall_moves = &moves_;
   }
-  const config::SafetyConfig& s = cfg_.safety;
-  client_force_ = std::make_unique<loop::ClientForce>(
-      loop::ClientForceLimits{s.client_force_limit, std::llround(s.client_force_hold_ms * 1e6),
-                              std::llround(s.client_force_ramp_ms * 1e6), s.client_force_energy_j,
-                              cfg_.loop.sample_period_s()});
-  lo.client_force = client_force_.get();
+  if (server_) {  // without a control socket no client can command a force: none stepped
+    const config::SafetyConfig& s = cfg_.safety;
+    client_force_ = std::make_unique<loop::ClientForce>(
+        loop::ClientForceLimits{s.client_force_limit, std::llround(s.client_force_hold_ms * 1e6),
+                                std::llround(s.client_force_ramp_ms * 1e6), s.client_force_energy_j,
+                                cfg_.loop.sample_period_s()});
+    lo.client_force = client_force_.get();
+  }
   lo.state = state_.get();
   auto servo = std::make_unique<loop::ServoLoop>(session_->device(), *active_, log_.ring.get(), lo);
   summary_.wake_latency = &servo->wake_latency();
