@@ -38,4 +38,11 @@ struct DriverContext {
   }
 };
 
+// Pure. Whole samples between write() and the force acting on a device behind a link of
+// one-way latency `one_way_ms` (a USB interrupt endpoint's polling interval, a serial port's):
+// the command waits up to that long to go out and its answer as long to come back, so the
+// answer to the command of tick k is read at tick k + ceil(2 P / T), one tick later than an
+// in-process device gives it: ceil(2 P / T) - 1 (1 at 1 kHz with P = 1 ms).
+int round_trip_delay_samples(double one_way_ms, double sample_period_s) noexcept;
+
 }  // namespace hapticd::drivers

@@ -62,11 +62,12 @@ MODULES = ("base", "client", "analysis", "kinematics", "config", "control", "gat
 PURE_CODECS = (
     "drivers/can/can_frame.h", "drivers/can/canopen.h", "drivers/can/cia402.h",
     "drivers/can/odrive_protocol.h", "drivers/can/can_bus_load.h", "drivers/can/can_settings.h",
-    "drivers/hid/report_field.h", "drivers/hid/report_layout.h",
+    "drivers/field/field.h", "drivers/field/field_schema.h", "drivers/hid/report_layout.h",
     "drivers/hid/report_descriptor.h", "drivers/hid/pid_protocol.h",
     "drivers/hid/descriptor_builder.h", "drivers/hid/hid_framing.h", "drivers/hid/hid_settings.h",
     "drivers/gpio/quadrature_decoder.h", "drivers/gpio/gpio_wire.h", "drivers/gpio/gpio_settings.h",
     "drivers/evdev/evdev_settings.h", "drivers/evdev/evdev_wire.h",
+    "drivers/serial/checksum.h", "drivers/serial/serial_frame.h", "drivers/serial/serial_settings.h",
 )
 # What a driver is given to build its device: a value type of the configuration, which a
 # driver's settings (a pure codec) are read from.

@@ -22,6 +22,10 @@
 #include "drivers/evdev/evdev_driver.h"
 #include "sim/peers/evdev/evdev_peer_entry.h"
 #endif
+#if HAPTICD_WITH_SERIAL
+#include "drivers/serial/serial_driver.h"
+#include "sim/peers/serial/serial_peer_entry.h"
+#endif
 
 namespace hapticd::wiring {
 namespace {
@@ -54,6 +58,9 @@ const std::vector<DriverEntry>& entries() {
 #endif
 #if HAPTICD_WITH_EVDEV
         join(drivers::evdev::device_entry(), sim::evdev::peer_entry()),
+#endif
+#if HAPTICD_WITH_SERIAL
+        join(drivers::serial::device_entry(), sim::serial::peer_entry()),
 #endif
   };
   return kDrivers;

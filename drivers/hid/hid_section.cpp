@@ -5,6 +5,8 @@
 #include <map>
 #include <string>
 
+#include "drivers/field/field_schema.h"
+
 namespace hapticd::drivers::hid {
 namespace {
 
@@ -16,15 +18,6 @@ using config::schema::MapReader;
 using config::schema::number;
 using config::schema::Range;
 using config::schema::read_hex;
-
-// What `type:` takes, in FieldType's order, named where the types are (report_field.h).
-std::vector<std::string> field_type_names() {
-  std::vector<std::string> names;
-  for (int t = 0; t <= static_cast<int>(FieldType::kI24); ++t) {
-    names.emplace_back(to_string(static_cast<FieldType>(t)));
-  }
-  return names;
-}
 
 // Reading state shared by the helpers: where each sub-key is (for errors found after
 // reading) and whether anything went wrong in this section.
@@ -67,49 +60,9 @@ void raw_value(MapReader& m, const Field& f, double& out) {
   if (const auto v = read_hex(m.diag(), f, 0xFFFFFFFFu)) out = static_cast<double>(*v);
 }
 
-// Where one field is and what it holds: {byte, type, endian}, or a field of any width at any
-// bit, {byte, bit, bits, signed, endian}; `bit` also with an integer `type`. Then scale and
-// offset for a quantity. Errors are at the key to change.
+// Where one field is and what it holds (drivers/field/field_schema.h).
 FieldSpec read_spec(MapReader& m, bool quantity) {
-  FieldSpec f;
-  integer(m, take(m, "byte", "the field's byte offset in the report's data"),
-          IntRange::between(0, kMaxReportData - 1), f.byte);
-  const Field type = m.take("type");
-  const Field bits = m.take("bits");
-  const Field sign = m.take("signed");
-  if (!type.present && !bits.present) {
-    m.missing("type",
-              "one of u8, i8, u16, i16, u24, i24, u32, i32, f32; or bits: N (1..32) for a field "
-              "of N bits");
-  } else if (type.present && bits.present) {
-    m.diag().error(bits.key_mark, bits.path,
-                   "give type or bits, not both (a type has its width: u16 is 16 bits)");
-  } else if (type.present) {
-    static const std::vector<std::string> kNames = field_type_names();
-    if (const auto t = config::schema::read_choice(m.diag(), type, kNames)) {
-      f = typed(static_cast<FieldType>(*t), f.byte);
-    }
-  } else {
-    integer(m, bits, IntRange::between(1, kMaxFieldBits), f.bits);
-  }
-  if (sign.present && type.present) {
-    m.diag().error(sign.key_mark, sign.path, "only with bits: the type says whether it is signed");
-  } else if (const auto v = config::schema::read_bool(m.diag(), sign)) {
-    f.is_signed = *v;
-  }
-  const Field bit = m.take("bit");
-  integer(m, bit, IntRange::between(0, 7), f.bit);
-  if (bit.present && f.is_float && f.bit != 0) {
-    m.diag().error(bit.key_mark, bit.path, "an f32 starts at bit 0 of its byte");
-  }
-  if (const auto e = config::schema::read_choice(m.diag(), m.take("endian"), {"little", "big"})) {
-    f.endian = *e == 0 ? Endian::kLittle : Endian::kBig;
-  }
-  if (quantity) {
-    number(m, take(m, "scale", "SI units per count"), Range::any(), f.scale);
-    number(m, m.take("offset"), Range::any(), f.offset);
-  }
-  return f;
+  return field::read_spec(m, kMaxReportData - 1, quantity);
 }
 
 // A key given without a value (`--set device.hid.report.output.enable=`) is absent: that is

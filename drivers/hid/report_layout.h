@@ -15,9 +15,28 @@
 #include <string>
 #include <vector>
 
-#include "drivers/hid/report_field.h"
+#include "drivers/field/field.h"
 
 namespace hapticd::drivers::hid {
+
+// A report's fields are the shared field codec's (drivers/field/field.h).
+using field::counter_modulus;
+using field::Endian;
+using field::FieldSpec;
+using field::FieldType;
+using field::is_integer;
+using field::kMaxFieldBits;
+using field::raw_max;
+using field::raw_min;
+using field::read_count;
+using field::read_raw;
+using field::read_si;
+using field::si_to_raw;
+using field::type_name;
+using field::typed;
+using field::write_raw;
+using field::write_si;
+using field::write_wrapped;
 
 // Longest data part of a report the profile accepts (the HID limit for a high-speed
 // interrupt endpoint); anything longer is a configuration error, not a buffer overrun.

@@ -14,7 +14,7 @@
 #include <optional>
 #include <span>
 
-#include "drivers/hid/report_field.h"
+#include "drivers/field/field.h"
 #include "drivers/hid/report_layout.h"
 
 namespace hapticd::fuzz {

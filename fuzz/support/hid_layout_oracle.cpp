@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "drivers/hid/report_field.h"
+#include "drivers/field/field.h"
 #include "drivers/hid/report_layout.h"
 #include "drivers/io/counter_unwrap.h"
 #include "support/check.h"
@@ -69,7 +69,7 @@ std::optional<double> si_of(const hid::FieldSpec& f, double k) {
   return si;
 }
 
-// The field's raw count by its definition (drivers/hid/report_field.h), bit by bit: its bytes
+// The field's raw count by its definition (drivers/field/field.h), bit by bit: its bytes
 // as one integer in its byte order, bits bit..bit+bits-1 of it, sign-extended when signed.
 std::int64_t model_count(std::span<const std::uint8_t> data, const hid::FieldSpec& f) {
   const std::size_t n = f.span();

@@ -62,6 +62,9 @@ const Case kCases[] = {
      "config/evdev.yaml",
      {"device.evdev.liveness_ms=100", "device.evdev.force_full_scale=15.99951171875"}},
 #endif
+#if HAPTICD_WITH_SERIAL
+    {"serial", "config/serial-stream.yaml"},
+#endif
 };
 
 config::Config load(const Case& c, const std::vector<std::string>& sets = {}) {

@@ -1,15 +1,15 @@
-// One numeric field of a HID report, as a vendor layout puts it: where it starts in the
-// report's data (a byte offset after the report id, and a bit within it), its width (1..32
-// bits), signed or not, a float, its byte order, and the affine map to SI units
-// (SI = raw * scale + offset). Fields need not be byte-aligned: the Nintendo Switch Pro
-// Controller packs its sticks' 12-bit axes three bytes to two (X = b5 | (b6 & 0x0f) << 8). Pure
-// code: no OS headers, no allocation after construction, so the driver, its loopback peer and
-// the fuzz targets share it.
+// One numeric field of a message a device sends or takes (a HID vendor report's data, a
+// serial frame), as its layout puts it: where it starts in the message (a byte offset, and a
+// bit within it), its width (1..32 bits), signed or not, a float, its byte order, and the
+// affine map to SI units (SI = raw * scale + offset). Fields need not be byte-aligned: the
+// Nintendo Switch Pro Controller packs its sticks' 12-bit axes three bytes to two
+// (X = b5 | (b6 & 0x0f) << 8). Pure code: no OS headers, no allocation after construction, so
+// the drivers, their loopback peers and the fuzz targets share it.
 //
 // A field's bytes, byte..byte+span()-1, are read as one integer in its byte order (little:
 // the first byte least significant; big: the first byte most significant); the field is that
 // integer's bits bit..bit+bits-1, counted from its least significant bit. For a little-endian
-// field this is HID's own bit order (bit b of byte k is bit 8k + b of the report).
+// field this is HID's own bit order (bit b of byte k is bit 8k + b of the message).
 #pragma once
 
 #include <cstddef>
@@ -18,7 +18,7 @@
 #include <string>
 #include <string_view>
 
-namespace hapticd::drivers::hid {
+namespace hapticd::drivers::field {
 
 // The whole-byte types a layout names with `type:`. The first seven keep their numbers (the
 // fuzz corpus is written with them).
@@ -33,7 +33,7 @@ std::optional<FieldType> parse_field_type(std::string_view text) noexcept;
 inline constexpr unsigned kMaxFieldBits = 32;
 
 struct FieldSpec {
-  std::size_t byte = 0;    // offset in the report's data, after the report id
+  std::size_t byte = 0;    // offset in the message (a HID report's: after the report id)
   unsigned bit = 0;        // 0..7: the field's lowest bit in the integer its bytes make
   unsigned bits = 8;       // 1..32 (an f32: 32)
   bool is_signed = false;  // two's complement of `bits`
@@ -62,8 +62,8 @@ double raw_max(const FieldSpec& f) noexcept;
 // 2^bits for an unsigned integer field (the wrap of a counter in it); 0 for the others.
 std::uint64_t counter_modulus(const FieldSpec& f) noexcept;
 
-// RT-safe: called every tick. The raw value of field `f` of `data` (the report's data, after
-// the id; the caller has checked it holds f.end() bytes). Integers are exact; f32 is widened.
+// RT-safe: called every tick. The raw value of field `f` of `data` (the message: a report's data
+// after its id; the caller has checked it holds f.end() bytes). Integers are exact; f32 is widened.
 double read_raw(const std::uint8_t* data, const FieldSpec& f) noexcept;
 // RT-safe: called every tick. An integer field's raw value (0 for an f32).
 std::int64_t read_count(const std::uint8_t* data, const FieldSpec& f) noexcept;
@@ -74,7 +74,7 @@ void write_raw(std::uint8_t* data, const FieldSpec& f, double raw) noexcept;
 // RT-safe. Writes integer `count` modulo 2^bits: a counter or a position that wraps.
 void write_wrapped(std::uint8_t* data, const FieldSpec& f, std::int64_t count) noexcept;
 
-// RT-safe: called every tick. SI value of the field in `data` (the report's data, after the id).
+// RT-safe: called every tick. SI value of the field in `data` (the message).
 inline double read_si(const std::uint8_t* data, const FieldSpec& f) noexcept {
   return read_raw(data, f) * f.scale + f.offset;
 }
@@ -87,4 +87,4 @@ inline void write_si(std::uint8_t* data, const FieldSpec& f, double si) noexcept
   write_raw(data, f, si_to_raw(si, f));
 }
 
-}  // namespace hapticd::drivers::hid
+}  // namespace hapticd::drivers::field

@@ -1,4 +1,4 @@
-#include "drivers/hid/report_field.h"
+#include "drivers/field/field.h"
 
 #include <algorithm>
 #include <array>
@@ -6,7 +6,7 @@
 #include <cmath>
 #include <cstring>
 
-namespace hapticd::drivers::hid {
+namespace hapticd::drivers::field {
 namespace {
 
 struct TypeInfo {
@@ -152,4 +152,4 @@ void write_wrapped(std::uint8_t* data, const FieldSpec& f, std::int64_t count) n
   store_bits(data, f, static_cast<std::uint64_t>(count));  // two's complement: modulo 2^bits
 }
 
-}  // namespace hapticd::drivers::hid
+}  // namespace hapticd::drivers::field

@@ -1,0 +1,248 @@
+#include "drivers/serial/serial_device.h"
+
+#include <poll.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <thread>
+
+#include "base/clock.h"
+#include "base/errno_text.h"
+#include "base/hex.h"
+
+namespace hapticd::drivers::serial {
+namespace {
+
+constexpr int kMaxReads = 64;  // reads per tick: a flooding device cannot hold the tick
+
+}  // namespace
+
+SerialDevice::SerialDevice(std::shared_ptr<const SerialSettings> settings,
+                           std::function<Port()> open, double sample_period_s, std::size_t joints)
+    : settings_(std::move(settings)),
+      open_(std::move(open)),
+      period_s_(sample_period_s),
+      joints_(joints),
+      liveness_ns_(std::llround(settings_->liveness_ms * 1e6)),
+      scanner_(settings_->input.shape) {
+  const std::array<double, base::kMaxJoints> zero{};
+  encode_output(std::span(zero.data(), joints_), false, settings_->output, zero_frame_);
+}
+
+SerialDevice::~SerialDevice() { on_close(); }
+
+DeviceInfo SerialDevice::on_configure() {
+  port_ = open_();
+  notices_ = port_.notices;
+  scanner_.clear();
+  active_ = false;
+  out_streak_ = 0;
+  try {
+    send_startup();
+    await_first_frame();
+  } catch (...) {
+    port_.fd.reset();
+    throw;
+  }
+  emergency_fd_.store(port_.fd.get());
+  DeviceInfo info;
+  info.description = "serial " + settings_->port;
+  info.transport_delay_samples = declared_delay_samples(*settings_, period_s_);
+  if (settings_->input.sequence)
+    info.sequence_modulus = field::counter_modulus(*settings_->input.sequence);
+  info.joints = joints_;
+  return info;
+}
+
+void SerialDevice::send_startup() {
+  for (const auto& frame : settings_->startup) {
+    const ssize_t n = ::write(port_.fd.get(), frame.data(), frame.size());
+    if (n != static_cast<ssize_t>(frame.size())) {
+      throw DeviceError(
+          "serial port " + settings_->port + ": a startup frame could not be sent (" +
+          (n < 0 ? base::errno_text(errno)
+                 : std::to_string(n) + " of " + std::to_string(frame.size()) + " bytes") +
+          ")");
+    }
+    std::this_thread::sleep_for(
+        std::chrono::duration<double, std::milli>(settings_->startup_gap_ms));
+  }
+}
+
+// The device speaks before anything is enabled: its first good frame within answer_timeout_ms
+// (asked for with zero-force frames in the request exchange), or configure fails saying what
+// arrived instead.
+void SerialDevice::await_first_frame() {
+  const std::int64_t deadline =
+      base::monotonic_ns() + std::llround(settings_->answer_timeout_ms * 1e6);
+  const std::uint64_t frames0 = c_[kFrames].value();
+  while (base::monotonic_ns() < deadline) {
+    if (settings_->exchange == Exchange::kRequest && !send({}, false)) break;
+    pollfd p{port_.fd.get(), POLLIN, 0};
+    ::poll(&p, 1, std::max(1, static_cast<int>(period_s_ * 1e3)));
+    const Drained d = drain();
+    if (d.error != 0) {
+      throw DeviceError("serial port " + settings_->port + ": " +
+                        describe({FaultClass::kTransport, static_cast<std::uint32_t>(d.error)}));
+    }
+    if (c_[kFrames].value() == frames0) continue;
+    // The first tick's read finds the answer to this one.
+    if (settings_->exchange == Exchange::kRequest) (void)send({}, false);
+    return;
+  }
+  const ScanCounts& s = scanner_.counts();
+  throw DeviceError("serial port " + settings_->port + ": no good frame within " +
+                    std::to_string(static_cast<int>(settings_->answer_timeout_ms)) +
+                    " ms (device.serial.answer_timeout_ms): " + std::to_string(s.skipped) +
+                    " bytes started no frame, " + std::to_string(s.bad_check) +
+                    " frames had a wrong check; check the baud rate, the exchange (" +
+                    (settings_->exchange == Exchange::kRequest
+                         ? "request: the device must answer each frame"
+                         : "stream: the device must send on its own") +
+                    "), input.sync and input.length");
+}
+
+void SerialDevice::on_enable() {
+  out_streak_ = 0;
+  last_frame_ns_ = base::monotonic_ns();  // the liveness bound starts now
+  active_ = true;
+}
+
+void SerialDevice::on_disable() noexcept {
+  active_ = false;
+  if (port_.fd) (void)::write(port_.fd.get(), zero_frame_.data(), settings_->output.shape.length);
+}
+
+void SerialDevice::on_close() noexcept {
+  emergency_fd_.store(-1);
+  on_disable();
+  port_.fd.reset();
+}
+
+void SerialDevice::emergency_stop() noexcept {
+  const int fd = emergency_fd_.load();
+  if (fd >= 0) (void)::write(fd, zero_frame_.data(), settings_->output.shape.length);
+}
+
+void SerialDevice::publish_scan() noexcept {
+  const ScanCounts& s = scanner_.counts();
+  c_[kFrames].set(s.frames);
+  c_[kBadCheck].set(s.bad_check);
+  c_[kSkipped].set(s.skipped);
+  c_[kOverflow].set(s.overflowed);
+}
+
+SerialDevice::Drained SerialDevice::drain() noexcept {
+  Drained d;
+  for (int i = 0; i < kMaxReads; ++i) {
+    const ssize_t n = ::read(port_.fd.get(), rx_.data(), rx_.size());
+    if (n == 0) {  // a tty hung up, a socket's peer gone: the device is unplugged
+      d.error = static_cast<int>(kHangUp);
+      break;
+    }
+    if (n < 0) {
+      if (errno != EAGAIN && errno != EINTR) d.error = errno;
+      break;
+    }
+    scanner_.push({rx_.data(), static_cast<std::size_t>(n)});
+    for (auto f = scanner_.next(); !f.empty(); f = scanner_.next()) {
+      decode_input(f, settings_->input, newest_);
+      ++d.frames;
+    }
+    if (port_.stream && static_cast<std::size_t>(n) < rx_.size()) break;
+  }
+  if (d.frames > 1) c_[kSuperseded].add(d.frames - 1);
+  publish_scan();
+  return d;
+}
+
+IoStatus SerialDevice::on_read(std::span<PositionSample> samples) noexcept {
+  const std::int64_t now = base::monotonic_ns();
+  const Drained d = drain();
+  if (d.error != 0) {
+    set_fault_code(static_cast<std::uint32_t>(d.error));
+    return IoStatus::kTransportFault;
+  }
+  // Output off in the request exchange: nothing else asks the device for its position.
+  if (!active_ && settings_->exchange == Exchange::kRequest && !send({}, false)) {
+    return IoStatus::kTransportFault;
+  }
+  if (d.frames == 0) {
+    if (now - last_frame_ns_ <= liveness_ns_) return IoStatus::kNoNewData;
+    set_fault_code(kSilent);
+    return IoStatus::kTransportFault;
+  }
+  last_frame_ns_ = now;
+  for (std::size_t j = 0; j < samples.size(); ++j) {
+    PositionSample& s = samples[j];
+    s.position = newest_.position[j];
+    s.time_ns = now;
+    s.status = newest_.status;
+    s.sequence = newest_.sequence;
+    s.flags = static_cast<std::uint8_t>(kSampleHasTime |
+                                        (settings_->input.sequence ? kSampleHasSequence : 0));
+    s.samples = d.frames;
+  }
+  if (active_ && (newest_.status & settings_->input.fault_mask) != 0) {
+    set_fault_code(newest_.status & settings_->input.fault_mask);
+    return IoStatus::kDeviceFault;
+  }
+  return IoStatus::kOk;
+}
+
+IoStatus SerialDevice::on_write(std::span<const double> forces) noexcept {
+  return send(forces, active_) ? IoStatus::kOk : IoStatus::kTransportFault;
+}
+
+bool SerialDevice::send(std::span<const double> forces, bool enable) noexcept {
+  const std::size_t len = settings_->output.shape.length;
+  if (forces.empty()) {
+    std::copy_n(zero_frame_.begin(), len, tx_.begin());
+  } else {
+    encode_output(forces, enable, settings_->output, tx_);
+  }
+  const ssize_t n = ::write(port_.fd.get(), tx_.data(), len);
+  if (n == static_cast<ssize_t>(len)) {
+    c_[kSent].add();
+    out_streak_ = 0;
+    return true;
+  }
+  if (n < 0 && errno != EAGAIN && errno != EINTR) {
+    set_fault_code(static_cast<std::uint32_t>(errno));
+    return false;
+  }
+  c_[n > 0 ? kShortWrite : kOutFull].add();
+  if (++out_streak_ < settings_->out_full_fault) return true;
+  set_fault_code(kOutStuck);
+  return false;
+}
+
+std::string SerialDevice::describe(const DeviceFault& fault) const {
+  const std::string port = "serial port " + settings_->port;
+  if (fault.fault_class == FaultClass::kDevice) {
+    return port + ": the device reported a fault: status bits " + std::to_string(fault.code) +
+           " under device.serial.input.fault_mask";
+  }
+  switch (fault.code) {
+    case kSilent:
+      return port + " is silent: no good frame for " +
+             std::to_string(static_cast<int>(settings_->liveness_ms)) +
+             " ms (device.serial.liveness_ms): the device hung, or its frames are all damaged";
+    case kHangUp:
+    case EIO:
+    case ENODEV:
+      return port + " hung up: the device was unplugged or reset (" +
+             (fault.code == kHangUp ? std::string("end of file")
+                                    : base::errno_text(static_cast<int>(fault.code))) +
+             ")";
+    case kOutStuck:
+      return port + " took no whole frame for " + std::to_string(settings_->out_full_fault) +
+             " ticks in a row (device.serial.out_full_fault): the device stopped reading";
+    default:
+      return port + ": " + base::errno_text(static_cast<int>(fault.code));
+  }
+}
+
+}  // namespace hapticd::drivers::serial
