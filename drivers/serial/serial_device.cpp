@@ -11,6 +11,7 @@
 #include "base/clock.h"
 #include "base/errno_text.h"
 #include "base/hex.h"
+#include "drivers/serial/tty_port.h"
 
 namespace hapticd::drivers::serial {
 namespace {
@@ -104,7 +105,22 @@ void SerialDevice::await_first_frame() {
                     "), input.sync and input.length");
 }
 
+// Frames a streaming device sent while the gate ran are history: the loop starts on new ones,
+// never fast-forwarding through them a read at a time.
+void SerialDevice::flush_input() noexcept {
+  if (port_.stream) {
+    discard_input(port_.fd.get());
+  } else {
+    while (::read(port_.fd.get(), rx_.data(), rx_.size()) > 0) {
+    }
+  }
+  scanner_.clear();
+}
+
 void SerialDevice::on_enable() {
+  flush_input();
+  // The first tick's read finds the answer to this one.
+  if (settings_->exchange == Exchange::kRequest) (void)send({}, false);
   out_streak_ = 0;
   last_frame_ns_ = base::monotonic_ns();  // the liveness bound starts now
   active_ = true;

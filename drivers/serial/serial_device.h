@@ -77,6 +77,7 @@ class SerialDevice final : public Device {
   void send_startup();
   void await_first_frame();
   void publish_scan() noexcept;
+  void flush_input() noexcept;
 
   std::shared_ptr<const SerialSettings> settings_;
   std::function<Port()> open_;

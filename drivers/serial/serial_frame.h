@@ -127,7 +127,8 @@ class FrameScanner {
  private:
   void compact() noexcept;
   const FrameShape* shape_;
-  std::array<std::uint8_t, 4 * kMaxFrame> buf_{};
+  // Twice what one read takes (serial_device.h), so a read never pushes out a frame begun.
+  std::array<std::uint8_t, 8 * kMaxFrame> buf_{};
   std::size_t start_ = 0;  // the first byte not yet consumed
   std::size_t size_ = 0;   // bytes held, from 0
   ScanCounts counts_;

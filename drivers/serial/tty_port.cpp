@@ -89,6 +89,8 @@ void check_latency(const SerialSettings& s, const std::string& tty) {
 
 }  // namespace
 
+void discard_input(int fd) noexcept { ::tcflush(fd, TCIFLUSH); }
+
 std::string tty_name(const std::string& port) {
   char buf[PATH_MAX];
   if (::realpath(port.c_str(), buf) == nullptr) return {};

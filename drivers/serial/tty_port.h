@@ -24,6 +24,9 @@ struct OpenedPort {
 // with the command that lowers it).
 OpenedPort open_tty(const SerialSettings& s);
 
+// Not RT-safe. Drops what the tty has received and not yet been read.
+void discard_input(int fd) noexcept;
+
 // Not RT-safe. The kernel's name of the tty a path leads to ("ttyUSB0" for
 // /dev/serial/by-id/usb-FTDI_...), or empty when it leads nowhere.
 std::string tty_name(const std::string& port);

@@ -117,6 +117,22 @@ inline bool wait_armed(std::chrono::milliseconds timeout = std::chrono::seconds(
   return armed;
 }
 
+// Until the running hapticd has enabled output (its log line "output enabled"), or `timeout`;
+// false then, or at once on a fault. A hand that pushes the device into a wall before it is
+// enabled finds the wall unarmed (a wall the device starts inside acts once it is left).
+inline bool wait_enabled(std::chrono::milliseconds timeout = std::chrono::seconds(60)) {
+  bool enabled = false;
+  wait_until(
+      [&] {
+        std::ifstream log(running_log());
+        const std::string text{std::istreambuf_iterator<char>(log), {}};
+        enabled = text.find("output enabled") != std::string::npos;
+        return enabled || text.find("] fault: ") != std::string::npos;
+      },
+      timeout);
+  return enabled;
+}
+
 // Whether process `pid` (a child) has ended, without reaping it.
 inline bool ended(pid_t pid) {
   siginfo_t info{};

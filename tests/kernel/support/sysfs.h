@@ -4,6 +4,7 @@
 #pragma once
 
 #include <chrono>
+#include <cstdint>
 #include <functional>
 #include <stdexcept>
 #include <string>
@@ -35,5 +36,9 @@ void wait_until(const std::function<bool()>& predicate, std::chrono::millisecond
 
 // Entries of a directory (no "." and ".."), sorted; empty when it does not exist.
 std::vector<std::string> list_dir(const std::string& path);
+
+// Where configfs keeps USB gadgets (libcomposite), and a USB id as sysfs writes it: "1209".
+inline constexpr const char* kUsbGadgets = "/sys/kernel/config/usb_gadget";
+std::string hex4(std::uint16_t value);
 
 }  // namespace hapticd::kernel_test

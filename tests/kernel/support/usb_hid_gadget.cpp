@@ -14,14 +14,6 @@
 namespace hapticd::kernel_test {
 namespace {
 
-constexpr const char* kGadgets = "/sys/kernel/config/usb_gadget";
-
-std::string hex4(std::uint16_t value) {
-  char text[8];
-  std::snprintf(text, sizeof text, "%04x", value);
-  return text;
-}
-
 // The /dev node of the character device "major:minor", as devtmpfs names it.
 std::string char_device_node(const std::string& major_minor) {
   std::istringstream uevent(read_text("/sys/dev/char/" + major_minor + "/uevent"));
@@ -34,8 +26,8 @@ std::string char_device_node(const std::string& major_minor) {
 }  // namespace
 
 UsbHidGadget::UsbHidGadget(UsbHidGadgetConfig config)
-    : config_(std::move(config)), root_(std::string(kGadgets) + "/" + config_.name) {
-  require_path(kGadgets, "USB gadget configfs (libcomposite, configfs mounted)");
+    : config_(std::move(config)), root_(std::string(kUsbGadgets) + "/" + config_.name) {
+  require_path(kUsbGadgets, "USB gadget configfs (libcomposite, configfs mounted)");
   const auto controllers = list_dir("/sys/class/udc");
   if (controllers.empty()) throw KernelFacilityError("no USB device controller (dummy_hcd)");
   try {

@@ -59,6 +59,7 @@ void CrcStreamBoard::start() {
     plant_ns_ = now_ns();
   }
   thread_ = std::thread([this] { run(); });
+  run_as_device(thread_);
 }
 
 void CrcStreamBoard::stop() {

@@ -81,6 +81,7 @@ void HaplyBoard::start() {
     plant_ns_ = now_ns();
   }
   thread_ = std::thread([this] { run(); });
+  run_as_device(thread_);
 }
 
 void HaplyBoard::stop() {

@@ -1,6 +1,8 @@
 #include "tty_io.h"
 
 #include <poll.h>
+#include <pthread.h>
+#include <sched.h>
 #include <sys/eventfd.h>
 #include <time.h>
 #include <unistd.h>
@@ -88,6 +90,12 @@ bool write_frame(int fd, std::span<const std::uint8_t> frame) {
     ppoll(&p, 1, &t, nullptr);
   }
   return true;
+}
+
+void run_as_device(std::thread& thread) {
+  sched_param p{};
+  p.sched_priority = 70;
+  (void)pthread_setschedparam(thread.native_handle(), SCHED_FIFO, &p);
 }
 
 }  // namespace hapticd::reference

@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <thread>
 #include <vector>
 
 namespace hapticd::reference {
@@ -36,6 +37,12 @@ class TtyWaiter {
  private:
   int event_fd_ = -1;
 };
+
+// A device's firmware runs on its own processor, whatever the host is doing: its thread at
+// SCHED_FIFO 70 (below hapticd's loop at 80), where the test may set it (root); as it is,
+// where it may not. A device thread starved for 100 ms by a loaded test machine would move its
+// mechanism without reporting it, which no real device does.
+void run_as_device(std::thread& thread);
 
 // Appends what `fd` holds to `into` without blocking. False when the descriptor is gone
 // (EBADF); a hung-up pty master (EIO) or an empty one is just no input.
