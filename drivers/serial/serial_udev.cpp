@@ -12,22 +12,35 @@ namespace {
 namespace fs = std::filesystem;
 constexpr const char* kById = "/dev/serial/by-id/";
 
-// The udev match of the configured port: its kernel name, or its by-id link (which udev's own
-// 60-serial.rules made before this rule runs).
+// The udev match of the configured port: its kernel name, or the properties its by-id link is
+// made of (udev's 60-serial.rules: usb-$ID_SERIAL-if$ID_USB_INTERFACE_NUM, -port$N after it for
+// a USB serial adapter), each matched literally.
 std::string port_match(const config::Config& cfg, const UdevRules& out, const std::string& port) {
+  const auto refuse = [&](const std::string& why) {
+    throw config::ConfigError(
+        {cfg.locate("device.serial.port") + ": device.serial.port: '" + port + "' " + why});
+  };
   if (port.rfind(kById, 0) == 0) {
     const std::string link = port.substr(std::string(kById).size());
-    out.literal("device.serial.port", link);
-    return "ENV{DEVLINKS}==\"*" + std::string(kById) + link + "*\"";
+    const std::size_t in = link.rfind("-if");
+    if (link.rfind("usb-", 0) != 0 || in == std::string::npos || in <= 4) {
+      refuse("is not a link udev's 60-serial.rules makes (usb-SERIAL-ifNN)");
+    }
+    const std::string serial = link.substr(4, in - 4);
+    const std::string iface = link.substr(in + 3, 2);
+    out.literal("device.serial.port", serial);
+    out.literal("device.serial.port", iface);
+    return "ENV{ID_BUS}==\"usb\", ENV{ID_SERIAL}==\"" + serial +
+           "\", ENV{ID_USB_INTERFACE_NUM}==\"" + iface + "\"";
   }
   if (port.rfind("/dev/tty", 0) == 0 && port.find('/', 5) == std::string::npos) {
     out.literal("device.serial.port", port.substr(5));
     return "KERNEL==\"" + port.substr(5) + "\"";
   }
-  throw config::ConfigError(
-      {cfg.locate("device.serial.port") + ": device.serial.port: '" + port +
-       "' is neither /dev/ttyNAME nor a /dev/serial/by-id/ link, which are what a udev rule can "
-       "match exactly"});
+  refuse(
+      "is neither /dev/ttyNAME nor a /dev/serial/by-id/ link, which are what a udev rule can "
+      "match exactly");
+  return {};
 }
 
 std::string driver_of(const std::string& tty) {

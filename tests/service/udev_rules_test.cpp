@@ -157,6 +157,31 @@ TEST(UdevRules, HidGrantsTheConfiguredDeviceByVendorProductAndSerial) {
 }
 #endif
 
+#if HAPTICD_WITH_SERIAL
+TEST(UdevRules, SerialGrantsTheConfiguredPortAndSetsAnFtdiLatencyTimer) {
+  std::vector<std::string> rules = rule_lines(instance_udev_rules(
+      example_config("serial-stream.yaml", {"device.serial.port=/dev/ttyUSB1"}), "arm"));
+  ASSERT_EQ(rules.size(), 2u);
+  EXPECT_EQ(rules[0], "SUBSYSTEM==\"tty\", KERNEL==\"ttyUSB1\", GROUP=\"hapticd\", MODE=\"0660\"");
+  EXPECT_EQ(rules[1],
+            "ACTION==\"add\", SUBSYSTEM==\"tty\", KERNEL==\"ttyUSB1\", DRIVERS==\"ftdi_sio\", "
+            "RUN+=\"/bin/sh -c 'echo 1 >/sys%p/device/latency_timer'\"");
+  // A by-id link: the properties it is made of, matched exactly.
+  rules = rule_lines(instance_udev_rules(
+      example_config("serial-stream.yaml", {"device.serial.port=/dev/serial/by-id/"
+                                            "usb-FTDI_FT232R_USB_UART_A50285BI-if00-port0"}),
+      "arm"));
+  ASSERT_EQ(rules.size(), 2u);
+  EXPECT_TRUE(has(rules[0],
+                  "ENV{ID_BUS}==\"usb\", ENV{ID_SERIAL}==\"FTDI_FT232R_USB_UART_A50285BI\", "
+                  "ENV{ID_USB_INTERFACE_NUM}==\"00\""))
+      << rules[0];
+  EXPECT_TRUE(
+      has(refusal(example_config("serial-stream.yaml", {"device.serial.port=/dev/my-board"})),
+          "device.serial.port: '/dev/my-board' is neither /dev/ttyNAME nor"));
+}
+#endif
+
 #if HAPTICD_WITH_EVDEV
 TEST(UdevRules, EvdevGrantsTheConfiguredInputNodeAndNoOther) {
   std::vector<std::string> rules =
