@@ -1,8 +1,7 @@
 #include "usb_acm_gadget.h"
 
-#include <unistd.h>
-
 #include "sysfs.h"
+#include "usb_gadget_tree.h"
 
 namespace hapticd::kernel_test {
 
@@ -29,22 +28,11 @@ UsbAcmGadget::UsbAcmGadget(UsbAcmGadgetConfig config)
 UsbAcmGadget::~UsbAcmGadget() { remove_configfs_tree(); }
 
 void UsbAcmGadget::create_configfs_tree() {
-  make_dir(root_);
-  write_text(root_ + "/idVendor", "0x" + hex4(config_.vendor_id));
-  write_text(root_ + "/idProduct", "0x" + hex4(config_.product_id));
-  write_text(root_ + "/bcdUSB", "0x0200");
-  make_dir(root_ + "/strings/0x409");
-  write_text(root_ + "/strings/0x409/serialnumber", config_.serial);
-  write_text(root_ + "/strings/0x409/manufacturer", config_.manufacturer);
-  write_text(root_ + "/strings/0x409/product", config_.product);
-  make_dir(root_ + "/configs/c.1");
-  make_dir(root_ + "/configs/c.1/strings/0x409");
-  write_text(root_ + "/configs/c.1/strings/0x409/configuration", "acm");
-  make_dir(root_ + "/functions/acm.usb0");
-  if (::symlink((root_ + "/functions/acm.usb0").c_str(),
-                (root_ + "/configs/c.1/acm.usb0").c_str()) != 0) {
-    throw_errno("link the ACM function into configuration c.1");
-  }
+  make_gadget_tree(root_,
+                   {config_.vendor_id, config_.product_id, config_.serial, config_.manufacturer,
+                    config_.product},
+                   "acm", "acm.usb0");
+  link_gadget_function(root_, "acm.usb0");
 }
 
 // The host's tty of this gadget: a ttyACM whose USB device has our ids and serial.
@@ -81,12 +69,7 @@ void UsbAcmGadget::remove_configfs_tree() noexcept {
   } catch (const KernelFacilityError&) {
     // Removal below still runs; a later fixture reports what is left over.
   }
-  ::unlink((root_ + "/configs/c.1/acm.usb0").c_str());
-  remove_dir(root_ + "/configs/c.1/strings/0x409");
-  remove_dir(root_ + "/configs/c.1");
-  remove_dir(root_ + "/functions/acm.usb0");
-  remove_dir(root_ + "/strings/0x409");
-  remove_dir(root_);
+  remove_gadget_tree(root_, "acm.usb0");
 }
 
 }  // namespace hapticd::kernel_test

@@ -10,6 +10,7 @@
 
 #include "hid_support.h"
 #include "sysfs.h"
+#include "usb_gadget_tree.h"
 
 namespace hapticd::kernel_test {
 namespace {
@@ -57,27 +58,17 @@ UsbHidGadget::~UsbHidGadget() {
 }
 
 void UsbHidGadget::create_configfs_tree() {
-  make_dir(root_);
-  write_text(root_ + "/idVendor", "0x" + hex4(config_.vendor_id));
-  write_text(root_ + "/idProduct", "0x" + hex4(config_.product_id));
-  write_text(root_ + "/bcdUSB", "0x0200");
-  make_dir(root_ + "/strings/0x409");
-  write_text(root_ + "/strings/0x409/serialnumber", config_.serial);
-  write_text(root_ + "/strings/0x409/manufacturer", config_.manufacturer);
-  write_text(root_ + "/strings/0x409/product", config_.product);
-  make_dir(root_ + "/configs/c.1");
-  make_dir(root_ + "/configs/c.1/strings/0x409");
-  write_text(root_ + "/configs/c.1/strings/0x409/configuration", "hid");
-  const std::string function = root_ + "/functions/hid.usb0";
-  make_dir(function);
+  const std::string function =
+      make_gadget_tree(root_,
+                       {config_.vendor_id, config_.product_id, config_.serial, config_.manufacturer,
+                        config_.product},
+                       "hid", "hid.usb0");
   write_text(function + "/protocol", "0");
   write_text(function + "/subclass", "0");
   write_text(function + "/report_length", std::to_string(config_.report_length));
   write_text(function + "/report_desc",
              std::string(config_.report_descriptor.begin(), config_.report_descriptor.end()));
-  if (::symlink(function.c_str(), (root_ + "/configs/c.1/hid.usb0").c_str()) != 0) {
-    throw_errno("link the HID function into configuration c.1");
-  }
+  link_gadget_function(root_, "hid.usb0");
 }
 
 // Best effort and in reverse order; configfs refuses to remove a directory still in use.
@@ -95,12 +86,7 @@ void UsbHidGadget::remove_configfs_tree() noexcept {
   } catch (const KernelFacilityError&) {
     // Removal below still runs; a later fixture reports what is left over.
   }
-  ::unlink((root_ + "/configs/c.1/hid.usb0").c_str());
-  remove_dir(root_ + "/configs/c.1/strings/0x409");
-  remove_dir(root_ + "/configs/c.1");
-  remove_dir(root_ + "/functions/hid.usb0");
-  remove_dir(root_ + "/strings/0x409");
-  remove_dir(root_);
+  remove_gadget_tree(root_, "hid.usb0");
 }
 
 std::optional<std::string> UsbHidGadget::find_usb_device() const {
