@@ -20,6 +20,7 @@
 #include "control/scene.h"
 #include "drivers/gpio/gpio_device.h"
 #include "drivers/gpio/gpio_settings.h"
+#include "drivers/gpio/gpio_wire.h"
 #include "loop/scene_tick.h"
 #include "loop/servo_loop.h"
 #include "sim/joint_plant.h"
@@ -59,6 +60,51 @@ std::string xy_errors(std::vector<std::string> sets, const std::string& text = x
     return all;
   }
   return "";
+}
+
+// The loopback wire of several joints: the joint in an output's byte 2 and in an edge's line
+// byte's high nibble, one more level byte per further joint; a joint past the last refused. A
+// device of one joint's messages are byte for byte what they were (joint 0: zero bytes).
+TEST(GpioJointsWire, TheJointTravelsInEveryMessageAndOneJointsBytesAreUnchanged) {
+  std::array<std::uint8_t, wire::kMaxMessageSize> buf{};
+  wire::Output o{12'345, 50'000, true, true, false};
+  o.joint = 2;
+  ASSERT_EQ(wire::encode_output(o, buf), wire::kOutputSize);
+  EXPECT_EQ(buf[2], 2);
+  wire::Output back;
+  ASSERT_TRUE(wire::decode_output({buf.data(), wire::kOutputSize}, back));
+  EXPECT_EQ(back.joint, 2);
+  buf[2] = 3;
+  EXPECT_FALSE(wire::decode_output({buf.data(), wire::kOutputSize}, back)) << "no joint 3";
+
+  wire::Levels l{wire::kLevelA, 7};
+  l.joint_count = 3;
+  l.others = {wire::kLevelB, wire::kLevelFault};
+  ASSERT_EQ(wire::encode_levels(l, buf), wire::kLevelsSize + 2);
+  wire::Levels lb;
+  ASSERT_TRUE(wire::decode_levels({buf.data(), wire::kLevelsSize + 2}, lb));
+  EXPECT_EQ(lb.joint_count, 3u);
+  EXPECT_EQ(lb.of(0), wire::kLevelA);
+  EXPECT_EQ(lb.of(1), wire::kLevelB);
+  EXPECT_EQ(lb.of(2), wire::kLevelFault);
+  EXPECT_FALSE(wire::decode_levels({buf.data(), wire::kLevelsSize + 3}, lb)) << "a fourth joint";
+
+  Edge e{5, 1, Line::kB, true};
+  e.joint = 1;
+  const std::size_t n = wire::encode_edges(10, {&e, 1}, buf);
+  EXPECT_EQ(buf[wire::kEdgesHeaderSize + 12], 0x11);
+  Edge eb;
+  ASSERT_TRUE(wire::decode_edge({buf.data(), n}, 0, eb));
+  EXPECT_EQ(eb.joint, 1);
+  EXPECT_EQ(eb.line, Line::kB);
+  buf[wire::kEdgesHeaderSize + 12] = 0x31;
+  EXPECT_FALSE(wire::decode_edge({buf.data(), n}, 0, eb)) << "no joint 3";
+
+  // One joint: the bytes of before (joint 0 where the formats had zeros).
+  wire::Output one{1, 2, true, false, false};
+  wire::encode_output(one, buf);
+  EXPECT_EQ(buf[2], 0);
+  EXPECT_EQ(wire::encode_levels({wire::kLevelA, 7}, buf), wire::kLevelsSize);
 }
 
 TEST(GpioJointsConfig, TheXyTableLoadsEachJointWithItsOwnLinesAndChannel) {

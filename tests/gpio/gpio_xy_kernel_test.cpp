@@ -13,6 +13,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <array>
 #include <chrono>
 #include <climits>
 #include <fstream>
@@ -40,11 +41,12 @@ using namespace std::chrono_literals;
 // As tests/gpio/gpio_kernel_test.cpp explains for one joint (what the emulated guest sustains):
 // 50 Hz, the wall at 150 N/m (b_req 1.7 <= 1.8 N s/m), 0.5 mm counts, max_edge_rate 25, edges
 // put 80 ms apart at least on each joint's lines. The press: the wall's face 2.83 mm from the
-// origin along the diagonal, the hand's set-point 47.5 mm along it over 10 s (each joint moves
-// 23 mm, 46 counts: 4.6 edges/s), held past the run's end. At rest the hand (300 N/m) and the
-// wall share its reach past the face, 44.6 mm: p = 300 x 44.6 / 450 = 29.7 mm, F = 4.5 N; 2 % of
-// it is 0.6 mm, above what the joints' 0.5 mm counts can move the rest along the normal (the
-// plant rests where the hand balances the quantised wall: within 2/3 x 0.71 mm of p).
+// origin along the diagonal (the table starts 0.35 mm along it), the hand's set-point 47.5 mm
+// along it over 10 s (each joint moves about 23 mm, 46 counts: 4.6 edges/s), held past the
+// run's end. At rest the hand (300 N/m) and the wall share its reach past the face, 45.0 mm:
+// p = 300 x 45.0 / 450 = 30.0 mm, F = 4.5 N; 2 % of it is 0.6 mm, above what the joints' 0.5 mm
+// counts can move the rest along the normal (the plant rests where the hand balances the
+// quantised wall: the measured penetration within 2/3 x 0.71 mm of p).
 const std::vector<std::string> kXySets = {
     "loop.rate_hz=50", "walls[0].stiffness=150", "walls[0].point=[0.002, 0.002]",
     "device.gpio.counts_per_unit=2000", "device.sim.counts_per_unit=2000",
@@ -113,7 +115,8 @@ struct XyRun {
 // `hapticd run --config config/gpio-xy.yaml` with the guest's chips, under `wrap` (strace, or
 // nothing); the peer started once the gate passed (the channels are on at duty 0 from
 // configure), `strike` called with it once the wall pushes.
-XyRun run_xy(const XyMachine& m, double duration_s, const std::vector<std::string>& wrap,
+XyRun run_xy(const XyMachine& m, double duration_s, const std::vector<std::string>& extra,
+             const std::vector<std::string>& wrap,
              const std::function<sim::gpio::GpioPeer&()>& start_peer,
              const std::function<void(sim::gpio::GpioPeer&)>& strike) {
   XyRun r;
@@ -128,6 +131,7 @@ XyRun run_xy(const XyMachine& m, double duration_s, const std::vector<std::strin
     args.push_back(a);
   }
   for (const auto& s : m.sets()) args.insert(args.end(), {"--set", s});
+  for (const auto& s : extra) args.insert(args.end(), {"--set", s});
   const std::string out = r.dir + "/output.txt";
   unlink(out.c_str());
   unlink((r.dir + "/summary.json").c_str());
@@ -209,10 +213,14 @@ class GpioXyKernelRun : public testing::Test {
       EXPECT_EQ(runner_->error(), "");
     }
   }
+  // `extra`: further --set, the peer's configuration too.
   XyRun run(double duration_s, const std::function<void(sim::gpio::GpioPeer&)>& strike,
-            const std::vector<std::string>& wrap = {}) {
+            const std::vector<std::string>& wrap = {}, const std::vector<std::string>& extra = {}) {
+    std::vector<std::string> sets = m_.sets();
+    sets.insert(sets.end(), extra.begin(), extra.end());
+    cfg_ = std::make_unique<config::Config>(load_xy_guest(sets));
     return run_xy(
-        m_, duration_s, wrap,
+        m_, duration_s, extra, wrap,
         [this]() -> sim::gpio::GpioPeer& {
           auto peer = wiring::find_driver("gpio").peer.make_peer_on(*cfg_, m_.endpoint());
           peer_.reset(dynamic_cast<sim::gpio::GpioPeer*>(peer.release()));
@@ -236,8 +244,7 @@ class GpioXyKernelRun : public testing::Test {
 };
 
 TEST_F(GpioXyKernelRun, TwoEncodersTwoChannelsRestAtForceOverStiffnessAlongTheDiagonal) {
-  const std::string prefix = "/tmp/hapticd-gpio-xy-strace";
-  const XyRun r = run(20.0, nullptr, reference::strace_to(prefix));
+  const XyRun r = run(20.0, nullptr);
   std::cout << r.output;
   ASSERT_EQ(r.exit_code, 0) << r.output;
   ASSERT_TRUE(r.summary.is_object()) << r.output;
@@ -251,9 +258,37 @@ TEST_F(GpioXyKernelRun, TwoEncodersTwoChannelsRestAtForceOverStiffnessAlongTheDi
   std::cout << "rest penetration " << rest * 1e3 << " mm, F/K " << expected * 1e3 << " mm\n";
   EXPECT_NEAR(rest, expected, 0.02 * expected) << "F/K along the diagonal";
   expect_both_stopped();
-  const reference::TickCalls calls = reference::tick_calls(prefix);
+}
+
+// The loop's thread under strace (rt_syscalls.h): what it asks of the kernel each tick, and
+// what reaches each PWM channel. strace stops the thread at every call, milliseconds each in
+// the emulator: 10 Hz (the wall at 20 N/m for the gate), where a tick's calls fit its period.
+// libgpiod 1.6 reads each input line's descriptor once a tick (A, B and the fault line of two
+// joints: 6), 2.x each chip's request once (2 chips); a duty is written only when it changed.
+TEST_F(GpioXyKernelRun, TheLoopsSystemCallsATick) {
+  const std::string prefix = "/tmp/hapticd-gpio-xy-strace";
+  const std::array<std::uint64_t, 2> before = {m_.pwm.applied(0).applies,
+                                               m_.pwm.applied(1).applies};
+  const XyRun r =
+      run(8.0, nullptr, reference::strace_to(prefix), {"loop.rate_hz=10", "walls[0].stiffness=20"});
+  std::cout << r.output;
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const reference::TickCalls calls = reference::tick_calls(prefix, 10);
   RecordProperty("rt_syscalls", reference::describe(calls));
   std::cout << "loop thread, per tick: " << reference::describe(calls) << "\n";
+  ASSERT_GT(calls.ticks, 30);
+  const auto per_tick = [&](const char* name) {
+    const auto it = calls.per_tick.find(name);
+    return it == calls.per_tick.end() ? 0.0 : it->second;
+  };
+  EXPECT_NEAR(per_tick("read"), HAPTICD_GPIOD_API == 1 ? 6.0 : 2.0, 0.05);
+  EXPECT_LE(per_tick("write"), 2.0) << "a duty write per joint at most";
+  const double ticks = r.summary["ticks"].get<double>();
+  for (unsigned ch : {0u, 1u}) {
+    const double applied = static_cast<double>(m_.pwm.applied(ch).applies - before[ch]);
+    std::cout << "channel " << ch << ": " << applied / ticks << " PWM applies a tick\n";
+    EXPECT_LE(applied, ticks + 8) << "at most one duty a tick (and set-up's and the stop's)";
+  }
 }
 
 TEST_F(GpioXyKernelRun, UnpluggingJointOnesChipZeroesBothAndNamesIt) {
