@@ -68,6 +68,44 @@ gpiod_chip* open_chip(const std::string& chip, std::string& desc) {
   return found;
 }
 
+// One request of `inputs` (both edges, monotonic timestamps) and each joint's direction output
+// at its starting level; null with `err` set when the kernel or the library refuses.
+gpiod_line_request* request_lines(gpiod_chip* chip, const std::vector<unsigned>& inputs,
+                                  std::span<const LineOffsets> joints, int& err) {
+  gpiod_line_request* request = nullptr;
+  gpiod_line_settings* in = gpiod_line_settings_new();
+  gpiod_line_settings* out[2] = {gpiod_line_settings_new(), gpiod_line_settings_new()};
+  gpiod_line_config* lc = gpiod_line_config_new();
+  gpiod_request_config* rc = gpiod_request_config_new();
+  err = ENOMEM;
+  if (in != nullptr && out[0] != nullptr && out[1] != nullptr && lc != nullptr && rc != nullptr) {
+    gpiod_line_settings_set_direction(in, GPIOD_LINE_DIRECTION_INPUT);
+    gpiod_line_settings_set_edge_detection(in, GPIOD_LINE_EDGE_BOTH);
+    gpiod_line_settings_set_event_clock(in, GPIOD_LINE_CLOCK_MONOTONIC);
+    // out[level]: a direction output starting at that level.
+    for (int level = 0; level < 2; ++level) {
+      gpiod_line_settings_set_direction(out[level], GPIOD_LINE_DIRECTION_OUTPUT);
+      gpiod_line_settings_set_output_value(
+          out[level], level != 0 ? GPIOD_LINE_VALUE_ACTIVE : GPIOD_LINE_VALUE_INACTIVE);
+    }
+    gpiod_request_config_set_consumer(rc, kConsumer);
+    gpiod_request_config_set_event_buffer_size(rc, kEventBuffer);
+    bool added = gpiod_line_config_add_line_settings(lc, inputs.data(), inputs.size(), in) == 0;
+    for (const LineOffsets& j : joints) {
+      added = added && gpiod_line_config_add_line_settings(lc, &j.direction, 1,
+                                                           out[j.direction_level ? 1 : 0]) == 0;
+    }
+    if (added) request = gpiod_chip_request_lines(chip, rc, lc);
+    err = errno;
+  }
+  gpiod_request_config_free(rc);
+  gpiod_line_config_free(lc);
+  gpiod_line_settings_free(out[1]);
+  gpiod_line_settings_free(out[0]);
+  gpiod_line_settings_free(in);
+  return request;
+}
+
 }  // namespace
 
 struct GpiodLines::Impl {
@@ -111,36 +149,8 @@ void GpiodLines::open(const std::string& chip, std::span<const LineOffsets> join
     direction_offsets += (direction_offsets.empty() ? "" : ", ") + std::to_string(j.direction);
   }
 
-  gpiod_line_settings* in = gpiod_line_settings_new();
-  gpiod_line_settings* out[2] = {gpiod_line_settings_new(), gpiod_line_settings_new()};
-  gpiod_line_config* lc = gpiod_line_config_new();
-  gpiod_request_config* rc = gpiod_request_config_new();
   int err = ENOMEM;
-  if (in != nullptr && out[0] != nullptr && out[1] != nullptr && lc != nullptr && rc != nullptr) {
-    gpiod_line_settings_set_direction(in, GPIOD_LINE_DIRECTION_INPUT);
-    gpiod_line_settings_set_edge_detection(in, GPIOD_LINE_EDGE_BOTH);
-    gpiod_line_settings_set_event_clock(in, GPIOD_LINE_CLOCK_MONOTONIC);
-    // out[level]: a direction output starting at that level.
-    for (int level = 0; level < 2; ++level) {
-      gpiod_line_settings_set_direction(out[level], GPIOD_LINE_DIRECTION_OUTPUT);
-      gpiod_line_settings_set_output_value(
-          out[level], level != 0 ? GPIOD_LINE_VALUE_ACTIVE : GPIOD_LINE_VALUE_INACTIVE);
-    }
-    gpiod_request_config_set_consumer(rc, kConsumer);
-    gpiod_request_config_set_event_buffer_size(rc, kEventBuffer);
-    bool added = gpiod_line_config_add_line_settings(lc, offsets.data(), offsets.size(), in) == 0;
-    for (const LineOffsets& j : joints) {
-      added = added && gpiod_line_config_add_line_settings(lc, &j.direction, 1,
-                                                           out[j.direction_level ? 1 : 0]) == 0;
-    }
-    if (added) m.request = gpiod_chip_request_lines(m.chip, rc, lc);
-    err = errno;
-  }
-  gpiod_request_config_free(rc);
-  gpiod_line_config_free(lc);
-  gpiod_line_settings_free(out[1]);
-  gpiod_line_settings_free(out[0]);
-  gpiod_line_settings_free(in);
+  m.request = request_lines(m.chip, offsets, joints, err);
   if (m.request == nullptr) {
     close();
     throw DeviceError("gpio: cannot request lines of " + chip + " (encoder, direction " +
