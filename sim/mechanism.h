@@ -40,6 +40,10 @@ class Mechanism {
   double encoder_position(int joint) noexcept {
     return encoder_.reading(plant_.joint_positions()[joint]);
   }
+  // RT-safe. The same in whole counts (the GPIO peer's encoder puts each count on its lines).
+  std::int64_t encoder_counts(int joint) noexcept {
+    return encoder_.counts(plant_.joint_positions()[joint]);
+  }
   double velocity(int joint) const noexcept { return plant_.joint_velocities()[joint]; }
   // The torque joint j's motor puts on the mechanism (reversed with device.sim.force_reversed).
   double held_torque(int joint) const noexcept;

@@ -1,8 +1,9 @@
-// The GPIO Device (docs/drivers/gpio.md): a quadrature encoder on two GPIO lines decoded x4 from
-// the kernel's timestamped edges, an optional index line that re-zeroes the count, an optional
-// motor-driver fault line, and a motor driver taking a sysfs PWM duty plus a direction line:
-// duty = |u| / max_force * period. The transport (kernel or loopback peer) is behind
-// gpio_transport.h, so this code is the same for both.
+// The GPIO Device (docs/drivers/gpio.md): for each joint, a quadrature encoder on two GPIO lines
+// decoded x4 from the kernel's timestamped edges, an optional index line that re-zeroes the
+// count, an optional motor-driver fault line, and a motor driver taking a sysfs PWM duty plus a
+// direction line: duty = |u| / max_force * period. A fault of any joint faults the device (the
+// base class then writes zero to every joint), its cause naming the joint. The transport
+// (kernel or loopback peer) is behind gpio_transport.h, so this code is the same for both.
 //
 // A sample's time is the last A/B edge's kernel timestamp when the tick brought one that
 // happened since the previous read; when it brought none the shaft has not moved and the
@@ -31,7 +32,8 @@ enum GpioStatus : std::uint32_t {
   kStatusFaultLine = 1u << 3,    // the motor driver's fault line is active
 };
 
-// Fault codes: the kind in the top byte, a detail (errno, count, rate) below.
+// Fault codes: the kind in the top byte, the joint in the next two bits, a detail (errno, count,
+// rate) in the 22 below (a device of one joint's codes are what they were: joint 0).
 enum class FaultKind : std::uint8_t {
   kReadError = 1,    // reading edge events failed (detail: errno)
   kWriteError = 2,   // writing the PWM or the direction line failed (detail: errno)
@@ -39,13 +41,14 @@ enum class FaultKind : std::uint8_t {
   kMissedEdges = 4,  // more missed edges than missed_edge_fault (detail: how many)
   kEdgeRate = 5,     // edges faster than max_edge_rate (detail: the rate seen, edges/s)
 };
-std::uint32_t fault_code(FaultKind kind, std::uint64_t detail) noexcept;
+std::uint32_t fault_code(FaultKind kind, std::uint64_t detail, std::size_t joint = 0) noexcept;
 
 class GpioDevice final : public Device {
  public:
   static constexpr std::size_t kEdgeBuffer = 256;  // edges one tick can take in
 
-  GpioDevice(const GpioSettings& settings, double max_force,
+  // max_force[j]: joint j's force at 100 % duty, for each of settings.joints.
+  GpioDevice(const GpioSettings& settings, std::span<const double> max_force,
              std::unique_ptr<GpioTransport> transport, int declared_delay);
 
   std::string_view driver_name() const noexcept override { return "gpio"; }
@@ -55,8 +58,12 @@ class GpioDevice final : public Device {
 
   // Any thread, for tests and the summary (plain reads of RT-owned counters: approximate
   // while the loop runs).
-  const QuadratureDecoder& decoder() const noexcept { return decoder_; }
-  std::uint64_t lost_edges() const noexcept { return decoder_.lost(); }
+  const QuadratureDecoder& decoder(std::size_t joint = 0) const noexcept {
+    return joints_[joint].decoder;
+  }
+  std::uint64_t lost_edges(std::size_t joint = 0) const noexcept {
+    return joints_[joint].decoder.lost();
+  }
 
  protected:
   DeviceInfo on_configure() override;
@@ -69,26 +76,38 @@ class GpioDevice final : public Device {
   std::string describe(const DeviceFault& fault) const override;
 
  private:
+  // One joint's decoding and output state; fixed in number after construction.
+  struct Joint {
+    explicit Joint(const GpioSettings& s, std::size_t i);
+    void restart(std::uint8_t levels) noexcept;  // the missed-edge ring emptied
+
+    QuadratureDecoder decoder;
+    bool direction_level = false;
+    bool fault_line = false;
+    // When each of the last missed_edge_fault + 1 missed edges was seen (a ring, preallocated).
+    std::vector<std::int64_t> missed_times;
+    std::size_t missed_next = 0;
+    std::uint64_t missed_seen = 0;  // decoder.missed_edges() at the last read
+    double max_force = 1.0;
+  };
+
   bool logical(const Edge& e) const noexcept;
   std::uint8_t logical_levels(std::uint8_t raw) const noexcept;
-  OutputState output(std::uint64_t duty_ns) const noexcept;
-  IoStatus check_faults() noexcept;
-  void note_missed(std::int64_t now_ns) noexcept;
+  OutputState output(std::size_t joint, std::uint64_t duty_ns) const noexcept;
+  IoStatus check_faults(std::size_t joint) noexcept;
+  void note_missed(Joint& j, std::int64_t now_ns) noexcept;
+  void sample(std::size_t joint, const EdgeRead& r, std::uint64_t ab_before,
+              std::uint64_t hits_before, PositionSample& out) const noexcept;
+  std::string who(std::size_t joint) const;
 
   GpioSettings s_;
-  double max_force_;
   std::unique_ptr<GpioTransport> transport_;
   int declared_delay_;
-  QuadratureDecoder decoder_;
+  std::vector<Joint> joints_;
   std::array<Edge, kEdgeBuffer> edges_{};
-  bool direction_level_ = false;
-  bool fault_line_ = false;
   std::int64_t previous_complete_ns_ = 0;  // the last read's EdgeRead::complete_until_ns
-  // When each of the last missed_edge_fault + 1 missed edges was seen (a ring, preallocated).
-  std::vector<std::int64_t> missed_times_;
-  std::size_t missed_next_ = 0;
-  std::uint64_t missed_seen_ = 0;  // decoder_.missed_edges() at the last read
-  // The decoder's missed edges, published for other threads (Device::counters).
+  // The decoders' missed edges, every joint's together, published for other threads
+  // (Device::counters).
   std::array<base::Counter, 1> counters_{{
       {"missed_edges", base::CounterKind::kAnomaly,
        "encoder edges missed within device.gpio.missed_edge_fault's tolerance: the count may "

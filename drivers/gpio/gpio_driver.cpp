@@ -13,20 +13,24 @@ int delay(const DriverContext& ctx) {
 
 std::unique_ptr<Device> make_device(const DriverContext& ctx) {
   const GpioSettings& s = gpio_settings(ctx);
-  return std::make_unique<GpioDevice>(s, ctx.max_force[0], std::make_unique<KernelTransport>(s),
+  return std::make_unique<GpioDevice>(s, ctx.max_force, std::make_unique<KernelTransport>(s),
                                       delay(ctx));
 }
 
 std::unique_ptr<Device> make_loopback_device(const DriverContext& ctx, io::UniqueFd end) {
-  return std::make_unique<GpioDevice>(gpio_settings(ctx), ctx.max_force[0],
-                                      std::make_unique<LoopbackTransport>(std::move(end)),
-                                      delay(ctx));
+  const GpioSettings& s = gpio_settings(ctx);
+  return std::make_unique<GpioDevice>(
+      s, ctx.max_force, std::make_unique<LoopbackTransport>(std::move(end), s.joints.size()),
+      delay(ctx));
 }
 
-// The direction line's level for a positive force (docs/drivers/gpio.md).
+// The direction line's level for a positive force (docs/drivers/gpio.md): joint 0's, the joint
+// the direction check pushes (several joints: the check is off, docs/kinematics.md).
 ForceReversal force_reversal(const config::Config& cfg) {
-  const bool high = gpio_settings(cfg).direction_positive_high;
-  return {"device.gpio.direction_positive", high ? "high" : "low", high ? "low" : "high"};
+  const GpioSettings& s = gpio_settings(cfg);
+  const bool high = s.joint(0).direction_positive_high;
+  return {s.listed ? "device.gpio.joints[0].direction_positive" : "device.gpio.direction_positive",
+          high ? "high" : "low", high ? "low" : "high"};
 }
 
 }  // namespace

@@ -53,7 +53,8 @@ std::size_t encode_output(const Output& o, std::span<std::uint8_t> out) noexcept
   out[1] = static_cast<std::uint8_t>((o.pwm_enabled ? kOutEnabled : 0) |
                                      (o.direction_level ? kOutDirection : 0) |
                                      (o.inversed ? kOutInversed : 0));
-  put_u16(&out[2], 0);
+  out[2] = o.joint;
+  out[3] = 0;
   put_u32(&out[4], 0);
   put_u64(&out[8], o.duty_ns);
   put_u64(&out[16], o.period_ns);
@@ -61,11 +62,13 @@ std::size_t encode_output(const Output& o, std::span<std::uint8_t> out) noexcept
 }
 
 std::size_t encode_levels(const Levels& l, std::span<std::uint8_t> out) noexcept {
-  if (out.size() < kLevelsSize) return 0;
+  const std::size_t size = kLevelsSize + l.joint_count - 1;
+  if (l.joint_count == 0 || l.joint_count > kMaxJoints || out.size() < size) return 0;
   out[0] = static_cast<std::uint8_t>(Type::kLevels);
   out[1] = l.levels & kAllLevels;
   put_u64(&out[2], static_cast<std::uint64_t>(l.time_ns));
-  return kLevelsSize;
+  for (std::size_t j = 1; j < l.joint_count; ++j) out[kLevelsSize + j - 1] = l.of(j) & kAllLevels;
+  return size;
 }
 
 std::size_t encode_edges(std::int64_t complete_until_ns, std::span<const Edge> edges,
@@ -81,7 +84,7 @@ std::size_t encode_edges(std::int64_t complete_until_ns, std::span<const Edge> e
   for (const Edge& e : edges) {
     put_u64(p, static_cast<std::uint64_t>(e.time_ns));
     put_u32(p + 8, e.seqno);
-    p[12] = static_cast<std::uint8_t>(e.line);
+    p[12] = static_cast<std::uint8_t>(static_cast<unsigned>(e.line) | (e.joint << 4));
     p[13] = e.level ? 1 : 0;
     p += kEdgeSize;
   }
@@ -105,10 +108,12 @@ bool decode_hello(std::span<const std::uint8_t> msg) noexcept {
 bool decode_output(std::span<const std::uint8_t> msg, Output& o) noexcept {
   if (msg.size() != kOutputSize || msg[0] != static_cast<std::uint8_t>(Type::kOutput)) return false;
   if ((msg[1] & ~(kOutEnabled | kOutDirection | kOutInversed)) != 0) return false;
-  if (!all_zero(msg.subspan(2, 6))) return false;  // reserved: a sender that sets them is wrong
+  if (msg[2] >= kMaxJoints) return false;
+  if (!all_zero(msg.subspan(3, 5))) return false;  // reserved: a sender that sets them is wrong
   const std::uint64_t duty = get_u64(&msg[8]);
   const std::uint64_t period = get_u64(&msg[16]);
   if (duty > period) return false;  // the PWM core refuses it too
+  o.joint = msg[2];
   o.pwm_enabled = (msg[1] & kOutEnabled) != 0;
   o.direction_level = (msg[1] & kOutDirection) != 0;
   o.inversed = (msg[1] & kOutInversed) != 0;
@@ -118,10 +123,18 @@ bool decode_output(std::span<const std::uint8_t> msg, Output& o) noexcept {
 }
 
 bool decode_levels(std::span<const std::uint8_t> msg, Levels& l) noexcept {
-  if (msg.size() != kLevelsSize || msg[0] != static_cast<std::uint8_t>(Type::kLevels)) return false;
+  if (msg.size() < kLevelsSize || msg.size() > kLevelsSize + kMaxJoints - 1 ||
+      msg[0] != static_cast<std::uint8_t>(Type::kLevels)) {
+    return false;
+  }
+  for (std::size_t i = kLevelsSize; i < msg.size(); ++i) {
+    if ((msg[i] & ~kAllLevels) != 0) return false;
+  }
   if ((msg[1] & ~kAllLevels) != 0) return false;
   l.levels = msg[1];
   l.time_ns = static_cast<std::int64_t>(get_u64(&msg[2]));
+  l.joint_count = 1 + msg.size() - kLevelsSize;
+  for (std::size_t j = 1; j < l.joint_count; ++j) l.others[j - 1] = msg[kLevelsSize + j - 1];
   return true;
 }
 
@@ -143,10 +156,13 @@ bool decode_edge(std::span<const std::uint8_t> msg, std::size_t i, Edge& e) noex
   const std::size_t at = kEdgesHeaderSize + i * kEdgeSize;
   if (i >= kMaxEdgesPerMessage || at + kEdgeSize > msg.size()) return false;
   const std::uint8_t* p = &msg[at];
-  if (p[12] >= kLineCount || p[13] > 1) return false;
+  const unsigned line = p[12] & 0x0Fu;
+  const unsigned joint = p[12] >> 4;
+  if (line >= kLineCount || joint >= kMaxJoints || p[13] > 1) return false;
   e.time_ns = static_cast<std::int64_t>(get_u64(p));
   e.seqno = get_u32(p + 8);
-  e.line = static_cast<Line>(p[12]);
+  e.line = static_cast<Line>(line);
+  e.joint = static_cast<std::uint8_t>(joint);
   e.level = p[13] != 0;
   return true;
 }

@@ -6,14 +6,22 @@
 // rather than guess.
 //
 //   driver -> peer  kHello   (1 byte)                 the driver opened the lines: send levels
-//                   kOutput  (24 bytes)               the PWM and direction line for the next
-//                                                     period: sent once a tick, the period's
-//                                                     clock (the peer steps its plant on it)
-//   peer -> driver  kLevels  (10 bytes)               the lines' levels now (answer to hello)
+//                   kOutput  (24 bytes)               one joint's PWM and direction line for
+//                                                     the next period: sent once a tick for
+//                                                     each joint, in joint order; the last
+//                                                     joint's is the period's clock (the peer
+//                                                     steps its plant on it)
+//   peer -> driver  kLevels  (10 + 1 n bytes)         the lines' levels now (answer to hello):
+//                                                     joint 0's, then n more joints'
 //                   kEdges   (16 + 14 n bytes)        n <= kMaxEdgesPerMessage edges, and the
 //                                                     time up to which the stream is complete
+//
+// A device of one joint sends exactly what it sent before joints existed: joint 0 is a zero
+// byte where the formats had a reserved one (kOutput byte 2, an edge's line byte's high
+// nibble), and kLevels has no further joints.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -27,7 +35,7 @@ enum class Type : std::uint8_t { kHello = 1, kOutput = 2, kLevels = 3, kEdges = 
 inline constexpr std::size_t kMaxEdgesPerMessage = 64;
 inline constexpr std::size_t kHelloSize = 1;
 inline constexpr std::size_t kOutputSize = 24;
-inline constexpr std::size_t kLevelsSize = 10;
+inline constexpr std::size_t kLevelsSize = 10;  // one joint; +1 per further joint
 inline constexpr std::size_t kEdgesHeaderSize = 16;
 inline constexpr std::size_t kEdgeSize = 14;
 inline constexpr std::size_t kMaxMessageSize = kEdgesHeaderSize + kMaxEdgesPerMessage * kEdgeSize;
@@ -44,11 +52,20 @@ struct Output {
   bool pwm_enabled = false;      // the channel's enable: always on from the driver (sysfs_pwm.h)
   bool direction_level = false;  // the direction line's electrical level
   bool inversed = false;         // PWM polarity
+  std::uint8_t joint = 0;        // whose channel and direction line
 };
 
+inline constexpr std::size_t kMaxJoints = 3;  // base::kMaxJoints; the wire stays pure
+
 struct Levels {
-  std::uint8_t levels = 0;  // kLevel* bits
+  std::uint8_t levels = 0;  // joint 0's kLevel* bits
   std::int64_t time_ns = 0;
+  std::array<std::uint8_t, kMaxJoints - 1> others{};  // joints 1.. (joint_count - 1 of them)
+  std::size_t joint_count = 1;
+
+  std::uint8_t of(std::size_t joint) const noexcept {
+    return joint == 0 ? levels : others[joint - 1];
+  }
 };
 
 // An edge on the wire carries the raw level; active-low is the driver's to apply.

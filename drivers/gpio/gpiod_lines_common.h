@@ -20,10 +20,17 @@ inline constexpr const char* kConsumer = "hapticd";
 struct InputLine {
   Line role = Line::kA;
   unsigned offset = 0;
+  std::uint8_t joint = 0;
 };
 
-// The input lines `lines` asks for: A, B, then the index and the fault line where set.
-std::vector<InputLine> input_lines(const LineOffsets& lines);
+// A joint's direction output.
+struct DirectionLine {
+  std::uint8_t joint = 0;
+  unsigned offset = 0;
+};
+
+// The input lines `joints` ask for: each joint's A, B, then its index and fault line where set.
+std::vector<InputLine> input_lines(std::span<const LineOffsets> joints);
 
 // errno in words, with what to do about the two a person meets: a line another process or
 // driver holds, and a chip the user may not open.
@@ -33,14 +40,15 @@ std::string why(int err);
 // empty kernel FIFO reads as EAGAIN, so the RT thread never waits in it.
 int make_nonblocking(int fd) noexcept;
 
-// Not RT-safe. Raw levels (wire::kLevel* bits) of `inputs`, input i read by `value(i)`: 1, 0,
-// or -1 with errno set, which throws DeviceError naming the line.
-std::uint8_t read_levels(std::span<const InputLine> inputs,
-                         const std::function<int(std::size_t)>& value);
+// Not RT-safe. Raw levels (wire::kLevel* bits) of `inputs` into levels[joint], input i read by
+// `value(i)`: 1, 0, or -1 with errno set, which throws DeviceError naming the line.
+void read_levels(std::span<const InputLine> inputs, const std::function<int(std::size_t)>& value,
+                 std::span<std::uint8_t> levels);
 
-// "gpiochip1 [gpio-sim.0] lines 0,1,dir 2".
+// "gpiochip1 [gpio-sim.0] lines 0,1,dir 2"; with several joints on the chip each joint's
+// lines, "; " between them.
 std::string describe(const std::string& chip, std::span<const InputLine> inputs,
-                     unsigned direction);
+                     std::span<const DirectionLine> directions);
 
 // RT-safe: called every tick. Puts the edges read in one tick back in the order the kernel
 // saw them, `before(a, b)` saying a came first: insertion sort, stable, for the handful of

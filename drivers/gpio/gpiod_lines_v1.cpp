@@ -1,7 +1,8 @@
 // libgpiod 1.6 (Debian 12), the kernel's GPIO uAPI v1: each input line requested for both-edge
-// events has its own event descriptor and its own 16-event kernel FIFO; an overflow drops the
-// newest events silently (no sequence numbers), so lost edges show only as the decoder's
-// illegal transitions. Event timestamps are CLOCK_MONOTONIC (Linux >= 5.7).
+// events has its own event descriptor and its own 16-event kernel FIFO (so a tick reads each
+// input line of each joint on the chip once); an overflow drops the newest events silently (no
+// sequence numbers), so lost edges show only as the decoder's illegal transitions. Event
+// timestamps are CLOCK_MONOTONIC (Linux >= 5.7).
 #include <gpiod.h>
 
 #include <algorithm>
@@ -32,8 +33,19 @@ struct GpiodLines::Impl {
   std::vector<InputLine> inputs;
   std::vector<gpiod_line*> lines;
   std::vector<int> fds;  // each input line's own event descriptor
-  gpiod_line* direction = nullptr;
-  unsigned direction_offset = 0;
+  std::vector<gpiod_common::DirectionLine> directions;
+  std::vector<gpiod_line*> direction_lines;  // index-aligned with directions
+
+  void request_direction(const LineOffsets& j) {
+    gpiod_line* l = gpiod_chip_get_line(chip, j.direction);
+    if (l == nullptr || gpiod_line_request_output(l, kConsumer, j.direction_level ? 1 : 0) != 0) {
+      const int e = errno;
+      throw DeviceError("gpio: cannot request line " + std::to_string(j.direction) + " of " +
+                        chip_desc + " as the direction output: " + why(e));
+    }
+    directions.push_back({j.joint, j.direction});
+    direction_lines.push_back(l);
+  }
 
   void request_input(const InputLine& in) {
     gpiod_line* l = gpiod_chip_get_line(chip, in.offset);
@@ -63,7 +75,7 @@ std::string GpiodLines::api() {
   return std::string("libgpiod ") + gpiod_version_string() + " (API 1)";
 }
 
-void GpiodLines::open(const std::string& chip, const LineOffsets& lines, bool direction_level) {
+void GpiodLines::open(const std::string& chip, std::span<const LineOffsets> joints) {
   close();
   Impl& m = *impl_;
   // Path, name, number or label: the library's own lookup.
@@ -73,16 +85,8 @@ void GpiodLines::open(const std::string& chip, const LineOffsets& lines, bool di
   }
   m.chip_desc = std::string(gpiod_chip_name(m.chip)) + " [" + gpiod_chip_label(m.chip) + "]";
   try {
-    for (const InputLine& in : gpiod_common::input_lines(lines)) m.request_input(in);
-    m.direction = gpiod_chip_get_line(m.chip, lines.direction);
-    if (m.direction == nullptr ||
-        gpiod_line_request_output(m.direction, kConsumer, direction_level ? 1 : 0) != 0) {
-      const int e = errno;
-      m.direction = nullptr;
-      throw DeviceError("gpio: cannot request line " + std::to_string(lines.direction) + " of " +
-                        m.chip_desc + " as the direction output: " + why(e));
-    }
-    m.direction_offset = lines.direction;
+    for (const InputLine& in : gpiod_common::input_lines(joints)) m.request_input(in);
+    for (const LineOffsets& j : joints) m.request_direction(j);
   } catch (...) {
     close();
     throw;
@@ -98,22 +102,24 @@ void GpiodLines::close() noexcept {
   m.inputs.clear();
   m.lines.clear();
   m.fds.clear();
-  m.direction = nullptr;
+  m.directions.clear();
+  m.direction_lines.clear();
 }
 
-std::uint8_t GpiodLines::read_levels() {
-  return gpiod_common::read_levels(
-      impl_->inputs, [&](std::size_t i) { return gpiod_line_get_value(impl_->lines[i]); });
+void GpiodLines::read_levels(std::span<std::uint8_t> levels) {
+  gpiod_common::read_levels(
+      impl_->inputs, [&](std::size_t i) { return gpiod_line_get_value(impl_->lines[i]); }, levels);
 }
 
 std::string GpiodLines::describe() const {
-  return gpiod_common::describe(impl_->chip_desc, impl_->inputs, impl_->direction_offset);
+  return gpiod_common::describe(impl_->chip_desc, impl_->inputs, impl_->directions);
 }
 
 // RT-safe: called every tick.
-int GpiodLines::read_events(std::span<Edge> out, std::size_t& count, std::uint64_t& lost) noexcept {
+int GpiodLines::read_events(std::span<Edge> out, std::size_t& count,
+                            std::span<std::uint64_t> lost) noexcept {
   count = 0;
-  lost = 0;  // uAPI v1 drops the newest events without a trace
+  (void)lost;  // uAPI v1 drops the newest events without a trace
   std::array<gpiod_line_event, kKernelFifo> ev;
   const Impl& m = *impl_;
   for (std::size_t line = 0; line < m.inputs.size(); ++line) {
@@ -130,21 +136,27 @@ int GpiodLines::read_events(std::span<Edge> out, std::size_t& count, std::uint64
         e.time_ns = static_cast<std::int64_t>(ev[i].ts.tv_sec) * 1'000'000'000 + ev[i].ts.tv_nsec;
         e.seqno = 0;
         e.line = m.inputs[line].role;
+        e.joint = m.inputs[line].joint;
         e.level = ev[i].event_type == GPIOD_LINE_EVENT_RISING_EDGE;
       }
       if (static_cast<unsigned>(n) < room) break;
     }
   }
-  // Each line's events are in time order; the lines merged by timestamp.
+  // Each line's events are in time order; the lines merged by timestamp (each joint's edges
+  // then in their order, which is all its decoder needs).
   gpiod_common::order_edges(out.first(count),
                             [](const Edge& a, const Edge& b) { return a.time_ns < b.time_ns; });
   return 0;
 }
 
 // RT-safe: called every tick the direction changes.
-int GpiodLines::set_direction(bool level) noexcept {
-  if (impl_->direction == nullptr) return EBADF;
-  return gpiod_line_set_value(impl_->direction, level ? 1 : 0) == 0 ? 0 : errno;
+int GpiodLines::set_direction(std::uint8_t joint, bool level) noexcept {
+  const Impl& m = *impl_;
+  for (std::size_t d = 0; d < m.directions.size(); ++d) {
+    if (m.directions[d].joint != joint) continue;
+    return gpiod_line_set_value(m.direction_lines[d], level ? 1 : 0) == 0 ? 0 : errno;
+  }
+  return EBADF;
 }
 
 }  // namespace hapticd::drivers::gpio

@@ -1,28 +1,54 @@
 #include "drivers/gpio/kernel_transport.h"
 
+#include <algorithm>
+
 #include "base/clock.h"
 
 namespace hapticd::drivers::gpio {
 
-KernelTransport::KernelTransport(const GpioSettings& s) : chip_(s.chip) {
-  offsets_.a = s.line_a;
-  offsets_.b = s.line_b;
-  offsets_.index = s.line_index;
-  offsets_.fault = s.line_fault;
-  offsets_.direction = s.line_direction;
-  channel_.sysfs_root = s.pwm_sysfs_root;
-  channel_.chip = s.pwm_chip;
-  channel_.channel = s.pwm_channel;
-  channel_.period_ns = s.pwm_period_ns;
-  channel_.inversed = s.pwm_inversed;
+KernelTransport::KernelTransport(const GpioSettings& s) : joint_count_(s.joints.size()) {
+  for (std::size_t i = 0; i < s.joints.size(); ++i) {
+    const GpioJointSettings& j = s.joints[i];
+    LineOffsets o;
+    o.a = j.line_a;
+    o.b = j.line_b;
+    o.index = j.line_index;
+    o.fault = j.line_fault;
+    o.direction = j.line_direction;
+    o.joint = static_cast<std::uint8_t>(i);
+    // Joints on one chip share its request (the section refuses a line used twice): one read a
+    // tick for all of them where the API allows it (docs/drivers/gpio.md, "Several joints").
+    const std::string name = j.chip.rfind("/dev/", 0) == 0 ? j.chip.substr(5) : j.chip;
+    auto chip =
+        std::find_if(chips_.begin(), chips_.end(), [&](const Chip& c) { return c.name == name; });
+    if (chip == chips_.end()) {
+      chips_.push_back({name, {}, std::make_unique<GpiodLines>()});
+      chip = chips_.end() - 1;
+    }
+    chip->joints.push_back(o);
+    PwmChannel& c = joints_[i].channel;
+    c.sysfs_root = s.pwm_sysfs_root;
+    c.chip = j.pwm_chip;
+    c.channel = j.pwm_channel;
+    c.period_ns = s.pwm_period_ns;
+    c.inversed = s.pwm_inversed;
+  }
+  for (Chip& c : chips_) {
+    for (const LineOffsets& o : c.joints) joints_[o.joint].lines = c.lines.get();
+  }
 }
 
-std::uint8_t KernelTransport::open(const OutputState& off) {
-  lines_.open(chip_, offsets_, off.direction_level);
-  direction_level_ = off.direction_level;
+JointLevels KernelTransport::open(std::span<const OutputState> off) {
   try {
-    pwm_.open(channel_);  // enabled at duty 0 (sysfs_pwm.h: the one defined stop)
-    return lines_.read_levels();
+    for (Chip& c : chips_) {
+      for (LineOffsets& o : c.joints) o.direction_level = off[o.joint].direction_level;
+      c.lines->open(c.name, c.joints);
+    }
+    for (std::size_t j = 0; j < joint_count_; ++j) {
+      joints_[j].direction_level = off[j].direction_level;
+      joints_[j].pwm.open(joints_[j].channel);  // enabled at duty 0 (sysfs_pwm.h)
+    }
+    return read_levels();
   } catch (...) {
     close();
     throw;
@@ -30,33 +56,60 @@ std::uint8_t KernelTransport::open(const OutputState& off) {
 }
 
 void KernelTransport::close() noexcept {
-  pwm_.close();
-  lines_.close();
+  for (std::size_t j = 0; j < joint_count_; ++j) joints_[j].pwm.close();
+  for (Chip& c : chips_) c.lines->close();
+}
+
+JointLevels KernelTransport::read_levels() {
+  JointLevels levels{};
+  for (Chip& c : chips_) c.lines->read_levels(levels);
+  return levels;
 }
 
 std::string KernelTransport::describe() const {
-  return "gpio " + lines_.describe() + ", pwm " + pwm_.path() + " (" + GpiodLines::api() + ")";
+  std::string lines;
+  for (const Chip& c : chips_) lines += (lines.empty() ? "" : "; ") + c.lines->describe();
+  std::string pwm;
+  for (std::size_t j = 0; j < joint_count_; ++j) {
+    pwm += (j == 0 ? "" : ", ") + joints_[j].pwm.path();
+  }
+  return "gpio " + lines + ", pwm " + pwm + " (" + GpiodLines::api() + ")";
 }
 
-// RT-safe: called every tick.
+// RT-safe: called every tick. One read per chip (2.x; 1.6: one per input line).
 EdgeRead KernelTransport::read_edges(std::span<Edge> buffer) noexcept {
   EdgeRead r;
   // Taken before the reads: every edge up to here has been timestamped by the kernel. (One
   // still in its interrupt thread may come next tick, older than this: the decoder counts
   // such an edge as out of order.)
   r.complete_until_ns = base::monotonic_ns();
-  r.error = lines_.read_events(buffer, r.count, r.lost);
+  for (Chip& c : chips_) {
+    std::size_t n = 0;
+    const int e = c.lines->read_events(buffer.subspan(r.count), n, r.lost);
+    r.count += n;
+    if (e != 0 && r.error == 0) {
+      r.error = e;
+      r.error_joint = c.joints.front().joint;
+    }
+  }
   return r;
 }
 
-// RT-safe: called every tick. The direction before the duty, so a new duty never drives the
-// old direction. The channel stays enabled (out.pwm_enabled is always true: sysfs_pwm.h).
+// RT-safe: called every tick for each joint. The direction before the duty, so a new duty never
+// drives the old direction. The channel stays enabled (out.pwm_enabled is always true:
+// sysfs_pwm.h).
 int KernelTransport::write_output(const OutputState& out) noexcept {
-  if (out.direction_level != direction_level_) {
-    if (const int e = lines_.set_direction(out.direction_level)) return e;
-    direction_level_ = out.direction_level;
+  Joint& j = joints_[out.joint];
+  if (out.direction_level != j.direction_level) {
+    if (const int e = j.lines->set_direction(out.joint, out.direction_level)) return e;
+    j.direction_level = out.direction_level;
   }
-  return pwm_.write(out.duty_ns);
+  return j.pwm.write(out.duty_ns);
+}
+
+// Async-signal-safe: each joint's "0" through its open duty_cycle descriptor.
+void KernelTransport::emergency_stop() noexcept {
+  for (std::size_t j = 0; j < joint_count_; ++j) joints_[j].pwm.emergency_stop();
 }
 
 }  // namespace hapticd::drivers::gpio

@@ -11,7 +11,7 @@
 
 namespace hapticd::drivers::gpio {
 
-wire::Levels LoopbackTransport::exchange_levels() {
+JointLevels LoopbackTransport::exchange_levels() {
   std::array<std::uint8_t, wire::kHelloSize> hello{};
   wire::encode_hello(hello);
   if (::send(fd_.get(), hello.data(), hello.size(), MSG_NOSIGNAL) < 0) {
@@ -30,27 +30,39 @@ wire::Levels LoopbackTransport::exchange_levels() {
       throw DeviceError("gpio: the loopback peer closed the connection");
     }
     wire::Levels l;
-    if (n > 0 && wire::decode_levels({rx_.data(), static_cast<std::size_t>(n)}, l)) return l;
+    if (n > 0 && wire::decode_levels({rx_.data(), static_cast<std::size_t>(n)}, l)) {
+      if (l.joint_count != joints_) {
+        throw DeviceError("gpio: the loopback peer simulates " + std::to_string(l.joint_count) +
+                          " joint(s), the configuration has " + std::to_string(joints_));
+      }
+      JointLevels levels{};
+      for (std::size_t j = 0; j < joints_; ++j) levels[j] = l.of(j);
+      return levels;
+    }
     // Edges of an earlier session, or garbage: not the answer.
   }
 }
 
-std::uint8_t LoopbackTransport::open(const OutputState& off) {
-  const wire::Levels l = exchange_levels();
-  seq_.reset();
-  wire::Output stop = off;
-  stop.duty_ns = 0;
-  wire::encode_output(stop, stop_msg_);
-  open_ = true;
-  if (const int e = write_output(off)) {
-    open_ = false;
-    throw DeviceError(std::string("gpio: cannot write to the loopback peer: ") +
-                      base::errno_text(e));
+JointLevels LoopbackTransport::open(std::span<const OutputState> off) {
+  const JointLevels levels = exchange_levels();
+  for (SequenceCheck& s : seq_) s.reset();
+  for (std::size_t j = 0; j < joints_; ++j) {
+    wire::Output stop = off[j];
+    stop.duty_ns = 0;
+    wire::encode_output(stop, stop_msg_[j]);
   }
-  return l.levels;
+  open_ = true;
+  for (std::size_t j = 0; j < joints_; ++j) {
+    if (const int e = write_output(off[j])) {
+      open_ = false;
+      throw DeviceError(std::string("gpio: cannot write to the loopback peer: ") +
+                        base::errno_text(e));
+    }
+  }
+  return levels;
 }
 
-std::uint8_t LoopbackTransport::read_levels() { return exchange_levels().levels; }
+JointLevels LoopbackTransport::read_levels() { return exchange_levels(); }
 
 // RT-safe: called every tick.
 EdgeRead LoopbackTransport::read_edges(std::span<Edge> buffer) noexcept {
@@ -79,11 +91,12 @@ EdgeRead LoopbackTransport::read_edges(std::span<Edge> buffer) noexcept {
     std::size_t kept = r.count;
     for (std::size_t i = 0; i < h.count; ++i) {
       Edge e;
-      if (!wire::decode_edge(msg, i, e)) {  // a line or level byte out of range
+      // A line, joint or level byte out of range.
+      if (!wire::decode_edge(msg, i, e) || e.joint >= joints_) {
         malformed_.fetch_add(1, std::memory_order_relaxed);
         break;
       }
-      r.lost += seq_.next(e.seqno);
+      r.lost[e.joint] += seq_[e.joint].next(e.seqno);
       buffer[kept++] = e;
     }
     r.count = kept;
@@ -102,11 +115,13 @@ int LoopbackTransport::write_output(const OutputState& out) noexcept {
   return 0;
 }
 
-// Async-signal-safe: send(2) of the prebuilt zero-duty message.
+// Async-signal-safe: send(2) of each joint's prebuilt zero-duty message.
 void LoopbackTransport::emergency_stop() noexcept {
   if (!open_) return;
-  [[maybe_unused]] const ssize_t n =
-      ::send(fd_.get(), stop_msg_.data(), stop_msg_.size(), MSG_DONTWAIT | MSG_NOSIGNAL);
+  for (std::size_t j = 0; j < joints_; ++j) {
+    [[maybe_unused]] const ssize_t n =
+        ::send(fd_.get(), stop_msg_[j].data(), stop_msg_[j].size(), MSG_DONTWAIT | MSG_NOSIGNAL);
+  }
 }
 
 }  // namespace hapticd::drivers::gpio

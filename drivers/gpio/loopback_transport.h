@@ -1,6 +1,6 @@
 // The GPIO driver against its simulated peer (sim/peers/gpio/) over one end of an
 // io::seqpacket_pair(), speaking gpio_wire.h: edges in, the PWM and direction state out once a
-// tick (the period that clocks the peer's plant).
+// tick for each joint (the last joint's is the period that clocks the peer's plant).
 #pragma once
 
 #include <array>
@@ -16,11 +16,11 @@ class LoopbackTransport final : public GpioTransport {
   // How long open() waits for the peer's answer to hello.
   static constexpr int kHelloTimeoutMs = 2000;
 
-  explicit LoopbackTransport(io::UniqueFd fd) : fd_(std::move(fd)) {}
+  LoopbackTransport(io::UniqueFd fd, std::size_t joints) : fd_(std::move(fd)), joints_(joints) {}
 
-  std::uint8_t open(const OutputState& off) override;
+  JointLevels open(std::span<const OutputState> off) override;
   void close() noexcept override { open_ = false; }
-  std::uint8_t read_levels() override;
+  JointLevels read_levels() override;
   std::string describe() const override { return "gpio loopback peer (socketpair)"; }
   EdgeRead read_edges(std::span<Edge> buffer) noexcept override;
   int write_output(const OutputState& out) noexcept override;
@@ -30,13 +30,15 @@ class LoopbackTransport final : public GpioTransport {
   std::uint64_t malformed() const noexcept { return malformed_.load(std::memory_order_relaxed); }
 
  private:
-  wire::Levels exchange_levels();
+  JointLevels exchange_levels();
 
   io::UniqueFd fd_;
+  std::size_t joints_;
   bool open_ = false;
-  SequenceCheck seq_;
+  std::array<SequenceCheck, base::kMaxJoints> seq_;  // the peer numbers each joint's edges
   std::array<std::uint8_t, wire::kMaxMessageSize> rx_{};
-  std::array<std::uint8_t, wire::kOutputSize> stop_msg_{};  // prebuilt for emergency_stop
+  // Prebuilt for emergency_stop: each joint's zero duty.
+  std::array<std::array<std::uint8_t, wire::kOutputSize>, base::kMaxJoints> stop_msg_{};
   std::atomic<std::uint64_t> malformed_{0};
 };
 

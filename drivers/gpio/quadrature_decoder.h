@@ -30,7 +30,8 @@ struct Edge {
   std::int64_t time_ns = 0;  // CLOCK_MONOTONIC of the edge (the kernel's timestamp)
   std::uint32_t seqno = 0;   // the transport's event sequence number (0 where it has none)
   Line line = Line::kA;
-  bool level = false;  // the line's logical level after the edge (active-low applied)
+  bool level = false;      // the line's logical level after the edge (active-low applied)
+  std::uint8_t joint = 0;  // whose encoder or motor driver (device.gpio.joints[joint])
 };
 
 // Bits of a two-bit encoder state.

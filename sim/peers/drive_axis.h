@@ -36,6 +36,10 @@ class DriveAxis {
   double encoder_position() noexcept {
     return shared_ ? shared_->encoder_position(joint_) : own_.encoder_position();
   }
+  // RT-safe. The encoder now, in counts.
+  std::int64_t encoder_counts() noexcept {
+    return shared_ ? shared_->encoder_counts(joint_) : own_.encoder_counts();
+  }
   double velocity() const noexcept {
     return shared_ ? shared_->velocity(joint_) : own_.plant().velocity();
   }

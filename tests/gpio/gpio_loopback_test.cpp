@@ -337,8 +337,9 @@ TEST(GpioLoopbackTransport, MalformedMessagesAreCountedAndDropped) {
     wire::encode_levels({0, 1}, buf);
     send(p, buf.data(), wire::kLevelsSize, 0);
   });
-  LoopbackTransport t(std::move(drv));
-  EXPECT_EQ(t.open({}), 0);
+  LoopbackTransport t(std::move(drv), 1);
+  const std::array<OutputState, 1> off{};
+  EXPECT_EQ(t.open(off)[0], 0);
   answer.join();
   const std::uint8_t garbage[] = {4, 0, 1, 0};
   send(p, garbage, sizeof garbage, 0);
@@ -362,7 +363,7 @@ TEST(GpioLoopbackTransport, MalformedMessagesAreCountedAndDropped) {
   send(p, buf.data(), n, 0);
   const EdgeRead r2 = t.read_edges(edges);
   EXPECT_EQ(r2.count, 2u);
-  EXPECT_EQ(r2.lost, 1u);
+  EXPECT_EQ(r2.lost[0], 1u);
   peer.reset();  // unplugged
   EXPECT_EQ(t.read_edges(edges).error, ECONNRESET);
 }

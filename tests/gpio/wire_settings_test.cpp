@@ -105,7 +105,10 @@ std::string errors_of(const std::vector<std::string>& sets) {
 
 TEST(GpioSettings, TheExampleLoads) {
   const config::Config cfg = load_gpio_example({});
-  const GpioSettings& s = gpio_settings(cfg);
+  const GpioSettings& g = gpio_settings(cfg);
+  ASSERT_EQ(g.joints.size(), 1u);
+  EXPECT_FALSE(g.listed);
+  const GpioJointSettings& s = g.joint(0);
   EXPECT_EQ(s.chip, "gpiochip0");
   EXPECT_EQ(s.line_a, 0u);
   EXPECT_EQ(s.line_b, 1u);
@@ -114,7 +117,7 @@ TEST(GpioSettings, TheExampleLoads) {
   EXPECT_FALSE(s.line_index.has_value());
   EXPECT_EQ(s.counts_per_unit, 100000.0);
   EXPECT_EQ(s.start_count, -2000);
-  EXPECT_EQ(s.pwm_period_ns, 50'000u);
+  EXPECT_EQ(g.pwm_period_ns, 50'000u);
   EXPECT_EQ(wiring::find_driver("gpio").declared_delay(cfg), 0);
 }
 

@@ -12,10 +12,22 @@ constexpr std::uint8_t bit_of(dg::Line line) {
 
 }  // namespace
 
-EncoderSim::EncoderSim(const config::Config& cfg, const dg::GpioSettings& s)
-    : axis_(cfg.device, cfg.loop.sample_period_s()),
+namespace {
+
+DriveAxis drive_axis(const config::Config& cfg, const EncoderJoint& who) {
+  if (who.mechanism == nullptr) return DriveAxis(cfg.device, cfg.loop.sample_period_s());
+  return DriveAxis(cfg.device, cfg.loop.sample_period_s(), *who.mechanism,
+                   static_cast<int>(who.joint));
+}
+
+}  // namespace
+
+EncoderSim::EncoderSim(const config::Config& cfg, const dg::GpioSettings& s,
+                       const EncoderJoint& who)
+    : axis_(drive_axis(cfg, who)),
       s_(s),
-      max_force_(cfg.device.max_force[0]),
+      j_(s.joint(who.joint)),
+      max_force_(cfg.device.max_force[who.joint]),
       period_ns_(cfg.loop.period_ns()),
       count_(0),
       queued_levels_(0),
@@ -31,8 +43,8 @@ EncoderSim::EncoderSim(const config::Config& cfg, const dg::GpioSettings& s)
   const std::uint8_t st = dg::state_of_count(count_);
   std::uint8_t levels =
       raw(dg::Line::kA, (st & dg::kBitA) != 0) | raw(dg::Line::kB, (st & dg::kBitB) != 0);
-  if (s_.line_index) levels |= raw(dg::Line::kIndex, count_ == s_.index_count);
-  if (s_.line_fault) levels |= raw(dg::Line::kFault, false);
+  if (j_.line_index) levels |= raw(dg::Line::kIndex, count_ == j_.index_count);
+  if (j_.line_fault) levels |= raw(dg::Line::kFault, false);
   queued_levels_ = line_levels_ = levels;
 }
 
@@ -40,7 +52,7 @@ EncoderSim::EncoderSim(const config::Config& cfg, const dg::GpioSettings& s)
 // negative (the sim's encoder resolution is its magnitude).
 std::int64_t EncoderSim::encoder_count() noexcept {
   const std::int64_t c = axis_.encoder_counts();
-  return s_.counts_per_unit < 0.0 ? -c : c;
+  return j_.counts_per_unit < 0.0 ? -c : c;
 }
 
 // The raw bit for `line` at logical level `logical` (active-low inverts).
@@ -57,19 +69,23 @@ std::uint8_t EncoderSim::raw_levels() const noexcept { return line_levels_; }
 // a PWM chip may do, its last duty still on the pin.
 void EncoderSim::apply_output(const dg::wire::Output& out) noexcept {
   channel_enabled_ = out.pwm_enabled;
+  duty_ns_ = fault_active_ ? 0 : out.duty_ns;
   if (fault_active_) return;  // a motor driver in fault keeps its bridge off
   const bool driving = out.duty_ns != 0 && out.period_ns != 0;
   if (driving != axis_.output_on()) axis_.set_output(driving);
   if (!driving) return;
   const double magnitude = static_cast<double>(out.duty_ns) / static_cast<double>(out.period_ns);
-  const bool positive = out.direction_level == s_.direction_positive_high;
+  const bool positive = out.direction_level == j_.direction_positive_high;
   axis_.hold_force((positive ? 1.0 : -1.0) * magnitude * max_force_);
 }
 
 void EncoderSim::set_fault_line(bool active, std::int64_t t_ns) {
-  if (!s_.line_fault || active == fault_active_) return;
+  if (!j_.line_fault || active == fault_active_) return;
   fault_active_ = active;
-  if (active) axis_.set_output(false);
+  if (active) {
+    axis_.set_output(false);
+    duty_ns_ = 0;
+  }
   queue_edge(t_ns, dg::Line::kFault, active, false);
 }
 
@@ -93,9 +109,9 @@ void EncoderSim::queue_count_edges(std::int64_t from, std::int64_t to, std::int6
     const std::uint8_t bit = line == dg::Line::kA ? dg::kBitA : dg::kBitB;
     // Spread evenly over the period, as a constant velocity would.
     const std::int64_t due = t0_ns + (period_ns_ * (2 * i + 1)) / (2 * n);
-    if (s_.line_index && before == s_.index_count) queue_edge(due, dg::Line::kIndex, false, true);
+    if (j_.line_index && before == j_.index_count) queue_edge(due, dg::Line::kIndex, false, true);
     queue_edge(due, line, (s1 & bit) != 0, true);
-    if (s_.line_index && after == s_.index_count) queue_edge(due + 1, dg::Line::kIndex, true, true);
+    if (j_.line_index && after == j_.index_count) queue_edge(due + 1, dg::Line::kIndex, true, true);
   }
 }
 
@@ -147,6 +163,44 @@ void EncoderSim::sent(const PendingEdge& e) noexcept {
   const std::uint8_t bit = bit_of(e.line);
   line_levels_ =
       static_cast<std::uint8_t>(e.raw_level ? (line_levels_ | bit) : (line_levels_ & ~bit));
+}
+
+JointEncoders::JointEncoders(const config::Config& cfg, const dg::GpioSettings& s) {
+  if (s.joints.size() > 1) {
+    mechanism_ = std::make_unique<Mechanism>(cfg.device, cfg.loop.sample_period_s());
+  }
+  for (std::size_t j = 0; j < s.joints.size(); ++j) {
+    enc_.push_back(std::make_unique<EncoderSim>(cfg, s, EncoderJoint{j, mechanism_.get()}));
+  }
+}
+
+void JointEncoders::step(std::int64_t t0_ns) {
+  for (const auto& e : enc_) e->step(t0_ns);
+}
+
+dg::wire::Levels JointEncoders::levels(std::int64_t now_ns) const noexcept {
+  dg::wire::Levels l;
+  l.levels = enc_.front()->raw_levels();
+  l.time_ns = now_ns;
+  l.joint_count = enc_.size();
+  for (std::size_t j = 1; j < enc_.size(); ++j) l.others[j - 1] = enc_[j]->raw_levels();
+  return l;
+}
+
+double JointEncoders::applied_force() const noexcept {
+  double largest = 0.0;
+  for (const auto& e : enc_) {
+    if (std::abs(e->applied_force()) > std::abs(largest)) largest = e->applied_force();
+  }
+  return largest;
+}
+
+bool JointEncoders::output_on() const noexcept {
+  return std::any_of(enc_.begin(), enc_.end(), [](const auto& e) { return e->output_on(); });
+}
+
+bool JointEncoders::channel_enabled() const noexcept {
+  return std::all_of(enc_.begin(), enc_.end(), [](const auto& e) { return e->channel_enabled(); });
 }
 
 }  // namespace hapticd::sim::gpio

@@ -5,17 +5,20 @@
 // quadrature encoder (with an optional one-count index mark at index_count and an optional fault
 // output) that turns the plant's motion into edges on its lines, spread over the period in which
 // the motion happened. Also the faults a peer can inject on those wires. Not RT-safe; no OS calls:
-// the peers (loopback_peer, kernel_peer) carry the edges.
+// the peers (loopback_peer, kernel_peer) carry the edges. A device of several joints has one
+// EncoderSim per joint, each moving its joint of one Mechanism (sim/mechanism.h) shared by all.
 #pragma once
 
 #include <cstdint>
 #include <deque>
+#include <memory>
 #include <vector>
 
 #include "drivers/gpio/gpio_settings.h"
 #include "drivers/gpio/gpio_wire.h"
 #include "drivers/gpio/quadrature_decoder.h"
-#include "sim/sim_axis.h"
+#include "sim/mechanism.h"
+#include "sim/peers/drive_axis.h"
 
 namespace hapticd::sim::gpio {
 
@@ -39,9 +42,16 @@ struct PendingEdge {
   bool paced = true;  // false: injected timing, not spread by the carrier's minimum spacing
 };
 
+// Who an EncoderSim is: joint `joint` of device.gpio, moving `mechanism`'s joint (null: an axis
+// of its own, a device of one joint).
+struct EncoderJoint {
+  std::size_t joint = 0;
+  Mechanism* mechanism = nullptr;
+};
+
 class EncoderSim {
  public:
-  EncoderSim(const config::Config& cfg, const dg::GpioSettings& s);
+  EncoderSim(const config::Config& cfg, const dg::GpioSettings& s, const EncoderJoint& who = {});
 
   // Raw levels of the lines now (wire::kLevel* bits).
   std::uint8_t raw_levels() const noexcept;
@@ -59,6 +69,8 @@ class EncoderSim {
   void sent(const PendingEdge& e) noexcept;
 
   double applied_force() const noexcept { return axis_.held_force(); }
+  // The duty last applied (0 while the motor driver is in fault).
+  std::uint64_t duty_ns() const noexcept { return duty_ns_; }
   // The bridge drives the motor: a non-zero duty reaches it (and no fault holds it off).
   bool output_on() const noexcept { return axis_.output_on(); }
   // The PWM channel's enable as last written: what the driver did with it (the force above
@@ -74,9 +86,11 @@ class EncoderSim {
   std::int64_t encoder_count() noexcept;
   void queue_edge(std::int64_t due_ns, dg::Line line, bool logical, bool paced);
 
-  SimAxis axis_;
+  DriveAxis axis_;
   dg::GpioSettings s_;
+  dg::GpioJointSettings j_;
   double max_force_;
+  std::uint64_t duty_ns_ = 0;
   std::int64_t period_ns_;
   std::int64_t count_;          // the encoder's true count (the plant's), as queued
   std::uint8_t queued_levels_;  // raw levels once every queued edge is sent
@@ -86,6 +100,40 @@ class EncoderSim {
   std::int64_t fast_ns_ = 1000;                // the spacing of injected edges
   std::int64_t pattern_step_ns_ = 20'000'000;  // the illegal pattern's step
   std::deque<PendingEdge> queue_;
+};
+
+// Every joint's EncoderSim: a device of one joint's on an axis of its own (exactly as before
+// joints existed), several joints' each on its joint of one Mechanism.
+class JointEncoders {
+ public:
+  // Throws std::invalid_argument for a mechanism (device.sim) that cannot be simulated.
+  JointEncoders(const config::Config& cfg, const dg::GpioSettings& s);
+
+  std::size_t size() const noexcept { return enc_.size(); }
+  EncoderSim& operator[](std::size_t joint) noexcept { return *enc_[joint]; }
+  const EncoderSim& operator[](std::size_t joint) const noexcept { return *enc_[joint]; }
+  // One period from t0_ns for every joint (the mechanism steps once: Mechanism::step_joint).
+  void step(std::int64_t t0_ns);
+  // Every joint's raw levels, for the loopback's answer to hello.
+  dg::wire::Levels levels(std::int64_t now_ns) const noexcept;
+
+  // The largest force any joint's motor puts on the mechanism, and whether any is on: what the
+  // hand can feel. The channel enabled: every joint's.
+  double applied_force() const noexcept;
+  bool output_on() const noexcept;
+  bool channel_enabled() const noexcept;
+  const Plant& plant() const noexcept { return enc_.front()->plant(); }
+  // Periods simulated so far (the mechanism's, for several joints).
+  std::uint64_t steps() const noexcept {
+    return mechanism_ ? mechanism_->plant().steps() : plant().steps();
+  }
+  const JointPlant* joint_plant() const noexcept {
+    return mechanism_ ? &mechanism_->plant() : nullptr;
+  }
+
+ private:
+  std::unique_ptr<Mechanism> mechanism_;  // null for one joint
+  std::vector<std::unique_ptr<EncoderSim>> enc_;
 };
 
 }  // namespace hapticd::sim::gpio

@@ -37,9 +37,20 @@ EndpointVerdict judge_gpio_chip(const std::string& chip_dir, const GpioChipFacts
               ", not gpio-sim"};
 }
 
+// Every joint's chip (one "CHIP_DIR,PWM_FILE" pair per joint, ';' between them): the first that
+// is not a gpio-sim chip decides, else the first's.
 EndpointVerdict judge_endpoint(const config::Config&, const std::string& endpoint) {
-  const std::string chip = endpoint.substr(0, endpoint.find(','));
-  return judge_gpio_chip(chip, read_gpio_chip(chip));
+  EndpointVerdict first;
+  for (std::size_t at = 0, i = 0;; ++i) {
+    const std::size_t end = endpoint.find(';', at);
+    const std::string one = endpoint.substr(at, end == std::string::npos ? end : end - at);
+    const std::string chip = one.substr(0, one.find(','));
+    EndpointVerdict v = judge_gpio_chip(chip, read_gpio_chip(chip));
+    if (v.kind != Kind::kSimulated) return v;
+    if (i == 0) first = v;
+    if (end == std::string::npos) return first;
+    at = end + 1;
+  }
 }
 
 }  // namespace hapticd::sim::gpio

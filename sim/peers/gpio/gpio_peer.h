@@ -10,10 +10,14 @@
 //     steps the plant on its own timer every period, reads the PWM channel's applied state and
 //     the direction line, and puts each edge on the wires at its time by writing the gpio-sim
 //     lines' `pull` attributes; the kernel time-stamps them as it would real edges.
-// Both also inject the GPIO wire faults (WireFault) besides the generic PeerFault ones.
+// Both also inject the GPIO wire faults (WireFault) besides the generic PeerFault ones. A device
+// of several joints (device.gpio.joints) has an encoder and a motor driver per joint, moving
+// one simulated mechanism (sim/mechanism.h) together.
 #pragma once
 
+#include <array>
 #include <atomic>
+#include <cstdint>
 #include <memory>
 #include <string>
 
@@ -27,10 +31,34 @@ namespace hapticd::sim::gpio {
 
 class GpioPeer : public LoopbackPeer {
  public:
-  // Any thread. Produce `f` once, from the next period on.
-  virtual bool inject_wire(WireFault f) noexcept = 0;
-  // Any thread. Whether the PWM channel was enabled at the last output the peer applied.
+  // Any thread. Produce `f` once on joint `joint`'s wires, from the next period on.
+  virtual bool inject_wire(WireFault f, std::size_t joint = 0) noexcept = 0;
+  // Any thread. PeerFault::kDeviceFault raises joint `joint`'s fault line from now on (false
+  // without one); inject(kDeviceFault) raises the first joint's that has one.
+  virtual bool inject_fault_line(std::size_t joint) noexcept = 0;
+  // Any thread. Whether every joint's PWM channel was enabled at the last output the peer
+  // applied.
   virtual bool channel_enabled() const noexcept = 0;
+  // Any thread. Joint `joint`'s duty at the last output the peer applied (0 while its motor
+  // driver is in fault).
+  virtual std::uint64_t duty_ns(std::size_t joint) const noexcept = 0;
+};
+
+// What both peers publish of their joints for other threads.
+class PublishedJoints {
+ public:
+  void publish(const JointEncoders& enc) noexcept {
+    for (std::size_t j = 0; j < enc.size(); ++j) duty_[j].store(enc[j].duty_ns());
+    enabled_.store(enc.channel_enabled());
+  }
+  std::uint64_t duty_ns(std::size_t joint) const noexcept {
+    return joint < duty_.size() ? duty_[joint].load() : 0;
+  }
+  bool channel_enabled() const noexcept { return enabled_.load(); }
+
+ private:
+  std::array<std::atomic<std::uint64_t>, dg::wire::kMaxJoints> duty_{};
+  std::atomic<bool> enabled_{false};
 };
 
 // Throws config::ConfigError when device.sim and device.gpio disagree about the encoder (the

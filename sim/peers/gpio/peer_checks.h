@@ -18,9 +18,10 @@ namespace hapticd::sim::gpio {
 inline void check_peer_config(const config::Config& cfg, const drivers::gpio::GpioSettings& s) {
   std::vector<std::string> errors;
   const double cpu = cfg.device.sim.counts_per_unit;
-  if (cpu != std::abs(s.counts_per_unit)) {
-    errors.push_back(cfg.locate("device.gpio.counts_per_unit") +
-                     ": device.gpio.counts_per_unit: the simulated encoder has " +
+  for (std::size_t j = 0; j < s.joints.size(); ++j) {
+    if (cpu == std::abs(s.joints[j].counts_per_unit)) continue;
+    const std::string key = s.key(j, "counts_per_unit");
+    errors.push_back(cfg.locate(key) + ": " + key + ": the simulated encoder has " +
                      std::to_string(cpu) + " counts per unit (device.sim.counts_per_unit); " +
                      "the two must agree in magnitude");
   }
