@@ -28,26 +28,82 @@ constexpr std::uint16_t reflect(std::uint16_t v, unsigned width) noexcept {
   return r;
 }
 
-// The Rocksoft model, bit by bit: a frame is a few dozen bytes, a table would buy nothing.
-constexpr std::uint16_t crc(const CrcParams& p, std::span<const std::uint8_t> bytes) noexcept {
+// The Rocksoft model, bit by bit: the definition, which the tables below are built from.
+constexpr std::uint16_t crc_bitwise(const CrcParams& p,
+                                    std::span<const std::uint8_t> bytes) noexcept {
   const std::uint32_t top = 1u << (p.width - 1);
   const std::uint32_t mask = (top << 1) - 1;
   std::uint32_t reg = p.init;
   for (std::uint8_t b : bytes) {
     const std::uint8_t in = p.refin ? static_cast<std::uint8_t>(reflect(b, 8)) : b;
     reg ^= static_cast<std::uint32_t>(in) << (p.width - 8);
-    for (int k = 0; k < 8; ++k)
+    for (int k = 0; k < 8; ++k) {
       reg = (reg & top) != 0 ? ((reg << 1) ^ p.poly) & mask : (reg << 1) & mask;
+    }
   }
   const auto out = static_cast<std::uint16_t>(reg);
   return static_cast<std::uint16_t>((p.refout ? reflect(out, p.width) : out) ^ p.xorout);
 }
 
-// Each catalogue entry reproduces its own check value, at compile time.
+// A byte at a time (a flooding device makes the scanner check a candidate at every byte): the
+// register's step for each byte value. Reflected algorithms (refin and refout, all of the
+// catalogue's that reflect) keep the register reflected and shift right.
+using Table = std::array<std::uint16_t, 256>;
+constexpr Table make_table(const CrcParams& p) {
+  Table t{};
+  const std::uint32_t mask = (1u << p.width) - 1;
+  for (std::uint32_t v = 0; v < 256; ++v) {
+    std::uint32_t reg;
+    if (p.refin) {
+      const std::uint32_t poly = reflect(p.poly, p.width);
+      reg = v;
+      for (int k = 0; k < 8; ++k) reg = (reg & 1u) != 0 ? (reg >> 1) ^ poly : reg >> 1;
+    } else {
+      reg = v << (p.width - 8);
+      for (int k = 0; k < 8; ++k) {
+        reg = (reg & (1u << (p.width - 1))) != 0 ? ((reg << 1) ^ p.poly) & mask : (reg << 1) & mask;
+      }
+    }
+    t[v] = static_cast<std::uint16_t>(reg & mask);
+  }
+  return t;
+}
+
+constexpr std::uint16_t crc_table(const CrcParams& p, const Table& t,
+                                  std::span<const std::uint8_t> bytes) noexcept {
+  const std::uint32_t mask = (1u << p.width) - 1;
+  std::uint32_t reg = p.refin ? reflect(p.init, p.width) : p.init;
+  for (std::uint8_t b : bytes) {
+    if (p.refin) {
+      reg = (reg >> 8) ^ t[(reg ^ b) & 0xFFu];
+    } else {
+      reg = ((reg << 8) ^ t[((reg >> (p.width - 8)) ^ b) & 0xFFu]) & mask;
+    }
+  }
+  // A reflected register is the reflected CRC already; refout then keeps it so.
+  const auto out = static_cast<std::uint16_t>(reg & mask);
+  const std::uint16_t value = p.refin == p.refout ? out : reflect(out, p.width);
+  return static_cast<std::uint16_t>(value ^ p.xorout);
+}
+
+constexpr std::array<Table, kAlgorithms.size()> make_tables() {
+  std::array<Table, kAlgorithms.size()> all{};
+  for (std::size_t i = 0; i < kAlgorithms.size(); ++i) {
+    if (kAlgorithms[i].kind == CheckKind::kCrc) all[i] = make_table(kAlgorithms[i].crc);
+  }
+  return all;
+}
+constexpr std::array<Table, kAlgorithms.size()> kTables = make_tables();
+
+// Each catalogue entry reproduces its own check value, bit by bit and a byte at a time alike,
+// at compile time.
 constexpr bool catalogue_checks() {
   constexpr std::array<std::uint8_t, 9> kDigits{'1', '2', '3', '4', '5', '6', '7', '8', '9'};
-  for (const CheckAlgorithm& a : kAlgorithms) {
-    if (a.kind == CheckKind::kCrc && crc(a.crc, kDigits) != a.crc.check) return false;
+  for (std::size_t i = 0; i < kAlgorithms.size(); ++i) {
+    const CheckAlgorithm& a = kAlgorithms[i];
+    if (a.kind != CheckKind::kCrc) continue;
+    if (crc_bitwise(a.crc, kDigits) != a.crc.check) return false;
+    if (crc_table(a.crc, kTables[i], kDigits) != a.crc.check) return false;
   }
   return true;
 }
@@ -73,8 +129,14 @@ std::uint16_t compute_check(const CheckAlgorithm& a, std::span<const std::uint8_
     case CheckKind::kXor8:
       for (std::uint8_t b : bytes) acc = static_cast<std::uint8_t>(acc ^ b);
       return acc;
-    case CheckKind::kCrc:
-      return crc(a.crc, bytes);
+    case CheckKind::kCrc: {
+      // One of the catalogue's (find_check_algorithm's): its table; anything else bit by bit.
+      const std::ptrdiff_t i = &a - kAlgorithms.data();
+      if (i >= 0 && i < static_cast<std::ptrdiff_t>(kAlgorithms.size())) {
+        return crc_table(a.crc, kTables[static_cast<std::size_t>(i)], bytes);
+      }
+      return crc_bitwise(a.crc, bytes);
+    }
   }
   return 0;
 }

@@ -1,6 +1,7 @@
 #include "drivers/serial/serial_device.h"
 
 #include <poll.h>
+#include <sys/ioctl.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -16,7 +17,9 @@
 namespace hapticd::drivers::serial {
 namespace {
 
-constexpr int kMaxReads = 64;  // reads per tick: a flooding device cannot hold the tick
+// Reads a tick: 2 KB scanned at most. A device sending more than that a period floods the
+// port; what is left is dropped and counted, so the tick's work stays bounded.
+constexpr int kMaxReads = 2;
 
 }  // namespace
 
@@ -37,17 +40,25 @@ SerialDevice::~SerialDevice() { on_close(); }
 DeviceInfo SerialDevice::on_configure() {
   port_ = open_();
   notices_ = port_.notices;
+  if (!settings_->input.shape.check) {
+    notices_.push_back(
+        "device.serial.input has no check: a damaged frame reaches the loop, "
+        "which faults only on a jump beyond safety.max_speed");
+  }
   scanner_.clear();
   active_ = false;
   out_streak_ = 0;
+  tail_len_ = 0;
+  emergency_fd_.store(port_.fd.get());  // a crash while configuring stops the device too
   try {
     send_startup();
     await_first_frame();
   } catch (...) {
+    emergency_fd_.store(-1);
     port_.fd.reset();
     throw;
   }
-  emergency_fd_.store(port_.fd.get());
+  last_frame_ns_ = base::monotonic_ns();  // the liveness bound starts at the first frame
   DeviceInfo info;
   info.description = "serial " + settings_->port;
   info.transport_delay_samples = declared_delay_samples(*settings_, period_s_);
@@ -80,13 +91,14 @@ void SerialDevice::await_first_frame() {
       base::monotonic_ns() + std::llround(settings_->answer_timeout_ms * 1e6);
   const std::uint64_t frames0 = c_[kFrames].value();
   while (base::monotonic_ns() < deadline) {
-    if (settings_->exchange == Exchange::kRequest && !send({}, false)) break;
+    if (settings_->exchange == Exchange::kRequest && !send({}, false)) {
+      throw DeviceError(describe({FaultClass::kTransport, send_error_}));
+    }
     pollfd p{port_.fd.get(), POLLIN, 0};
     ::poll(&p, 1, std::max(1, static_cast<int>(period_s_ * 1e3)));
     const Drained d = drain();
     if (d.error != 0) {
-      throw DeviceError("serial port " + settings_->port + ": " +
-                        describe({FaultClass::kTransport, static_cast<std::uint32_t>(d.error)}));
+      throw DeviceError(describe({FaultClass::kTransport, static_cast<std::uint32_t>(d.error)}));
     }
     if (c_[kFrames].value() == frames0) continue;
     // The first tick's read finds the answer to this one.
@@ -117,6 +129,13 @@ void SerialDevice::flush_input() noexcept {
   scanner_.clear();
 }
 
+// After a fault: what arrived meanwhile is history, and the liveness bound starts again.
+void SerialDevice::on_clear_fault() {
+  flush_input();
+  out_streak_ = 0;
+  last_frame_ns_ = base::monotonic_ns();
+}
+
 void SerialDevice::on_enable() {
   flush_input();
   // The first tick's read finds the answer to this one.
@@ -126,9 +145,17 @@ void SerialDevice::on_enable() {
   active_ = true;
 }
 
+// The stop frame, after whatever of an earlier frame the port still owes the device: a frame cut
+// short shifts every byte after it (a device without framing takes them for commands).
+void SerialDevice::write_stop(int fd) noexcept {
+  int err = 0;
+  if (!finish_tail(fd, err)) return;
+  (void)write_all(fd, zero_frame_.data(), settings_->output.shape.length);
+}
+
 void SerialDevice::on_disable() noexcept {
   active_ = false;
-  if (port_.fd) (void)::write(port_.fd.get(), zero_frame_.data(), settings_->output.shape.length);
+  if (port_.fd) write_stop(port_.fd.get());
 }
 
 void SerialDevice::on_close() noexcept {
@@ -137,9 +164,10 @@ void SerialDevice::on_close() noexcept {
   port_.fd.reset();
 }
 
+// Async-signal-safe: write(2) on the open descriptor, nothing else.
 void SerialDevice::emergency_stop() noexcept {
   const int fd = emergency_fd_.load();
-  if (fd >= 0) (void)::write(fd, zero_frame_.data(), settings_->output.shape.length);
+  if (fd >= 0) write_stop(fd);
 }
 
 void SerialDevice::publish_scan() noexcept {
@@ -165,13 +193,35 @@ SerialDevice::Drained SerialDevice::drain() noexcept {
     scanner_.push({rx_.data(), static_cast<std::size_t>(n)});
     for (auto f = scanner_.next(); !f.empty(); f = scanner_.next()) {
       decode_input(f, settings_->input, newest_);
+      d.status |= newest_.status;  // a fault bit in a superseded frame is a fault all the same
       ++d.frames;
     }
-    if (port_.stream && static_cast<std::size_t>(n) < rx_.size()) break;
+    if (static_cast<std::size_t>(n) < rx_.size() && port_.stream) return finish(d);
+    if (i + 1 == kMaxReads) drop_flood();
   }
+  return finish(d);
+}
+
+SerialDevice::Drained SerialDevice::finish(const Drained& d) noexcept {
   if (d.frames > 1) c_[kSuperseded].add(d.frames - 1);
   publish_scan();
   return d;
+}
+
+// RT-safe. More than a tick reads (2 KB) still waiting: a flood, or a loop held up for a long
+// time. Dropped unread and counted, so a tick's work stays bounded (the scan checks a candidate
+// at every sync byte); a device that numbers its frames shows the drop as a sequence gap.
+void SerialDevice::drop_flood() noexcept {
+  int n = 0;
+  if (::ioctl(port_.fd.get(), FIONREAD, &n) == 0 && n > 0) {
+    c_[kBacklog].add(static_cast<std::uint64_t>(n));
+    if (port_.stream) {
+      discard_input(port_.fd.get());
+    } else {
+      while (::read(port_.fd.get(), rx_.data(), rx_.size()) > 0) {
+      }
+    }
+  }
 }
 
 IoStatus SerialDevice::on_read(std::span<PositionSample> samples) noexcept {
@@ -201,17 +251,45 @@ IoStatus SerialDevice::on_read(std::span<PositionSample> samples) noexcept {
                                         (settings_->input.sequence ? kSampleHasSequence : 0));
     s.samples = d.frames;
   }
-  if (active_ && (newest_.status & settings_->input.fault_mask) != 0) {
-    set_fault_code(newest_.status & settings_->input.fault_mask);
+  if (active_ && (d.status & settings_->input.fault_mask) != 0) {
+    set_fault_code(d.status & settings_->input.fault_mask);
     return IoStatus::kDeviceFault;
   }
   return IoStatus::kOk;
 }
 
+// The enable switch only while ACTIVE: the zero a fault writes (the base latches FAULTED
+// first) and every frame after it say off.
 IoStatus SerialDevice::on_write(std::span<const double> forces) noexcept {
-  return send(forces, active_) ? IoStatus::kOk : IoStatus::kTransportFault;
+  return send(forces, state() == DeviceState::kActive) ? IoStatus::kOk : IoStatus::kTransportFault;
 }
 
+// RT-safe. write(2) again after a signal; what the port took, or -1 with errno.
+ssize_t SerialDevice::write_all(int fd, const std::uint8_t* p, std::size_t len) noexcept {
+  ssize_t n;
+  do {
+    n = ::write(fd, p, len);
+  } while (n < 0 && errno == EINTR);
+  return n;
+}
+
+// RT-safe. What the port still owes the device of a frame it took only part of; true once none
+// is left, false (err set on a failure, 0 when the port is full) otherwise.
+bool SerialDevice::finish_tail(int fd, int& err) noexcept {
+  while (tail_len_ > 0) {
+    const ssize_t n = write_all(fd, tail_.data() + tail_at_, tail_len_);
+    if (n <= 0) {
+      err = n < 0 && errno != EAGAIN ? errno : 0;
+      return false;
+    }
+    tail_at_ += static_cast<std::size_t>(n);
+    tail_len_ -= static_cast<std::size_t>(n);
+  }
+  return true;
+}
+
+// RT-safe: called every tick. One whole frame out; a frame the port takes part of is finished
+// before anything else is sent. A port that takes nothing for out_full_fault ticks faults.
 bool SerialDevice::send(std::span<const double> forces, bool enable) noexcept {
   const std::size_t len = settings_->output.shape.length;
   if (forces.empty()) {
@@ -219,18 +297,29 @@ bool SerialDevice::send(std::span<const double> forces, bool enable) noexcept {
   } else {
     encode_output(forces, enable, settings_->output, tx_);
   }
-  const ssize_t n = ::write(port_.fd.get(), tx_.data(), len);
+  int err = 0;
+  ssize_t n = 0;
+  if (finish_tail(port_.fd.get(), err)) n = write_all(port_.fd.get(), tx_.data(), len);
+  if (err != 0 || (n < 0 && errno != EAGAIN)) {
+    send_error_ = static_cast<std::uint32_t>(err != 0 ? err : errno);
+    set_fault_code(send_error_);
+    return false;
+  }
   if (n == static_cast<ssize_t>(len)) {
     c_[kSent].add();
     out_streak_ = 0;
     return true;
   }
-  if (n < 0 && errno != EAGAIN && errno != EINTR) {
-    set_fault_code(static_cast<std::uint32_t>(errno));
-    return false;
+  if (n > 0) {  // the rest goes first next time, whatever is sent then
+    tail_at_ = 0;
+    tail_len_ = len - static_cast<std::size_t>(n);
+    std::copy_n(tx_.begin() + n, tail_len_, tail_.begin());
+    c_[kShortWrite].add();
+  } else {
+    c_[kOutFull].add();
   }
-  c_[n > 0 ? kShortWrite : kOutFull].add();
   if (++out_streak_ < settings_->out_full_fault) return true;
+  send_error_ = kOutStuck;
   set_fault_code(kOutStuck);
   return false;
 }
@@ -238,7 +327,7 @@ bool SerialDevice::send(std::span<const double> forces, bool enable) noexcept {
 std::string SerialDevice::describe(const DeviceFault& fault) const {
   const std::string port = "serial port " + settings_->port;
   if (fault.fault_class == FaultClass::kDevice) {
-    return port + ": the device reported a fault: status bits " + std::to_string(fault.code) +
+    return port + ": the device reported a fault: status bits " + base::hex(fault.code) +
            " under device.serial.input.fault_mask";
   }
   switch (fault.code) {

@@ -8,6 +8,7 @@
 // input (bad checks, noise, overflow) is counted, never logged from the tick.
 #pragma once
 
+#include <sys/types.h>
 #include <array>
 #include <atomic>
 #include <functional>
@@ -44,6 +45,7 @@ class SerialDevice final : public Device {
   DeviceInfo on_configure() override;
   void on_enable() override;
   void on_disable() noexcept override;
+  void on_clear_fault() override;
   void on_close() noexcept override;
   IoStatus on_read(std::span<PositionSample> samples) noexcept override;
   IoStatus on_write(std::span<const double> forces) noexcept override;
@@ -59,6 +61,7 @@ class SerialDevice final : public Device {
     kSent,
     kOutFull,
     kShortWrite,
+    kBacklog,
     kCounterCount
   };
   // Why a transport fault latched (DeviceFault::code): an errno, or one of these.
@@ -68,7 +71,8 @@ class SerialDevice final : public Device {
 
   struct Drained {
     std::uint32_t frames = 0;
-    int error = 0;  // errno, or kHangUp
+    std::uint32_t status = 0;  // every frame's status bits, OR'd
+    int error = 0;             // errno, or kHangUp
   };
   // RT-safe: called every tick.
   Drained drain() noexcept;
@@ -76,6 +80,11 @@ class SerialDevice final : public Device {
   bool send(std::span<const double> forces, bool enable) noexcept;
   void send_startup();
   void await_first_frame();
+  Drained finish(const Drained& d) noexcept;
+  void drop_flood() noexcept;
+  static ssize_t write_all(int fd, const std::uint8_t* p, std::size_t len) noexcept;
+  bool finish_tail(int fd, int& err) noexcept;
+  void write_stop(int fd) noexcept;
   void publish_scan() noexcept;
   void flush_input() noexcept;
 
@@ -89,12 +98,15 @@ class SerialDevice final : public Device {
   std::array<std::uint8_t, kMaxFrame> zero_frame_{};  // zero force, enable off: the stop
   std::array<std::uint8_t, 4 * kMaxFrame> rx_{};
   std::array<std::uint8_t, kMaxFrame> tx_{};
+  std::array<std::uint8_t, kMaxFrame> tail_{};  // what the port owes of a frame cut short
+  std::size_t tail_at_ = 0, tail_len_ = 0;
   FrameScanner scanner_;
   InputValues newest_;
   std::int64_t newest_ns_ = 0;
   std::int64_t last_frame_ns_ = 0;
   bool active_ = false;
   int out_streak_ = 0;
+  std::uint32_t send_error_ = 0;  // why the last send failed (an errno or kOutStuck)
   std::vector<std::string> notices_;
   using K = base::CounterKind;
   std::array<base::Counter, kCounterCount> c_{{
@@ -105,7 +117,9 @@ class SerialDevice final : public Device {
       {"overflow_bytes", K::kAnomaly, "input bytes dropped: more arrived than a tick holds"},
       {"frames_sent", K::kCount, "output frames the port took"},
       {"out_full", K::kAnomaly, "ticks whose frame the port would not take (its buffer full)"},
-      {"short_writes", K::kAnomaly, "output frames the port took only part of"},
+      {"short_writes", K::kAnomaly, "output frames the port took only part of (finished next)"},
+      {"backlog_bytes", K::kAnomaly,
+       "input bytes dropped unread: more than a tick reads (2 KB) was waiting"},
   }};
 };
 

@@ -1,6 +1,9 @@
 #include "drivers/serial/serial_frame.h"
 
+#include "config/schema_reader.h"
+
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 
 namespace hapticd::drivers::serial {
@@ -75,6 +78,31 @@ std::string indexed(const char* name, std::size_t i) {
   return std::string(name) + "[" + std::to_string(i) + "]";
 }
 
+// A check that leaves a field out lets a damaged value of it through.
+void check_covers(const FrameShape& s, const FieldSpec& f, const std::string& name,
+                  const std::string& where, std::vector<std::string>& errors) {
+  if (!s.check || (f.byte >= s.check->from && f.end() <= s.check->to)) return;
+  errors.push_back(where + ".check: covers bytes [" + std::to_string(s.check->from) + ", " +
+                   std::to_string(s.check->to) + "), not all of " + name + " (bytes " +
+                   std::to_string(f.byte) + ".." + std::to_string(f.end() - 1) + "): a damaged " +
+                   name + " would pass it");
+}
+
+// The on and off values a switch writes: distinct, and what the field holds exactly.
+void check_switch(const EnableField& e, const std::string& where,
+                  std::vector<std::string>& errors) {
+  for (const auto& [v, key] : {std::pair{e.on, ".on"}, {e.off, ".off"}}) {
+    const bool exact =
+        e.field.is_float ||
+        (std::nearbyint(v) == v && v >= field::raw_min(e.field) && v <= field::raw_max(e.field));
+    if (!exact) {
+      errors.push_back(where + ".enable" + key + ": " + config::schema::format_number(v) +
+                       " is no value the " + field::type_name(e.field) + " field holds");
+    }
+  }
+  if (e.on == e.off) errors.push_back(where + ".enable: on and off are the same value");
+}
+
 }  // namespace
 
 std::vector<std::string> validate(const InputLayout& in, const std::string& where) {
@@ -91,6 +119,21 @@ std::vector<std::string> validate(const InputLayout& in, const std::string& wher
       errors.push_back(where + "." + name + ": an unsigned integer field (a u8, u16, bits: N)");
     }
     check_field(**f, name, where, in.shape.length, occ, errors);
+    check_covers(in.shape, **f, name, where, errors);
+  }
+  for (std::size_t i = 0; i < in.positions.size(); ++i) {
+    check_covers(in.shape, in.positions[i], indexed("positions", i), where, errors);
+  }
+  if (in.shape.sync.empty() && !in.shape.check) {
+    errors.push_back(where +
+                     ".sync: a frame with neither sync bytes nor a check is never found "
+                     "again once a byte is lost: give its first byte(s) as sync");
+  }
+  if (in.fault_mask != 0 && !in.status) {
+    errors.push_back(where + ".fault_mask: without a status field it can never fault");
+  } else if (in.status && in.status->bits < 32 && (in.fault_mask >> in.status->bits) != 0) {
+    errors.push_back(where + ".fault_mask: has bits beyond the status field's " +
+                     std::to_string(in.status->bits));
   }
   return errors;
 }
@@ -102,8 +145,18 @@ std::vector<std::string> validate(const OutputLayout& out, const std::string& wh
   if (!errors.empty()) return errors;
   for (std::size_t i = 0; i < out.forces.size(); ++i) {
     check_field(out.forces[i], indexed("forces", i), where, out.shape.length, occ, errors);
+    check_covers(out.shape, out.forces[i], indexed("forces", i), where, errors);
+    if (out.forces[i].offset != 0.0) {
+      errors.push_back(where + "." + indexed("forces", i) +
+                       ".offset: a force field takes none (zero force is raw 0, and the field's "
+                       "reach and the force's reversal are its scale's)");
+    }
   }
-  if (out.enable) check_field(out.enable->field, "enable", where, out.shape.length, occ, errors);
+  if (out.enable) {
+    check_field(out.enable->field, "enable", where, out.shape.length, occ, errors);
+    check_covers(out.shape, out.enable->field, "enable", where, errors);
+    check_switch(*out.enable, where, errors);
+  }
   return errors;
 }
 

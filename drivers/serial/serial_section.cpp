@@ -105,10 +105,11 @@ FrameShape read_shape(MapReader& m) {
   return s;
 }
 
-void report(MapReader& m, const std::vector<std::string>& errors) {
+// A layout's problems, at the line of its frame's key (input:, output:).
+void report(MapReader& m, const Field& frame, const std::vector<std::string>& errors) {
   for (const std::string& e : errors) {
     const auto colon = e.find(": ");
-    m.diag().error(m.mark(), m.path() + "." + e.substr(0, colon), e.substr(colon + 2));
+    m.diag().error(frame.key_mark, m.path() + "." + e.substr(0, colon), e.substr(colon + 2));
   }
 }
 
@@ -125,7 +126,7 @@ void read_input(MapReader& parent, SerialSettings& s) {
     s.input.fault_mask = *v;
   }
   m.finish();
-  if (f.present && m.ok()) report(parent, validate(s.input, "input"));
+  if (f.present && m.ok()) report(parent, f, validate(s.input, "input"));
 }
 
 void read_output(MapReader& parent, SerialSettings& s) {
@@ -146,7 +147,7 @@ void read_output(MapReader& parent, SerialSettings& s) {
     s.output.enable = en;
   }
   m.finish();
-  if (f.present && m.ok()) report(parent, validate(s.output, "output"));
+  if (f.present && m.ok()) report(parent, f, validate(s.output, "output"));
 }
 
 void read_startup(MapReader& m, SerialSettings& s) {
