@@ -52,8 +52,18 @@ ForceReversal force_reversal(const config::Config& cfg) {
     return {"device.hid.pid.direction_deg", format_number(s.pid.direction_deg),
             format_number(std::fmod(s.pid.direction_deg + 180.0, 360.0))};
   }
-  const double scale = s.report.output.force.scale;
-  return {"device.hid.report.output.force.scale", format_number(scale), format_number(-scale)};
+  const OutputLayout& o = s.report.output;
+  if (!o.listed) {
+    const double scale = o.force.scale;
+    return {"device.hid.report.output.force.scale", format_number(scale), format_number(-scale)};
+  }
+  std::string now = "[", reversed = "[";  // every entry's scale, joint i entry i
+  for (std::size_t j = 0; j < o.joints(); ++j) {
+    const char* sep = j > 0 ? ", " : "";
+    now += sep + format_number(o.joint(j).field.scale);
+    reversed += sep + format_number(-o.joint(j).field.scale);
+  }
+  return {"device.hid.report.output.forces[i].scale", now + "]", reversed + "]"};
 }
 
 std::string list_devices() {
