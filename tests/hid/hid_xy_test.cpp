@@ -161,6 +161,28 @@ TEST(HidTwoJoints, TheStageRestsInTheDiagonalWallAsTheSimDriversDoes) {
   RecordProperty("penetration_sim_mm", std::to_string(sim.result.max_penetration * 1e3));
 }
 
+// A wall across x alone, the hand pressing along the diagonal: x stops in the wall while y
+// follows the hand freely. A force sent to the other joint's field, or a position read from
+// it, moves the wrong axis, which the symmetric diagonal wall cannot show.
+TEST(HidTwoJoints, AWallAcrossXStopsXAndLeavesYToTheHand) {
+  const config::Config cfg = testing::load_example(
+      "hid-report-xy.yaml",
+      {"loop.clock=freerun", "walls[0].normal=[1, 0]", "walls[0].point=[0.02, 0]"});
+  const XyRun r = run_xy(cfg, 2000);
+  ASSERT_EQ(r.result.fault.cause, loop::FaultCause::kNone) << loop::describe(r.result.fault);
+  const config::TaskWallConfig& wall = cfg.walls.front();
+  const config::OperatorSpec& hand = cfg.device.sim.op;
+  const kinematics::Vec3 setpoint = hand.origin + 0.05 * hand.direction;  // setpoint.depth
+  const double reach = wall.normal.dot(setpoint - wall.point);
+  const double expected = hand.stiffness * reach / (wall.law.stiffness + hand.stiffness);
+  ASSERT_EQ(r.records.size(), 2000u);
+  double rest = 0.0;
+  for (std::size_t k = 1500; k < 2000; ++k) rest += r.records[k].penetration / 500.0;
+  EXPECT_NEAR(rest, expected, 0.02 * expected) << "F/K across x";
+  EXPECT_NEAR(r.joints[0], wall.point[0] + expected, 1e-4) << "x held in the wall";
+  EXPECT_NEAR(r.joints[1], setpoint[1], 1e-4) << "y at the hand's set-point: no wall force on y";
+}
+
 TEST(HidTwoJoints, ADeviceFaultInTheWallLeavesBothJointsWithoutForce) {
   const config::Config cfg = testing::load_example("hid-report-xy.yaml", {"loop.clock=freerun"});
   // Half of 3000 ticks: 1.5 s, held at depth in the wall.
