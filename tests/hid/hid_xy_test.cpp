@@ -66,6 +66,29 @@ TEST(HidTwoJoints, EachJointHasItsOwnFieldInBothReports) {
   device.close();
 }
 
+// The setting the direction check names for a reversed force (drivers/device_entry.h), for the
+// list form: given back with --set, it reverses every joint's force field and nothing else.
+TEST(HidTwoJoints, TheReversalOfTheListFormIsAListTheConfigurationReads) {
+  const config::Config plain = testing::load_example("hid-report-xy.yaml");
+  const ForceReversal f = wiring::find_driver("hid").force_reversal(plain);
+  EXPECT_EQ(f.key, "device.hid.report.output.forces");
+  EXPECT_EQ(f.reversed,
+            "[{byte: 0, type: i16, scale: -0.001, full_scale: 10000}, "
+            "{byte: 2, type: i16, scale: -0.001, full_scale: 10000}]");
+  const config::Config flipped =
+      testing::load_example("hid-report-xy.yaml", {f.key + "=" + f.reversed});
+  const OutputLayout& o = testing::settings_of(flipped)->report.output;
+  const OutputLayout& was = testing::settings_of(plain)->report.output;
+  ASSERT_EQ(o.joints(), 2u);
+  for (std::size_t j = 0; j < 2; ++j) {
+    EXPECT_EQ(o.joint(j).field.scale, -was.joint(j).field.scale);
+    EXPECT_EQ(o.joint(j).field.byte, was.joint(j).field.byte);
+    EXPECT_EQ(o.joint(j).full_scale, was.joint(j).full_scale);
+  }
+  const ForceReversal back = wiring::find_driver("hid").force_reversal(flipped);
+  EXPECT_EQ(back.reversed, f.now) << "reversed twice: as it was";
+}
+
 struct XyRun {
   loop::LoopResult result;
   std::vector<telemetry::TickRecord> records;
