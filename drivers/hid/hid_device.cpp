@@ -32,7 +32,7 @@ DeviceInfo HidDevice::on_configure() {
   emergency_.store(transport_.get());
   return {transport_->describe() + ", " + profile_->summary(),
           declared_delay_samples(settings_->poll_interval_ms, period_s_),
-          profile_->sequence_modulus()};
+          profile_->sequence_modulus(), profile_->joints()};
 }
 
 // Whatever the device said before output was enabled (a status from before, samples of the
@@ -101,8 +101,19 @@ void HidDevice::emergency_stop() noexcept {
   if (HidTransport* t = emergency_.load()) t->emergency();
 }
 
+// One report carries every joint's position: each joint's sample shares its time, sequence and
+// status, and a held tick holds them all.
 IoStatus HidDevice::on_read(std::span<PositionSample> samples) noexcept {
-  PositionSample& out = samples.front();  // one joint
+  const IoStatus s = read_joint0(samples.front());
+  if (s != IoStatus::kOk) return s;
+  for (std::size_t j = 1; j < samples.size(); ++j) {
+    samples[j] = samples.front();
+    samples[j].position = decoded_.position[j];
+  }
+  return s;
+}
+
+IoStatus HidDevice::read_joint0(PositionSample& out) noexcept {
   const Drained d = drain();
   if (d.error != 0) {
     set_fault_code(static_cast<std::uint32_t>(d.error));
@@ -117,7 +128,7 @@ IoStatus HidDevice::on_read(std::span<PositionSample> samples) noexcept {
   if (d.reports > 0) last_report_ns_ = now;
   if (d.samples == 0) return hold(out, now);
   have_position_ = true;
-  out.position = decoded_.position;
+  out.position = decoded_.position[0];
   out.time_ns = now;  // hidapi gives no kernel time stamp: when it was read
   out.flags = kSampleHasTime;
   out.samples = d.samples;
@@ -144,7 +155,7 @@ IoStatus HidDevice::hold(PositionSample& out, std::int64_t now) noexcept {
     return IoStatus::kTransportFault;
   }
   bump(kHeld);
-  out.position = decoded_.position;
+  out.position = decoded_.position[0];
   out.time_ns = now;  // nothing changed up to now: the position is current as of now
   out.flags = kSampleHasTime | kSampleHeld;
   if (decoded_.has_velocity) {
@@ -215,7 +226,6 @@ IoStatus HidDevice::send(std::span<const std::uint8_t> report, bool& written) no
 }
 
 IoStatus HidDevice::on_write(std::span<const double> forces) noexcept {
-  const double force = forces.front();     // one joint
   if (state() == DeviceState::kFaulted) {  // after a fault nothing but zero, ahead of the queue
     transport_->write_safe();
     return IoStatus::kOk;
@@ -231,7 +241,7 @@ IoStatus HidDevice::on_write(std::span<const double> forces) noexcept {
     if (s != IoStatus::kOk || !written) return s;
     pending_ = {};
   }
-  return send(profile_->force_report(force), written);
+  return send(profile_->force_report(forces), written);
 }
 
 HidCounters HidDevice::hid_counts() const noexcept {

@@ -78,6 +78,8 @@ class HidDevice final : public Device {
   };
   // RT-safe: called every tick. Every pending input report, decoded into decoded_.
   Drained drain() noexcept;
+  // RT-safe: called every tick. Joint 0's sample (the others share its all but position).
+  IoStatus read_joint0(PositionSample& out) noexcept;
   IoStatus hold(PositionSample& out, std::int64_t now) noexcept;
   void await_first_sample();
   void bump(CounterIndex i) noexcept { c_[i].add(); }

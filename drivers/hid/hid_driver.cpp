@@ -43,6 +43,24 @@ std::unique_ptr<Device> make_loopback_device(const DriverContext& ctx, io::Uniqu
   return std::make_unique<HidDevice>(s, std::move(open), ctx.sample_period_s());
 }
 
+// A force field as the configuration writes it, with `scale` for its scale.
+std::string flow(const ForceField& f, double scale) {
+  using config::schema::format_number;
+  const FieldSpec& s = f.field;
+  std::string out = "{byte: " + std::to_string(s.byte);
+  const std::string type = field::type_name(s);
+  if (field::parse_field_type(type)) {
+    out += ", type: " + type;
+  } else {
+    out += ", bits: " + std::to_string(s.bits) + (s.is_signed ? ", signed: true" : "");
+  }
+  if (s.bit != 0) out += ", bit: " + std::to_string(s.bit);
+  if (s.endian == field::Endian::kBig) out += ", endian: big";
+  out += ", scale: " + format_number(scale);
+  if (s.offset != 0.0) out += ", offset: " + format_number(s.offset);
+  return out + ", full_scale: " + format_number(f.full_scale) + "}";
+}
+
 // The PID profile's Direction turns by half a turn; the report profile's force field changes
 // its sign (docs/drivers/hid.md, which way a positive level pushes).
 ForceReversal force_reversal(const config::Config& cfg) {
@@ -52,8 +70,21 @@ ForceReversal force_reversal(const config::Config& cfg) {
     return {"device.hid.pid.direction_deg", format_number(s.pid.direction_deg),
             format_number(std::fmod(s.pid.direction_deg + 180.0, 360.0))};
   }
-  const double scale = s.report.output.force.scale;
-  return {"device.hid.report.output.force.scale", format_number(scale), format_number(-scale)};
+  const OutputLayout& o = s.report.output;
+  if (!o.listed) {
+    const double scale = o.force.scale;
+    return {"device.hid.report.output.force.scale", format_number(scale), format_number(-scale)};
+  }
+  // The list form: the whole list, every entry as it is but its scale's sign, so the value
+  // given back with --set is a list the configuration reads.
+  std::string now = "[", reversed = "[";
+  for (std::size_t j = 0; j < o.joints(); ++j) {
+    const char* sep = j > 0 ? ", " : "";
+    const ForceField f = o.joint(j);
+    now += sep + flow(f, f.field.scale);
+    reversed += sep + flow(f, -f.field.scale);
+  }
+  return {"device.hid.report.output.forces", now + "]", reversed + "]"};
 }
 
 std::string list_devices() {

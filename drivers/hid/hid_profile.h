@@ -5,12 +5,14 @@
 // lock, log or throw.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <span>
 #include <string>
 #include <vector>
 
+#include "base/joints.h"
 #include "drivers/hid/hid_settings.h"
 #include "drivers/hid/hid_transport.h"
 
@@ -26,13 +28,16 @@ enum class InputKind : std::uint8_t {
 };
 
 struct Decoded {
-  double position = 0.0;
+  std::array<double, base::kMaxJoints> position{};  // joint i's is entry i
   double velocity = 0.0;
   std::uint32_t sequence = 0;
   std::uint32_t status = 0;  // the profile's status bits, kept across reports
   bool has_sequence = false;
   bool has_velocity = false;
 };
+
+// Zero force on every joint: what the enables send first.
+inline constexpr std::array<double, base::kMaxJoints> kZeroForce{};
 
 class HidProfile {
  public:
@@ -59,8 +64,11 @@ class HidProfile {
   // RT-safe: called every tick. A report to send before this tick's force (a firmware
   // watchdog's refresh), or an empty span.
   virtual std::span<const std::uint8_t> before_force() noexcept = 0;
-  // RT-safe: called every tick. The output report carrying `force`.
-  virtual std::span<const std::uint8_t> force_report(double force) noexcept = 0;
+  // RT-safe: called every tick. The output report carrying `forces`, one per joint the profile
+  // drives (joints()), joint i's entry i.
+  virtual std::span<const std::uint8_t> force_report(std::span<const double> forces) noexcept = 0;
+  // The joints the profile drives: the layout's (report), one (pid).
+  virtual std::size_t joints() const noexcept = 0;
   // Not RT-safe: "status 0x05: ..." for a device fault with these status bits.
   virtual std::string describe_status(std::uint32_t status) const = 0;
 };

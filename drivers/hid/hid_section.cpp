@@ -6,53 +6,31 @@
 #include <string>
 
 #include "drivers/field/field_schema.h"
+#include "drivers/hid/hid_section_reading.h"
+#include "kinematics/kinematics.h"
 
 namespace hapticd::drivers::hid {
-namespace {
+namespace section {
 
-using config::schema::Diagnostics;
-using config::schema::Field;
-using config::schema::integer;
-using config::schema::IntRange;
-using config::schema::MapReader;
-using config::schema::number;
-using config::schema::Range;
-using config::schema::read_hex;
-
-// Reading state shared by the helpers: where each sub-key is (for errors found after
-// reading) and whether anything went wrong in this section.
-struct Ctx {
-  Diagnostics& d;
-  std::map<std::string, YAML::Mark> marks;  // path below device.hid.report -> key mark
-  std::size_t errors_before;
-  bool failed() const { return d.messages().size() != errors_before; }
-  void mark(const Field& f, const std::string& rel) {
-    if (f.present) marks[rel] = f.key_mark;
-  }
-  // Reports "device.hid.report.<rel>: what" at the closest key recorded for `rel`.
-  void error_at(const std::string& rel, const std::string& what, const YAML::Mark& fallback) {
-    YAML::Mark m = fallback;
-    std::size_t best = 0;
-    for (const auto& [path, mark] : marks) {
-      if (rel.compare(0, path.size(), path) == 0 && path.size() >= best &&
-          (rel.size() == path.size() || rel[path.size()] == '.')) {
-        best = path.size();
-        m = mark;
-      }
+void Ctx::error_at(const std::string& rel, const std::string& what, const YAML::Mark& fallback) {
+  YAML::Mark m = fallback;
+  std::size_t best = 0;
+  for (const auto& [path, mark] : marks) {
+    if (rel.compare(0, path.size(), path) == 0 && path.size() >= best &&
+        (rel.size() == path.size() || rel[path.size()] == '.')) {
+      best = path.size();
+      m = mark;
     }
-    d.error(m, "device.hid.report." + rel, what);
   }
-};
+  d.error(m, "device.hid.report." + rel, what);
+}
 
-// Takes `key`; reports it missing (with `why`) when `why` is given and it is absent.
-Field take(MapReader& m, const char* key, const char* why = nullptr) {
+Field take(MapReader& m, const char* key, const char* why) {
   const Field f = m.take(key);
   if (!f.present && why != nullptr) m.missing(key, why);
   return f;
 }
 
-// A raw value written into a field (an enable's on/off, a feature's value): a number, or an
-// unsigned integer in 0x hexadecimal as ids and masks are.
 void raw_value(MapReader& m, const Field& f, double& out) {
   const bool hex = f.present && f.node.IsScalar() && f.node.Scalar().size() > 2 &&
                    f.node.Scalar()[0] == '0' && (f.node.Scalar()[1] | 0x20) == 'x';
@@ -60,13 +38,10 @@ void raw_value(MapReader& m, const Field& f, double& out) {
   if (const auto v = read_hex(m.diag(), f, 0xFFFFFFFFu)) out = static_cast<double>(*v);
 }
 
-// Where one field is and what it holds (drivers/field/field_schema.h).
 FieldSpec read_spec(MapReader& m, bool quantity) {
   return field::read_spec(m, kMaxReportData - 1, quantity);
 }
 
-// A key given without a value (`--set device.hid.report.output.enable=`) is absent: that is
-// how an optional mapping of an example file is removed from the command line.
 bool absent(const Field& f) { return !f.present || f.node.IsNull(); }
 
 std::optional<FieldSpec> optional_field(MapReader& parent, Ctx& c, const std::string& rel,
@@ -80,130 +55,11 @@ std::optional<FieldSpec> optional_field(MapReader& parent, Ctx& c, const std::st
   return f;
 }
 
-// The keys every report starts with: its id and its data length.
-void read_report_head(MapReader& m, Ctx& c, std::uint8_t& report_id, std::size_t& length) {
-  if (const auto v = read_hex(c.d, m.take("report_id"), 255))
-    report_id = static_cast<std::uint8_t>(*v);
-  integer(m, take(m, "length", "data bytes after the report id"),
-          IntRange::between(1, kMaxReportData), length);
-}
+}  // namespace section
 
-void read_input(MapReader& report, Ctx& c, InputLayout& in) {
-  const Field field = take(report, "input", "the input report with the position");
-  c.mark(field, "input");
-  MapReader m(c.d, field);
-  read_report_head(m, c, in.report_id, in.length);
-  const Field pos = take(m, "position", "where the position is");
-  c.mark(pos, "input.position");
-  MapReader p(c.d, pos);
-  in.position = read_spec(p, true);
-  const Field wraps = p.take("wraps");
-  c.mark(wraps, "input.position.wraps");
-  if (const auto w = config::schema::read_bool(c.d, wraps)) in.position_wraps = *w;
-  p.finish();
-  in.sequence = optional_field(m, c, "input", "sequence", false);
-  const Field status = m.take("status");
-  if (!absent(status)) {
-    c.mark(status, "input.status");
-    MapReader s(c.d, status);
-    in.status = read_spec(s, false);
-    if (const auto v = read_hex(c.d, s.take("fault_mask"), 0xFFFFFFFFu)) in.fault_mask = *v;
-    s.finish();
-  }
-  in.velocity = optional_field(m, c, "input", "velocity", true);
-  m.finish();
-}
+namespace {
 
-void read_output(MapReader& report, Ctx& c, OutputLayout& out) {
-  const Field field = take(report, "output", "the output report with the force");
-  c.mark(field, "output");
-  MapReader m(c.d, field);
-  read_report_head(m, c, out.report_id, out.length);
-  const Field force = take(m, "force", "where the force command goes");
-  c.mark(force, "output.force");
-  MapReader f(c.d, force);
-  out.force = read_spec(f, true);
-  number(f, take(f, "full_scale", "the largest |raw| force the device accepts"),
-         Range::greater_than(0.0), out.full_scale);
-  f.finish();
-  const Field enable = m.take("enable");
-  if (!absent(enable)) {
-    c.mark(enable, "output.enable");
-    MapReader e(c.d, enable);
-    SwitchField sw{read_spec(e, false)};
-    raw_value(e, e.take("on"), sw.on);
-    raw_value(e, e.take("off"), sw.off);
-    e.finish();
-    out.enable = sw;
-  }
-  out.keepalive = optional_field(m, c, "output", "keepalive", false);
-  m.finish();
-}
-
-// A feature report: report_id, length, field, and on/off (enable) or value.
-std::optional<FeatureLayout> read_feature(MapReader& report, Ctx& c, const char* key,
-                                          bool is_switch) {
-  const Field field = report.take(key);
-  if (absent(field)) return std::nullopt;
-  c.mark(field, key);
-  MapReader m(c.d, field);
-  FeatureLayout f;
-  if (const auto v = read_hex(c.d, take(m, "report_id", "the feature report's id"), 255)) {
-    f.report_id = static_cast<std::uint8_t>(*v);
-  }
-  integer(m, take(m, "length", "data bytes after the report id"),
-          IntRange::between(1, kMaxReportData), f.length);
-  const Field spec = take(m, "field", "where the value goes: {byte, type, endian}");
-  c.mark(spec, std::string(key) + ".field");
-  MapReader s(c.d, spec);
-  f.field = read_spec(s, false);
-  s.finish();
-  if (is_switch) {
-    raw_value(m, m.take("on"), f.on);
-    raw_value(m, m.take("off"), f.off);
-  } else {
-    raw_value(m, take(m, "value", "the raw value written"), f.on);
-  }
-  m.finish();
-  return f;
-}
-
-// A wrapping position is unwrapped the short way round (drivers/io/counter_unwrap.h): half the
-// field's range must be more than the loop lets the axis move in one period, or a real move
-// could be taken the other way round before the speed check could see it.
-void check_wrap(Ctx& c, const config::Config& cfg, const InputLayout& in, const YAML::Mark& at) {
-  if (!in.position_wraps) return;
-  const double half =
-      std::ldexp(std::abs(in.position.scale), static_cast<int>(in.position.bits) - 1);
-  const double step = cfg.safety.max_speed * cfg.loop.sample_period_s();
-  if (half > step) return;
-  c.error_at("input.position.wraps",
-             "a " + std::to_string(in.position.bits) + "-bit position of " +
-                 config::schema::format_number(in.position.scale) + " per count wraps every " +
-                 config::schema::format_number(2.0 * half) +
-                 ": a move of half that in one period cannot be told from one the other way, and "
-                 "safety.max_speed allows " +
-                 config::schema::format_number(step) + " a period",
-             at);
-}
-
-void read_report_profile(MapReader& hid, Ctx& c, const config::Config& cfg, HidSettings& s) {
-  const Field field = take(hid, "report", "the report layout (profile report)");
-  MapReader m(c.d, field);
-  ReportProfileLayout& l = s.report;
-  read_input(m, c, l.input);
-  read_output(m, c, l.output);
-  l.enable_feature = read_feature(m, c, "enable_feature", true);
-  l.gain_feature = read_feature(m, c, "gain_feature", false);
-  l.watchdog_feature = read_feature(m, c, "watchdog_feature", false);
-  m.finish();
-  if (c.failed()) return;
-  for (const std::string& e : validate(l, cfg.device.max_force[0])) {
-    const std::size_t colon = e.find(": ");
-    c.error_at(e.substr(0, colon), e.substr(colon + 2), field.key_mark);
-  }
-  check_wrap(c, cfg, l.input, field.key_mark);
-}
+using namespace section;
 
 // {usage_page, usage} -> page << 16 | usage.
 std::optional<std::uint32_t> read_usage(MapReader& m, Ctx& c) {
@@ -215,6 +71,12 @@ std::optional<std::uint32_t> read_usage(MapReader& m, Ctx& c) {
 
 void read_pid_profile(MapReader& hid, Ctx& c, const config::Config& cfg, HidSettings& s) {
   const Field field = take(hid, "pid", "the PID settings (profile pid)");
+  if (const int joints = kinematics::joint_count(cfg.device.kinematics); joints != 1) {
+    c.d.error(field.key_mark, field.path,
+              "drives one joint, the mechanism has " + std::to_string(joints) +
+                  " (device.kinematics): a PID device of several axes is not supported yet "
+                  "(docs/drivers/hid.md, \"Two axes\"); profile report drives several");
+  }
   MapReader m(c.d, field);
   PidSettings& p = s.pid;
   const Field pos = take(m, "position", "{usage_page, usage, min, max}");

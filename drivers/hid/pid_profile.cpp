@@ -70,7 +70,7 @@ class PidProfile final : public HidProfile {
     fill_set_effect(data(effect, l_.set_effect));
     set_block_everywhere();
     send_now(t, effect, "Set Effect", timeout_);
-    send_now(t, force_report(0.0), "Set Constant Force", timeout_);
+    send_now(t, force_report(kZeroForce), "Set Constant Force", timeout_);
     if (l_.device_gain.present) {
       std::vector<std::uint8_t> gain = make_report(l_.device_gain, l_.numbered);
       set_slot(data(gain, l_.device_gain), l_.dg_gain,
@@ -108,7 +108,8 @@ class PidProfile final : public HidProfile {
       const auto in = data_of(report, l_.position_report, l_.numbered);
       const Slot& p = l_.position;
       const double raw = static_cast<double>(get_slot(in, p));
-      d.position = s_.position_min + (raw - static_cast<double>(p.logical_min)) * position_scale_;
+      d.position[0] =
+          s_.position_min + (raw - static_cast<double>(p.logical_min)) * position_scale_;
       d.has_sequence = l_.sequence.present;
       if (d.has_sequence) d.sequence = static_cast<std::uint32_t>(get_slot(in, l_.sequence));
       return InputKind::kPosition;
@@ -135,7 +136,10 @@ class PidProfile final : public HidProfile {
     return start_;  // restarts the finite effect before it runs out
   }
 
-  std::span<const std::uint8_t> force_report(double force) noexcept override {
+  std::size_t joints() const noexcept override { return 1; }
+
+  std::span<const std::uint8_t> force_report(std::span<const double> forces) noexcept override {
+    const double force = forces.front();  // one axis (docs/drivers/hid.md, "Two axes")
     const Slot& m = l_.sc_magnitude;
     const double raw =
         std::nearbyint(force / s_.force_full_scale * static_cast<double>(m.logical_max));

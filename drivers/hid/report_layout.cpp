@@ -103,29 +103,29 @@ bool raw_fits(double raw, const FieldSpec& f) {
                         : static_cast<double>(static_cast<float>(raw)) == raw);
 }
 
-void check_force(const OutputLayout& o, double max_force, std::vector<std::string>& errors) {
-  const FieldSpec& f = o.force;
+void check_force(const std::string& key, const FieldSpec& f, double full_scale, double max_force,
+                 std::vector<std::string>& errors) {
   // A raw value itself: a fractional limit of an integer field rounds past it (127.5 -> 128).
-  if (!raw_fits(o.full_scale, f) || o.full_scale <= 0.0) {
-    errors.push_back("output.force.full_scale: must be > 0 and fit the field's type " +
-                     type_name(f) + " (" + (is_integer(f) ? "whole counts, " : "") + "at most " +
-                     num(raw_max(f)) + "), got " + num(o.full_scale));
+  if (!raw_fits(full_scale, f) || full_scale <= 0.0) {
+    errors.push_back(key + ".full_scale: must be > 0 and fit the field's type " + type_name(f) +
+                     " (" + (is_integer(f) ? "whole counts, " : "") + "at most " + num(raw_max(f)) +
+                     "), got " + num(full_scale));
     return;
   }
-  const double lo_raw = std::max(-o.full_scale, raw_min(f));
+  const double lo_raw = std::max(-full_scale, raw_min(f));
   const double a = lo_raw * f.scale + f.offset;
-  const double b = o.full_scale * f.scale + f.offset;
+  const double b = full_scale * f.scale + f.offset;
   const double lo = std::min(a, b), hi = std::max(a, b);
   // A scale so large that full scale is no finite force: +-inf would decode as inf.
   if (!std::isfinite(lo) || !std::isfinite(hi)) {
-    errors.push_back("output.force: counts " + num(lo_raw) + ".." + num(o.full_scale) + " x " +
+    errors.push_back(key + ": counts " + num(lo_raw) + ".." + num(full_scale) + " x " +
                      num(f.scale) +
                      " N is no finite force; use a scale that makes full_scale "
                      "a force in newtons");
     return;
   }
   if (lo > -max_force || hi < max_force) {
-    errors.push_back("output.force: counts " + num(lo_raw) + ".." + num(o.full_scale) + " x " +
+    errors.push_back(key + ": counts " + num(lo_raw) + ".." + num(full_scale) + " x " +
                      num(f.scale) + " N + " + num(f.offset) + " N reach only " + num(lo) + ".." +
                      num(hi) + " N, which cannot represent device.max_force +-" + num(max_force) +
                      " N");
@@ -148,7 +148,12 @@ void check_feature(const std::string& where, const FeatureLayout& fl, bool is_sw
 }
 
 void check_input(const InputLayout& in, std::vector<std::string>& errors) {
-  std::vector<Named> fields{{"input.position", &in.position}};
+  std::vector<std::string> keys;
+  for (std::size_t j = 0; j < in.joints(); ++j) keys.push_back(in.key(j));
+  std::vector<Named> fields{{keys[0], &in.position}};
+  for (std::size_t j = 1; j < in.joints(); ++j) {
+    fields.push_back({keys[j], &in.more_positions[j - 1].field});
+  }
   if (in.sequence) {
     fields.push_back({"input.sequence", &*in.sequence});
     require_integer("input.sequence", *in.sequence, true, errors);
@@ -164,18 +169,36 @@ void check_input(const InputLayout& in, std::vector<std::string>& errors) {
   }
   if (in.velocity) fields.push_back({"input.velocity", &*in.velocity});
   check_report("input", in.length, fields, errors);
-  if (in.position_wraps && !is_integer(in.position)) {
-    errors.push_back("input.position.wraps: only an integer field wraps (this one is f32)");
+  for (std::size_t j = 0; j < in.joints(); ++j) {
+    if (in.joint(j).wraps && !is_integer(in.joint(j).field)) {
+      errors.push_back(keys[j] + ".wraps: only an integer field wraps (this one is f32)");
+    }
+  }
+  if (in.velocity && in.joints() > 1) {
+    errors.push_back("input.velocity: one field for " + std::to_string(in.joints()) +
+                     " joints: a device's velocity is read for a one-joint mechanism only");
   }
 }
 
 }  // namespace
 
-std::vector<std::string> validate(const ReportProfileLayout& l, double max_force) {
+std::string InputLayout::key(std::size_t j) const {
+  return listed ? "input.positions[" + std::to_string(j) + "]" : "input.position";
+}
+
+std::string OutputLayout::key(std::size_t j) const {
+  return listed ? "output.forces[" + std::to_string(j) + "]" : "output.force";
+}
+
+std::vector<std::string> validate(const ReportProfileLayout& l, std::span<const double> max_force) {
   std::vector<std::string> errors;
   check_input(l.input, errors);
   const OutputLayout& o = l.output;
-  std::vector<Named> out{{"output.force", &o.force}};
+  std::vector<std::string> keys;
+  for (std::size_t j = 0; j < o.joints(); ++j) keys.push_back(o.key(j));
+  std::vector<Named> out{{keys[0], &o.force}};
+  for (std::size_t j = 1; j < o.joints(); ++j)
+    out.push_back({keys[j], &o.more_forces[j - 1].field});
   if (o.enable) {
     out.push_back({"output.enable", &o.enable->field});
     check_switch("output.enable", o.enable->field, o.enable->on, o.enable->off, true, errors);
@@ -190,7 +213,10 @@ std::vector<std::string> validate(const ReportProfileLayout& l, double max_force
     }
   }
   check_report("output", o.length, out, errors);
-  check_force(o, max_force, errors);
+  for (std::size_t j = 0; j < o.joints(); ++j) {
+    const double need = j < max_force.size() ? max_force[j] : max_force.back();
+    check_force(keys[j], o.joint(j).field, o.joint(j).full_scale, need, errors);
+  }
   if (!o.enable && !l.enable_feature) {
     errors.push_back(
         "output: needs an enable field or an enable_feature report, so the "
@@ -229,6 +255,10 @@ std::vector<std::string> validate(const ReportProfileLayout& l, double max_force
   return errors;
 }
 
+std::vector<std::string> validate(const ReportProfileLayout& layout, double max_force) {
+  return validate(layout, std::span<const double>(&max_force, 1));
+}
+
 std::size_t input_report_size(const InputLayout& layout) noexcept {
   return layout.length + (layout.report_id != 0 ? 1 : 0);
 }
@@ -240,8 +270,11 @@ InputDecode decode_input(std::span<const std::uint8_t> report, const InputLayout
   if (numbered && report[0] != layout.report_id) return InputDecode::kOtherReport;
   const std::span<const std::uint8_t> data = numbered ? report.subspan(1) : report;
   if (data.size() < layout.length) return InputDecode::kTooShort;
-  out.position = read_si(data.data(), layout.position);
-  out.position_count = read_count(data.data(), layout.position);
+  for (std::size_t j = 0; j < layout.joints(); ++j) {
+    const FieldSpec& f = j == 0 ? layout.position : layout.more_positions[j - 1].field;
+    out.position[j] = read_si(data.data(), f);
+    out.position_count[j] = read_count(data.data(), f);
+  }
   if (layout.sequence) {
     out.sequence = static_cast<std::uint32_t>(read_count(data.data(), *layout.sequence));
   }
@@ -257,31 +290,39 @@ void encode_input(const InputValues& in, const InputLayout& layout,
   std::fill(report.begin(), report.end(), std::uint8_t{0});
   std::uint8_t* data = report.data();
   if (layout.report_id != 0) *data++ = layout.report_id;
-  const double count = std::nearbyint(si_to_raw(in.position, layout.position));
-  if (layout.position_wraps && std::isfinite(count) && std::abs(count) < 0x1p62) {
-    write_wrapped(data, layout.position, static_cast<std::int64_t>(count));  // a multi-turn axis
-  } else {
-    write_si(data, layout.position, in.position);
+  for (std::size_t j = 0; j < layout.joints(); ++j) {
+    const PositionField p = layout.joint(j);
+    const double count = std::nearbyint(si_to_raw(in.position[j], p.field));
+    if (p.wraps && std::isfinite(count) && std::abs(count) < 0x1p62) {
+      write_wrapped(data, p.field, static_cast<std::int64_t>(count));  // a multi-turn axis
+    } else {
+      write_si(data, p.field, in.position[j]);
+    }
   }
   if (layout.sequence) write_wrapped(data, *layout.sequence, in.sequence);
   if (layout.status) write_raw(data, *layout.status, static_cast<double>(in.status));
   if (layout.velocity) write_si(data, *layout.velocity, in.velocity);
 }
 
-void encode_force(double force, const OutputLayout& layout,
+void encode_force(std::span<const double> forces, const OutputLayout& layout,
                   std::span<std::uint8_t> report) noexcept {
-  const double raw =
-      std::clamp(si_to_raw(force, layout.force), -layout.full_scale, layout.full_scale);
-  write_raw(report.data() + 1, layout.force, raw);
+  for (std::size_t j = 0; j < layout.joints() && j < forces.size(); ++j) {
+    const FieldSpec& f = j == 0 ? layout.force : layout.more_forces[j - 1].field;
+    const double fs = j == 0 ? layout.full_scale : layout.more_forces[j - 1].full_scale;
+    write_raw(report.data() + 1, f, std::clamp(si_to_raw(forces[j], f), -fs, fs));
+  }
 }
 
 bool decode_output(std::span<const std::uint8_t> report, const OutputLayout& layout,
                    OutputValues& out) noexcept {
   if (report.size() < wire_size(layout.length) || report[0] != layout.report_id) return false;
   const std::uint8_t* data = report.data() + 1;
-  const double raw = read_raw(data, layout.force);
-  out.force = std::clamp(raw, -layout.full_scale, layout.full_scale) * layout.force.scale +
-              layout.force.offset;
+  for (std::size_t j = 0; j < layout.joints(); ++j) {
+    const ForceField f = layout.joint(j);
+    out.force[j] =
+        std::clamp(read_raw(data, f.field), -f.full_scale, f.full_scale) * f.field.scale +
+        f.field.offset;
+  }
   out.enable = true;
   if (layout.enable) out.enable = read_raw(data, layout.enable->field) == layout.enable->on;
   if (layout.keepalive) out.keepalive = read_raw(data, *layout.keepalive);

@@ -8,6 +8,7 @@
 // reports are the data alone, and output and feature reports still carry a leading 0.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <optional>
@@ -15,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "base/joints.h"
 #include "drivers/field/field.h"
 
 namespace hapticd::drivers::hid {
@@ -42,17 +44,36 @@ using field::write_wrapped;
 // interrupt endpoint); anything longer is a configuration error, not a buffer overrun.
 inline constexpr std::size_t kMaxReportData = 1024;
 
+// One joint's position field beyond the first (the list form `positions: [...]`).
+struct PositionField {
+  FieldSpec field;
+  bool wraps = false;
+};
+
 struct InputLayout {
   std::uint8_t report_id = 0;  // 0: the device does not number its reports
   std::size_t length = 0;      // data bytes after the id
-  FieldSpec position;          // m or rad
+  FieldSpec position;          // joint 0's: m or rad
   // The position is a counter of a multi-turn axis that wraps modulo 2^bits: the driver
   // unwraps it (position_count, one sample to the next) into the real motion.
   bool position_wraps = false;
+  // Joints 1.. of a mechanism of several (device.kinematics). The one-joint key `position`
+  // is joint 0 above whichever form the configuration used, so every one-joint layout reads
+  // as it did; `listed` says the list form was given (it names the keys in messages).
+  std::vector<PositionField> more_positions;
+  bool listed = false;
   std::optional<FieldSpec> sequence;  // the device's sample counter (unsigned integer)
   std::optional<FieldSpec> status;    // status bits (integer)
   std::uint32_t fault_mask = 0;       // status bits that mean the device has faulted
   std::optional<FieldSpec> velocity;  // the device's own velocity estimate (m/s, rad/s)
+
+  std::size_t joints() const noexcept { return 1 + more_positions.size(); }
+  // Joint j's field, j < joints().
+  PositionField joint(std::size_t j) const noexcept {
+    return j == 0 ? PositionField{position, position_wraps} : more_positions[j - 1];
+  }
+  // The key naming joint j's field: "input.position" or "input.positions[j]".
+  std::string key(std::size_t j) const;
 };
 
 // A field that switches something (the amplifier) with two raw values.
@@ -62,13 +83,27 @@ struct SwitchField {
   double off = 0.0;
 };
 
+// One joint's force field beyond the first (the list form `forces: [...]`).
+struct ForceField {
+  FieldSpec field;
+  double full_scale = 0.0;
+};
+
 struct OutputLayout {
   std::uint8_t report_id = 0;
   std::size_t length = 0;
-  FieldSpec force;          // N or N m; scale is N per count
-  double full_scale = 0.0;  // the largest |raw| force the device accepts
+  FieldSpec force;                      // joint 0's: N or N m; scale is N per count
+  double full_scale = 0.0;              // the largest |raw| force the device accepts
+  std::vector<ForceField> more_forces;  // joints 1.., as InputLayout::more_positions
+  bool listed = false;
   std::optional<SwitchField> enable;
   std::optional<FieldSpec> keepalive;  // a counter bumped with every report (firmware watchdog)
+
+  std::size_t joints() const noexcept { return 1 + more_forces.size(); }
+  ForceField joint(std::size_t j) const noexcept {
+    return j == 0 ? ForceField{force, full_scale} : more_forces[j - 1];
+  }
+  std::string key(std::size_t j) const;  // "output.force" or "output.forces[j]"
 };
 
 // A feature report that carries one value (enable on/off, gain, watchdog timeout).
@@ -92,7 +127,10 @@ struct ReportProfileLayout {
 
 // Not RT-safe. Everything wrong with the layout, each message "<where>: <what>" with <where> a
 // key path below the profile ("input.sequence", "output"). `max_force`: the force the
-// controller may command (device.max_force), which the force field must represent.
+// controller may command (device.max_force), which the force field must represent: joint i's
+// is entry i (the last entry stands for joints past the span's end).
+std::vector<std::string> validate(const ReportProfileLayout& layout,
+                                  std::span<const double> max_force);
 std::vector<std::string> validate(const ReportProfileLayout& layout, double max_force);
 
 // What decoding one input report found.
@@ -104,11 +142,12 @@ enum class InputDecode : std::uint8_t {
 };
 
 struct InputValues {
-  double position = 0.0;
+  std::array<double, base::kMaxJoints> position{};  // joint i's is entry i
   double velocity = 0.0;
   std::uint32_t sequence = 0;
   std::uint32_t status = 0;
-  std::int64_t position_count = 0;  // an integer position field's raw count (decode only)
+  // An integer position field's raw count (decode only), joint i's entry i.
+  std::array<std::int64_t, base::kMaxJoints> position_count{};
 };
 
 // RT-safe: called every tick. Decodes one report as hid_read returned it.
@@ -124,16 +163,17 @@ std::size_t input_report_size(const InputLayout& layout) noexcept;
 // report id (0 when unnumbered) and the data.
 inline std::size_t wire_size(std::size_t data_length) noexcept { return data_length + 1; }
 
-// RT-safe: called every tick. The force in `report` (prepared with its id and constant fields) set
-// to `force`, clamped to +-full_scale counts.
-void encode_force(double force, const OutputLayout& layout,
+// RT-safe: called every tick. The forces in `report` (prepared with its id and constant fields)
+// set to `forces`, joint i's to entry i, each clamped to its field's +-full_scale counts.
+// `forces` holds layout.joints() values.
+void encode_force(std::span<const double> forces, const OutputLayout& layout,
                   std::span<std::uint8_t> report) noexcept;
 // RT-safe. The peer's side: the force and enable state an output report carries. False for a
 // report of another id or too short.
 struct OutputValues {
-  double force = 0.0;
-  bool enable = true;      // true when the layout has no enable field
-  double keepalive = 0.0;  // raw
+  std::array<double, base::kMaxJoints> force{};  // joint i's is entry i
+  bool enable = true;                            // true when the layout has no enable field
+  double keepalive = 0.0;                        // raw
 };
 bool decode_output(std::span<const std::uint8_t> report, const OutputLayout& layout,
                    OutputValues& out) noexcept;

@@ -10,13 +10,23 @@
 namespace hapticd::drivers::hid {
 namespace {
 
+std::array<io::CounterUnwrap, base::kMaxJoints> make_unwraps(const InputLayout& in) {
+  static_assert(base::kMaxJoints == 3, "one initial CounterUnwrap per joint");
+  std::array<io::CounterUnwrap, base::kMaxJoints> u{{{8, false}, {8, false}, {8, false}}};
+  for (std::size_t j = 0; j < in.joints() && j < u.size(); ++j) {
+    u[j] = io::CounterUnwrap(static_cast<int>(in.joint(j).field.bits), in.joint(j).field.is_signed);
+  }
+  return u;
+}
+
 class ReportProfile final : public HidProfile {
  public:
   explicit ReportProfile(const HidSettings& s)
       : l_(s.report),
         timeout_(static_cast<long>(s.limits.timeout_ms)),
         out_(wire_size(l_.output.length)),
-        off_(wire_size(l_.output.length)) {
+        off_(wire_size(l_.output.length)),
+        unwrap_(make_unwraps(l_.input)) {
     prepare(out_, true);
     prepare(off_, false);
   }
@@ -44,7 +54,7 @@ class ReportProfile final : public HidProfile {
     if (l_.enable_feature) set(t, *l_.enable_feature, l_.enable_feature->on, "enable (on)");
     // Through force_report: the first enabled report moves the keep-alive on from the
     // output-off report before it, as every report after it does.
-    send_now(t, force_report(0.0), "the output-on report", timeout_);
+    send_now(t, force_report(kZeroForce), "the output-on report", timeout_);
   }
 
   void disable(HidTransport& t) noexcept override {
@@ -73,12 +83,14 @@ class ReportProfile final : public HidProfile {
       default:
         return InputKind::kTooShort;
     }
-    d.position = v.position;
-    if (l_.input.position_wraps) {  // a multi-turn axis: the count goes on past the field's ends
-      const FieldSpec& p = l_.input.position;
-      d.position = static_cast<double>(unwrap_.next(static_cast<std::uint64_t>(v.position_count))) *
-                       p.scale +
-                   p.offset;
+    for (std::size_t j = 0; j < l_.input.joints(); ++j) {
+      const PositionField p = l_.input.joint(j);
+      d.position[j] = v.position[j];
+      if (p.wraps) {  // a multi-turn axis: the count goes on past the field's ends
+        const auto count = static_cast<std::uint64_t>(v.position_count[j]);
+        d.position[j] =
+            static_cast<double>(unwrap_[j].next(count)) * p.field.scale + p.field.offset;
+      }
     }
     d.velocity = v.velocity;
     d.sequence = v.sequence;
@@ -94,8 +106,10 @@ class ReportProfile final : public HidProfile {
 
   std::span<const std::uint8_t> before_force() noexcept override { return {}; }
 
-  std::span<const std::uint8_t> force_report(double force) noexcept override {
-    encode_force(force, l_.output, out_);
+  std::size_t joints() const noexcept override { return l_.input.joints(); }
+
+  std::span<const std::uint8_t> force_report(std::span<const double> forces) noexcept override {
+    encode_force(forces, l_.output, out_);
     if (l_.output.keepalive) {  // a counter the firmware watches: it moves with every report
       const FieldSpec& k = *l_.output.keepalive;
       // 1, 2, ... M-1, 1...: never the output-off report's 0, so the report after it and
@@ -120,7 +134,7 @@ class ReportProfile final : public HidProfile {
       const SwitchField& e = *l_.output.enable;
       write_raw(r.data() + 1, e.field, on ? e.on : e.off);
     }
-    encode_force(0.0, l_.output, r);
+    encode_force(kZeroForce, l_.output, r);
   }
 
   void set(HidTransport& t, const FeatureLayout& f, double raw, const char* what) {
@@ -179,9 +193,8 @@ class ReportProfile final : public HidProfile {
   std::vector<std::uint8_t> out_;  // the per-tick report, enable on
   std::vector<std::uint8_t> off_;  // zero force, enable off
   std::uint64_t keepalive_ = 0;
-  io::CounterUnwrap unwrap_{
-      static_cast<int>(l_.input.position.bits),
-      l_.input.position.is_signed};  // position_wraps: the count since configure
+  // Each wrapping joint's count since configure (unused for a joint that does not wrap).
+  std::array<io::CounterUnwrap, base::kMaxJoints> unwrap_;
   std::string descriptor_note_;
   // The input report's length as the device declares it (the layout's when it has no
   // descriptor): anything longer is malformed.

@@ -122,7 +122,7 @@ void check_wrapping(const hid::InputLayout& in, HidInput& r) {
 void check_input_round_trip(const hid::InputLayout& in, HidInput& r) {
   const double k_pos = r.number(), k_vel = r.number(), any = r.number();
   hid::InputValues v;
-  v.position = si_of(in.position, k_pos).value_or(any);  // else any value, NaN too
+  v.position[0] = si_of(in.position, k_pos).value_or(any);  // else any value, NaN too
   v.velocity = in.velocity ? si_of(*in.velocity, k_vel).value_or(0.0) : 0.0;
   v.sequence = r.u32();
   v.status = r.u32();
@@ -131,10 +131,10 @@ void check_input_round_trip(const hid::InputLayout& in, HidInput& r) {
   hid::InputValues got;
   require(hid::decode_input(rep, in, got) == hid::InputDecode::kOk, "an encoded input decodes");
   if (si_of(in.position, k_pos)) {
-    require(near(got.position, v.position, quantum(in.position, k_pos), in.position, k_pos),
+    require(near(got.position[0], v.position[0], quantum(in.position, k_pos), in.position, k_pos),
             "the position comes back within the field's quantisation");
-  } else if (std::isnan(v.position)) {
-    require(got.position == in.position.offset, "a NaN position is sent as raw 0");
+  } else if (std::isnan(v.position[0])) {
+    require(got.position[0] == in.position.offset, "a NaN position is sent as raw 0");
   }
   if (in.velocity && si_of(*in.velocity, k_vel)) {
     require(near(got.velocity, v.velocity, quantum(*in.velocity, k_vel), *in.velocity, k_vel),
@@ -159,7 +159,7 @@ void check_output_round_trip(const hid::OutputLayout& o, double force) {
       const hid::FieldSpec& e = o.enable->field;
       hid::write_raw(rep.data() + 1, e, on ? o.enable->on : o.enable->off);
     }
-    hid::encode_force(force, o, rep);
+    hid::encode_force(std::span<const double>(&force, 1), o, rep);
     const hid::FieldSpec& f = o.force;
     const double raw = hid::read_raw(rep.data() + 1, f);
     require(std::abs(raw) <= o.full_scale, "the force written is within +-full_scale counts");
@@ -170,7 +170,7 @@ void check_output_round_trip(const hid::OutputLayout& o, double force) {
     if (std::isnan(r)) continue;
     const double want = std::clamp(r, std::max(-o.full_scale, hid::raw_min(f)), o.full_scale);
     require(std::abs(raw - want) <= quantum(f, want), "the force written is the clamped force");
-    require(near(got.force, want * f.scale + f.offset, 1.0, f, want),
+    require(near(got.force[0], want * f.scale + f.offset, 1.0, f, want),
             "decode_output gives back the clamped force within one count");
   }
 }
@@ -201,7 +201,7 @@ void check_decode(const Bytes& rep, const hid::ReportProfileLayout& l) {
   require(d == want, "decode_input: empty, another id, too short, or ok");
   if (d == hid::InputDecode::kOk && hid::is_integer(in.position)) {
     const std::span<const std::uint8_t> data = std::span(rep).subspan(numbered ? 1 : 0);
-    require(v.position_count == model_count(data, in.position),
+    require(v.position_count[0] == model_count(data, in.position),
             "the position's count is its bits as the field's definition reads them");
     if (in.sequence) {
       require(v.sequence == static_cast<std::uint32_t>(model_count(data, *in.sequence)),
@@ -213,7 +213,7 @@ void check_decode(const Bytes& rep, const hid::ReportProfileLayout& l) {
   const bool ours = rep.size() >= hid::wire_size(o.length) && rep[0] == o.report_id;
   require(hid::decode_output(rep, o, out) == ours, "decode_output: its id and length");
   if (ours && !std::isnan(hid::read_raw(rep.data() + 1, o.force))) {
-    require(near(out.force, o.force.offset, o.full_scale, o.force, o.full_scale),
+    require(near(out.force[0], o.force.offset, o.full_scale, o.force, o.full_scale),
             "a decoded force lies within +-full_scale counts");
   }
   for (const auto* f : {&l.enable_feature, &l.gain_feature, &l.watchdog_feature}) {

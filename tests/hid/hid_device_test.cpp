@@ -248,7 +248,8 @@ struct ReportRig {
         device(settings, fake.opener(), 1e-3) {}
   Bytes input(double position, std::uint32_t seq, std::uint32_t status) const {
     Bytes r(input_report_size(settings->report.input));
-    encode_input({position, 0.0, seq, status}, settings->report.input, r);
+    encode_input({.position = {position}, .sequence = seq, .status = status},
+                 settings->report.input, r);
     return r;
   }
   std::shared_ptr<const HidSettings> settings;

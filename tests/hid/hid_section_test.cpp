@@ -225,5 +225,84 @@ TEST(HidConfig, TheLivenessBoundBelongsToADeviceThatReportsOnChange) {
   EXPECT_TRUE(has(e, "device.hid.report.output.enable.on: must be an integer in")) << all(e);
 }
 
+// Several joints (issue 37): the list forms, one field per joint of device.kinematics.
+TEST(HidConfig, TheTwoJointExampleLoadsWithAFieldPerJoint) {
+  const config::Config c = load(file("hid-report-xy.yaml"));
+  const ReportProfileLayout& l = hid(c).report;
+  ASSERT_EQ(l.input.joints(), 2u);
+  ASSERT_EQ(l.output.joints(), 2u);
+  EXPECT_EQ(l.input.joint(0).field.byte, 0u);
+  EXPECT_EQ(l.input.joint(1).field.byte, 2u);
+  EXPECT_EQ(l.output.joint(1).field.byte, 2u);
+  EXPECT_DOUBLE_EQ(l.output.joint(1).full_scale, 10000);
+  EXPECT_EQ(l.input.key(1), "input.positions[1]");
+  const ReportProfileLayout& one = hid(load(file("hid-report.yaml"))).report;
+  EXPECT_EQ(one.input.joints(), 1u);
+  EXPECT_EQ(one.output.key(0), "output.force") << "a one-joint file reads as it did";
+}
+
+TEST(HidConfig, AListOfTheWrongLengthOrBothFormsAreRefusedByName) {
+  auto e = errors(file("hid-report-xy.yaml"),
+                  {"device.hid.report.input.positions=[{byte: 0, type: i16, scale: 1.0e-5}, "
+                   "{byte: 2, type: i16, scale: 1.0e-5}, {byte: 6, type: u8, scale: 1.0e-5}]"});
+  EXPECT_TRUE(has(e,
+                  "device.hid.report.input.positions: 3 field(s) for a mechanism of 2 "
+                  "joint(s) (device.kinematics)"))
+      << all(e);
+  e = errors(file("hid-report-xy.yaml"),
+             {"device.hid.report.output.forces=",
+              "device.hid.report.output.force={byte: 0, type: i16, scale: 0.001, "
+              "full_scale: 10000}"});
+  EXPECT_TRUE(has(e,
+                  "device.hid.report.output.force: 1 field(s) for a mechanism of 2 joint(s) "
+                  "(device.kinematics): give output.forces"))
+      << all(e);
+  e = errors(file("hid-report-xy.yaml"),
+             {"device.hid.report.input.position={byte: 6, type: u8, scale: 1.0e-5}"});
+  EXPECT_TRUE(has(e,
+                  "device.hid.report.input.positions: give position (one joint) or positions "
+                  "(one per joint), not both"))
+      << all(e);
+  e = errors(file("hid-report-xy.yaml"), {"device.hid.report.input.positions=[]"});
+  EXPECT_TRUE(has(e, "device.hid.report.input.positions: must be a list of 1 to 3 fields"))
+      << all(e);
+}
+
+TEST(HidConfig, EachJointsFieldIsCheckedAtItsEntry) {
+  std::string text = file("hid-report-xy.yaml");
+  const std::string from = "- {byte: 2, type: i16, scale: 1.0e-5}  # joint 1, y";
+  text.replace(text.find(from), from.size(), "- {byte: 1, type: i16, scale: 1.0e-5}");
+  const auto line = 1 + std::count(text.begin(), text.begin() + text.find("{byte: 1,"), '\n');
+  auto e = errors(text);
+  ASSERT_EQ(e.size(), 1u) << all(e);
+  EXPECT_EQ(e[0], "hid.yaml:" + std::to_string(line) +
+                      ": device.hid.report.input.positions[1]: bytes 1..2 overlap "
+                      "input.positions[0] (bytes 0..1)");
+  e = errors(file("hid-report-xy.yaml"), {"device.max_force=[10, 20]"});
+  EXPECT_TRUE(has(e,
+                  "device.hid.report.output.forces[1]: counts -10000..10000 x 0.001 N + 0 N "
+                  "reach only -10..10 N, which cannot represent device.max_force +-20 N"))
+      << all(e);
+  EXPECT_FALSE(has(e, "output.forces[0]")) << "joint 0 reaches its 10 N: " << all(e);
+  e = errors(file("hid-report-xy.yaml"),
+             {"device.hid.report.input.velocity={byte: 6, type: i16, scale: 1.0e-3}"});
+  EXPECT_TRUE(has(e, "device.hid.report.input.velocity: one field for 2 joints")) << all(e);
+  e = errors(file("hid-report-xy.yaml"),
+             {"device.hid.report.input.positions=[{byte: 0, type: i16, scale: 1.0e-5}, "
+              "{byte: 2, type: f32, scale: 1.0e-5, wraps: true}]",
+              "device.hid.report.input.length=8"});
+  EXPECT_TRUE(has(e, "device.hid.report.input.positions[1].wraps: only an integer field wraps"))
+      << all(e);
+}
+
+TEST(HidConfig, ThePidProfileDrivesOneJoint) {
+  const auto e = errors(file("hid-report-xy.yaml"),
+                        {"device.hid.profile=pid", "device.hid.report=",
+                         "device.hid.pid={position: {usage_page: 1, usage: 0x30, min: -0.1, "
+                         "max: 0.1}, force_full_scale: 10}"});
+  EXPECT_TRUE(has(e, "device.hid.pid: drives one joint, the mechanism has 2 (device.kinematics)"))
+      << all(e);
+}
+
 }  // namespace
 }  // namespace hapticd::drivers::hid

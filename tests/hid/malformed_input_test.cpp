@@ -31,7 +31,7 @@ TEST(HidMalformed, BadReportsAreCountedByKindAndTheLoopGoesOn) {
   fake.send_raw({0x77, 1, 2});                   // not a message type at all
   fake.send_raw({static_cast<std::uint8_t>(FrameType::kSetFeatureReply), 0});  // a stray reply
   Bytes good(input_report_size(s->report.input));
-  encode_input({0.002, 0.0, 7, 0}, s->report.input, good);
+  encode_input({.position = {0.002}, .sequence = 7, .status = 0}, s->report.input, good);
   fake.send_input(good);
   std::this_thread::sleep_for(std::chrono::milliseconds(10));
   PositionSample sample;
@@ -154,7 +154,7 @@ TEST(HidMalformed, CountingBadReportsAndAFullQueueAllocateNothing) {
   device.configure();
   device.enable();
   Bytes good(input_report_size(s->report.input));
-  encode_input({0.001, 0.0, 1, 0}, s->report.input, good);
+  encode_input({.position = {0.001}, .sequence = 1, .status = 0}, s->report.input, good);
   for (const Bytes& r :
        {Bytes{1, 2}, Bytes{9, 0, 0, 0, 0, 0, 0, 0, 0}, Bytes{}, Bytes(3000, 1), good, good}) {
     fake.send_input(r);

@@ -173,7 +173,7 @@ TEST(HidReportLayout, AFourBitCounterWrapsAtSixteen) {
   l.input.sequence->bits = 4;
   ASSERT_TRUE(validate(l, 10.0).empty());
   std::vector<std::uint8_t> r(input_report_size(l.input));
-  encode_input({0.001, 0.0, 17, 0}, l.input, r);
+  encode_input({.position = {0.001}, .sequence = 17, .status = 0}, l.input, r);
   InputValues v;
   ASSERT_EQ(decode_input(r, l.input, v), InputDecode::kOk);
   EXPECT_EQ(v.sequence, 1u);
@@ -188,15 +188,15 @@ TEST(HidReportLayout, AWrappingPositionIsWrittenModuloItsWidth) {
   l.input.position_wraps = true;
   ASSERT_TRUE(validate(l, 10.0).empty());
   std::vector<std::uint8_t> r(input_report_size(l.input));
-  encode_input({0.130, 0.0, 0, 0}, l.input, r);
+  encode_input({.position = {0.130}, .sequence = 0, .status = 0}, l.input, r);
   InputValues v;
   ASSERT_EQ(decode_input(r, l.input, v), InputDecode::kOk);
-  EXPECT_EQ(v.position_count, 130 - 256);
-  EXPECT_NEAR(v.position, -0.126, 1e-12);
+  EXPECT_EQ(v.position_count[0], 130 - 256);
+  EXPECT_NEAR(v.position[0], -0.126, 1e-12);
   l.input.position_wraps = false;
-  encode_input({0.130, 0.0, 0, 0}, l.input, r);
+  encode_input({.position = {0.130}, .sequence = 0, .status = 0}, l.input, r);
   ASSERT_EQ(decode_input(r, l.input, v), InputDecode::kOk);
-  EXPECT_EQ(v.position_count, 127);
+  EXPECT_EQ(v.position_count[0], 127);
   l.input.position = typed(FieldType::kF32, 0, Endian::kLittle, 1.0);
   l.input.position_wraps = true;
   EXPECT_TRUE(mentions(validate(l, 10.0), "input.position.wraps: only an integer field wraps"));
@@ -286,11 +286,11 @@ TEST(HidReportLayout, AbsurdLengthsAreRefused) {
 TEST(HidReportLayout, InputDecodesAndRejectsWrongIdsAndShortReports) {
   const ReportProfileLayout l = ffbeast_like();
   std::vector<std::uint8_t> r(input_report_size(l.input));
-  encode_input({-0.0123, 0.0, 250, 0x01}, l.input, r);
+  encode_input({.position = {-0.0123}, .sequence = 250, .status = 0x01}, l.input, r);
   EXPECT_EQ(r[0], 1);
   InputValues v;
   ASSERT_EQ(decode_input(r, l.input, v), InputDecode::kOk);
-  EXPECT_NEAR(v.position, -0.0123, 1e-9);
+  EXPECT_NEAR(v.position[0], -0.0123, 1e-9);
   EXPECT_EQ(v.sequence, 250u);
   EXPECT_EQ(v.status, 1u);
   r[0] = 7;
@@ -307,26 +307,26 @@ TEST(HidReportLayout, UnnumberedDevicesCarryNoIdOnInputButAZeroOnOutput) {
   EXPECT_TRUE(validate(l, 10.0).empty());
   EXPECT_EQ(input_report_size(l.input), 8u);
   std::vector<std::uint8_t> in(8);
-  encode_input({0.001, 0.0, 3, 0}, l.input, in);
+  encode_input({.position = {0.001}, .sequence = 3, .status = 0}, l.input, in);
   InputValues v;
   ASSERT_EQ(decode_input(in, l.input, v), InputDecode::kOk);
-  EXPECT_NEAR(v.position, 0.001, 1e-12);
+  EXPECT_NEAR(v.position[0], 0.001, 1e-12);
   std::vector<std::uint8_t> out(wire_size(l.output.length));
-  encode_force(2.5, l.output, out);
+  encode_force(std::array{2.5}, l.output, out);
   EXPECT_EQ(out[0], 0);
   OutputValues o;
   ASSERT_TRUE(decode_output(out, l.output, o));
-  EXPECT_DOUBLE_EQ(o.force, 2.5);
+  EXPECT_DOUBLE_EQ(o.force[0], 2.5);
 }
 
 TEST(HidReportLayout, ForceIsClampedToFullScale) {
   const ReportProfileLayout l = ffbeast_like();
   std::vector<std::uint8_t> out(wire_size(l.output.length));
   out[0] = 2;
-  encode_force(-50.0, l.output, out);
+  encode_force(std::array{-50.0}, l.output, out);
   OutputValues o;
   ASSERT_TRUE(decode_output(out, l.output, o));
-  EXPECT_DOUBLE_EQ(o.force, -10.0);
+  EXPECT_DOUBLE_EQ(o.force[0], -10.0);
 }
 
 }  // namespace

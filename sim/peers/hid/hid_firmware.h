@@ -1,4 +1,5 @@
-// The simulated HID device's firmware: the plant (a SimAxis) behind a USB HID interface that
+// The simulated HID device's firmware: the plant (a SimAxis; for a mechanism of several joints,
+// the Mechanism of device.kinematics, one motor per joint) behind a USB HID interface that
 // speaks either profile of the HID driver, with the driver's own pure codecs
 // (drivers/hid/report_layout.h, pid_protocol.h). Like firmware it steps the plant when the
 // force command arrives (the output report; for PID, Set Constant Force) and answers with an
@@ -12,6 +13,7 @@
 // On a real USB gadget the link itself is the delay and d is 0.
 #pragma once
 
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cstdint>
@@ -22,6 +24,7 @@
 
 #include "config/config.h"
 #include "drivers/hid/hid_settings.h"
+#include "sim/mechanism.h"
 #include "sim/peers/loopback_peer.h"
 #include "sim/peers/peer_state.h"
 #include "sim/sim_axis.h"
@@ -60,6 +63,10 @@ class HidFirmware {
   double applied_force() const noexcept { return felt_.force(); }
   bool output_on() const noexcept { return felt_.on(); }
   const Plant& plant() const noexcept { return axis_.plant(); }
+  // The mechanism of several joints, or null for one joint (plant() is it).
+  const JointPlant* joint_plant() const noexcept {
+    return mechanism_ ? &mechanism_->plant() : nullptr;
+  }
   // Any thread. kTransportFault is the transport's to produce (returns false here).
   virtual bool inject(PeerFault fault) noexcept;
   // Peer thread, for peers on a real link (HidgPeer, UhidPeer): the host was heard at `now`;
@@ -80,13 +87,21 @@ class HidFirmware {
   // output_on(): a vanish() from another thread zeroes what is felt at once, and a state report
   // built before this thread sees the link gone must not say the amplifier went off by itself
   // (the host would read a device fault where the wire was cut).
-  bool amplifier_on() const noexcept { return axis_.output_on(); }
+  bool amplifier_on() const noexcept {
+    return mechanism_ ? mechanism_->output_on(0) : axis_.output_on();
+  }
+  // The joints the device drives (device.kinematics).
+  std::size_t joints() const noexcept {
+    return mechanism_ ? static_cast<std::size_t>(mechanism_->joints()) : 1;
+  }
   // Holds `force` (zero while off) and advances the plant one period.
-  void step(double force) noexcept;
+  void step(double force) noexcept { step(std::span<const double>(&force, 1)); }
+  // The same for every joint: joint i's force is entry i (joints() of them).
+  void step(std::span<const double> forces) noexcept;
   // Holds `force` from now on without a step: what plays changed between two commands.
   void hold(double force) noexcept;
-  // The position the device reports: measured link_delay steps ago.
-  double measured_position() const noexcept { return fifo_[fifo_head_]; }
+  // The position the device reports: measured link_delay steps ago (joint j's).
+  double measured_position(std::size_t j = 0) const noexcept { return fifo_[fifo_head_][j]; }
   double velocity() const noexcept { return axis_.plant().velocity(); }
   // Sequence number of the next answer (skips when injected).
   std::uint32_t next_sequence() noexcept;
@@ -94,8 +109,15 @@ class HidFirmware {
   bool device_fault() const noexcept { return faults_.active(PeerFault::kDeviceFault); }
 
  private:
+  // Publishes what the person feels: the largest torque a motor holds.
+  void publish() noexcept;
+  // Every joint's encoder now.
+  std::array<double, base::kMaxJoints> encoders() noexcept;
+
   SimAxis axis_;
-  std::vector<double> fifo_;  // the last link_delay + 1 positions; fifo_head_ the oldest
+  std::unique_ptr<Mechanism> mechanism_;  // several joints; axis_ unused then
+  // The last link_delay + 1 positions of every joint; fifo_head_ the oldest.
+  std::vector<std::array<double, base::kMaxJoints>> fifo_;
   std::size_t fifo_head_ = 0;
   std::uint32_t sequence_ = 0;
   FeltOutput felt_;
@@ -113,6 +135,7 @@ class FirmwarePeer : public LoopbackPeer {
   double applied_force() const noexcept final { return fw_->applied_force(); }
   bool output_on() const noexcept final { return fw_->output_on(); }
   const Plant& plant() const noexcept final { return fw_->plant(); }
+  const JointPlant* joint_plant() const noexcept final { return fw_->joint_plant(); }
 
  protected:
   explicit FirmwarePeer(std::unique_ptr<HidFirmware> firmware) : fw_(std::move(firmware)) {}

@@ -2,6 +2,8 @@
 // report with the configured layout and answers with the input report.
 #include <cerrno>
 #include <map>
+#include <stdexcept>
+#include <string>
 
 #include "drivers/hid/descriptor_builder.h"
 #include "sim/peers/hid/hid_firmware.h"
@@ -15,11 +17,22 @@ using namespace drivers::hid;
 // The simulated firmware's own watchdog when the host does not configure one (ms).
 constexpr double kDefaultWatchdogMs = 100.0;
 
+// The layout's joints are the mechanism's (the configuration checks it; a test may not).
+const ReportProfileLayout& checked_joints(const ReportProfileLayout& l, std::size_t joints) {
+  if (l.input.joints() != joints || l.output.joints() != joints) {
+    throw std::invalid_argument("hid report firmware: the layout has " +
+                                std::to_string(l.input.joints()) + " position and " +
+                                std::to_string(l.output.joints()) + " force field(s) for " +
+                                std::to_string(joints) + " joint(s)");
+  }
+  return l;
+}
+
 class ReportFirmware final : public HidFirmware {
  public:
   ReportFirmware(const config::Config& cfg, const HidSettings& s, int link_delay)
       : HidFirmware(cfg, link_delay),
-        l_(s.report),
+        l_(checked_joints(s.report, joints())),
         descriptor_(report_profile_descriptor(l_)),
         answer_(input_report_size(l_.input)),
         feature_on_(!l_.enable_feature),
@@ -42,7 +55,8 @@ class ReportFirmware final : public HidFirmware {
       answer(send);  // enabled: report the state at rest
       return;
     }
-    step(device_fault() || stuck ? 0.0 : v.force);
+    if (device_fault() || stuck) v.force = {};
+    step(std::span<const double>(v.force.data(), joints()));
     answer(send);
   }
 
@@ -91,7 +105,7 @@ class ReportFirmware final : public HidFirmware {
   void answer(const Send& send) {
     if (!answering()) return;
     InputValues v;
-    v.position = measured_position();
+    for (std::size_t j = 0; j < joints(); ++j) v.position[j] = measured_position(j);
     v.velocity = velocity();
     v.sequence = next_sequence();
     if (device_fault()) {
