@@ -220,6 +220,7 @@ void EvdevDevice::wait_output() const noexcept {
   if (updates_) updates_->wait_done();
 }
 
+// RT-safe: called every tick. The pending events, at most kMaxDrain.
 EvdevDevice::Drained EvdevDevice::drain() noexcept {
   Drained d;
   for (int j = 0; j < joints_; ++j) axes_[j].samples = 0;
@@ -247,6 +248,8 @@ EvdevDevice::Drained EvdevDevice::drain() noexcept {
   return d;
 }
 
+// RT-safe: called every tick. One event: a configured axis' value, the end of a frame, the
+// device stopping an effect of hapticd's, or something else (counted).
 void EvdevDevice::take_event(const wire::Event& ev, Drained& d) noexcept {
   if (ev.type == kEvAbs) {
     for (int j = 0; j < joints_; ++j) {
@@ -267,7 +270,7 @@ void EvdevDevice::take_event(const wire::Event& ev, Drained& d) noexcept {
   if (ev.type != kEvSyn) c_[kOtherEvents].add();
 }
 
-// A frame that moved no configured axis is nothing to the driver.
+// RT-safe: called every tick. A frame that moved no configured axis is nothing to the driver.
 void EvdevDevice::take_frame(Drained& d, std::int64_t time_ns) noexcept {
   bool any = false;
   for (int j = 0; j < joints_; ++j) {
@@ -285,6 +288,7 @@ void EvdevDevice::take_frame(Drained& d, std::int64_t time_ns) noexcept {
   c_[kAxisEvents].add();
 }
 
+// RT-safe: called every tick. Each joint's sample: new where its axis moved, held otherwise.
 IoStatus EvdevDevice::on_read(std::span<PositionSample> samples) noexcept {
   const Drained d = drain();
   if (d.error != 0) {
@@ -313,15 +317,16 @@ IoStatus EvdevDevice::on_read(std::span<PositionSample> samples) noexcept {
   return status;
 }
 
-// Whether a force is commanded on any joint: silence under it is what liveness_ms bounds.
+// RT-safe: called every tick. Whether a force is commanded on any joint: silence under it is
+// what liveness_ms bounds.
 bool EvdevDevice::forced() const noexcept {
   return effects_[0].level != 0 || effects_[1].level != 0;
 }
 
-// A tick without an event of axis j: the input core passes a value only when it changes, so
-// the position is the last one, still current - unless a force has been commanded for longer
-// than the liveness bound without the axis saying anything: then it is stale (the loop counts
-// it).
+// RT-safe: called every tick. A tick without an event of axis j: the input core passes a value only
+// when it changes, so the position is the last one, still current - unless a force has been
+// commanded for longer than the liveness bound without the axis saying anything: then it is stale
+// (the loop counts it).
 IoStatus EvdevDevice::hold(int j, PositionSample& out) noexcept {
   if (!have_position_) return IoStatus::kNoNewData;
   const std::int64_t now = base::monotonic_ns();

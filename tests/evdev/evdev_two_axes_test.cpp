@@ -11,6 +11,7 @@
 #include <fstream>
 #include <numbers>
 #include <sstream>
+#include <thread>
 
 #include "alloc_counter.h"
 #include "config/config_loader.h"
@@ -276,6 +277,30 @@ TEST(EvdevTwoAxesLoopback, AFaultZeroesBothAxes) {
       EXPECT_EQ(rig.peer.joint_force(1), 0.0) << effect;
       EXPECT_FALSE(rig.peer.output_on());
     }
+  }
+}
+
+// The crash handler's stop (Device::emergency_stop: a write of each effect's stop, nothing
+// else): both axes' effects, with one effect per axis.
+TEST(EvdevTwoAxesLoopback, TheEmergencyStopStopsEveryEffect) {
+  for (const char* effect : {"direction", "per_axis"}) {
+    Loopback rig(joystick({std::string("device.evdev.effect=") + effect, "loop.clock=freerun"}));
+    rig.device.configure();
+    rig.device.enable();
+    const std::array<double, 2> push{2.0, -1.0};
+    ASSERT_EQ(rig.device.write(push), IoStatus::kOk);
+    rig.runner.wait_idle();
+    ASSERT_NEAR(rig.peer.joint_force(0), 2.0, 1e-3) << effect;
+    rig.device.emergency_stop();
+    EXPECT_TRUE([&] {
+      for (int i = 0; i < 200; ++i) {
+        if (!rig.peer.output_on()) return true;
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+      }
+      return false;
+    }()) << effect;
+    EXPECT_EQ(rig.peer.joint_force(0), 0.0) << effect;
+    EXPECT_EQ(rig.peer.joint_force(1), 0.0) << effect;
   }
 }
 
