@@ -167,8 +167,9 @@ void read_axes(MapReader& ev, const Field& list, EvdevSettings& s) {
 }
 
 // `axis` (one joint) or `axes` (one entry per joint), never both, as many as device.kinematics
-// has joints.
-void read_axis(MapReader& ev, const config::Config& cfg, EvdevSettings& s) {
+// has joints. True when `axes` gave them: each entry has its direction_deg (a list of one
+// entry's is the effect's).
+bool read_axis(MapReader& ev, const config::Config& cfg, EvdevSettings& s) {
   const Field one = take(ev, "axis");
   const Field list = take(ev, "axes");
   if (one.present && list.present) {
@@ -176,10 +177,11 @@ void read_axis(MapReader& ev, const config::Config& cfg, EvdevSettings& s) {
                     "refuses " + ev.path() +
                         ".axis beside it: axis is the one axis of a device of one joint, axes "
                         "the axes of its joints; give one of them");
-    return;
+    return true;
   }
   if (list.present) {
     read_axes(ev, list, s);
+    if (s.joints == 1) s.direction_deg = s.axis.direction_deg;
   } else {
     if (!one.present) ev.missing("axis", "the absolute axis read as the position (or axes)");
     MapReader m(ev.diag(), one);
@@ -196,6 +198,7 @@ void read_axis(MapReader& ev, const config::Config& cfg, EvdevSettings& s) {
                         std::to_string(joints) + ": give " + ev.path() +
                         ".axes one entry per joint (joint i is axes[i])");
   }
+  return list.present;
 }
 
 // ff_driver, the USB polling interval and the kernel's HZ, and what they allow of loop.rate_hz.
@@ -239,7 +242,7 @@ double largest_force(const config::Config& cfg, const EvdevSettings& s) {
   return s.effect == EffectMode::kDirection ? std::hypot(m0, m1) : std::max(m0, m1);
 }
 
-void read_force(MapReader& ev, const config::Config& cfg, EvdevSettings& s) {
+void read_force(MapReader& ev, const config::Config& cfg, bool axes, EvdevSettings& s) {
   const Field fs = take(ev, "force_full_scale");
   if (!fs.present) ev.missing("force_full_scale", "the force (N or N m) at level 0x7fff");
   number(ev, fs, Range::greater_than(0.0), s.force_full_scale);
@@ -256,11 +259,12 @@ void read_force(MapReader& ev, const config::Config& cfg, EvdevSettings& s) {
                         format_number(s.force_full_scale) + " N");
   }
   const Field dir = take(ev, "direction_deg");
-  if (dir.present && s.joints > 1) {
+  if (dir.present && axes) {
     ev.diag().error(dir.key_mark, dir.path,
                     "one axis' only: with axes each entry has its own direction_deg");
+  } else {
+    number(ev, dir, Range::interval(0.0, true, 360.0, false), s.direction_deg);
   }
-  number(ev, dir, Range::interval(0.0, true, 360.0, false), s.direction_deg);
   number(ev, take(ev, "gain"), Range::interval(0.0, false, 1.0, true), s.gain);
   number(ev, take(ev, "autocenter"), Range::interval(0.0, true, 1.0, true), s.autocenter);
 }
@@ -306,10 +310,10 @@ std::shared_ptr<const config::DriverSettings> read_evdev_section(MapReader& ev,
   const std::size_t errors_before = ev.diag().messages().size();
   auto s = std::make_shared<EvdevSettings>();
   read_select(ev, s->select);
-  read_axis(ev, cfg, *s);
+  const bool axes = read_axis(ev, cfg, *s);
   read_ff_driver(ev, cfg, *s);
   read_effect(ev, *s);
-  read_force(ev, cfg, *s);
+  read_force(ev, cfg, axes, *s);
   read_liveness(ev, cfg, *s);
   read_update(ev, cfg, *s);
   if (ev.diag().messages().size() != errors_before) return nullptr;

@@ -60,6 +60,13 @@ std::vector<std::string> notes(const DriverContext& ctx) {
     line += ", at most " + config::schema::format_number(highest) +
             " updates a second reach the device";
   }
+  if (s.joints == 2) {
+    line += "; two axes, " + abs_name(s.axis.code) + " and " + abs_name(s.second.code) +
+            ", effect " + to_string(s.effect) +
+            (s.effect == EffectMode::kDirection
+                 ? " (one EVIOCSFF a tick, its direction following the force)"
+                 : " (one effect per axis: two EVIOCSFF a tick)");
+  }
   return {line + " (docs/drivers/evdev.md)"};
 }
 

@@ -63,7 +63,8 @@ TEST(EvdevTwoAxesConfig, TheJoystickExampleLoadsAndTheOneAxisExampleIsUnchanged)
   EXPECT_EQ(direction_of(s.axis.direction_deg), 0xC000) << "right: toward ABS_X's maximum";
   EXPECT_EQ(direction_of(s.second.direction_deg), 0x0000) << "down: toward ABS_Y's maximum";
   EXPECT_EQ(s.effect, EffectMode::kDirection);
-  const EvdevSettings& one = evdev_settings(joystick({}, "evdev.yaml"));
+  const config::Config one_cfg = joystick({}, "evdev.yaml");
+  const EvdevSettings& one = evdev_settings(one_cfg);
   EXPECT_EQ(one.joints, 1);
   EXPECT_EQ(direction_of(one.direction_deg), 0xC000);
   // ff-memless turns a direction into whole degrees: one effect per axis is its default.
@@ -121,6 +122,19 @@ TEST(EvdevTwoAxesConfig, EachMistakeIsNamedAtItsLineWithTheKey) {
                                      "device.kinematics (cartesian) has 2"),
             std::string::npos)
       << one_axis_two_joints;
+  // A list of one entry is one axis: its direction_deg is the effect's, the section's refused.
+  const std::vector<std::string> one_entry = {
+      "device.evdev.axis=", "device.evdev.direction_deg=",
+      "device.evdev.axes=[{code: ABS_X, min: -0.05, max: 0.05, direction_deg: 90}]"};
+  const config::Config listed_cfg = joystick(one_entry, "evdev.yaml");
+  const EvdevSettings& listed = evdev_settings(listed_cfg);
+  EXPECT_EQ(listed.joints, 1);
+  EXPECT_EQ(direction_of(listed.direction_deg), 0x4000);
+  std::vector<std::string> both = one_entry;
+  both.push_back("device.evdev.direction_deg=270");
+  EXPECT_NE(errors(both, "evdev.yaml").find("device.evdev.direction_deg: one axis' only"),
+            std::string::npos)
+      << errors(both, "evdev.yaml");
   const std::string three =
       errors({"device.evdev.axes=[{code: ABS_X, min: -1, max: 1}, {code: ABS_Y, min: -1, max: 1}, "
               "{code: ABS_Z, min: -1, max: 1}]"});
@@ -131,7 +145,8 @@ TEST(EvdevTwoAxesConfig, EachMistakeIsNamedAtItsLineWithTheKey) {
 // <linux/input.h>: 0x0000 down, 0x4000 left, 0x8000 up, 0xC000 right; ABS_X grows to the
 // right, ABS_Y down (toward the user).
 TEST(EvdevTwoAxesDirection, EachJointsForceBecomesTheDirectionThatPushesItsWay) {
-  const EvdevSettings& s = evdev_settings(joystick());
+  const config::Config cfg = joystick();
+  const EvdevSettings& s = evdev_settings(cfg);
   const double fs = s.force_full_scale;
   struct Case {
     double f0, f1;
