@@ -73,8 +73,9 @@ TEST(EvdevTwoAxesConfig, TheJoystickExampleLoadsAndTheOneAxisExampleIsUnchanged)
   EXPECT_EQ(evdev_settings(memless).effect, EffectMode::kPerAxis);
 }
 
-TEST(EvdevTwoAxesConfig, EachMistakeIsNamedAtItsLineWithTheKey) {
-  // The file and line of the key, the key, what is wrong.
+// How many axes, and which key gives them: the file and line of the key, the key, what is
+// wrong.
+TEST(EvdevTwoAxesConfig, TheAxesAreCountedAgainstTheKinematicsAtTheirKey) {
   EXPECT_NE(
       errors({"device.kinematics.joints=3", "device.kinematics.scale=[1, 1, 1]",
               "device.kinematics.sign=[1, 1, 1]",
@@ -91,6 +92,34 @@ TEST(EvdevTwoAxesConfig, EachMistakeIsNamedAtItsLineWithTheKey) {
   EXPECT_NE(beside.find("device.evdev.axes: refuses device.evdev.axis beside it"),
             std::string::npos)
       << beside;
+  const std::string one_axis_two_joints =
+      errors({"device.evdev.axes=", "device.evdev.axis={code: ABS_X, min: -0.05, max: 0.05}"});
+  EXPECT_NE(one_axis_two_joints.find("device.evdev.axis: 1 axis(es) read as 1 joint(s), but "
+                                     "device.kinematics (cartesian) has 2"),
+            std::string::npos)
+      << one_axis_two_joints;
+  // A list of one entry is one axis: its direction_deg is the effect's, the section's refused.
+  const std::vector<std::string> one_entry = {
+      "device.evdev.axis=", "device.evdev.direction_deg=",
+      "device.evdev.axes=[{code: ABS_X, min: -0.05, max: 0.05, direction_deg: 90}]"};
+  const config::Config listed_cfg = joystick(one_entry, "evdev.yaml");
+  const EvdevSettings& listed = evdev_settings(listed_cfg);
+  EXPECT_EQ(listed.joints, 1);
+  EXPECT_EQ(direction_of(listed.direction_deg), 0x4000);
+  std::vector<std::string> both = one_entry;
+  both.push_back("device.evdev.direction_deg=270");
+  EXPECT_NE(errors(both, "evdev.yaml").find("device.evdev.direction_deg: one axis' only"),
+            std::string::npos)
+      << errors(both, "evdev.yaml");
+  const std::string three =
+      errors({"device.evdev.axes=[{code: ABS_X, min: -1, max: 1}, {code: ABS_Y, min: -1, max: 1}, "
+              "{code: ABS_Z, min: -1, max: 1}]"});
+  EXPECT_NE(three.find("device.evdev.axes: must be a list of 1 or 2 axes"), std::string::npos)
+      << three;
+}
+
+// Each axis' direction, the effect and the full scale they need, named at the key.
+TEST(EvdevTwoAxesConfig, EachDirectionAndEffectMistakeIsNamedAtItsKey) {
   const std::string parallel = errors({"device.evdev.axes[1].direction_deg=90"});
   EXPECT_NE(parallel.find("device.evdev.axes: both axes push along the effect's x"),
             std::string::npos)
@@ -116,30 +145,6 @@ TEST(EvdevTwoAxesConfig, EachMistakeIsNamedAtItsLineWithTheKey) {
   const std::string one_effect = errors({"device.evdev.effect=direction"}, "evdev.yaml");
   EXPECT_NE(one_effect.find("device.evdev.effect: only with two axes"), std::string::npos)
       << one_effect;
-  const std::string one_axis_two_joints =
-      errors({"device.evdev.axes=", "device.evdev.axis={code: ABS_X, min: -0.05, max: 0.05}"});
-  EXPECT_NE(one_axis_two_joints.find("device.evdev.axis: 1 axis(es) read as 1 joint(s), but "
-                                     "device.kinematics (cartesian) has 2"),
-            std::string::npos)
-      << one_axis_two_joints;
-  // A list of one entry is one axis: its direction_deg is the effect's, the section's refused.
-  const std::vector<std::string> one_entry = {
-      "device.evdev.axis=", "device.evdev.direction_deg=",
-      "device.evdev.axes=[{code: ABS_X, min: -0.05, max: 0.05, direction_deg: 90}]"};
-  const config::Config listed_cfg = joystick(one_entry, "evdev.yaml");
-  const EvdevSettings& listed = evdev_settings(listed_cfg);
-  EXPECT_EQ(listed.joints, 1);
-  EXPECT_EQ(direction_of(listed.direction_deg), 0x4000);
-  std::vector<std::string> both = one_entry;
-  both.push_back("device.evdev.direction_deg=270");
-  EXPECT_NE(errors(both, "evdev.yaml").find("device.evdev.direction_deg: one axis' only"),
-            std::string::npos)
-      << errors(both, "evdev.yaml");
-  const std::string three =
-      errors({"device.evdev.axes=[{code: ABS_X, min: -1, max: 1}, {code: ABS_Y, min: -1, max: 1}, "
-              "{code: ABS_Z, min: -1, max: 1}]"});
-  EXPECT_NE(three.find("device.evdev.axes: must be a list of 1 or 2 axes"), std::string::npos)
-      << three;
 }
 
 // <linux/input.h>: 0x0000 down, 0x4000 left, 0x8000 up, 0xC000 right; ABS_X grows to the
