@@ -223,6 +223,24 @@ TEST(EvdevTwoAxesLoopback, AForceOnEitherJointPushesThatJointItsWay) {
   }
 }
 
+// An entry's direction_deg turned by half a turn reverses that joint's force on a device that
+// renders the direction as the header says, and only that joint's: the setting a device that
+// pushes the other way needs (docs/drivers/evdev.md).
+TEST(EvdevTwoAxesLoopback, AnAxisDirectionTurnedByHalfATurnReversesThatJointOnly) {
+  for (const char* effect : {"direction", "per_axis"}) {
+    Loopback rig(joystick({std::string("device.evdev.effect=") + effect, "loop.clock=freerun",
+                           "device.evdev.axes[1].direction_deg=180"}));
+    rig.device.configure();
+    rig.device.enable();
+    const std::array<double, 2> push{1.5, 2.0};
+    ASSERT_EQ(rig.device.write(push), IoStatus::kOk);
+    rig.runner.wait_idle();
+    EXPECT_NEAR(rig.peer.joint_force(0), 1.5, 1e-3) << effect;
+    EXPECT_NEAR(rig.peer.joint_force(1), -2.0, 1e-3) << effect;
+    rig.device.disable();
+  }
+}
+
 loop::LoopResult run_scene(const config::Config& cfg, Device& device, std::uint64_t ticks,
                            std::uint64_t* allocations) {
   control::Controller controller(control::make_control_law(cfg));  // unused at several joints
