@@ -1,6 +1,8 @@
 // The evdev driver's Device: the lifecycle over an EvdevTransport (libevdev on
-// /dev/input/eventN, or the loopback socketpair). configure uploads one FF_CONSTANT effect at
-// level 0 and sets FF_GAIN and FF_AUTOCENTER as configured; enable grabs the device
+// /dev/input/eventN, or the loopback socketpair), one axis or two (device.evdev.axes: a
+// joystick's ABS_X and ABS_Y, one FF_CONSTANT whose direction and level follow the force, or one
+// per axis). configure uploads the FF_CONSTANT effect(s) at level 0 and sets FF_GAIN and
+// FF_AUTOCENTER as configured; enable grabs the device
 // (EVIOCGRAB), turns autocenter off and plays the effect; every tick drains the events and
 // updates the effect's level (EVIOCSFF); disable and every fault set level 0, stop and erase
 // the effect, give autocenter back and release the grab. The updates go through the update
@@ -68,6 +70,7 @@ class EvdevDevice final : public Device {
   static constexpr std::uint32_t kEffectStopped = 0x10000;
   static constexpr std::uint32_t kUpdatesLate = 0x10001;
   static constexpr auto kSettle = std::chrono::seconds(2);  // an update at enable and disable
+  static constexpr int kAxes = 2;                           // an effect's plane: x and y
   enum CounterIndex : std::size_t {
     kAxisEvents,
     kSuperseded,
@@ -84,56 +87,70 @@ class EvdevDevice final : public Device {
     kLibrary,
     kCounterCount
   };
+  // One axis' state: its range, the frame being read, its last value.
+  struct Axis {
+    AxisRange range;
+    int pending = 0;                      // the axis value of the frame being read
+    bool moved = false;                   // the frame being read moved it
+    std::int64_t value = 0;               // the last complete frame's, unwrapped (axis.wraps)
+    io::CounterUnwrap unwrap{32, false};  // axis.wraps: the value less the range's minimum
+    int kernel_fuzz = 0;                  // the fuzz the kernel had on it, given back at close
+    std::uint32_t samples = 0;            // this tick's frames that moved it
+    std::int64_t time_ns = 0;             // the newest one's kernel time
+    std::int64_t quiet_since_ns = 0;      // its last event, or the last zero force after it
+  };
   struct Drained {
-    std::uint32_t samples = 0;  // frames (SYN_REPORT) that moved the axis
-    std::int64_t time_ns = 0;   // the newest one's kernel time
-    int error = 0;              // the transport failed (errno)
+    std::uint32_t frames = 0;  // frames (SYN_REPORT) that moved an axis
+    int error = 0;             // the transport failed (errno)
     bool effect_stopped = false;
   };
   Drained drain() noexcept;
-  void take_frame(Drained& d, std::int64_t time_ns) noexcept;  // the axis' pending value is new
-  void check_device(const wire::Facts& f) const;
+  void take_event(const wire::Event& ev, Drained& d) noexcept;
+  void take_frame(Drained& d, std::int64_t time_ns) noexcept;  // the axes' pending values are new
+  void check_device(const wire::Facts& f, const AxisSettings& a) const;
+  void configure_axis(int j);
   void upload();
   void start_updates();
+  UpdateThread::Session session() const noexcept;
   void zero_and_wait(const char* when);
   void stop_effect() noexcept;
-  IoStatus hold(PositionSample& out) noexcept;
-  void post(std::int16_t level) noexcept;
-  std::int64_t unwrapped(int raw) noexcept;
-  void check_wrap(const wire::Facts& f);
+  IoStatus hold(int j, PositionSample& out) noexcept;
+  void post(double force0, double force1) noexcept;
+  std::int64_t unwrapped(int j, int raw) noexcept;
+  void check_wrap(const wire::Facts& f, int j);
   void ff_or_throw(int code, int value, const char* what);
   void note_kernel_driver(const InputListing& l);
   std::string describe_late() const;
-  void unfuzz(int fuzz);
+  void unfuzz(int j, int fuzz);
+  void refuzz() noexcept;
+  int effect_count() const noexcept;
+  bool forced() const noexcept;
 
   std::shared_ptr<const EvdevSettings> settings_;
   std::function<Opened()> open_;
   double period_s_;
   bool realtime_;
   std::int64_t liveness_ns_;
+  int joints_;
   std::unique_ptr<EvdevTransport> transport_;
   std::vector<std::string> notices_;
-  AxisRange range_;
-  wire::Effect effect_;     // the uploaded effect (id -1: none), the level last written
-  int pending_value_ = 0;   // the axis value of the frame being read
-  std::int64_t value_ = 0;  // the last complete frame's, unwrapped (axis.wraps)
-  io::CounterUnwrap unwrap_{32, false};    // axis.wraps: the value less the range's minimum
+  std::array<Axis, kAxes> axes_{};
+  // The uploaded effects (id -1: none): one, or one per axis (effect: per_axis); the levels
+  // (and, effect: direction, the direction) last written.
+  std::array<wire::Effect, kAxes> effects_{};
   std::unique_ptr<UpdateThread> updates_;  // from configure to close
-  bool frame_moved_ = false;
   bool active_ = false;
   bool stopping_ = false;  // the stop asked for this session (a fault's, or disable's)
   bool have_position_ = false;
   bool has_gain_ = false, has_autocenter_ = false;
   std::int64_t late_ns_ = 0;  // the longest update of the late streak that faulted
-  int kernel_fuzz_ = 0;       // the fuzz the kernel had on the axis, given back at close
   std::atomic<EvdevTransport*> emergency_{nullptr};
-  std::int64_t quiet_since_ns_ = 0;  // the last axis event, or the last zero force after it
   using K = base::CounterKind;
   std::array<base::Counter, kCounterCount> c_{{
-      {"axis_events", K::kCount, "frames (SYN_REPORT) that moved the configured axis"},
+      {"axis_events", K::kCount, "frames (SYN_REPORT) that moved a configured axis"},
       {"superseded", K::kCount, "axis frames replaced by a newer one in the same tick"},
-      {"held_ticks", K::kCount, "ticks without an axis event: the position held"},
-      {"effect_updates", K::kCount, "EVIOCSFF updates of the effect's level the kernel took"},
+      {"held_ticks", K::kCount, "ticks without an axis event: the position held (each axis')"},
+      {"effect_updates", K::kCount, "EVIOCSFF updates of an effect's level the kernel took"},
       {"updates_superseded", K::kCount,
        "levels replaced by a newer one before the update thread took them (the device was "
        "busy with an earlier update)"},
@@ -142,7 +159,8 @@ class EvdevDevice final : public Device {
        "EVIOCSFF updates longer than the declared delay covers (device.evdev.update_latency_ms)"},
       {"syn_dropped", K::kAnomaly, "times the kernel's event buffer overflowed (SYN_DROPPED)"},
       {"silent_ticks", K::kAnomaly,
-       "ticks past device.evdev.liveness_ms without an axis event while a force was commanded"},
+       "ticks past device.evdev.liveness_ms without an event of an axis while a force was "
+       "commanded"},
       {"other_events", K::kCount, "events of other axes, keys and buttons (ignored)"},
       {"drain_limit", K::kAnomaly, "ticks that stopped draining at the per-tick bound"},
       {"malformed_messages", K::kAnomaly,

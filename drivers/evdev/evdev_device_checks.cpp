@@ -1,5 +1,5 @@
-// What configure checks of the device the kernel offers (the axis, force feedback, gain and
-// autocenter where the configuration needs them, a counter's range for axis.wraps, the kind of
+// What configure checks of the device the kernel offers (each axis, its fuzz, force feedback, gain
+// and autocenter where the configuration needs them, a counter's range for axis.wraps, the kind of
 // its kernel driver), and the sentences the driver's faults are named with.
 #include <cerrno>
 #include <cstdio>
@@ -10,8 +10,7 @@
 
 namespace hapticd::drivers::evdev {
 
-void EvdevDevice::check_device(const wire::Facts& f) const {
-  const AxisSettings& a = settings_->axis;
+void EvdevDevice::check_device(const wire::Facts& f, const AxisSettings& a) const {
   const std::string who = "evdev: \"" + f.name + "\"";
   if (!f.has_axis) throw DeviceError(who + " has no " + abs_name(a.code) + " axis");
   if (!f.ff_constant) {
@@ -42,17 +41,46 @@ void EvdevDevice::check_device(const wire::Facts& f) const {
 // core does not clamp reported values to the [minimum, maximum] limits"), so the counter's
 // rollover reaches the driver as a jump of the whole range. Unwrapped, the range must hold 2^n
 // values, as a field of n bits does.
-void EvdevDevice::check_wrap(const wire::Facts& f) {
-  if (!settings_->axis.wraps) return;
+void EvdevDevice::check_wrap(const wire::Facts& f, int j) {
+  const AxisSettings& a = settings_->axis_of(j);
+  if (!a.wraps) return;
   const int bits = counter_bits(f.range);
   if (bits == 0) {
     throw DeviceError("evdev: \"" + f.name +
                       "\": device.evdev.axis.wraps needs a counter's range, " +
-                      "2^n values, but the kernel gives " + abs_name(settings_->axis.code) + " [" +
+                      "2^n values, but the kernel gives " + abs_name(a.code) + " [" +
                       std::to_string(f.range.minimum) + ", " + std::to_string(f.range.maximum) +
                       "]: it cannot be unwrapped");
   }
-  unwrap_ = io::CounterUnwrap(bits, false);  // a new session: the first value sets the base
+  axes_[j].unwrap = io::CounterUnwrap(bits, false);  // a new session: the first value is the base
+}
+
+// The kernel smooths an axis with fuzz (hid-input gives a joystick's 1/256 of its range): a
+// change within fuzz/2 is dropped and up to twice fuzz averaged with the last value, a dead
+// band and a lag in the position the wall is rendered from. hapticd turns it off while it has
+// the device and gives it back at close.
+void EvdevDevice::unfuzz(int j, int fuzz) {
+  axes_[j].kernel_fuzz = 0;
+  if (fuzz == 0) return;
+  const int code = settings_->axis_of(j).code;
+  transport_->set_fuzz(code, 0);
+  axes_[j].kernel_fuzz = fuzz;
+  notices_.push_back("the kernel filtered " + abs_name(code) + " with fuzz " +
+                     std::to_string(fuzz) + " (changes within " + std::to_string(fuzz / 2) +
+                     " counts dropped): hapticd sets it to 0 while it runs and gives it back at "
+                     "close");
+}
+
+void EvdevDevice::refuzz() noexcept {
+  for (int j = 0; transport_ && j < joints_; ++j) {
+    if (axes_[j].kernel_fuzz == 0) continue;
+    try {
+      transport_->set_fuzz(settings_->axis_of(j).code, axes_[j].kernel_fuzz);
+    } catch (const DeviceError&) {
+      // A device that is gone takes its fuzz with it.
+    }
+    axes_[j].kernel_fuzz = 0;
+  }
 }
 
 void EvdevDevice::note_kernel_driver(const InputListing& l) {

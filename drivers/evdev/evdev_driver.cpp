@@ -60,6 +60,13 @@ std::vector<std::string> notes(const DriverContext& ctx) {
     line += ", at most " + config::schema::format_number(highest) +
             " updates a second reach the device";
   }
+  if (s.joints == 2) {
+    line += "; two axes, " + abs_name(s.axis.code) + " and " + abs_name(s.second.code) +
+            ", effect " + to_string(s.effect) +
+            (s.effect == EffectMode::kDirection
+                 ? " (one EVIOCSFF a tick, its direction following the force)"
+                 : " (one effect per axis: two EVIOCSFF a tick)");
+  }
   return {line + " (docs/drivers/evdev.md)"};
 }
 
@@ -72,12 +79,14 @@ std::string list_devices() {
   }
 }
 
-// The effect's direction turned by half a turn (docs/drivers/evdev.md).
+// The effect's direction turned by half a turn (docs/drivers/evdev.md); with two axes joint
+// 0's (the direction check drives one joint).
 ForceReversal force_reversal(const config::Config& cfg) {
   using config::schema::format_number;
-  const double d = settings_of(cfg)->direction_deg;
-  return {"device.evdev.direction_deg", format_number(d),
-          format_number(std::fmod(d + 180.0, 360.0))};
+  const EvdevSettings& s = *settings_of(cfg);
+  const double d = s.joints == 1 ? s.direction_deg : s.axis.direction_deg;
+  return {s.joints == 1 ? "device.evdev.direction_deg" : "device.evdev.axes[0].direction_deg",
+          format_number(d), format_number(std::fmod(d + 180.0, 360.0))};
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <numbers>
 #include <stdexcept>
 
 namespace hapticd::drivers::evdev {
@@ -37,6 +38,10 @@ const char* to_string(FfDriver d) noexcept {
       return "memless";
   }
   return "?";
+}
+
+const char* to_string(EffectMode m) noexcept {
+  return m == EffectMode::kDirection ? "direction" : "per_axis";
 }
 
 std::uint16_t direction_of(double degrees) noexcept {
@@ -86,6 +91,46 @@ std::int16_t force_level(double force, double full_scale) noexcept {
 
 double level_force(int level, double full_scale) noexcept {
   return static_cast<double>(level) * (full_scale / kLevelMax);
+}
+
+PlaneVector direction_vector(std::uint16_t direction) noexcept {
+  // The four the axes lie along exactly: sin and cos of pi are not 0 in double.
+  switch (direction) {
+    case 0x0000:
+      return {0.0, 1.0};
+    case 0x4000:
+      return {-1.0, 0.0};
+    case 0x8000:
+      return {0.0, -1.0};
+    case 0xC000:
+      return {1.0, 0.0};
+    default:
+      break;
+  }
+  const double a = direction / 65536.0 * 2.0 * std::numbers::pi;
+  return {-std::sin(a), std::cos(a)};
+}
+
+DirectedLevel directed_level(double force0, double force1, const EvdevSettings& s,
+                             std::uint16_t previous) noexcept {
+  const PlaneVector a0 = direction_vector(direction_of(s.axis.direction_deg));
+  const PlaneVector a1 = direction_vector(direction_of(s.second.direction_deg));
+  if (!std::isfinite(force0) || !std::isfinite(force1)) return {previous, 0};
+  const double x = force0 * a0.x + force1 * a1.x;
+  const double y = force0 * a0.y + force1 * a1.y;
+  const std::int16_t level = force_level(std::hypot(x, y), s.force_full_scale);
+  if (level == 0) return {previous, 0};
+  // (-sin t, cos t) = (x, y) / |(x, y)|: t = atan2(-x, y), in turns of 65536.
+  const double turns = std::atan2(-x, y) / (2.0 * std::numbers::pi);
+  const auto direction = static_cast<std::uint16_t>(std::lround(turns * 65536.0) & 0xFFFF);
+  return {direction, level};
+}
+
+double plane_force(int joint, std::uint16_t direction, int level, const EvdevSettings& s) noexcept {
+  const PlaneVector v = direction_vector(direction);
+  const PlaneVector a = direction_vector(direction_of(s.axis_of(joint).direction_deg));
+  const double along = a.x != 0.0 ? v.x : v.y;  // the device's own +x or +y
+  return level_force(level, s.force_full_scale) * along;
 }
 
 namespace {

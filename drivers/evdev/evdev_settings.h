@@ -65,11 +65,26 @@ struct AxisSettings {
   // multi-turn encoder in a report field of its own width): unwrapped from the previous
   // sample. The kernel's range must then hold 2^n values (docs/drivers/evdev.md).
   bool wraps = false;
+  // Two axes (device.evdev.axes[i].direction_deg): the ff_effect.direction toward which a
+  // positive force on this joint pushes, 0 (down, +Y), 90 (left, -X), 180 (up, -Y) or 270
+  // (right, +X); the two axes' are perpendicular. One axis: the section's direction_deg.
+  double direction_deg = 270.0;
 };
+
+// How the force of two axes becomes FF_CONSTANT effects (device.evdev.effect,
+// docs/drivers/evdev.md "Two axes"):
+//   kDirection  one effect whose direction and level follow the force vector each tick
+//   kPerAxis    one effect per axis at that axis' fixed direction, its signed level the joint's
+enum class EffectMode : std::uint8_t { kDirection, kPerAxis };
+const char* to_string(EffectMode m) noexcept;
 
 struct EvdevSettings final : config::DriverSettings {
   Selector select;
-  AxisSettings axis;
+  AxisSettings axis;                           // joint 0: device.evdev.axis, or axes[0]
+  AxisSettings second;                         // joint 1 where device.evdev.axes has two entries
+  int joints = 1;                              // 1 (axis) or 2 (axes)
+  EffectMode effect = EffectMode::kDirection;  // two axes only
+  const AxisSettings& axis_of(int joint) const noexcept { return joint == 0 ? axis : second; }
   double force_full_scale = 0.0;  // N (N m) at level 0x7fff, >= device.max_force
   double direction_deg = 270.0;   // ff_effect.direction: 270 (0xC000, right) pushes toward +x
   double gain = 1.0;              // FF_GAIN while output is on, (0, 1]
@@ -112,6 +127,30 @@ int counter_bits(const AxisRange& range) noexcept;
 std::int16_t force_level(double force, double full_scale) noexcept;
 // The force a level stands for.
 double level_force(int level, double full_scale) noexcept;
+
+// The unit vector in the effect's plane (x right, y down) toward which ff_effect.direction
+// `direction` points, as <linux/input.h> encodes it: 0x0000 down (+y), 0x4000 left (-x), 0x8000
+// up (-y), 0xC000 right (+x), i.e. (-sin, cos) of the direction's angle; ff-memless renders the
+// same, its x = sin * level and y = -cos * level counted toward left and up (ml_combine_effects).
+struct PlaneVector {
+  double x = 0.0, y = 0.0;
+};
+PlaneVector direction_vector(std::uint16_t direction) noexcept;
+// The one effect of two axes (EffectMode::kDirection): its direction and level.
+struct DirectedLevel {
+  std::uint16_t direction = 0;
+  std::int16_t level = 0;
+};
+// RT-safe. The direction and level that push joint j with force[j] (N), each joint along its
+// axis' direction_deg: the vector's direction rounded to 1/65536 of a turn, its length as
+// force_level. A force rounding to level 0 keeps `previous`'s direction (hid-pidff sends a Set
+// Effect report for every change of direction, none for the level alone).
+DirectedLevel directed_level(double force0, double force1, const EvdevSettings& s,
+                             std::uint16_t previous) noexcept;
+// RT-safe. The force (N) an effect of `direction` and `level` (times gain) puts on the device's
+// axis that joint j's direction_deg lies along (x for 90 and 270, y for 0 and 180), counted
+// toward that axis' + (right, down): what a device following <linux/input.h> renders.
+double plane_force(int joint, std::uint16_t direction, int level, const EvdevSettings& s) noexcept;
 
 // Whole samples between write() and the force acting, as the gate analyses them
 // (docs/drivers/evdev.md): what the kernel's driver adds - uinput 0; pidff like the HID

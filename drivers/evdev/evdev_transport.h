@@ -55,9 +55,9 @@ class EvdevTransport {
   // because nothing on the RT thread may print them.
   virtual std::uint64_t library_messages() const noexcept { return 0; }
 
-  // Not RT-safe. The effect emergency() stops (-1: none).
-  virtual void set_emergency_effect(int id) noexcept = 0;
-  // Async-signal-safe: only write(2) of the stop of that effect on the open descriptor.
+  // Not RT-safe. The effects emergency() stops (-1: none): one, or one per axis.
+  virtual void set_emergency_effects(int first, int second) noexcept = 0;
+  // Async-signal-safe: only write(2) of the stop of those effects on the open descriptor.
   virtual void emergency() noexcept = 0;
 };
 

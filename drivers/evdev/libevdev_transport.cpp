@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cerrno>
 #include <ctime>
@@ -103,7 +104,10 @@ class LibevdevTransport final : public EvdevTransport {
       : fd_(std::move(fd)), dev_(std::move(dev)), path_(std::move(path)) {
     libevdev_set_device_log_function(dev_.get(), count_message, LIBEVDEV_LOG_INFO, &messages_);
   }
-  ~LibevdevTransport() override { emergency_id_.store(-1); }
+  ~LibevdevTransport() override {
+    emergency_ids_[0].store(-1);
+    emergency_ids_[1].store(-1);
+  }
 
   std::string describe() const override {
     return "evdev " + path_ + " \"" + std::string(libevdev_get_name(dev_.get())) + "\"";
@@ -210,15 +214,20 @@ class LibevdevTransport final : public EvdevTransport {
     return messages_.load(std::memory_order_relaxed);
   }
 
-  void set_emergency_effect(int id) noexcept override { emergency_id_.store(id); }
+  void set_emergency_effects(int first, int second) noexcept override {
+    emergency_ids_[0].store(first);
+    emergency_ids_[1].store(second);
+  }
 
   void emergency() noexcept override {
-    const int id = emergency_id_.load();
-    if (id < 0) return;
-    input_event ev{};
-    ev.type = EV_FF;
-    ev.code = static_cast<__u16>(id);
-    [[maybe_unused]] const ssize_t n = ::write(fd_.get(), &ev, sizeof ev);
+    for (const std::atomic<int>& e : emergency_ids_) {
+      const int id = e.load();
+      if (id < 0) continue;
+      input_event ev{};
+      ev.type = EV_FF;
+      ev.code = static_cast<__u16>(id);
+      [[maybe_unused]] const ssize_t n = ::write(fd_.get(), &ev, sizeof ev);
+    }
   }
 
  private:
@@ -241,7 +250,7 @@ class LibevdevTransport final : public EvdevTransport {
   EvdevPtr dev_;
   std::string path_;
   bool syncing_ = false;
-  std::atomic<int> emergency_id_{-1};
+  std::array<std::atomic<int>, 2> emergency_ids_{-1, -1};
   std::atomic<std::uint64_t> messages_{0};
 };
 

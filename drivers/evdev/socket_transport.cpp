@@ -153,14 +153,16 @@ ReadStatus SocketTransport::read(wire::Event& ev, int& error) noexcept {
   }
 }
 
-void SocketTransport::set_emergency_effect(int id) noexcept {
-  stop_size_ = id < 0 ? 0 : wire::encode_write_ff(id, 0, stop_);
+void SocketTransport::set_emergency_effects(int first, int second) noexcept {
+  stop_size_[0] = first < 0 ? 0 : wire::encode_write_ff(first, 0, stop_[0]);
+  stop_size_[1] = second < 0 ? 0 : wire::encode_write_ff(second, 0, stop_[1]);
 }
 
 void SocketTransport::emergency() noexcept {
-  if (stop_size_ > 0) {
+  for (std::size_t k = 0; k < stop_.size(); ++k) {
+    if (stop_size_[k] == 0) continue;
     [[maybe_unused]] const ssize_t n =
-        ::send(fd_.get(), stop_.data(), stop_size_, MSG_DONTWAIT | MSG_NOSIGNAL);
+        ::send(fd_.get(), stop_[k].data(), stop_size_[k], MSG_DONTWAIT | MSG_NOSIGNAL);
   }
 }
 

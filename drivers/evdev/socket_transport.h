@@ -30,7 +30,7 @@ class SocketTransport final : public EvdevTransport {
   int update(const wire::Effect& effect) noexcept override;
   int write_ff(int code, int value) noexcept override;
   ReadStatus read(wire::Event& ev, int& error) noexcept override;
-  void set_emergency_effect(int id) noexcept override;
+  void set_emergency_effects(int first, int second) noexcept override;
   void emergency() noexcept override;
 
  private:
@@ -49,8 +49,9 @@ class SocketTransport final : public EvdevTransport {
   std::array<std::uint8_t, 32> tx_{};   // the RT thread's EV_FF writes
   std::array<std::uint8_t, 32> utx_{};  // the update thread's
   std::array<std::uint8_t, 32> urx_{};
-  std::array<std::uint8_t, 32> stop_{};  // the emergency stop, prebuilt
-  std::size_t stop_size_ = 0;
+  // The emergency stops, prebuilt: one per effect.
+  std::array<std::array<std::uint8_t, 32>, 2> stop_{};
+  std::array<std::size_t, 2> stop_size_{};
 };
 
 }  // namespace hapticd::drivers::evdev

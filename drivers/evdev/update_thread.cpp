@@ -8,18 +8,27 @@
 namespace hapticd::drivers::evdev {
 namespace {
 
-constexpr std::uint64_t kLevelMask = 0xFFFF;
-constexpr std::uint64_t kSeqMask = 0xFFFF'FFFF;
+constexpr std::uint64_t kPayloadMask = 0xFFFF'FFFF;
+constexpr std::uint64_t kSeqMask = 0x7FFF'FFFF;  // 31 bits: bit 63 is kTaken
 
 std::uint32_t seq_of(std::uint64_t slot) noexcept {
-  return static_cast<std::uint32_t>((slot >> 16) & kSeqMask);
+  return static_cast<std::uint32_t>((slot >> 32) & kSeqMask);
 }
-std::int16_t level_of(std::uint64_t slot) noexcept {
-  return static_cast<std::int16_t>(static_cast<std::uint16_t>(slot & kLevelMask));
+std::uint32_t payload_of(std::uint64_t slot) noexcept {
+  return static_cast<std::uint32_t>(slot & kPayloadMask);
 }
-// Wrap-aware: sequence number a is at or past b.
+// Wrap-aware over the 31 bits: sequence number a is at or past b.
 bool reached(std::uint32_t a, std::uint32_t b) noexcept {
-  return static_cast<std::int32_t>(a - b) >= 0;
+  return static_cast<std::int32_t>((a - b) << 1) >= 0;
+}
+std::uint32_t packed(const wire::Effect& e) noexcept {
+  return static_cast<std::uint16_t>(e.id) | (static_cast<std::uint32_t>(e.direction) << 16);
+}
+wire::Effect unpacked(std::uint32_t e) noexcept {
+  wire::Effect effect;
+  effect.id = static_cast<std::int16_t>(static_cast<std::uint16_t>(e & 0xFFFF));
+  effect.direction = static_cast<std::uint16_t>(e >> 16);
+  return effect;
 }
 
 }  // namespace
@@ -37,10 +46,10 @@ UpdateThread::~UpdateThread() {
   thread_.join();
 }
 
-void UpdateThread::start_session(const wire::Effect& effect) noexcept {
-  effect_.store(
-      static_cast<std::uint16_t>(effect.id) | (static_cast<std::uint32_t>(effect.direction) << 16),
-      std::memory_order_release);
+void UpdateThread::start_session(const Session& session) noexcept {
+  effects_[0].store(packed(session.effects[0]), std::memory_order_release);
+  effects_[1].store(packed(session.effects[1]), std::memory_order_release);
+  mode_.store(session.mode, std::memory_order_release);
   error_.store(0, std::memory_order_release);
   late_.store(false, std::memory_order_release);
   late_ns_.store(0, std::memory_order_release);
@@ -48,9 +57,10 @@ void UpdateThread::start_session(const wire::Effect& effect) noexcept {
 }
 
 // RT-safe: called every tick.
-bool UpdateThread::post(std::int16_t level) noexcept {
+bool UpdateThread::post(std::int16_t level, std::uint16_t second) noexcept {
   const std::uint64_t seq = (seq_of(slot_.load(std::memory_order_relaxed)) + 1) & kSeqMask;
-  const std::uint64_t v = (seq << 16) | static_cast<std::uint16_t>(level);
+  const std::uint64_t v =
+      (seq << 32) | (std::uint64_t{second} << 16) | static_cast<std::uint16_t>(level);
   // seq_cst, with the load of asleep_ below and the thread's store of asleep_ before it looks
   // at the slot again: one of the two sees the other, so a level is never left unwoken.
   const std::uint64_t before = slot_.exchange(v, std::memory_order_seq_cst);
@@ -63,16 +73,18 @@ bool UpdateThread::post(std::int16_t level) noexcept {
 
 // RT-safe. The stop is asked for before level 0 is handed over, and the thread looks for a
 // stop before it takes a level: the stop comes first.
-bool UpdateThread::post_stop() noexcept {
+bool UpdateThread::post_stop(std::uint16_t second) noexcept {
   stops_asked_.fetch_add(1, std::memory_order_seq_cst);
-  return post(0);
+  return post(0, mode_.load(std::memory_order_acquire) == Mode::kDirected ? second : 0);
 }
 
 void UpdateThread::stop_effect() noexcept {
   const std::uint32_t asked = stops_asked_.load(std::memory_order_acquire);
-  const auto id =
-      static_cast<int>(static_cast<std::int16_t>(effect_.load(std::memory_order_acquire) & 0xFFFF));
-  transport_.write_ff(id, 0);  // best effort: a device that is gone says so to the reads
+  const int effects = mode_.load(std::memory_order_acquire) == Mode::kPerAxis ? 2 : 1;
+  for (int k = 0; k < effects; ++k) {
+    // best effort: a device that is gone says so to the reads
+    transport_.write_ff(unpacked(effects_[k].load(std::memory_order_acquire)).id, 0);
+  }
   stops_made_.store(asked, std::memory_order_release);
   done_.notify_all();
 }
@@ -97,28 +109,40 @@ void UpdateThread::run() noexcept {
     }
     // Fails when the RT thread handed a newer level over meanwhile: that one is taken next.
     if (!slot_.compare_exchange_weak(v, v | kTaken, std::memory_order_acq_rel)) continue;
-    update(level_of(v));
+    update(payload_of(v));
     done_.store(seq_of(v), std::memory_order_release);
     done_.notify_all();
   }
 }
 
-void UpdateThread::update(std::int16_t level) noexcept {
-  const std::uint32_t e = effect_.load(std::memory_order_acquire);
-  wire::Effect effect;
-  effect.id = static_cast<std::int16_t>(static_cast<std::uint16_t>(e & 0xFFFF));
-  effect.direction = static_cast<std::uint16_t>(e >> 16);
-  effect.level = level;
-  const std::int64_t t0 = base::monotonic_ns();
+// One EVIOCSFF: false when the kernel refused it (its errno kept, the first of the session).
+bool UpdateThread::update_one(wire::Effect effect) noexcept {
   const int error = transport_.update(effect);
-  const std::int64_t ns = base::monotonic_ns() - t0;
   if (error == 0) {
     c_.taken.add();
-  } else {
-    int none = 0;
-    error_.compare_exchange_strong(none, error, std::memory_order_acq_rel);
+    return true;
   }
-  judge(ns);
+  int none = 0;
+  error_.compare_exchange_strong(none, error, std::memory_order_acq_rel);
+  return false;
+}
+
+// The update posted, timed as one: kPerAxis makes both effects' EVIOCSFF, effects[0]'s first
+// (the simulated device steps its plant at effects[1]'s, the end of the tick's update).
+void UpdateThread::update(std::uint32_t payload) noexcept {
+  const auto level = static_cast<std::int16_t>(static_cast<std::uint16_t>(payload & 0xFFFF));
+  const auto second = static_cast<std::uint16_t>(payload >> 16);
+  const Mode mode = mode_.load(std::memory_order_acquire);
+  wire::Effect first = unpacked(effects_[0].load(std::memory_order_acquire));
+  first.level = level;
+  if (mode == Mode::kDirected) first.direction = second;
+  const std::int64_t t0 = base::monotonic_ns();
+  if (update_one(first) && mode == Mode::kPerAxis) {
+    wire::Effect other = unpacked(effects_[1].load(std::memory_order_acquire));
+    other.level = static_cast<std::int16_t>(second);
+    update_one(other);
+  }
+  judge(base::monotonic_ns() - t0);
 }
 
 // The time an update took, against what the declared delay covers.

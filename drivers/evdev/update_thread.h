@@ -11,6 +11,7 @@
 // follows that update at once, ahead of any level still waiting, which level 0 replaces.
 #pragma once
 
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cstdint>
@@ -32,6 +33,15 @@ class UpdateThread {
     std::int64_t covered_ns = 0;  // an update longer than this is late
     int late_fault = 10;          // this many late updates in a row fault
   };
+  // What one update is made of (docs/drivers/evdev.md, "Two axes"):
+  //   kOne       one axis: effects[0] with the level posted
+  //   kDirected  two axes, one effect: effects[0] with the level and the direction posted
+  //   kPerAxis   two axes, an effect each: effects[0] and then effects[1], each with its level
+  enum class Mode : std::uint8_t { kOne, kDirected, kPerAxis };
+  struct Session {
+    std::array<wire::Effect, 2> effects{};  // their ids and (kOne, kPerAxis) directions
+    Mode mode = Mode::kOne;
+  };
   // Not RT-safe. Starts the thread at SCHED_FIFO `priority`; `transport` must outlive it.
   UpdateThread(EvdevTransport& transport, int priority, Timing timing, Counters counters);
   // Stops the thread and joins it, after the update it has in hand.
@@ -39,17 +49,19 @@ class UpdateThread {
   UpdateThread(const UpdateThread&) = delete;
   UpdateThread& operator=(const UpdateThread&) = delete;
 
-  // Not RT-safe; while idle (after flush). The effect later levels update (its id and
-  // direction), and a new session: the error and the late streak forgotten.
-  void start_session(const wire::Effect& effect) noexcept;
+  // Not RT-safe; while idle (after flush). The effects later levels update (their ids and
+  // directions), and a new session: the error and the late streak forgotten.
+  void start_session(const Session& session) noexcept;
 
-  // RT-safe: called every tick. Hands `level` on without waiting: one atomic exchange, and a
-  // futex wake only when the thread is asleep (none while the device is busy with an update).
-  // True when it replaced a level the thread had not taken: superseded.
-  bool post(std::int16_t level) noexcept;
-  // RT-safe: the stop of the effect (an EV_FF write of 0), then level 0: after the update in
-  // hand, ahead of any level waiting. Same as post() otherwise.
-  bool post_stop() noexcept;
+  // RT-safe: called every tick. Hands `level` (and `second`: kDirected the direction, kPerAxis
+  // effects[1]'s level) on without waiting: one atomic exchange, and a futex wake only when the
+  // thread is asleep (none while the device is busy with an update). True when it replaced an
+  // update the thread had not taken: superseded.
+  bool post(std::int16_t level, std::uint16_t second = 0) noexcept;
+  // RT-safe: the stop of the effects (an EV_FF write of 0 each), then level 0 (kDirected: in
+  // direction `second`): after the update in hand, ahead of any level waiting. Same as post()
+  // otherwise.
+  bool post_stop(std::uint16_t second = 0) noexcept;
   // RT-safe. The first update the device refused this session: its errno, or 0.
   int error() const noexcept { return error_.load(std::memory_order_acquire); }
   // RT-safe. Whether late_fault updates in a row were late this session.
@@ -71,21 +83,24 @@ class UpdateThread {
   void run() noexcept;
   bool idle() const noexcept;
   void stop_effect() noexcept;
-  void update(std::int16_t level) noexcept;
+  void update(std::uint32_t payload) noexcept;
+  bool update_one(wire::Effect effect) noexcept;
   void judge(std::int64_t ns) noexcept;
 
   EvdevTransport& transport_;
   const Timing timing_;
   Counters c_;
-  // The level handed over: bits 0-15 the level, 16-47 its sequence number, kTaken once the
-  // thread took it. The RT thread exchanges, the update thread takes with a compare-exchange:
-  // a level is either taken or superseded, never both.
+  // The update handed over: bits 0-15 the level, 16-31 the second word (post), 32-62 its
+  // sequence number, kTaken once the thread took it. The RT thread exchanges, the update thread
+  // takes with a compare-exchange: an update is either taken or superseded, never both.
   std::atomic<std::uint64_t> slot_{kTaken};
   std::atomic<std::uint32_t> done_{0};  // the sequence number of the last level through
   std::atomic<std::uint32_t> bell_{0};  // the futex the thread sleeps on
   std::atomic<std::uint32_t> stops_asked_{0}, stops_made_{0};
   std::atomic<bool> asleep_{false}, stop_{false};
-  std::atomic<std::uint32_t> effect_{0};  // id (low 16 bits) and direction (high 16)
+  // Each effect's id (low 16 bits) and direction (high 16), and the mode: set while idle.
+  std::array<std::atomic<std::uint32_t>, 2> effects_{};
+  std::atomic<Mode> mode_{Mode::kOne};
   std::atomic<int> error_{0};
   std::atomic<bool> late_{false};
   std::atomic<std::int64_t> late_ns_{0};

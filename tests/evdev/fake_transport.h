@@ -89,7 +89,7 @@ class FakeTransport final : public EvdevTransport {
     return status;
   }
   std::uint64_t library_messages() const noexcept override { return s_->library_messages; }
-  void set_emergency_effect(int) noexcept override {}
+  void set_emergency_effects(int, int) noexcept override {}
   void emergency() noexcept override { s_->emergencies.fetch_add(1); }
 
  private:

@@ -39,35 +39,54 @@ namespace ev = drivers::evdev;
 using ev::wire::Message;
 using ev::wire::Type;
 
+namespace {
+
+// Where the simulated axes start: device.sim.initial_position, or the mechanism's origin.
+std::array<double, 2> evdev_start_of(const config::Config& cfg, const Mechanism* m) {
+  if (m == nullptr) return {cfg.device.sim.initial_position, 0.0};
+  const kinematics::Vec3& q = m->plant().joint_positions();
+  return {q[0], q[1]};
+}
+
+}  // namespace
+
 SocketEvdevPeer::SocketEvdevPeer(const config::Config& cfg, io::UniqueFd fd, int link_delay_samples)
     : settings_(ev::evdev_settings(cfg)),
+      joints_(settings_.joints),
+      effects_held_(joints_ == 2 && settings_.effect == ev::EffectMode::kPerAxis ? 2 : 1),
       fd_(std::move(fd)),
       axis_(cfg.device, cfg.loop.sample_period_s()),
+      mechanism_(joints_ == 2 ? std::make_unique<Mechanism>(cfg.device, cfg.loop.sample_period_s())
+                              : nullptr),
       counts_per_unit_(axis_.counts_per_unit() > 0.0 ? axis_.counts_per_unit() : 1e6),
-      fifo_(static_cast<std::size_t>(link_delay_samples) + 1, cfg.device.sim.initial_position) {
+      fifo_(static_cast<std::size_t>(link_delay_samples) + 1,
+            evdev_start_of(cfg, mechanism_.get())) {
   tx_.reserve(ev::wire::kMaxMessage);
-  const ev::AxisSettings& a = settings_.axis;
-  if (a.scale == ev::Scale::kRange) {
-    // The encoder's counts over the configured travel, from 0 at min.
-    range_ = {0, checked_counts(cfg, (a.max - a.min) * counts_per_unit_, "over its travel"), 0};
-    if (range_.maximum < 0) range_ = {range_.maximum, 0, 0};
-  } else {
-    const double per_unit = a.rotary ? counts_per_unit_ : counts_per_unit_ * 1e-3;
-    range_ = {-(1 << 30), 1 << 30, std::max(1, checked_counts(cfg, per_unit, "per unit"))};
+  for (int j = 0; j < joints_; ++j) {
+    const ev::AxisSettings& a = settings_.axis_of(j);
+    ev::AxisRange& r = range_[static_cast<std::size_t>(j)];
+    if (a.scale == ev::Scale::kRange) {
+      // The encoder's counts over the configured travel, from 0 at min.
+      r = {0, checked_counts(cfg, (a.max - a.min) * counts_per_unit_, "over its travel"), 0};
+      if (r.maximum < 0) r = {r.maximum, 0, 0};
+    } else {
+      const double per_unit = a.rotary ? counts_per_unit_ : counts_per_unit_ * 1e-3;
+      r = {-(1 << 30), 1 << 30, std::max(1, checked_counts(cfg, per_unit, "per unit"))};
+    }
   }
 }
 
-std::int32_t SocketEvdevPeer::raw_value(double x) const noexcept {
-  const ev::AxisSettings& a = settings_.axis;
+std::int32_t SocketEvdevPeer::raw_value(int j, double x) const noexcept {
+  const ev::AxisSettings& a = settings_.axis_of(j);
+  const ev::AxisRange& r = range_[static_cast<std::size_t>(j)];
   double raw = 0.0;
   if (a.scale == ev::Scale::kRange) {
-    const double span = static_cast<double>(range_.maximum) - range_.minimum;
-    raw = range_.minimum + (x - a.min) / (a.max - a.min) * span;
+    const double span = static_cast<double>(r.maximum) - r.minimum;
+    raw = r.minimum + (x - a.min) / (a.max - a.min) * span;
   } else {
-    raw = (x - a.offset) * (a.rotary ? range_.resolution : range_.resolution * 1e3);
+    raw = (x - a.offset) * (a.rotary ? r.resolution : r.resolution * 1e3);
   }
-  raw = std::clamp(std::floor(raw), static_cast<double>(range_.minimum),
-                   static_cast<double>(range_.maximum));
+  raw = std::clamp(std::floor(raw), static_cast<double>(r.minimum), static_cast<double>(r.maximum));
   return static_cast<std::int32_t>(raw);
 }
 
@@ -109,19 +128,39 @@ void SocketEvdevPeer::send_event(int type, int code, int value) {
   send(m);
 }
 
-// The force the effect asks for, along the axis: the level's share of full scale, times the
-// gain, along the direction as <linux/input.h> encodes it (0x4000 "left", 0xC000 "right": a
-// positive level pushes toward -x at 0x4000, -sin(direction)), while it plays.
+// The force the effects ask for on each joint, while they play: each level's share of full
+// scale, times the gain, along its direction as <linux/input.h> encodes it (0x4000 "left",
+// 0xC000 "right", 0x0000 "down", 0x8000 "up": ev::plane_force), the joint's axis being the
+// effect's x or y as its direction_deg lies (one axis: x). Summed over the effects, as
+// ff-memless combines them.
 void SocketEvdevPeer::apply() noexcept {
-  double force = 0.0;
-  if (playing_.load() && uploaded_) {
-    const double along = -std::sin(effect_.direction / 65536.0 * 2.0 * std::numbers::pi);
-    force = ev::level_force(effect_.level, settings_.force_full_scale) * gain_ * along;
-    if (std::abs(force) < 1e-12) force = 0.0;
+  std::array<double, kAxes> force{};
+  for (int k = 0; k < effects_held_; ++k) {
+    if (!playing_.load() || !uploaded_[k] || !effect_playing_[k]) continue;
+    for (int j = 0; j < joints_; ++j) {
+      force[j] += ev::plane_force(j, effects_[k].direction, effects_[k].level, settings_) * gain_;
+    }
+  }
+  double largest = 0.0;
+  for (int j = 0; j < joints_; ++j) {
+    if (std::abs(force[j]) < 1e-12) force[j] = 0.0;
+    if (std::abs(force[j]) > std::abs(largest)) largest = force[j];
+    joint_force_[j].store(force[j]);
+    if (mechanism_) {
+      mechanism_->set_output(j, playing_.load());
+      mechanism_->hold_torque(j, force[j]);
+    }
   }
   axis_.set_output(playing_.load());
-  axis_.hold_force(force);
-  applied_.store(force);
+  axis_.hold_force(force[0]);
+  applied_.store(largest);
+}
+
+int SocketEvdevPeer::effect_index(int id) const noexcept {
+  for (int k = 0; k < effects_held_; ++k) {
+    if (uploaded_[k] && effects_[k].id == id) return k;
+  }
+  return -1;
 }
 
 void SocketEvdevPeer::on_update(const ev::wire::Effect& e) {
@@ -146,10 +185,15 @@ void SocketEvdevPeer::take_due() {
   }
 }
 
-// An EV_FF event written to the node: play or stop the effect, the gain.
+// An EV_FF event written to the node: play or stop an effect, the gain.
 void SocketEvdevPeer::write_ff(int code, int value) {
   if (code == ev::kFfGain) gain_ = value / 65535.0;
-  if (uploaded_ && code == effect_.id) playing_.store(value > 0 && fault_.load() == kNoFault);
+  if (const int k = effect_index(code); k >= 0) {
+    effect_playing_[k] = value > 0 && fault_.load() == kNoFault;
+    bool any = false;
+    for (int i = 0; i < effects_held_; ++i) any = any || (uploaded_[i] && effect_playing_[i]);
+    playing_.store(any);
+  }
   apply();
 }
 
@@ -159,64 +203,102 @@ int SocketEvdevPeer::service_interval_ms() const noexcept {
   return left <= 0 ? 0 : static_cast<int>((left + 999'999) / 1'000'000);
 }
 
-// The update taken: the level applied, the plant stepped, the update answered and the axis
-// reported (held by the declared delay; a device slowed on purpose holds nothing more).
+// The update taken: the level applied and answered; at the tick's last effect (effects[1] with
+// effect: per_axis, the update thread's order) the plant stepped and the axes reported.
 void SocketEvdevPeer::take_update(const ev::wire::Effect& e) {
-  if (!uploaded_ || e.id != effect_.id) return answer_update(EINVAL, 0);  // erased meanwhile
-  if (fault_.load() == kFaultPending) {  // the device stops the effect itself, and says so
+  const int k = effect_index(e.id);
+  if (k < 0) return answer_update(EINVAL, 0);  // erased meanwhile
+  if (fault_.load() == kFaultPending) {        // the device stops its effects itself, and says so
     fault_.store(kFaultSaid);
     playing_.store(false);
-    send_event(ev::kEvFfStatus, effect_.id, ev::kFfStatusStopped);
+    effect_playing_.fill(false);
+    send_event(ev::kEvFfStatus, e.id, ev::kFfStatusStopped);
   }
-  effect_.level = e.level;
-  effect_.direction = e.direction;
+  effects_[k].level = e.level;
+  effects_[k].direction = e.direction;
   apply();
-  axis_.step();
-  fifo_[fifo_head_] = axis_.encoder_position();
-  fifo_head_ = (fifo_head_ + 1) % fifo_.size();
   last_level_.store(e.level);
   updates_taken_.fetch_add(1);
+  if (k + 1 < effects_held_) return answer_update(0, e.id);
+  step_and_report();
   answer_update(0, e.id);
   if (silent_.load()) return;
-  const double x = latency_ns_.load() > 0 ? axis_.encoder_position() : fifo_[fifo_head_];
-  send_event(ev::kEvAbs, settings_.axis.code, raw_value(x));
+  const bool late = latency_ns_.load() > 0;
+  for (int j = 0; j < joints_; ++j) {
+    const double x = late
+                         ? (mechanism_ ? mechanism_->encoder_position(j) : axis_.encoder_position())
+                         : fifo_[fifo_head_][j];
+    send_event(ev::kEvAbs, settings_.axis_of(j).code, raw_value(j, x));
+  }
   send_event(ev::kEvSyn, ev::kSynReport, 0);
+}
+
+// One period of the plant (or the mechanism), its encoders into the delay line (held by the
+// declared delay; a device slowed on purpose holds nothing more).
+void SocketEvdevPeer::step_and_report() {
+  std::array<double, kAxes>& slot = fifo_[fifo_head_];
+  if (mechanism_) {
+    mechanism_->step();
+    for (int j = 0; j < joints_; ++j) slot[j] = mechanism_->encoder_position(j);
+  } else {
+    axis_.step();
+    slot[0] = axis_.encoder_position();
+  }
+  fifo_head_ = (fifo_head_ + 1) % fifo_.size();
+}
+
+void SocketEvdevPeer::query(const Message& m) {
+  Message f;
+  f.type = Type::kFacts;
+  f.facts.name = "hapticd simulated force-feedback device";
+  f.facts.bus = 0x06;  // BUS_VIRTUAL
+  for (int j = 0; j < joints_; ++j) {
+    if (m.a != settings_.axis_of(j).code) continue;
+    f.facts.has_axis = true;
+    f.facts.range = range_[static_cast<std::size_t>(j)];
+    f.facts.value = raw_value(j, fifo_[fifo_head_][j]);
+  }
+  f.facts.ff_constant = f.facts.ff_gain = f.facts.ff_autocenter = true;
+  f.facts.ff_effects = effects_held_;
+  send(f);
+}
+
+// EVIOCSFF: a new effect (id -1) takes the next free slot, an existing one is an update.
+void SocketEvdevPeer::upload(const Message& m) {
+  if (m.effect.id >= 0) {
+    if (effect_index(m.effect.id) < 0) return answer_update(EINVAL, 0);
+    return on_update(m.effect);
+  }
+  for (int k = 0; k < effects_held_; ++k) {
+    if (uploaded_[k]) continue;
+    uploaded_[k] = true;
+    effect_playing_[k] = false;
+    effects_[k] = m.effect;
+    effects_[k].id = static_cast<std::int16_t>(k);
+    return answer(0, k);
+  }
+  answer(ENOSPC);  // it holds effects_held_ effects
 }
 
 void SocketEvdevPeer::handle(const Message& m) {
   switch (m.type) {
-    case Type::kQuery: {
-      Message f;
-      f.type = Type::kFacts;
-      f.facts.name = "hapticd simulated force-feedback device";
-      f.facts.bus = 0x06;  // BUS_VIRTUAL
-      f.facts.has_axis = m.a == settings_.axis.code;
-      f.facts.range = range_;
-      f.facts.value = raw_value(fifo_[fifo_head_]);
-      f.facts.ff_constant = f.facts.ff_gain = f.facts.ff_autocenter = true;
-      f.facts.ff_effects = 1;
-      send(f);
-      return;
-    }
+    case Type::kQuery:
+      return query(m);
     case Type::kGrab:
       answer(0);
       return;
     case Type::kUpload:
-      if (m.effect.id < 0) {
-        if (uploaded_) return answer(ENOSPC);  // it holds one effect
-        uploaded_ = true;
-        effect_ = m.effect;
-        effect_.id = 0;
-        return answer(0, 0);
-      }
-      if (!uploaded_ || m.effect.id != effect_.id) return answer_update(EINVAL, 0);
-      return on_update(m.effect);
-    case Type::kErase:
-      if (!uploaded_ || m.a != effect_.id) return answer(EINVAL);
-      uploaded_ = false;
-      playing_.store(false);
+      return upload(m);
+    case Type::kErase: {
+      const int k = effect_index(m.a);
+      if (k < 0) return answer(EINVAL);
+      uploaded_[k] = false;
+      effect_playing_[k] = false;
+      playing_.store(
+          std::any_of(effect_playing_.begin(), effect_playing_.end(), [](bool p) { return p; }));
       apply();
       return answer(0);
+    }
     case Type::kWriteFf:
       if (!pending_.empty()) return pending_.push_back({0, m});  // behind the update in hand
       return write_ff(m.a, m.b);
@@ -227,7 +309,8 @@ void SocketEvdevPeer::handle(const Message& m) {
 
 void SocketEvdevPeer::lose_host() noexcept {
   playing_.store(false);
-  uploaded_ = false;  // closing the node erases the effects of the process that made them
+  uploaded_.fill(false);  // closing the node erases the effects of the process that made them
+  effect_playing_.fill(false);
   pending_.clear();
   answers_.reset();  // an update waiting for its answer learns the device is gone
   apply();
@@ -290,6 +373,7 @@ bool SocketEvdevPeer::inject(PeerFault fault) noexcept {
       vanished_.store(true);
       playing_.store(false);
       applied_.store(0.0);
+      for (std::atomic<double>& f : joint_force_) f.store(0.0);
       ::shutdown(fd_.get(), SHUT_RDWR);
       return true;
   }
