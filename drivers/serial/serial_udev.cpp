@@ -1,4 +1,5 @@
 #include <filesystem>
+#include <regex>
 #include <sstream>
 
 #include "config/config_loader.h"
@@ -20,26 +21,25 @@ std::string port_match(const config::Config& cfg, const UdevRules& out, const st
     throw config::ConfigError(
         {cfg.locate("device.serial.port") + ": device.serial.port: '" + port + "' " + why});
   };
+  static const std::regex kLink(R"(usb-([A-Za-z0-9_.:-]+)-if([0-9a-f]{2})(-port([0-9]+))?)");
+  static const std::regex kKernel(R"(/dev/(tty(ACM|USB|AMA|S)[0-9]+))");
+  std::smatch m;
   if (port.rfind(kById, 0) == 0) {
     const std::string link = port.substr(std::string(kById).size());
-    const std::size_t in = link.rfind("-if");
-    if (link.rfind("usb-", 0) != 0 || in == std::string::npos || in <= 4) {
-      refuse("is not a link udev's 60-serial.rules makes (usb-SERIAL-ifNN)");
+    if (!std::regex_match(link, m, kLink)) {
+      refuse("is not a link udev's 60-serial.rules makes (usb-SERIAL-ifNN, -portN after it)");
     }
-    const std::string serial = link.substr(4, in - 4);
-    const std::string iface = link.substr(in + 3, 2);
-    out.literal("device.serial.port", serial);
-    out.literal("device.serial.port", iface);
-    return "ENV{ID_BUS}==\"usb\", ENV{ID_SERIAL}==\"" + serial +
-           "\", ENV{ID_USB_INTERFACE_NUM}==\"" + iface + "\"";
+    std::string match = "ENV{ID_BUS}==\"usb\", ENV{ID_SERIAL}==\"" + m[1].str() +
+                        "\", ENV{ID_USB_INTERFACE_NUM}==\"" + m[2].str() + "\"";
+    // A USB serial adapter's port on that interface (usb-serial's port_number).
+    if (m[4].matched) match += ", ATTRS{port_number}==\"" + m[4].str() + "\"";
+    out.literal("device.serial.port", m[1].str());
+    return match;
   }
-  if (port.rfind("/dev/tty", 0) == 0 && port.find('/', 5) == std::string::npos) {
-    out.literal("device.serial.port", port.substr(5));
-    return "KERNEL==\"" + port.substr(5) + "\"";
-  }
+  if (std::regex_match(port, m, kKernel)) return "KERNEL==\"" + m[1].str() + "\"";
   refuse(
-      "is neither /dev/ttyNAME nor a /dev/serial/by-id/ link, which are what a udev rule can "
-      "match exactly");
+      "is neither a serial port's own node (/dev/ttyACMn, ttyUSBn, ttyAMAn, ttySn) nor a "
+      "/dev/serial/by-id/ link, which are what a udev rule can match exactly");
   return {};
 }
 
@@ -56,7 +56,13 @@ void write_udev_rules(const config::Config& cfg, UdevRules& out) {
   const std::string match = port_match(cfg, out, s.port);
   out.comment("device.serial.port: " + s.port + ", granted to the group (no other tty).");
   out.rule("SUBSYSTEM==\"tty\", " + match + out.grant());
-  const int ms = std::max(1, static_cast<int>(s.latency_ms));
+  if (s.latency_ms < 1.0) {
+    throw config::ConfigError(
+        {cfg.locate("device.serial.latency_ms") +
+         ": device.serial.latency_ms: an FTDI adapter's latency timer is whole milliseconds, 1 at "
+         "the least: below 1 the rule cannot set what hapticd then requires"});
+  }
+  const int ms = static_cast<int>(s.latency_ms);
   out.comment(
       "On an FTDI adapter (ftdi_sio), its latency timer (16 ms as the kernel leaves it) "
       "set to device.serial.latency_ms, " +

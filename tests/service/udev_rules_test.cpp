@@ -176,9 +176,17 @@ TEST(UdevRules, SerialGrantsTheConfiguredPortAndSetsAnFtdiLatencyTimer) {
                   "ENV{ID_BUS}==\"usb\", ENV{ID_SERIAL}==\"FTDI_FT232R_USB_UART_A50285BI\", "
                   "ENV{ID_USB_INTERFACE_NUM}==\"00\""))
       << rules[0];
-  EXPECT_TRUE(
-      has(refusal(example_config("serial-stream.yaml", {"device.serial.port=/dev/my-board"})),
-          "device.serial.port: '/dev/my-board' is neither /dev/ttyNAME nor"));
+  EXPECT_TRUE(has(rules[0], "ATTRS{port_number}==\"0\"")) << "that adapter port only";
+  for (const char* bad :
+       {"/dev/my-board", "/dev/tty0", "/dev/tty", "/dev/serial/by-id/usb-Foo-if0",
+        "/dev/serial/by-id/usb-Foo-if00xyz", "/dev/serial/by-id/usb-Foo-if00/../../ttyS0"}) {
+    SCOPED_TRACE(bad);
+    EXPECT_TRUE(has(
+        refusal(example_config("serial-stream.yaml", {std::string("device.serial.port=") + bad})),
+        std::string("device.serial.port: '") + bad + "' is "));
+  }
+  EXPECT_TRUE(has(refusal(example_config("serial-stream.yaml", {"device.serial.latency_ms=0.5"})),
+                  "device.serial.latency_ms: an FTDI adapter's latency timer is whole"));
 }
 #endif
 
