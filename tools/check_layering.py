@@ -65,6 +65,7 @@ PURE_CODECS = (
     "drivers/field/field.h", "drivers/field/field_schema.h", "drivers/hid/report_layout.h",
     "drivers/hid/report_descriptor.h", "drivers/hid/pid_protocol.h",
     "drivers/hid/descriptor_builder.h", "drivers/hid/hid_framing.h", "drivers/hid/hid_settings.h",
+    "drivers/hid/hid_section_reading.h",
     "drivers/gpio/quadrature_decoder.h", "drivers/gpio/gpio_wire.h", "drivers/gpio/gpio_settings.h",
     "drivers/evdev/evdev_settings.h", "drivers/evdev/evdev_wire.h",
     "drivers/serial/checksum.h", "drivers/serial/serial_frame.h", "drivers/serial/serial_settings.h",
