@@ -319,8 +319,12 @@ bool SerialDevice::send(std::span<const double> forces, bool enable) noexcept {
     c_[kOutFull].add();
   }
   if (++out_streak_ < settings_->out_full_fault) return true;
-  send_error_ = kOutStuck;
-  set_fault_code(kOutStuck);
+  // A port that takes nothing may be one being unplugged whose hang-up is on its way: say so if
+  // the kernel already knows (the fault path only: one poll).
+  pollfd p{port_.fd.get(), 0, 0};
+  send_error_ =
+      ::poll(&p, 1, 0) > 0 && (p.revents & (POLLHUP | POLLERR)) != 0 ? kHangUp : kOutStuck;
+  set_fault_code(send_error_);
   return false;
 }
 
@@ -344,7 +348,8 @@ std::string SerialDevice::describe(const DeviceFault& fault) const {
              ")";
     case kOutStuck:
       return port + " took no whole frame for " + std::to_string(settings_->out_full_fault) +
-             " ticks in a row (device.serial.out_full_fault): the device stopped reading";
+             " ticks in a row (device.serial.out_full_fault): the device stopped reading, or is "
+             "being unplugged";
     default:
       return port + ": " + base::errno_text(static_cast<int>(fault.code));
   }

@@ -17,8 +17,10 @@ std::shared_ptr<const SerialSettings> settings_of(const DriverContext& ctx) {
 std::unique_ptr<Device> make_device(const DriverContext& ctx) {
   auto s = settings_of(ctx);
   (void)serial_settings(ctx);  // the right section, or std::logic_error
-  auto open = [s] {
+  const double period = ctx.sample_period_s();
+  auto open = [s, period] {
     OpenedPort p = open_tty(*s);
+    check_wire_rate(*s, tty_driver(tty_name(s->port)), period);
     return Port{std::move(p.fd), true, std::move(p.notices)};
   };
   return std::make_unique<SerialDevice>(s, open, ctx.sample_period_s(), s->input.positions.size());

@@ -43,12 +43,6 @@ std::string port_match(const config::Config& cfg, const UdevRules& out, const st
   return {};
 }
 
-std::string driver_of(const std::string& tty) {
-  std::error_code ec;
-  const fs::path d = fs::read_symlink("/sys/class/tty/" + tty + "/device/driver", ec);
-  return ec ? std::string("?") : d.filename().string();
-}
-
 }  // namespace
 
 void write_udev_rules(const config::Config& cfg, UdevRules& out) {
@@ -78,7 +72,8 @@ std::string list_ports() {
   int n = 0;
   for (const auto& e : fs::directory_iterator(kById, ec)) {
     const std::string tty = tty_name(e.path().string());
-    out << "serial " << tty << " (" << driver_of(tty) << ")";
+    const std::string driver = tty_driver(tty);
+    out << "serial " << tty << " (" << (driver.empty() ? "?" : driver) << ")";
     if (const auto t = ftdi_latency_timer(tty)) out << ", latency timer " << *t << " ms";
     out << "\n  device.serial.port: " << e.path().string() << "\n";
     ++n;

@@ -98,6 +98,28 @@ std::string tty_name(const std::string& port) {
   return real.substr(real.rfind('/') + 1);
 }
 
+std::string tty_driver(const std::string& tty, const std::string& sysfs) {
+  char buf[PATH_MAX];
+  const std::string link = sysfs + "/class/tty/" + tty + "/device/driver";
+  const ssize_t n = ::readlink(link.c_str(), buf, sizeof buf - 1);
+  if (n <= 0) return {};
+  const std::string target(buf, static_cast<std::size_t>(n));
+  return target.substr(target.rfind('/') + 1);
+}
+
+void check_wire_rate(const SerialSettings& s, const std::string& driver, double sample_period_s) {
+  if (driver.empty() || driver == "cdc_acm") return;
+  const double bytes = static_cast<double>(s.input.shape.length + s.output.shape.length);
+  const double wire_s = 10.0 * bytes / static_cast<double>(s.baud);
+  if (wire_s <= sample_period_s) return;
+  throw DeviceError(
+      "serial port " + s.port + " (" + driver + ") at device.serial.baud " +
+      std::to_string(s.baud) + ": a period's frames (" + std::to_string(static_cast<int>(bytes)) +
+      " bytes, 10 bits each) take " + std::to_string(wire_s * 1e3).substr(0, 5) +
+      " ms of the wire, longer than the " + std::to_string(sample_period_s * 1e3).substr(0, 5) +
+      " ms period: a faster baud rate, shorter frames or a lower loop.rate_hz");
+}
+
 std::optional<int> ftdi_latency_timer(const std::string& tty, const std::string& sysfs) {
   std::ifstream in(sysfs + "/class/tty/" + tty + "/device/latency_timer");
   int ms = 0;

@@ -30,6 +30,14 @@ void discard_input(int fd) noexcept;
 // Not RT-safe. The kernel's name of the tty a path leads to ("ttyUSB0" for
 // /dev/serial/by-id/usb-FTDI_...), or empty when it leads nowhere.
 std::string tty_name(const std::string& port);
+// Not RT-safe. The kernel driver of a tty ("cdc_acm", "ftdi_sio", "pl2303"...), from sysfs;
+// empty for a tty without a device (a pseudo-terminal).
+std::string tty_driver(const std::string& tty, const std::string& sysfs = "/sys");
+// Not RT-safe. A port whose bytes cross a wire at `baud` (any driver but cdc_acm, whose USB
+// link ignores the rate): refused (DeviceError naming the keys) when one period's frames, 10
+// bits a byte, do not fit in the period.
+void check_wire_rate(const SerialSettings& s, const std::string& driver, double sample_period_s);
+
 // Not RT-safe. An FTDI (ftdi_sio) port's latency timer in ms, from sysfs; nothing for any
 // other kind of port. `sysfs` is /sys (a test may give another root).
 std::optional<int> ftdi_latency_timer(const std::string& tty, const std::string& sysfs = "/sys");

@@ -106,6 +106,32 @@ TEST(SerialTty, AnFtdiPortsLatencyTimerIsReadFromSysfs) {
   std::filesystem::remove_all(root);
 }
 
+TEST(SerialTty, AUartWhoseBaudCannotCarryAPeriodsFramesIsRefused) {
+  SerialSettings s = settings_for("/dev/ttyUSB0");
+  s.input.shape.length = 14;
+  s.output.shape.length = 10;
+  s.baud = 115200;  // 24 bytes, 240 bits: 2.08 ms of the wire
+  try {
+    check_wire_rate(s, "ftdi_sio", 1e-3);
+    FAIL() << "2 ms of frames in a 1 ms period";
+  } catch (const DeviceError& e) {
+    EXPECT_NE(std::string(e.what()).find("device.serial.baud 115200"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_NO_THROW(check_wire_rate(s, "cdc_acm", 1e-3)) << "a CDC-ACM link ignores the rate";
+  EXPECT_NO_THROW(check_wire_rate(s, "", 1e-3)) << "a pseudo-terminal has no wire";
+  s.baud = 460800;
+  EXPECT_NO_THROW(check_wire_rate(s, "ftdi_sio", 1e-3));
+  const std::filesystem::path root =
+      std::filesystem::temp_directory_path() / ("hapticd-sysfs-drv-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(root / "class/tty/ttyUSB3/device");
+  std::filesystem::create_directory_symlink("../../../bus/usb-serial/drivers/ftdi_sio",
+                                            root / "class/tty/ttyUSB3/device/driver");
+  EXPECT_EQ(tty_driver("ttyUSB3", root.string()), "ftdi_sio");
+  EXPECT_EQ(tty_driver("pts7", root.string()), "");
+  std::filesystem::remove_all(root);
+}
+
 // A board that answers garbage: configure gives up after answer_timeout_ms, saying what came.
 TEST(SerialTty, ConfigureNamesWhatArrivedWhenNoFrameDid) {
   Pty pty;

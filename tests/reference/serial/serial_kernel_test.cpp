@@ -107,7 +107,11 @@ TEST(SerialAcm, UnpluggedMidRunTheRunEndsWithTheCauseNamed) {
                   });
   board.stop();
   EXPECT_EQ(r.status, 1) << r.log;
-  EXPECT_NE(fault_text(r).find("hung up"), std::string::npos) << fault_text(r);
+  // The hang-up, or the port taking nothing while it comes (cdc_acm's write finds no room for a
+  // few ticks before the disconnect reaches the tty): either way the cause says unplugged.
+  EXPECT_TRUE(fault_text(r).find("hung up") != std::string::npos ||
+              fault_text(r).find("being unplugged") != std::string::npos)
+      << fault_text(r);
   EXPECT_EQ(r.summary["device"]["final_command"], 0.0) << r.summary["device"].dump();
 }
 
