@@ -14,6 +14,7 @@
 #include "control/scene.h"
 #include "loop/scene_tick.h"
 #include "loop/servo_loop.h"
+#include "scene_run.h"
 #include "sim/peers/paced_device.h"
 #include "wiring/registry.h"
 
@@ -25,22 +26,9 @@ using kinematics::Vec3;
 // `ticks` ticks of cfg's scene on `device` in freerun, recorded into `ring` (or not).
 loop::LoopResult run_scene(const config::Config& cfg, Device& device, std::uint64_t ticks,
                            telemetry::SpscRing<telemetry::TickRecord>* ring) {
-  control::Controller controller(control::make_control_law(cfg));  // unused at several joints
-  loop::SceneWalls walls(
-      std::make_unique<control::Scene>(control::make_scene(cfg)),
-      std::vector<control::ObserverParams>(cfg.walls.size(), control::observer_params(cfg, 0)));
-  loop::SceneState state(cfg.device.kinematics, walls, cfg.device.max_force.per_joint());
-  loop::LoopOptions o;
-  o.sample.realtime = false;
-  o.sample.period_ns = std::llround(cfg.loop.sample_period_s() * 1e9);
-  o.sample.stale_fault_ticks = cfg.safety.stale_fault_ticks;
-  o.max_ticks = ticks;
-  o.scene = &state;
   device.configure();
   device.enable();
-  loop::ServoLoop servo(device, controller, ring, o);
-  const std::atomic<bool> stop{false};
-  const loop::LoopResult r = servo.run(stop);
+  const loop::LoopResult r = hapticd::testing::run_scene_loop(cfg, device, ticks, ring);
   device.close();
   return r;
 }

@@ -16,6 +16,7 @@
 #include "control/scene.h"
 #include "loop/scene_tick.h"
 #include "loop/servo_loop.h"
+#include "scene_run.h"
 #include "sim/peers/paced_device.h"
 #include "sim/peers/peer_runner.h"
 #include "wiring/registry.h"
@@ -47,24 +48,7 @@ config::Config load_joints(const JointsCase& c) {
 // The scene's loop of `cfg` on `device` for `ticks` ticks; the allocations of its run.
 loop::LoopResult run_joints(const config::Config& cfg, Device& device, std::uint64_t ticks,
                             std::uint64_t& allocations) {
-  control::Controller controller(control::make_control_law(cfg));  // unused at several joints
-  loop::SceneWalls walls(
-      std::make_unique<control::Scene>(control::make_scene(cfg)),
-      std::vector<control::ObserverParams>(cfg.walls.size(), control::observer_params(cfg, 0)));
-  loop::SceneState state(cfg.device.kinematics, walls, cfg.device.max_force.per_joint());
-  loop::LoopOptions o;
-  o.sample.realtime = false;
-  o.sample.period_ns = std::llround(cfg.loop.sample_period_s() * 1e9);
-  o.sample.stale_fault_ticks = cfg.safety.stale_fault_ticks;
-  o.sample.sequence_modulus = device.info().sequence_modulus;
-  o.max_ticks = ticks;
-  o.scene = &state;
-  loop::ServoLoop servo(device, controller, nullptr, o);
-  const std::atomic<bool> stop{false};
-  const testing::AllocationScope scope;
-  const loop::LoopResult r = servo.run(stop);
-  allocations = scope.count();
-  return r;
+  return hapticd::testing::run_scene_loop(cfg, device, ticks, nullptr, &allocations);
 }
 
 class JointsConformance : public ::testing::TestWithParam<JointsCase> {};

@@ -20,6 +20,7 @@
 #include "drivers/evdev/evdev_settings.h"
 #include "loop/scene_tick.h"
 #include "loop/servo_loop.h"
+#include "scene_run.h"
 #include "sim/joint_plant.h"
 #include "sim/peers/evdev/evdev_peer.h"
 #include "sim/peers/paced_device.h"
@@ -243,25 +244,9 @@ TEST(EvdevTwoAxesLoopback, AnAxisDirectionTurnedByHalfATurnReversesThatJointOnly
 
 loop::LoopResult run_scene(const config::Config& cfg, Device& device, std::uint64_t ticks,
                            std::uint64_t* allocations) {
-  control::Controller controller(control::make_control_law(cfg));  // unused at several joints
-  loop::SceneWalls walls(
-      std::make_unique<control::Scene>(control::make_scene(cfg)),
-      std::vector<control::ObserverParams>(cfg.walls.size(), control::observer_params(cfg, 0)));
-  loop::SceneState state(cfg.device.kinematics, walls, cfg.device.max_force.per_joint());
-  loop::LoopOptions o;
-  o.sample.realtime = false;
-  o.sample.period_ns = std::llround(cfg.loop.sample_period_s() * 1e9);
-  o.sample.stale_fault_ticks = cfg.safety.stale_fault_ticks;
-  o.max_ticks = ticks;
-  o.scene = &state;
   device.configure();
   device.enable();
-  loop::ServoLoop servo(device, controller, nullptr, o);
-  const std::atomic<bool> stop{false};
-  const testing::AllocationScope scope;
-  const loop::LoopResult r = servo.run(stop);
-  if (allocations != nullptr) *allocations = scope.count();
-  return r;
+  return hapticd::testing::run_scene_loop(cfg, device, ticks, nullptr, allocations);
 }
 
 // The press of the example along the diagonal: at rest the hand's spring and the wall share

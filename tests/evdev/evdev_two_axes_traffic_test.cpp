@@ -21,6 +21,7 @@
 #include "drivers/evdev/evdev_settings.h"
 #include "loop/scene_tick.h"
 #include "loop/servo_loop.h"
+#include "scene_run.h"
 #include "sim/peers/paced_device.h"
 #include "sim/peers/peer_runner.h"
 #include "telemetry/spsc_ring.h"
@@ -50,23 +51,10 @@ Pressed press(const std::string& effect) {
   wiring::Loopback pair = wiring::find_driver("evdev").make_loopback(cfg);
   sim::PeerRunner runner(*pair.peer);
   sim::PacedDevice device(std::move(pair.device), runner);
-  control::Controller controller(control::make_control_law(cfg));
-  loop::SceneWalls walls(
-      std::make_unique<control::Scene>(control::make_scene(cfg)),
-      std::vector<control::ObserverParams>(cfg.walls.size(), control::observer_params(cfg, 0)));
-  loop::SceneState state(cfg.device.kinematics, walls, cfg.device.max_force.per_joint());
-  loop::LoopOptions o;
-  o.sample.realtime = false;
-  o.sample.period_ns = std::llround(cfg.loop.sample_period_s() * 1e9);
-  o.sample.stale_fault_ticks = cfg.safety.stale_fault_ticks;
-  o.max_ticks = 3000;
-  o.scene = &state;
   telemetry::SpscRing<telemetry::TickRecord> ring(4096);
   device.configure();
   device.enable();
-  loop::ServoLoop servo(device, controller, &ring, o);
-  const std::atomic<bool> stop{false};
-  const loop::LoopResult r = servo.run(stop);
+  const loop::LoopResult r = hapticd::testing::run_scene_loop(cfg, device, 3000, &ring);
   device.disable();
   EXPECT_EQ(r.fault.cause, loop::FaultCause::kNone) << loop::describe(r.fault);
   Pressed p;

@@ -23,6 +23,7 @@
 #include "drivers/gpio/gpio_wire.h"
 #include "loop/scene_tick.h"
 #include "loop/servo_loop.h"
+#include "scene_run.h"
 #include "sim/joint_plant.h"
 #include "sim/peers/gpio/gpio_peer.h"
 #include "sim/peers/paced_device.h"
@@ -220,6 +221,7 @@ TEST(GpioJointsLoopback, EachJointDecodesItsOwnEdgesAndDrivesItsOwnChannel) {
   EXPECT_GT(gpio.decoder(1).edges(), gpio.decoder(0).edges()) << "joint 1 moved further";
   EXPECT_EQ(gpio.decoder(0).missed_edges() + gpio.decoder(1).missed_edges(), 0u);
   rig.device().disable();
+  rig.runner.wait_idle();  // the peer has taken the zero
   EXPECT_EQ(rig.peer().duty_ns(0), 0u);
   EXPECT_EQ(rig.peer().duty_ns(1), 0u);
 }
@@ -290,23 +292,10 @@ TEST(GpioJointsLoopback, TheXyTablesHandRestsAtForceOverStiffnessAlongTheDiagona
   const sim::gpio::GpioPeer& peer = dynamic_cast<const sim::gpio::GpioPeer&>(*pair.peer);
   sim::PeerRunner runner(*pair.peer);
   sim::PacedDevice device(std::move(pair.device), runner);
-  control::Controller controller(control::make_control_law(cfg));
-  loop::SceneWalls walls(
-      std::make_unique<control::Scene>(control::make_scene(cfg)),
-      std::vector<control::ObserverParams>(cfg.walls.size(), control::observer_params(cfg, 0)));
-  loop::SceneState state(cfg.device.kinematics, walls, cfg.device.max_force.per_joint());
-  loop::LoopOptions o;
-  o.sample.realtime = false;
-  o.sample.period_ns = std::llround(cfg.loop.sample_period_s() * 1e9);
-  o.sample.stale_fault_ticks = cfg.safety.stale_fault_ticks;
-  o.max_ticks = 2000;
-  o.scene = &state;
   telemetry::SpscRing<telemetry::TickRecord> ring(4096);
   device.configure();
   device.enable();
-  loop::ServoLoop servo(device, controller, &ring, o);
-  const std::atomic<bool> stop{false};
-  const loop::LoopResult r = servo.run(stop);
+  const loop::LoopResult r = hapticd::testing::run_scene_loop(cfg, device, 2000, &ring);
   device.close();
   ASSERT_EQ(r.fault.cause, loop::FaultCause::kNone) << loop::describe(r.fault);
   EXPECT_GT(r.count(loop::kCounterContactTicks), 1000u);
