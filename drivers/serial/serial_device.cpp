@@ -17,9 +17,10 @@
 namespace hapticd::drivers::serial {
 namespace {
 
-// Reads a tick: 2 KB scanned at most. A device sending more than that a period floods the
-// port; what is left is dropped and counted, so the tick's work stays bounded.
-constexpr int kMaxReads = 2;
+// Bytes a tick scans at most (two reads of a tty, or as many of a socket's messages): a device
+// sending more than that a period floods the port; what is left is dropped and counted, so the
+// tick's work stays bounded.
+constexpr std::size_t kMaxBytesPerTick = 2048;
 
 }  // namespace
 
@@ -180,7 +181,11 @@ void SerialDevice::publish_scan() noexcept {
 
 SerialDevice::Drained SerialDevice::drain() noexcept {
   Drained d;
-  for (int i = 0; i < kMaxReads; ++i) {
+  for (std::size_t taken = 0;;) {
+    if (taken >= kMaxBytesPerTick) {
+      drop_flood();
+      break;
+    }
     const ssize_t n = ::read(port_.fd.get(), rx_.data(), rx_.size());
     if (n == 0) {  // a tty hung up, a socket's peer gone: the device is unplugged
       d.error = static_cast<int>(kHangUp);
@@ -196,8 +201,9 @@ SerialDevice::Drained SerialDevice::drain() noexcept {
       d.status |= newest_.status;  // a fault bit in a superseded frame is a fault all the same
       ++d.frames;
     }
-    if (static_cast<std::size_t>(n) < rx_.size() && port_.stream) return finish(d);
-    if (i + 1 == kMaxReads) drop_flood();
+    taken += static_cast<std::size_t>(n);
+    // A tty's short read took everything there was; a socket is read until it has nothing.
+    if (static_cast<std::size_t>(n) < rx_.size() && port_.stream) break;
   }
   return finish(d);
 }

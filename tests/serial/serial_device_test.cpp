@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <array>
+#include <string_view>
 #include <vector>
 
 #include "drivers/io/unique_fd.h"
@@ -127,6 +128,40 @@ TEST(SerialDevice, ADeviceThatStopsReadingFaultsAfterOutFullFaultTicks) {
   EXPECT_EQ(st, IoStatus::kTransportFault);
   EXPECT_NE(rig.device->describe_fault().find("took no whole frame for 3 ticks"), std::string::npos)
       << rig.device->describe_fault();
+}
+
+std::uint64_t counter(const Device& d, std::string_view name) {
+  for (const base::Counter& c : d.counters()) {
+    if (c.name() == name) return c.value();
+  }
+  return 0;
+}
+
+// A device that floods: a tick reads 2 KB and drops the rest, counted, so the tick's work is
+// bounded whatever arrives; the next tick starts on what comes next.
+TEST(SerialDevice, AFloodIsReadUpToItsBoundAndTheRestDroppedAndCounted) {
+  Rig rig(Exchange::kStream);
+  rig.answer(0, 0);
+  rig.device->configure();
+  rig.device->enable();
+  // A socketpair counts each message's overhead against its buffer: widen it (or setsockopt's
+  // ordinary limit, for a test not run as root).
+  const int big = 8 << 20;
+  if (::setsockopt(rig.mine.get(), SOL_SOCKET, SO_SNDBUFFORCE, &big, sizeof big) != 0) {
+    ::setsockopt(rig.mine.get(), SOL_SOCKET, SO_SNDBUF, &big, sizeof big);
+  }
+  std::array<std::uint8_t, 6> f{0xA5, 1, 0, 0, 0, 1};
+  int sent = 0;
+  while (sent < 2000 && ::send(rig.mine.get(), f.data(), f.size(), MSG_DONTWAIT) == 6) ++sent;
+  ASSERT_GT(sent * 6, 2048 + 600) << "more than a tick's bound waiting";
+  std::array<PositionSample, 2> s{};
+  ASSERT_EQ(rig.device->read(s), IoStatus::kOk);
+  const std::uint64_t frames = counter(*rig.device, "frames");
+  EXPECT_LE(frames, 1u + 2048 / 6 + 1) << "no more than the bound was scanned";
+  EXPECT_GT(counter(*rig.device, "backlog_bytes"), 3000u) << "the rest dropped and counted";
+  rig.answer(1234, -1);
+  ASSERT_EQ(rig.device->read(s), IoStatus::kOk);
+  EXPECT_DOUBLE_EQ(s[0].position, 1.234) << "the next frame whole";
 }
 
 }  // namespace
