@@ -6,8 +6,10 @@
 #include <systemd/sd-daemon.h>
 #include <unistd.h>
 
+#include <array>
 #include <chrono>
 #include <cmath>
+#include <span>
 #include <thread>
 
 #include "gate/number_format.h"
@@ -15,6 +17,7 @@
 #include "service/exit_codes.h"
 #include "service/run/counters_report.h"
 #include "service/run/gate_derate.h"
+#include "service/run/rearm_position.h"
 #include "service/run/run_session.h"
 
 namespace hapticd::service {
@@ -236,20 +239,14 @@ std::string RunSession::try_clear() {
   } catch (const DeviceError& e) {
     return e.what();
   }
+  std::array<PositionSample, base::kMaxJoints> s{};
+  const std::span<PositionSample> samples(s.data(), device.info().joints);
   for (int attempt = 0; attempt < 100; ++attempt) {
-    PositionSample s;
-    const IoStatus st = device.read(s);
+    const IoStatus st = device.read(samples);
     if (st == IoStatus::kTransportFault || st == IoStatus::kDeviceFault) {
       return "the device faults again: " + device.describe_fault();
     }
-    if (st == IoStatus::kOk && std::isfinite(s.position)) {
-      const double p = cfg.wall.normal * (s.position - cfg.wall.position);
-      if (p > 0.0) {
-        return "the device is " + gate::format_number(p * 1e3) +
-               " mm inside the wall: move it out first";
-      }
-      return "";
-    }
+    if (st == IoStatus::kOk) return rearm_refusal(cfg, samples);
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
   }
   return "no position from the device to check it is outside the wall";
