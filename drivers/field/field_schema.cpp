@@ -69,6 +69,10 @@ FieldSpec read_spec(MapReader& m, std::size_t max_byte, bool quantity) {
     const Field scale = m.take("scale");
     if (!scale.present) m.missing("scale", "SI units per count");
     number(m, scale, Range::any(), f.scale);
+    if (scale.present && f.scale == 0.0) {
+      m.diag().error(scale.key_mark, scale.path,
+                     "must not be 0: every count would read as the same value");
+    }
     number(m, m.take("offset"), Range::any(), f.offset);
   }
   return f;

@@ -80,6 +80,9 @@ TEST(SerialConfig, EachWrongKeyIsNamedWithWhatIsWrong) {
                               "scale: 0.001}, {byte: 5, type: i16, endian: big, scale: 0.001}]"})
                 .find("2 field(s) for a mechanism of 1 joint(s)"),
             std::string::npos);
+  EXPECT_NE(errors_of(wheel, {"device.serial.input.positions=[{byte: 3, type: i24, scale: 0}]"})
+                .find("device.serial.input.positions[0].scale: must not be 0"),
+            std::string::npos);
   EXPECT_NE(errors_of(wheel, {"device.serial.liveness_ms=1.5"}).find("at least twice latency_ms"),
             std::string::npos);
   EXPECT_NE(errors_of(wheel, {"device.serial.porrt=/dev/ttyACM1"}).find("porrt"),
