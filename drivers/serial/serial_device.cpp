@@ -47,7 +47,6 @@ DeviceInfo SerialDevice::on_configure() {
         "which faults only on a jump beyond safety.max_speed");
   }
   scanner_.clear();
-  active_ = false;
   out_streak_ = 0;
   tail_len_ = 0;
   emergency_fd_.store(port_.fd.get());  // a crash while configuring stops the device too
@@ -143,7 +142,6 @@ void SerialDevice::on_enable() {
   if (settings_->exchange == Exchange::kRequest) (void)send({}, false);
   out_streak_ = 0;
   last_frame_ns_ = base::monotonic_ns();  // the liveness bound starts now
-  active_ = true;
 }
 
 // The stop frame, after whatever of an earlier frame the port still owes the device: a frame cut
@@ -155,7 +153,6 @@ void SerialDevice::write_stop(int fd) noexcept {
 }
 
 void SerialDevice::on_disable() noexcept {
-  active_ = false;
   if (port_.fd) write_stop(port_.fd.get());
 }
 
@@ -232,13 +229,14 @@ void SerialDevice::drop_flood() noexcept {
 
 IoStatus SerialDevice::on_read(std::span<PositionSample> samples) noexcept {
   const std::int64_t now = base::monotonic_ns();
+  const bool active = state() == DeviceState::kActive;
   const Drained d = drain();
   if (d.error != 0) {
     set_fault_code(static_cast<std::uint32_t>(d.error));
     return IoStatus::kTransportFault;
   }
   // Output off in the request exchange: nothing else asks the device for its position.
-  if (!active_ && settings_->exchange == Exchange::kRequest && !send({}, false)) {
+  if (!active && settings_->exchange == Exchange::kRequest && !send({}, false)) {
     return IoStatus::kTransportFault;
   }
   if (d.frames == 0) {
@@ -257,7 +255,7 @@ IoStatus SerialDevice::on_read(std::span<PositionSample> samples) noexcept {
                                         (settings_->input.sequence ? kSampleHasSequence : 0));
     s.samples = d.frames;
   }
-  if (active_ && (d.status & settings_->input.fault_mask) != 0) {
+  if (active && (d.status & settings_->input.fault_mask) != 0) {
     set_fault_code(d.status & settings_->input.fault_mask);
     return IoStatus::kDeviceFault;
   }

@@ -104,7 +104,6 @@ class SerialDevice final : public Device {
   InputValues newest_;
   std::int64_t newest_ns_ = 0;
   std::int64_t last_frame_ns_ = 0;
-  bool active_ = false;
   int out_streak_ = 0;
   std::uint32_t send_error_ = 0;  // why the last send failed (an errno or kOutStuck)
   std::vector<std::string> notices_;
