@@ -14,6 +14,7 @@
 #include <fstream>
 
 #include "base/errno_text.h"
+#include "config/schema_reader.h"
 #include "drivers/device.h"
 
 namespace hapticd::drivers::serial {
@@ -112,12 +113,13 @@ void check_wire_rate(const SerialSettings& s, const std::string& driver, double 
   const double bytes = static_cast<double>(s.input.shape.length + s.output.shape.length);
   const double wire_s = 10.0 * bytes / static_cast<double>(s.baud);
   if (wire_s <= sample_period_s) return;
-  throw DeviceError(
-      "serial port " + s.port + " (" + driver + ") at device.serial.baud " +
-      std::to_string(s.baud) + ": a period's frames (" + std::to_string(static_cast<int>(bytes)) +
-      " bytes, 10 bits each) take " + std::to_string(wire_s * 1e3).substr(0, 5) +
-      " ms of the wire, longer than the " + std::to_string(sample_period_s * 1e3).substr(0, 5) +
-      " ms period: a faster baud rate, shorter frames or a lower loop.rate_hz");
+  throw DeviceError("serial port " + s.port + " (" + driver + ") at device.serial.baud " +
+                    std::to_string(s.baud) + ": a period's frames (" +
+                    std::to_string(static_cast<int>(bytes)) + " bytes, 10 bits each) take " +
+                    config::schema::format_number(std::round(wire_s * 1e5) / 100) +
+                    " ms of the wire, longer than the " +
+                    config::schema::format_number(sample_period_s * 1e3) +
+                    " ms period: a faster baud rate, shorter frames or a lower loop.rate_hz");
 }
 
 std::optional<int> ftdi_latency_timer(const std::string& tty, const std::string& sysfs) {
