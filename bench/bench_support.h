@@ -5,12 +5,15 @@
 
 #include <benchmark/benchmark.h>
 
+#include <array>
 #include <chrono>
 #include <fstream>
+#include <span>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "base/joints.h"
 #include "config/config_loader.h"
 #include "sim/peers/loopback_peer.h"
 #include "wiring/registry.h"
@@ -28,19 +31,22 @@ inline config::Config load_example(const char* name, const std::vector<std::stri
                                   wiring::driver_schemas());
 }
 
-// One tick per iteration: the device's read and a write of +-`force` (alternating), then the
-// peer answers in this thread. With `driver_only` the iteration's time is read and write
+// One tick per iteration: the device's read of every joint and a write of +-`force`
+// (alternating) on each, then the peer answers in this thread. With `driver_only` the iteration's time is read and write
 // alone (use ->UseManualTime()); otherwise it includes the peer's own work.
 inline void run_ticks(benchmark::State& state, Device& device, sim::LoopbackPeer& peer,
                       bool driver_only, double force = 0.5) {
-  PositionSample s;
+  std::array<PositionSample, base::kMaxJoints> s{};
+  std::array<double, base::kMaxJoints> forces{};
+  const std::size_t n = device.info().joints;
+  forces.fill(force);
   for (auto _ : state) {
     const auto t0 = std::chrono::steady_clock::now();
-    benchmark::DoNotOptimize(device.read(s));
-    benchmark::DoNotOptimize(device.write(force));
+    benchmark::DoNotOptimize(device.read(std::span(s.data(), n)));
+    benchmark::DoNotOptimize(device.write(std::span<const double>(forces.data(), n)));
     const auto t1 = std::chrono::steady_clock::now();
     peer.service();
-    force = -force;
+    for (double& f : forces) f = -f;
     if (driver_only) state.SetIterationTime(std::chrono::duration<double>(t1 - t0).count());
   }
 }

@@ -50,11 +50,18 @@ void BM_HidReportTickWithDevice(benchmark::State& state) {
 }
 void BM_HidPidDriverTick(benchmark::State& state) { tick_bench(state, "hid-pid.yaml", true); }
 void BM_HidPidTickWithDevice(benchmark::State& state) { tick_bench(state, "hid-pid.yaml", false); }
+// Two axes (issue 37): one Set Constant Force per joint a tick.
+void BM_HidPidXyDriverTick(benchmark::State& state) { tick_bench(state, "hid-pid-xy.yaml", true); }
+void BM_HidPidXyTickWithDevice(benchmark::State& state) {
+  tick_bench(state, "hid-pid-xy.yaml", false);
+}
 
 BENCHMARK(BM_HidReportDriverTick)->UseManualTime();
 BENCHMARK(BM_HidReportTickWithDevice);
 BENCHMARK(BM_HidPidDriverTick)->UseManualTime();
 BENCHMARK(BM_HidPidTickWithDevice);
+BENCHMARK(BM_HidPidXyDriverTick)->UseManualTime();
+BENCHMARK(BM_HidPidXyTickWithDevice);
 
 }  // namespace
 

@@ -26,24 +26,6 @@ std::uint64_t counter(const Device& d, std::string_view name) {
   return 0;
 }
 
-// bench::run_ticks for every joint of the device: a read of each joint's sample and a write of
-// +-0.05 N (m) on each (within the pantograph's 0.12 N m).
-void run_ticks(benchmark::State& state, Device& device, sim::LoopbackPeer& peer, bool driver_only) {
-  std::array<PositionSample, base::kMaxJoints> s{};
-  std::array<double, base::kMaxJoints> force{};
-  const std::size_t n = device.info().joints;
-  force.fill(0.05);
-  for (auto _ : state) {
-    const auto t0 = std::chrono::steady_clock::now();
-    benchmark::DoNotOptimize(device.read(std::span(s.data(), n)));
-    benchmark::DoNotOptimize(device.write(std::span<const double>(force.data(), n)));
-    const auto t1 = std::chrono::steady_clock::now();
-    peer.service();
-    for (double& f : force) f = -f;
-    if (driver_only) state.SetIterationTime(std::chrono::duration<double>(t1 - t0).count());
-  }
-}
-
 void tick_bench(benchmark::State& state, const char* example, bool driver_only) {
   const config::Config cfg = bench::load_example(example);
   wiring::Loopback pair = wiring::find_driver("serial").make_loopback(cfg);
@@ -56,7 +38,8 @@ void tick_bench(benchmark::State& state, const char* example, bool driver_only) 
   pair.peer->service();  // the enable's answer, so the first tick has a sample
   const std::uint64_t in0 = counter(*pair.device, "frames"),
                       out0 = counter(*pair.device, "frames_sent");
-  run_ticks(state, *pair.device, *pair.peer, driver_only);
+  // +-0.05 N (m) on each joint: within the pantograph's 0.12 N m.
+  bench::run_ticks(state, *pair.device, *pair.peer, driver_only, 0.05);
   const double ticks = static_cast<double>(state.iterations());
   const double in = static_cast<double>(counter(*pair.device, "frames") - in0) / ticks;
   const double out = static_cast<double>(counter(*pair.device, "frames_sent") - out0) / ticks;

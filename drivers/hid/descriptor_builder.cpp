@@ -78,7 +78,7 @@ void block_index(DescriptorBuilder& b) {
   b.usage(kEffectBlockIndex).logical(1, 40).report_size(8).report_count(1).output(kData);
 }
 
-void set_effect(DescriptorBuilder& b, std::uint8_t id) {
+void set_effect(DescriptorBuilder& b, std::uint8_t id, int axes) {
   b.usage(kSetEffectReport).collection(kLogical).report_id(id);
   block_index(b);
   b.usage(kEffectType).collection(kLogical).usage(kEtConstantForce);  // the one it renders
@@ -87,12 +87,21 @@ void set_effect(DescriptorBuilder& b, std::uint8_t id) {
   b.logical(0, 32767).report_size(16).report_count(4).output(kData);
   b.usage(kGain).logical(0, 255).report_size(8).report_count(1).output(kData);
   b.usage(kTriggerButton).logical(1, 8).report_size(8).report_count(1).output(kData);
-  b.usage(kAxesEnable).collection(kLogical).usage_page(0x01).usage(0x30);
-  b.logical(0, 1).report_size(1).report_count(1).output(kData).end_collection();
-  b.usage_page(kPage).usage(kDirectionEnable).report_size(1).report_count(1).output(kData);
-  b.padding(ReportKind::kOutput, 6);
-  b.usage(kDirection).collection(kLogical).usage_page(0x0A).usage(1);
-  b.logical(0, 35999).physical(0, 35999).report_size(16).report_count(1).output(kData);
+  if (axes == 1) {
+    b.usage(kAxesEnable).collection(kLogical).usage_page(0x01).usage(0x30);
+    b.logical(0, 1).report_size(1).report_count(1).output(kData).end_collection();
+    b.usage_page(kPage).usage(kDirectionEnable).report_size(1).report_count(1).output(kData);
+    b.padding(ReportKind::kOutput, 6);
+    b.usage(kDirection).collection(kLogical).usage_page(0x0A).usage(1);
+    b.logical(0, 35999).physical(0, 35999).report_size(16).report_count(1).output(kData);
+  } else {
+    b.usage(kAxesEnable).collection(kLogical).usage_page(0x01).usage(0x30).usage(0x31);
+    b.logical(0, 1).report_size(1).report_count(2).output(kData).end_collection();
+    b.usage_page(kPage).usage(kDirectionEnable).report_size(1).report_count(1).output(kData);
+    b.padding(ReportKind::kOutput, 5);
+    b.usage(kDirection).collection(kLogical).usage_page(0x0A).usage(1).usage(2);
+    b.logical(0, 36000).physical(0, 36000).report_size(16).report_count(2).output(kData);
+  }
   b.end_collection().usage_page(kPage).physical(0, 0).end_collection();
 }
 
@@ -180,14 +189,19 @@ std::vector<std::uint8_t> pid_reference_descriptor(const PidReferenceOptions& o)
   DescriptorBuilder b;
   b.usage_page(0x01).usage(0x04).collection(kApplication);        // Joystick
   b.report_id(o.ids.position).usage(0x01).collection(kPhysical);  // Pointer
-  b.usage(0x30).logical(-32767, 32767).report_size(16).report_count(1).input(kData);
+  b.usage(0x30);
+  if (o.axes == 2) b.usage(0x31);
+  b.logical(-32767, 32767)
+      .report_size(16)
+      .report_count(static_cast<std::uint32_t>(o.axes))
+      .input(kData);
   b.end_collection();
   if (o.sequence) {
     b.usage_page(0xFF00).usage(0x20).logical(0, 255).report_size(8).report_count(1).input(kData);
   }
   b.usage_page(kPage);
   if (o.state_report) state_report(b, o.ids.state);
-  set_effect(b, o.ids.set_effect);
+  set_effect(b, o.ids.set_effect, o.axes);
   envelope(b, o.ids.set_envelope);
   effect_control(b, o.ids);
   device_reports(b, o);

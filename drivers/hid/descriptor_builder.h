@@ -68,6 +68,9 @@ struct PidReferenceOptions {
   // ArduinoJoystickWithFFBLibrary, Fino, VNWheel): a logical collection of usage 0x96 holding
   // its array, with no 0x95 report collection around it.
   bool device_control_report = true;
+  // 2: a stick of two axes as OpenFFBoard's "FFB Joystick (2 Axis)" declares it: X and Y in the
+  // input report, Axes Enable X and Y, and two Direction instances of 0..36000.
+  int axes = 1;
 };
 
 // The ids ArduinoJoystickWithFFBLibrary v1.0.0 gives its reports (src/FFBDescriptor.h), one id

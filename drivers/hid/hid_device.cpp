@@ -31,8 +31,8 @@ DeviceInfo HidDevice::on_configure() {
   transport_->set_safe_reports(profile_->safe_reports());
   emergency_.store(transport_.get());
   return {transport_->describe() + ", " + profile_->summary(),
-          declared_delay_samples(settings_->poll_interval_ms, period_s_),
-          profile_->sequence_modulus(), profile_->joints()};
+          declared_delay_samples(*settings_, period_s_), profile_->sequence_modulus(),
+          profile_->joints()};
 }
 
 // Whatever the device said before output was enabled (a status from before, samples of the
@@ -241,7 +241,13 @@ IoStatus HidDevice::on_write(std::span<const double> forces) noexcept {
     if (s != IoStatus::kOk || !written) return s;
     pending_ = {};
   }
-  return send(profile_->force_report(forces), written);
+  // A report the full queue did not take ends the tick: the reports after it would render
+  // some joints' forces of this tick beside others' of the last.
+  for (const std::span<const std::uint8_t> r : profile_->force_reports(forces)) {
+    const IoStatus s = send(r, written);
+    if (s != IoStatus::kOk || !written) return s;
+  }
+  return IoStatus::kOk;
 }
 
 HidCounters HidDevice::hid_counts() const noexcept {

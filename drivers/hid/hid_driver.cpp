@@ -21,7 +21,7 @@ std::shared_ptr<const HidSettings> settings_of(const DriverContext& ctx) {
 }
 
 int declared_delay(const DriverContext& ctx) {
-  return declared_delay_samples(settings_of(ctx)->poll_interval_ms, ctx.sample_period_s());
+  return declared_delay_samples(*settings_of(ctx), ctx.sample_period_s());
 }
 
 std::unique_ptr<Device> make_device(const DriverContext& ctx) {
@@ -66,9 +66,19 @@ std::string flow(const ForceField& f, double scale) {
 ForceReversal force_reversal(const config::Config& cfg) {
   using config::schema::format_number;
   const HidSettings& s = *settings_of(cfg);
-  if (s.profile == Profile::kPid) {
+  if (s.profile == Profile::kPid && s.pid.directions_deg.empty()) {
     return {"device.hid.pid.direction_deg", format_number(s.pid.direction_deg),
             format_number(std::fmod(s.pid.direction_deg + 180.0, 360.0))};
+  }
+  if (s.profile == Profile::kPid) {
+    // Two axes: each Direction read along its axis, mirrored about its range's middle.
+    std::string now = "[", reversed = "[";
+    for (std::size_t j = 0; j < s.pid.directions_deg.size(); ++j) {
+      const char* sep = j > 0 ? ", " : "";
+      now += sep + format_number(s.pid.directions_deg[j]);
+      reversed += sep + format_number(360.0 - s.pid.directions_deg[j]);
+    }
+    return {"device.hid.pid.directions_deg", now + "]", reversed + "]"};
   }
   const OutputLayout& o = s.report.output;
   if (!o.listed) {

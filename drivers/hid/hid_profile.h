@@ -64,9 +64,11 @@ class HidProfile {
   // RT-safe: called every tick. A report to send before this tick's force (a firmware
   // watchdog's refresh), or an empty span.
   virtual std::span<const std::uint8_t> before_force() noexcept = 0;
-  // RT-safe: called every tick. The output report carrying `forces`, one per joint the profile
-  // drives (joints()), joint i's entry i.
-  virtual std::span<const std::uint8_t> force_report(std::span<const double> forces) noexcept = 0;
+  // RT-safe: called every tick. The output reports carrying `forces`, one per joint the profile
+  // drives (joints()), joint i's entry i: one report (profile report), or one per joint
+  // (profile pid, force_reports_per_tick), sent in order.
+  virtual std::span<const std::span<const std::uint8_t>> force_reports(
+      std::span<const double> forces) noexcept = 0;
   // The joints the profile drives: the layout's (report), one (pid).
   virtual std::size_t joints() const noexcept = 0;
   // Not RT-safe: "status 0x05: ..." for a device fault with these status bits.

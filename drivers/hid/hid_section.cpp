@@ -69,26 +69,92 @@ std::optional<std::uint32_t> read_usage(MapReader& m, Ctx& c) {
   return usage(static_cast<std::uint16_t>(*page), static_cast<std::uint16_t>(*id));
 }
 
+// One entry of `position` / `positions`: {usage_page, usage, min, max}.
+PidPosition read_pid_position(Ctx& c, const Field& f) {
+  PidPosition p;
+  MapReader pm(c.d, f);
+  if (const auto u = read_usage(pm, c)) p.usage = *u;
+  number(pm, take(pm, "min", "the position (m or rad) at the axis' logical minimum"), Range::any(),
+         p.min);
+  number(pm, take(pm, "max", "the position at its logical maximum"), Range::any(), p.max);
+  pm.finish();
+  if (p.min == p.max && !c.failed()) c.d.error(f.key_mark, f.path, "min and max must differ");
+  return p;
+}
+
+// The positions, one per joint of the mechanism; two joints need their effects' Directions.
+void read_pid_axes(MapReader& m, Ctx& c, const Field& pid, int joints, PidSettings& p) {
+  bool listed = false;
+  for (const Field& f : joint_fields(m, c, "position", "positions", "pid",
+                                     "{usage_page, usage, min, max}", listed)) {
+    p.positions.push_back(read_pid_position(c, f));
+  }
+  const Field dirs = m.take("directions_deg");
+  if (joints > 2) {
+    c.d.error(pid.key_mark, pid.path,
+              "drives one or two joints (X and Y), the mechanism has " + std::to_string(joints) +
+                  " (device.kinematics); profile report drives several");
+  } else if (!p.positions.empty() && p.joints() != static_cast<std::size_t>(joints)) {
+    c.d.error(pid.key_mark, pid.path + (listed ? ".positions" : ".position"),
+              std::to_string(p.joints()) + " position(s) for a mechanism of " +
+                  std::to_string(joints) + " joint(s) (device.kinematics)");
+  }
+  if (joints == 1) {
+    if (!absent(dirs)) {
+      c.d.error(dirs.key_mark, dirs.path,
+                "two joints' only: one joint's effect has one polar direction_deg");
+    }
+    number(m, m.take("direction_deg"), Range::interval(0.0, true, 360.0, false), p.direction_deg);
+    return;
+  }
+  if (const Field one = m.take("direction_deg"); !absent(one)) {
+    c.d.error(one.key_mark, one.path,
+              "one joint's only: two joints' effects each have their own entry of directions_deg");
+  }
+  if (absent(dirs)) {
+    m.missing("directions_deg",
+              "each joint's effect's Direction (which way the firmware turns a positive "
+              "Magnitude is a fact of the firmware: docs/drivers/hid.md, \"Two axes\")");
+    return;
+  }
+  if (!dirs.node.IsSequence() || dirs.node.size() != 2) {
+    c.d.error(dirs.key_mark, dirs.path,
+              "must be a list of 2 directions (degrees), joint i's effect's being entry i, got " +
+                  config::schema::describe_value(dirs.node));
+    return;
+  }
+  for (std::size_t i = 0; i < 2; ++i) {
+    double d = 0.0;
+    const Field e{dirs.path + "[" + std::to_string(i) + "]", dirs.node[i], dirs.node[i].Mark(),
+                  true};
+    number(m, e, Range::interval(0.0, true, 360.0, true), d);
+    p.directions_deg.push_back(d);
+  }
+}
+
+// The force reports of a tick go out one a polling interval: they must fit the period.
+void check_pid_rate(Ctx& c, const Field& pid, const config::Config& cfg, const HidSettings& s) {
+  // One report a tick faster than the polling (a 2 kHz loop over 1 ms polling) is the queue's
+  // and the declared delay's, as it always was; several must fit.
+  const double n = static_cast<double>(force_reports_per_tick(s));
+  const double period_ms = 1e3 * cfg.loop.sample_period_s();
+  if (n < 2 || n * s.poll_interval_ms <= period_ms + 1e-9) return;
+  using config::schema::format_number;
+  c.d.error(pid.key_mark, pid.path + ".positions",
+            format_number(n) + " joints send " + format_number(n) +
+                " Set Constant Force reports a period, one a polling interval (poll_interval_ms " +
+                format_number(s.poll_interval_ms) + "): they need " +
+                format_number(n * s.poll_interval_ms) + " ms, the period is " +
+                format_number(period_ms) + " ms; lower loop.rate_hz to at most " +
+                format_number(std::floor(1e3 / (n * s.poll_interval_ms))));
+}
+
 void read_pid_profile(MapReader& hid, Ctx& c, const config::Config& cfg, HidSettings& s) {
   const Field field = take(hid, "pid", "the PID settings (profile pid)");
-  if (const int joints = kinematics::joint_count(cfg.device.kinematics); joints != 1) {
-    c.d.error(field.key_mark, field.path,
-              "drives one joint, the mechanism has " + std::to_string(joints) +
-                  " (device.kinematics): a PID device of several axes is not supported yet "
-                  "(docs/drivers/hid.md, \"Two axes\"); profile report drives several");
-  }
+  const int joints = kinematics::joint_count(cfg.device.kinematics);
   MapReader m(c.d, field);
   PidSettings& p = s.pid;
-  const Field pos = take(m, "position", "{usage_page, usage, min, max}");
-  MapReader pm(c.d, pos);
-  if (const auto u = read_usage(pm, c)) p.position_usage = *u;
-  number(pm, take(pm, "min", "the position (m or rad) at the axis' logical minimum"), Range::any(),
-         p.position_min);
-  number(pm, take(pm, "max", "the position at its logical maximum"), Range::any(), p.position_max);
-  pm.finish();
-  if (pos.present && p.position_min == p.position_max && !c.failed()) {
-    c.d.error(pos.key_mark, pos.path, "min and max must differ");
-  }
+  read_pid_axes(m, c, field, joints, p);
   const Field seq = m.take("sequence");
   if (!absent(seq)) {
     MapReader sm(c.d, seq);
@@ -97,26 +163,31 @@ void read_pid_profile(MapReader& hid, Ctx& c, const config::Config& cfg, HidSett
   }
   const Field fs = take(m, "force_full_scale", "the force (N) at the Magnitude's logical maximum");
   number(m, fs, Range::greater_than(0.0), p.force_full_scale);
-  if (fs.present && p.force_full_scale > 0.0 && p.force_full_scale < cfg.device.max_force[0]) {
+  double max_force = 0.0;
+  for (int j = 0; j < std::max(1, joints); ++j) {
+    max_force = std::max(max_force, cfg.device.max_force[static_cast<std::size_t>(j)]);
+  }
+  if (fs.present && p.force_full_scale > 0.0 && p.force_full_scale < max_force) {
     c.d.error(fs.key_mark, fs.path,
-              "cannot represent device.max_force " +
-                  config::schema::format_number(cfg.device.max_force[0]) +
+              "cannot represent device.max_force " + config::schema::format_number(max_force) +
                   " N: the magnitude saturates at " +
                   config::schema::format_number(p.force_full_scale) + " N");
   }
   number(m, m.take("gain"), Range::interval(0.0, false, 1.0, true), p.gain);
-  number(m, m.take("direction_deg"), Range::interval(0.0, true, 360.0, false), p.direction_deg);
   const Field dur = m.take("effect_duration_ms");
   number(m, dur, Range::interval(0.0, true, 32767.0, true), p.effect_duration_ms);
-  const double two_periods_ms = 2e3 * cfg.loop.sample_period_s();
-  if (dur.present && p.effect_duration_ms > 0.0 && p.effect_duration_ms < two_periods_ms) {
+  // Each of the effects is restarted in turn, one a tick, every half duration.
+  const double effects = static_cast<double>(std::max<std::size_t>(1, p.joints()));
+  const double min_ms = 2e3 * effects * cfg.loop.sample_period_s();
+  if (dur.present && p.effect_duration_ms > 0.0 && p.effect_duration_ms < min_ms) {
     c.d.error(dur.key_mark, dur.path,
-              "must be 0 (infinite) or at least two sample periods (" +
-                  config::schema::format_number(two_periods_ms) +
-                  " ms): the driver restarts it every half duration");
+              std::string("must be 0 (infinite) or at least ") + (effects == 1 ? "two" : "four") +
+                  " sample periods (" + config::schema::format_number(min_ms) +
+                  " ms): the driver restarts each effect every half duration");
   }
   if (const auto v = read_hex(c.d, m.take("fault_mask"), 0xFF)) p.fault_mask = *v;
   m.finish();
+  if (!c.failed()) check_pid_rate(c, field, cfg, s);  // after poll_interval_ms
 }
 
 void read_select(MapReader& hid, Ctx& c, Selector& sel) {

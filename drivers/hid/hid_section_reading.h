@@ -6,6 +6,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "config/schema_reader.h"
 #include "drivers/hid/hid_settings.h"
@@ -47,6 +48,14 @@ FieldSpec read_spec(MapReader& m, bool quantity);
 bool absent(const Field& f);
 std::optional<FieldSpec> optional_field(MapReader& parent, Ctx& c, const std::string& rel,
                                         const char* key, bool quantity);
+
+// The entries of a list form (`positions`, `forces`): one mapping per joint, joint i entry i.
+// Nothing for a list that is not one of 1..kMaxJoints entries (reported at its key).
+std::vector<Field> list_entries(Ctx& c, const Field& f, const std::string& rel);
+// The one-joint key or its list form, never both: which one names the joints' fields.
+// `listed`: the list form was given.
+std::vector<Field> joint_fields(MapReader& m, Ctx& c, const char* one, const char* list,
+                                const std::string& parent, const char* why, bool& listed);
 
 // device.hid.report (profile report), into s.report.
 void read_report_profile(MapReader& hid, Ctx& c, const config::Config& cfg, HidSettings& s);

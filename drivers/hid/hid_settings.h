@@ -6,6 +6,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "config/config.h"
 #include "config/schema_reader.h"
@@ -28,16 +29,28 @@ struct Selector {
   std::string path;  // a hidapi path (/dev/hidrawN, or bus-port:cfg.intf)
 };
 
+// One joint's position: an input usage and the SI positions at its logical ends.
+struct PidPosition {
+  std::uint32_t usage = kGenericDesktopX;
+  double min = 0.0;  // SI position at the axis' logical minimum
+  double max = 0.0;  // ... and at its logical maximum
+};
+
 struct PidSettings {
-  std::uint32_t position_usage = kGenericDesktopX;
-  double position_min = 0.0;         // SI position at the axis' logical minimum
-  double position_max = 0.0;         // ... and at its logical maximum
-  std::uint32_t sequence_usage = 0;  // an input usage beside the axis read as a counter; 0: none
-  double force_full_scale = 0.0;     // N (N m) at the Magnitude's logical maximum
-  double gain = 1.0;                 // Device Gain, a fraction of its logical maximum, (0, 1]
-  double direction_deg = 270.0;      // Set Effect Direction, where the force comes from: 270 = +X
-  double effect_duration_ms = 0.0;   // 0: infinite; else the effect stops unless restarted
+  std::vector<PidPosition> positions;  // one per joint (`position`, or the list `positions`)
+  std::uint32_t sequence_usage = 0;    // an input usage beside the axes read as a counter; 0: none
+  double force_full_scale = 0.0;       // N (N m) at the Magnitude's logical maximum
+  double gain = 1.0;                   // Device Gain, a fraction of its logical maximum, (0, 1]
+  // One joint: one effect, Direction Enable set, this polar Direction (where the force comes
+  // from: 270 = +X).
+  double direction_deg = 270.0;
+  // Two joints: one effect per axis (Axes Enable X, then Y), Direction Enable clear, joint i's
+  // effect's own Direction instance i at directions_deg[i], mapped from 0..360 onto the field's
+  // logical range (docs/drivers/hid.md, "Two axes"). Empty for one joint.
+  std::vector<double> directions_deg;
+  double effect_duration_ms = 0.0;  // 0: infinite; else each effect stops unless restarted
   std::uint32_t fault_mask = kPidDefaultFaultMask;  // PidStatus bits that fault the loop
+  std::size_t joints() const noexcept { return positions.size(); }
 };
 
 struct Limits {
@@ -63,11 +76,16 @@ struct HidSettings final : config::DriverSettings {
   int writer_priority = 0;     // SCHED_FIFO of the output thread (loop.rt_priority - 1)
 };
 
-// Whole samples between write() and the force acting, as the gate analyses them: a command
-// waits up to one polling interval to go out and its answer up to one to come back, so the
-// answer to the command of tick k is read at tick k + ceil(2 P / T), one tick later than an
-// in-process device would give it. 1 at 1 kHz with bInterval 1 ms (docs/drivers/hid.md).
-int declared_delay_samples(double poll_interval_ms, double sample_period_s) noexcept;
+// Output reports a tick carrying the force: one (profile report, or pid of one joint), or one
+// Set Constant Force per joint (pid of two).
+std::size_t force_reports_per_tick(const HidSettings& s) noexcept;
+
+// Whole samples between write() and the force acting, as the gate analyses them: a tick's n
+// force reports go out one a polling interval, the last up to n P after the write, and its
+// answer takes up to one more to come back, so the answer to the command of tick k is read at
+// tick k + ceil((n + 1) P / T), one tick later than an in-process device would give it. 1 at
+// 1 kHz with bInterval 1 ms and one report (docs/drivers/hid.md).
+int declared_delay_samples(const HidSettings& s, double sample_period_s) noexcept;
 
 // Not RT-safe. Reads device.hid with the config library's schema reader, so every problem is
 // reported as "FILE:LINE: device.hid.key: what" and an unknown key is never silently ignored;

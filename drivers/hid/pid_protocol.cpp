@@ -1,6 +1,7 @@
 #include "drivers/hid/pid_protocol.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "base/hex.h"
 
@@ -60,11 +61,14 @@ class Finder {
     return {};
   }
 
-  // The first element of a variable field inside `collection` (the Direction ordinals).
-  Slot first_in(const ReportRef& ref, std::uint32_t collection) const {
+  // Element `n` of the variable elements inside `collection`, counted across its fields in
+  // order (the Direction's instances: one field of count 2, or two fields).
+  Slot nth_in(const ReportRef& ref, std::uint32_t collection, std::uint32_t n) const {
     if (!ref.present) return {};
     for (const ReportField& f : fields_of(ref)) {
-      if (f.is_variable() && f.inside(collection)) return slot_of(f, 0);
+      if (!f.is_variable() || !f.inside(collection)) continue;
+      if (n < f.count) return slot_of(f, n);
+      n -= f.count;
     }
     return {};
   }
@@ -137,8 +141,10 @@ void find_effect_reports(Finder& f, PidLayout& l) {
   l.se_gain = f.slot(l.set_effect, u(kGain));
   l.se_trigger_button = f.slot(l.set_effect, u(kTriggerButton));
   l.se_axis_x = f.slot(l.set_effect, kGenericDesktopX, u(kAxesEnable));
+  l.se_axis_y = f.slot(l.set_effect, kGenericDesktopY, u(kAxesEnable));
   l.se_direction_enable = f.slot(l.set_effect, u(kDirectionEnable));
-  l.se_direction = f.first_in(l.set_effect, u(kDirection));
+  l.se_direction = f.nth_in(l.set_effect, u(kDirection), 0);
+  l.se_direction_y = f.nth_in(l.set_effect, u(kDirection), 1);
 
   l.set_constant =
       f.report(kSetConstantForceReport, ReportKind::kOutput, "Set Constant Force", true);
@@ -194,21 +200,34 @@ void find_device_reports(Finder& f, PidLayout& l) {
   l.st_playing = f.slot(l.state, u(kEffectPlaying));
 }
 
-// The input report holding the position usage, and the sequence usage beside it.
-std::string find_position(const ParsedDescriptor& d, std::uint32_t position_usage,
-                          std::uint32_t sequence_usage, PidLayout& l) {
-  for (const ReportField& f : d.fields) {
-    if (f.kind != ReportKind::kInput || !f.is_variable() || f.is_constant()) continue;
-    for (std::uint32_t i = 0; i < f.count && !l.position.present; ++i) {
-      if (f.usage_of(i) != position_usage) continue;
-      const ReportInfo* info = d.find_report(f.kind, f.report_id);
-      l.position_report = {true, f.kind, f.report_id, info != nullptr ? info->data_bytes() : 0};
-      l.position = slot_of(f, i);
+// The input report holding the position usages (every one in the same report), and the
+// sequence usage beside them.
+std::string find_positions(const ParsedDescriptor& d, std::span<const std::uint32_t> usages,
+                           std::uint32_t sequence_usage, PidLayout& l) {
+  for (std::size_t j = 0; j < usages.size(); ++j) {
+    Slot found;
+    for (const ReportField& f : d.fields) {
+      if (f.kind != ReportKind::kInput || !f.is_variable() || f.is_constant()) continue;
+      if (l.position_report.present && f.report_id != l.position_report.id) continue;
+      for (std::uint32_t i = 0; i < f.count && !found.present; ++i) {
+        if (f.usage_of(i) != usages[j]) continue;
+        const ReportInfo* info = d.find_report(f.kind, f.report_id);
+        l.position_report = {true, f.kind, f.report_id, info != nullptr ? info->data_bytes() : 0};
+        found = slot_of(f, i);
+      }
     }
-  }
-  if (!l.position.present) {
-    return "the report descriptor has no input field with the position usage " +
-           usage_text(position_usage) + " (device.hid.pid.position)";
+    const std::string key = usages.size() == 1
+                                ? "device.hid.pid.position"
+                                : "device.hid.pid.positions[" + std::to_string(j) + "]";
+    if (!found.present) {
+      return "the report descriptor has no input field with the position usage " +
+             usage_text(usages[j]) +
+             (j > 0 ? " in input report " + std::to_string(l.position_report.id) +
+                          ", which holds joint 0's"
+                    : std::string()) +
+             " (" + key + ")";
+    }
+    l.positions.push_back(found);
   }
   if (sequence_usage != 0) {
     for (const ReportField& f : d.fields) {
@@ -227,9 +246,27 @@ std::string find_position(const ParsedDescriptor& d, std::uint32_t position_usag
   return "";
 }
 
+// One effect per axis: each selects its own axis and carries its own Direction.
+std::string check_axes(const PidLayout& l) {
+  if (l.positions.size() < 2) return "";
+  if (l.positions.size() > 2) {
+    return "the pid profile drives one or two joints (X and Y), not " +
+           std::to_string(l.positions.size());
+  }
+  const auto missing = [](const char* what, std::uint32_t u) {
+    return std::string("the PID Set Effect report has no ") + what + " (" + usage_text(u) +
+           "), which a force on each of two axes needs (docs/drivers/hid.md, \"Two axes\")";
+  };
+  if (!l.se_axis_x.present) return missing("Axes Enable X", kGenericDesktopX);
+  if (!l.se_axis_y.present) return missing("Axes Enable Y", kGenericDesktopY);
+  if (!l.se_direction_y.present)
+    return missing("second Direction instance", pid::u(pid::kDirection));
+  return "";
+}
+
 }  // namespace
 
-PidFind find_pid_layout(const ParsedDescriptor& d, std::uint32_t position_usage,
+PidFind find_pid_layout(const ParsedDescriptor& d, std::span<const std::uint32_t> position_usages,
                         std::uint32_t sequence_usage) {
   PidLayout l;
   l.numbered = d.numbered;
@@ -237,10 +274,16 @@ PidFind find_pid_layout(const ParsedDescriptor& d, std::uint32_t position_usage,
   find_effect_reports(f, l);
   find_device_reports(f, l);
   if (!f.error().empty()) return {std::nullopt, f.error()};
-  if (std::string e = find_position(d, position_usage, sequence_usage, l); !e.empty()) {
+  if (std::string e = find_positions(d, position_usages, sequence_usage, l); !e.empty()) {
     return {std::nullopt, e};
   }
+  if (std::string e = check_axes(l); !e.empty()) return {std::nullopt, e};
   return {l, ""};
+}
+
+PidFind find_pid_layout(const ParsedDescriptor& d, std::uint32_t position_usage,
+                        std::uint32_t sequence_usage) {
+  return find_pid_layout(d, std::span<const std::uint32_t>(&position_usage, 1), sequence_usage);
 }
 
 std::vector<std::uint8_t> make_report(const ReportRef& ref, bool numbered) {
@@ -299,6 +342,11 @@ std::uint32_t pid_status(std::span<const std::uint8_t> data, const PidLayout& l)
   flag(l.st_power, false, kPidPowerOff);
   flag(l.st_playing, false, kPidEffectStopped);
   return bits;
+}
+
+std::int64_t direction_value(const Slot& dir, double degrees) noexcept {
+  const double span = static_cast<double>(dir.logical_max - dir.logical_min);
+  return dir.logical_min + std::llround(degrees / 360.0 * span);
 }
 
 std::int64_t null_value(const Slot& s) noexcept {

@@ -79,8 +79,9 @@ enum Usage : std::uint16_t {
 constexpr std::uint32_t u(Usage id) noexcept { return usage(kPage, id); }
 }  // namespace pid
 
-// Generic Desktop X, the usual position axis.
+// Generic Desktop X and Y: the usual position axes, and the Axes Enable bits of Set Effect.
 inline constexpr std::uint32_t kGenericDesktopX = usage(0x01, 0x30);
+inline constexpr std::uint32_t kGenericDesktopY = usage(0x01, 0x31);
 
 // One report the profile uses.
 struct ReportRef {
@@ -110,13 +111,16 @@ struct Choice {
 
 struct PidLayout {
   bool numbered = false;
-  // The position axis and the optional sample counter, in one input report.
+  // The position axes (joint i's is entry i) and the optional sample counter, in one input
+  // report.
   ReportRef position_report;
-  Slot position, sequence;
-  // Set Effect (output).
+  std::vector<Slot> positions;
+  Slot sequence;
+  // Set Effect (output). Axes Enable X and Y, and the Direction's first two instances (its
+  // ordinals 1 and 2, X's and Y's).
   ReportRef set_effect;
   Slot se_block, se_duration, se_trigger_repeat, se_sample_period, se_start_delay, se_gain,
-      se_trigger_button, se_axis_x, se_direction_enable, se_direction;
+      se_trigger_button, se_axis_x, se_axis_y, se_direction_enable, se_direction, se_direction_y;
   Choice se_constant;
   // Set Constant Force (output).
   ReportRef set_constant;
@@ -165,9 +169,14 @@ enum PidStatus : std::uint32_t {
 // adds them for a board that drives them (docs/drivers/hid.md).
 inline constexpr std::uint32_t kPidDefaultFaultMask = kPidActuatorsDisabled;
 
-// Not RT-safe. Finds every report and field the profile needs. `position_usage` is the input
-// usage read as the position (e.g. kGenericDesktopX); `sequence_usage` an optional input usage
-// in the same report read as the device's sample counter (0: none).
+// Not RT-safe. Finds every report and field the profile needs. `position_usages` are the input
+// usages read as the joints' positions (e.g. kGenericDesktopX), all in one report;
+// `sequence_usage` an optional input usage in that report read as the device's sample counter
+// (0: none). Two joints need Set Effect's Axes Enable X and Y and two Direction instances (one
+// effect per axis, docs/drivers/hid.md "Two axes").
+PidFind find_pid_layout(const ParsedDescriptor& d, std::span<const std::uint32_t> position_usages,
+                        std::uint32_t sequence_usage = 0);
+// One joint's.
 PidFind find_pid_layout(const ParsedDescriptor& d, std::uint32_t position_usage,
                         std::uint32_t sequence_usage = 0);
 
@@ -193,6 +202,10 @@ void choose(std::span<std::uint8_t> data, const Choice& c) noexcept;
 bool chosen(std::span<const std::uint8_t> data, const Choice& c) noexcept;
 // RT-safe: called every tick. The PidStatus bits of a PID State report's data.
 std::uint32_t pid_status(std::span<const std::uint8_t> data, const PidLayout& l) noexcept;
+
+// An axis' own Direction (Direction Enable clear, two axes): `degrees` in [0, 360] onto the
+// slot's whole logical range, 0 its minimum and 360 its maximum.
+std::int64_t direction_value(const Slot& dir, double degrees) noexcept;
 
 // The slot's HID null value (outside its logical range, all ones where possible): PID reads
 // a null Duration as infinite and a null Trigger Button as none.

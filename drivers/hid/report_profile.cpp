@@ -1,5 +1,7 @@
 // The `report` profile: vendor-defined reports in a configured layout (report_layout.h).
 
+#include <array>
+
 #include "base/errno_text.h"
 #include "base/hex.h"
 #include "drivers/device.h"
@@ -108,7 +110,13 @@ class ReportProfile final : public HidProfile {
 
   std::size_t joints() const noexcept override { return l_.input.joints(); }
 
-  std::span<const std::uint8_t> force_report(std::span<const double> forces) noexcept override {
+  std::span<const std::span<const std::uint8_t>> force_reports(
+      std::span<const double> forces) noexcept override {
+    one_[0] = force_report(forces);
+    return one_;
+  }
+
+  std::span<const std::uint8_t> force_report(std::span<const double> forces) noexcept {
     encode_force(forces, l_.output, out_);
     if (l_.output.keepalive) {  // a counter the firmware watches: it moves with every report
       const FieldSpec& k = *l_.output.keepalive;
@@ -190,8 +198,9 @@ class ReportProfile final : public HidProfile {
 
   ReportProfileLayout l_;
   std::chrono::milliseconds timeout_;
-  std::vector<std::uint8_t> out_;  // the per-tick report, enable on
-  std::vector<std::uint8_t> off_;  // zero force, enable off
+  std::vector<std::uint8_t> out_;                     // the per-tick report, enable on
+  std::array<std::span<const std::uint8_t>, 1> one_;  // force_reports(): out_
+  std::vector<std::uint8_t> off_;                     // zero force, enable off
   std::uint64_t keepalive_ = 0;
   // Each wrapping joint's count since configure (unused for a joint that does not wrap).
   std::array<io::CounterUnwrap, base::kMaxJoints> unwrap_;

@@ -9,19 +9,14 @@
 #include "kinematics/kinematics.h"
 
 namespace hapticd::drivers::hid::section {
-namespace {
 
-// The keys every report starts with: its id and its data length.
-void read_report_head(MapReader& m, Ctx& c, std::uint8_t& report_id, std::size_t& length) {
-  if (const auto v = read_hex(c.d, m.take("report_id"), 255))
-    report_id = static_cast<std::uint8_t>(*v);
-  integer(m, take(m, "length", "data bytes after the report id"),
-          IntRange::between(1, kMaxReportData), length);
-}
+namespace {
 
 std::string at(const std::string& path, std::size_t i) {
   return path + "[" + std::to_string(i) + "]";
 }
+
+}  // namespace
 
 // The entries of a list form (`positions`, `forces`): one mapping per joint, joint i entry i.
 // Nothing for a list that is not one of 1..kMaxJoints entries (reported at its key).
@@ -61,6 +56,16 @@ std::vector<Field> joint_fields(MapReader& m, Ctx& c, const char* one, const cha
   }
   c.mark(single, parent + "." + one);
   return {single};
+}
+
+namespace {
+
+// The keys every report starts with: its id and its data length.
+void read_report_head(MapReader& m, Ctx& c, std::uint8_t& report_id, std::size_t& length) {
+  if (const auto v = read_hex(c.d, m.take("report_id"), 255))
+    report_id = static_cast<std::uint8_t>(*v);
+  integer(m, take(m, "length", "data bytes after the report id"),
+          IntRange::between(1, kMaxReportData), length);
 }
 
 PositionField read_position(Ctx& c, const Field& f, const std::string& rel) {

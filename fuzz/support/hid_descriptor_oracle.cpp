@@ -150,13 +150,22 @@ void check_pid_reports(const hid::ParsedDescriptor& d, const hid::PidLayout& l,
 
 // Every slot and choice the layout found, written and read back in its own report.
 void check_pid_slots(const hid::PidLayout& l, std::span<const std::uint8_t> fill) {
-  require(l.position.present && l.sc_magnitude.present && l.bl_block.present,
+  require(!l.positions.empty() && l.sc_magnitude.present && l.bl_block.present,
           "a found layout has the fields find_pid_layout needs");
+  std::vector<const hid::Slot*> input{&l.sequence};
+  for (const hid::Slot& p : l.positions) {
+    require(p.present, "every joint's position is found");
+    input.push_back(&p);
+  }
+  require(l.positions.size() == 1 ||
+              (l.se_axis_x.present && l.se_axis_y.present && l.se_direction_y.present),
+          "two joints' layout has both axes' enables and Directions");
   const std::pair<const hid::ReportRef&, std::vector<const hid::Slot*>> slots[] = {
-      {l.position_report, {&l.position, &l.sequence}},
+      {l.position_report, input},
       {l.set_effect,
        {&l.se_block, &l.se_duration, &l.se_trigger_repeat, &l.se_sample_period, &l.se_start_delay,
-        &l.se_gain, &l.se_trigger_button, &l.se_axis_x, &l.se_direction_enable, &l.se_direction}},
+        &l.se_gain, &l.se_trigger_button, &l.se_axis_x, &l.se_axis_y, &l.se_direction_enable,
+        &l.se_direction, &l.se_direction_y}},
       {l.set_constant, {&l.sc_block, &l.sc_magnitude}},
       {l.effect_operation, {&l.eo_block, &l.eo_loop_count}},
       {l.block_load, {&l.bl_block, &l.bl_ram_pool}},
@@ -195,12 +204,17 @@ void check_hid_descriptor(std::span<const std::uint8_t> bytes, bool with_sequenc
   if (!p.descriptor) return check_error(p.error, bytes.size());
   require(p.error.empty(), "a parsed descriptor has no error");
   check_parsed(*p.descriptor);
-  const hid::PidFind f = hid::find_pid_layout(*p.descriptor, hid::kGenericDesktopX,
-                                              with_sequence ? hid::kReferenceSequenceUsage : 0);
+  const std::uint32_t sequence = with_sequence ? hid::kReferenceSequenceUsage : 0;
+  const hid::PidFind f = hid::find_pid_layout(*p.descriptor, hid::kGenericDesktopX, sequence);
   require(f.layout.has_value() == f.error.empty(), "a PID layout, or an error naming the gap");
   if (!f.layout) return;
   check_pid_reports(*p.descriptor, *f.layout, bytes);
   check_pid_slots(*f.layout, bytes);
+  // The same descriptor as a stick of two axes: X and Y, one effect each.
+  const std::uint32_t xy[] = {hid::kGenericDesktopX, hid::kGenericDesktopY};
+  const hid::PidFind two = hid::find_pid_layout(*p.descriptor, xy, sequence);
+  require(two.layout.has_value() == two.error.empty(), "two axes: a layout, or the gap named");
+  if (two.layout) check_pid_slots(*two.layout, bytes);
 }
 
 }  // namespace hapticd::fuzz

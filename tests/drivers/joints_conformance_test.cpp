@@ -32,6 +32,7 @@ struct JointsCase {
 const JointsCase kJointsCases[] = {
 #if HAPTICD_WITH_HID
     {"hid", "config/hid-report-xy.yaml"},  // two joints in one report each way (issue 37)
+    {"hid", "config/hid-pid-xy.yaml"},     // two PID effects, one Set Constant Force each
 #endif
     {"sim", "config/sim-delta.yaml"},
 };

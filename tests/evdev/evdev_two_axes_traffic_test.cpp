@@ -100,7 +100,8 @@ std::uint64_t pidff_per_axis(const Pressed& p, const EvdevSettings& s) {
 TEST(EvdevTwoAxesTraffic, OneEffectWithADirectionSendsLeastForTheSamePress) {
   const Pressed directed = press("direction");
   const Pressed per_axis = press("per_axis");
-  const EvdevSettings& s = evdev_settings(traffic_config("direction"));
+  const config::Config directed_cfg = traffic_config("direction");  // owns the settings
+  const EvdevSettings& s = evdev_settings(directed_cfg);
   ASSERT_GT(directed.ticks, 2000u);
   // One EVIOCSFF a tick against two, and the zeros of enable, of the loop's last write and of
   // disable.

@@ -121,9 +121,10 @@ TEST(GpioJointsConfig, TheXyTableLoadsEachJointWithItsOwnLinesAndChannel) {
   EXPECT_EQ(s.joint(1).chip, "gpiochip0") << "the section's chip, every joint's default";
   EXPECT_EQ(s.joint(1).counts_per_unit, 100000.0);
   // An entry's own chip, resolution and direction win over the section's.
-  const GpioSettings& own = gpio_settings(
+  const config::Config own_cfg =
       load_xy({"device.gpio.joints[1].chip=gpiochip1", "device.gpio.joints[1].counts_per_unit=-1e5",
-               "device.gpio.joints[1].direction_positive=low", "device.sim.counts_per_unit=1e5"}));
+               "device.gpio.joints[1].direction_positive=low", "device.sim.counts_per_unit=1e5"});
+  const GpioSettings& own = gpio_settings(own_cfg);
   EXPECT_EQ(own.joint(1).chip, "gpiochip1");
   EXPECT_EQ(own.joint(1).counts_per_unit, -1e5);
   EXPECT_FALSE(own.joint(1).direction_positive_high);

@@ -58,8 +58,43 @@ TEST(HidDescriptor, PidLayoutIsFoundByUsageWhateverTheIds) {
   EXPECT_EQ(l.se_direction.logical_max, 35999);
   EXPECT_TRUE(l.se_axis_x.present);
   EXPECT_TRUE(l.state.present);
-  EXPECT_EQ(l.position.bit_size, 16u);
+  EXPECT_EQ(l.positions.at(0).bit_size, 16u);
   EXPECT_EQ(l.sequence.bit_offset, 16u);
+}
+
+// A stick of two axes (OpenFFBoard's "FFB Joystick (2 Axis)" shape): both positions in one
+// report, Axes Enable X and Y, and the Direction's two instances, each its own 16 bits.
+TEST(PidDescriptor, TwoAxesFindEachAxisItsEnableAndItsDirection) {
+  PidReferenceOptions o;
+  o.axes = 2;
+  const auto p = parse_report_descriptor(pid_reference_descriptor(o));
+  ASSERT_TRUE(p.descriptor) << p.error;
+  const std::uint32_t xy[] = {kGenericDesktopX, kGenericDesktopY};
+  const PidFind f = find_pid_layout(*p.descriptor, xy, kReferenceSequenceUsage);
+  ASSERT_TRUE(f.layout) << f.error;
+  const PidLayout& l = *f.layout;
+  ASSERT_EQ(l.positions.size(), 2u);
+  EXPECT_EQ(l.positions[1].bit_offset, 16u) << "Y after X";
+  EXPECT_EQ(l.sequence.bit_offset, 32u);
+  EXPECT_EQ(l.se_axis_y.bit_offset, l.se_axis_x.bit_offset + 1);
+  EXPECT_EQ(l.se_direction_enable.bit_offset, l.se_axis_x.bit_offset + 2)
+      << "bit 2, as OpenFFBoard";
+  EXPECT_EQ(l.se_direction_y.bit_offset, l.se_direction.bit_offset + 16);
+  EXPECT_EQ(l.se_direction_y.logical_max, 36000);
+  EXPECT_EQ(direction_value(l.se_direction, 0.0), 0);
+  EXPECT_EQ(direction_value(l.se_direction_y, 360.0), 36000);
+  EXPECT_EQ(direction_value(l.se_direction, 90.0), 9000);
+
+  // A one-axis descriptor cannot take two effects of their own axes: the gap is named.
+  const auto one = parse_report_descriptor(pid_reference_descriptor());
+  const std::uint32_t xx[] = {kGenericDesktopX, kGenericDesktopX};
+  const PidFind none = find_pid_layout(*one.descriptor, xx);
+  ASSERT_FALSE(none.layout);
+  EXPECT_NE(none.error.find("Axes Enable Y"), std::string::npos) << none.error;
+  // Y missing from the position's report is named with its key.
+  const PidFind no_y = find_pid_layout(*one.descriptor, xy);
+  ASSERT_FALSE(no_y.layout);
+  EXPECT_NE(no_y.error.find("(device.hid.pid.positions[1])"), std::string::npos) << no_y.error;
 }
 
 // Every report the profile cannot do without, taken out of the descriptor in turn.

@@ -70,12 +70,19 @@ TEST(HidConfig, TheExampleConfigurationsLoad) {
   EXPECT_DOUBLE_EQ(hid(p).pid.effect_duration_ms, 100);
 }
 
+// One force report a tick, polled every `poll_ms`.
+int delay_of_one_report(double poll_ms, double period_s) {
+  HidSettings s;
+  s.poll_interval_ms = poll_ms;
+  return declared_delay_samples(s, period_s);
+}
+
 TEST(HidConfig, TheDeclaredDelayFollowsThePollingIntervalAndT) {
-  EXPECT_EQ(declared_delay_samples(1.0, 1e-3), 1);    // bInterval 1 at 1 kHz
-  EXPECT_EQ(declared_delay_samples(1.0, 4e-3), 0);    // 250 Hz: the round trip fits a period
-  EXPECT_EQ(declared_delay_samples(4.0, 4e-3), 1);    // a wheel polled at 250 Hz
-  EXPECT_EQ(declared_delay_samples(0.125, 1e-3), 0);  // high speed, one microframe
-  EXPECT_EQ(declared_delay_samples(1.0, 0.5e-3), 3);  // 2 kHz over 1 ms polling
+  EXPECT_EQ(delay_of_one_report(1.0, 1e-3), 1);    // bInterval 1 at 1 kHz
+  EXPECT_EQ(delay_of_one_report(1.0, 4e-3), 0);    // 250 Hz: the round trip fits a period
+  EXPECT_EQ(delay_of_one_report(4.0, 4e-3), 1);    // a wheel polled at 250 Hz
+  EXPECT_EQ(delay_of_one_report(0.125, 1e-3), 0);  // high speed, one microframe
+  EXPECT_EQ(delay_of_one_report(1.0, 0.5e-3), 3);  // 2 kHz over 1 ms polling
   const config::Config c = load(file("hid-report.yaml"), {"device.hid.poll_interval_ms=4"});
   EXPECT_EQ(wiring::find_driver("hid").declared_delay(c), 7);
 }
@@ -236,7 +243,8 @@ TEST(HidConfig, TheTwoJointExampleLoadsWithAFieldPerJoint) {
   EXPECT_EQ(l.output.joint(1).field.byte, 2u);
   EXPECT_DOUBLE_EQ(l.output.joint(1).full_scale, 10000);
   EXPECT_EQ(l.input.key(1), "input.positions[1]");
-  const ReportProfileLayout& one = hid(load(file("hid-report.yaml"))).report;
+  const config::Config one_joint = load(file("hid-report.yaml"));  // owns the settings read below
+  const ReportProfileLayout& one = hid(one_joint).report;
   EXPECT_EQ(one.input.joints(), 1u);
   EXPECT_EQ(one.output.key(0), "output.force") << "a one-joint file reads as it did";
 }
@@ -295,12 +303,59 @@ TEST(HidConfig, EachJointsFieldIsCheckedAtItsEntry) {
       << all(e);
 }
 
-TEST(HidConfig, ThePidProfileDrivesOneJoint) {
+TEST(HidConfig, TheTwoAxisPidExampleLoadsAPositionAndADirectionPerJoint) {
+  const config::Config c = load(file("hid-pid-xy.yaml"));
+  const PidSettings& p = hid(c).pid;
+  ASSERT_EQ(p.joints(), 2u);
+  EXPECT_EQ(p.positions[0].usage, kGenericDesktopX);
+  EXPECT_EQ(p.positions[1].usage, kGenericDesktopY);
+  EXPECT_DOUBLE_EQ(p.positions[1].max, 0.349066);
+  ASSERT_EQ(p.directions_deg.size(), 2u);
+  EXPECT_EQ(p.directions_deg[0], 0.0);
+  EXPECT_EQ(p.directions_deg[1], 360.0);
+  EXPECT_EQ(force_reports_per_tick(hid(c)), 2u);
+  // Two reports out, one polling interval each, and one back: 3 ms, under two 2 ms periods.
+  EXPECT_EQ(declared_delay_samples(hid(c), 2e-3), 1);
+  EXPECT_EQ(declared_delay_samples(hid(c), 1e-3), 2);
+  const config::Config one = load(file("hid-pid.yaml"));
+  EXPECT_EQ(hid(one).pid.joints(), 1u) << "`position` is one joint's";
+  EXPECT_EQ(force_reports_per_tick(hid(one)), 1u);
+}
+
+TEST(HidConfig, TwoAxesRefuseWhatTheirEffectsCannotDo) {
+  const std::string xy = file("hid-pid-xy.yaml");
+  auto e = errors(xy, {"device.hid.pid.directions_deg="});
+  EXPECT_TRUE(has(e, "device.hid.pid.directions_deg: missing (each joint's effect's Direction"))
+      << all(e);
+  e = errors(xy, {"device.hid.pid.directions_deg=[0]", "device.hid.pid.direction_deg=270"});
+  EXPECT_TRUE(has(e, "device.hid.pid.directions_deg: must be a list of 2 directions")) << all(e);
+  EXPECT_TRUE(has(e, "device.hid.pid.direction_deg: one joint's only")) << all(e);
+  e = errors(xy, {"device.hid.pid.directions_deg=[0, 400]"});
+  EXPECT_TRUE(has(e, "device.hid.pid.directions_deg[1]: must be in [0, 360]")) << all(e);
+  e = errors(xy, {"device.hid.pid.positions=[{usage_page: 1, usage: 0x30, min: -1, max: 1}]"});
+  EXPECT_TRUE(has(e, "device.hid.pid.positions: 1 position(s) for a mechanism of 2 joint(s)"))
+      << all(e);
+  // Two reports a period, one a millisecond: 1 kHz cannot carry them.
+  e = errors(xy, {"loop.rate_hz=1000"});
+  EXPECT_TRUE(has(e,
+                  "device.hid.pid.positions: 2 joints send 2 Set Constant Force reports a "
+                  "period"))
+      << all(e);
+  EXPECT_TRUE(has(e, "lower loop.rate_hz to at most 500")) << all(e);
+  e = errors(xy, {"device.hid.pid.effect_duration_ms=6"});
+  EXPECT_TRUE(has(e, "device.hid.pid.effect_duration_ms: must be 0 (infinite) or at least four"))
+      << all(e);
+  // One joint's file given a second joint's Direction.
+  e = errors(file("hid-pid.yaml"), {"device.hid.pid.directions_deg=[0, 360]"});
+  EXPECT_TRUE(has(e, "device.hid.pid.directions_deg: two joints' only")) << all(e);
+}
+
+TEST(HidConfig, ThePidProfileDrivesOneOrTwoJoints) {
   const auto e = errors(file("hid-report-xy.yaml"),
                         {"device.hid.profile=pid", "device.hid.report=",
                          "device.hid.pid={position: {usage_page: 1, usage: 0x30, min: -0.1, "
-                         "max: 0.1}, force_full_scale: 10}"});
-  EXPECT_TRUE(has(e, "device.hid.pid: drives one joint, the mechanism has 2 (device.kinematics)"))
+                         "max: 0.1}, force_full_scale: 10, directions_deg: [0, 360]}"});
+  EXPECT_TRUE(has(e, "device.hid.pid.position: 1 position(s) for a mechanism of 2 joint(s)"))
       << all(e);
 }
 

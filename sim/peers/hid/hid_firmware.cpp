@@ -72,24 +72,25 @@ void HidFirmware::set_output(bool on) noexcept {
 void HidFirmware::lose_host() noexcept { set_output(false); }
 
 void HidFirmware::step(std::span<const double> forces) noexcept {
+  hold(forces);
   if (mechanism_) {
-    for (int j = 0; j < mechanism_->joints(); ++j) {
-      const auto i = static_cast<std::size_t>(j);
-      mechanism_->hold_torque(j, i < forces.size() ? forces[i] : 0.0);
-    }
-    publish();
     mechanism_->step();
   } else {
-    axis_.hold_force(forces.front());
-    publish();
     axis_.step();
   }
   fifo_[fifo_head_] = encoders();  // the newest replaces the oldest
   fifo_head_ = (fifo_head_ + 1) % fifo_.size();
 }
 
-void HidFirmware::hold(double force) noexcept {  // the PID firmware: one joint
-  axis_.hold_force(force);
+void HidFirmware::hold(std::span<const double> forces) noexcept {
+  if (mechanism_) {
+    for (int j = 0; j < mechanism_->joints(); ++j) {
+      const auto i = static_cast<std::size_t>(j);
+      mechanism_->hold_torque(j, i < forces.size() ? forces[i] : 0.0);
+    }
+  } else {
+    axis_.hold_force(forces.front());
+  }
   publish();
 }
 

@@ -99,7 +99,7 @@ class HidFirmware {
   // The same for every joint: joint i's force is entry i (joints() of them).
   void step(std::span<const double> forces) noexcept;
   // Holds `force` from now on without a step: what plays changed between two commands.
-  void hold(double force) noexcept;
+  void hold(std::span<const double> forces) noexcept;
   // The position the device reports: measured link_delay steps ago (joint j's).
   double measured_position(std::size_t j = 0) const noexcept { return fifo_[fifo_head_][j]; }
   double velocity() const noexcept { return axis_.plant().velocity(); }

@@ -21,8 +21,8 @@ const drivers::hid::HidSettings& settings_of(const config::Config& cfg) {
 std::unique_ptr<LoopbackPeer> make_peer(const config::Config& cfg, io::UniqueFd end) {
   // Over the socketpair the firmware holds each answer as long as the USB link would: the
   // delay the driver declares, from the same polling interval.
-  const int delay = drivers::hid::declared_delay_samples(settings_of(cfg).poll_interval_ms,
-                                                         cfg.loop.sample_period_s());
+  const int delay =
+      drivers::hid::declared_delay_samples(settings_of(cfg), cfg.loop.sample_period_s());
   return std::make_unique<SocketHidPeer>(std::move(end), make_firmware(cfg, delay));
 }
 

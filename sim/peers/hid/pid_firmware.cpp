@@ -21,13 +21,17 @@ struct Effect {
   std::int64_t magnitude = 0;
   double duration_ms = 0.0;   // 0: infinite
   std::uint64_t started = 0;  // plant step at Op Effect Start
-  double gain = 1.0, dir_x = 1.0;
+  double gain = 1.0;
+  std::array<double, 2> share{1.0, 0.0};  // each axis' torque per unit of magnitude
+  bool fresh = false;                     // its Set Constant Force came since the last step
 };
 
 PidLayout own_layout(const std::vector<std::uint8_t>& descriptor, const config::Config& cfg,
                      const PidSettings& p) {
   const DescriptorParse parsed = parse_report_descriptor(descriptor);
-  const PidFind f = find_pid_layout(*parsed.descriptor, p.position_usage, p.sequence_usage);
+  std::vector<std::uint32_t> usages;
+  for (const PidPosition& pos : p.positions) usages.push_back(pos.usage);
+  const PidFind f = find_pid_layout(*parsed.descriptor, usages, p.sequence_usage);
   if (!f.layout) {
     throw config::ConfigError({cfg.locate("device.hid.pid") +
                                ": device.hid.pid: the simulated PID device cannot serve this "
@@ -48,7 +52,7 @@ class PidFirmware final : public HidFirmware {
         descriptor_(pid_reference_descriptor(
             {p_.sequence_usage == kReferenceSequenceUsage, true,
              o.sidewinder_lineage ? kSideWinderLineageIds : PidReferenceIds{},
-             !o.sidewinder_lineage})),
+             !o.sidewinder_lineage, static_cast<int>(s.pid.joints())})),
         l_(own_layout(descriptor_, cfg, p_)),
         pool_{o.sidewinder_lineage ? kSideWinderLineageIds.pool : PidReferenceIds{}.pool},
         position_(make_report(l_.position_report, l_.numbered)),
@@ -68,8 +72,11 @@ class PidFirmware final : public HidFirmware {
   void on_output(std::span<const std::uint8_t> r, const Send& send) override {
     if (is_report(r, l_.set_constant, l_.numbered)) {
       const auto d = data_of(r, l_.set_constant, l_.numbered);
-      if (Effect* e = effect(get_slot(d, l_.sc_block))) e->magnitude = get_slot(d, l_.sc_magnitude);
-      if (amplifier_on()) {
+      if (Effect* e = effect(get_slot(d, l_.sc_block))) {
+        e->magnitude = get_slot(d, l_.sc_magnitude);
+        e->fresh = true;
+      }
+      if (amplifier_on() && tick_complete()) {
         step(force());
         answer(send);
       }
@@ -156,6 +163,18 @@ class PidFirmware final : public HidFirmware {
     return e.allocated ? &e : nullptr;
   }
 
+  // The host's tick has arrived: every playing effect has its new magnitude (one effect per
+  // axis: one Set Constant Force each), or none plays. Then the plant steps once a period,
+  // however many reports a tick carries.
+  bool tick_complete() {
+    const bool all = std::all_of(effects_.begin(), effects_.end(),
+                                 [](const Effect& e) { return !e.playing || e.fresh; });
+    if (all) {
+      for (Effect& e : effects_) e.fresh = false;
+    }
+    return all;
+  }
+
   void set_effect(std::span<const std::uint8_t> d) {
     Effect* e = effect(get_slot(d, l_.se_block));
     if (e == nullptr) return;
@@ -168,15 +187,34 @@ class PidFirmware final : public HidFirmware {
       e->gain = static_cast<double>(get_slot(d, l_.se_gain)) /
                 static_cast<double>(l_.se_gain.logical_max);
     }
+    set_shares(d, *e);
+  }
+
+  // Which way each axis turns a positive magnitude, as OpenFFBoard's HidFFB.cpp set_effect
+  // reads the Set Effect (docs/drivers/hid.md, "Two axes"): with Direction Enable (or on a
+  // device of one axis) DirectInput's polar direction, where the force comes from,
+  // -magnitude * sin on X and +cos on Y (EffectsCalculator.cpp: torque = -magnitude * share);
+  // the SideWinder lineage's +sin (ArduinoJoystickWithFFBLibrary, getEffectForce) the reverse.
+  // Without it, each enabled axis reads its own Direction linearly, (d - mid) / half of its
+  // range on X and the negative on Y; an axis not enabled gets nothing.
+  void set_shares(std::span<const std::uint8_t> d, Effect& e) const {
     const Slot& dir = l_.se_direction;
-    if (dir.present) {
+    if (!dir.present) return;
+    const bool polar = p_.joints() == 1 || get_slot(d, l_.se_direction_enable) != 0;
+    if (polar) {
       const double turn = static_cast<double>(dir.logical_max - dir.logical_min + 1);
-      const double angle = static_cast<double>(get_slot(d, dir) - dir.logical_min) / turn;
-      // DirectInput's polar direction, where the force comes from, as OpenFFBoard renders it
-      // (EffectsCalculator.cpp: -magnitude * sin(direction)): 90 degrees pushes toward -X. The
-      // SideWinder lineage's +sin (ArduinoJoystickWithFFBLibrary, getEffectForce) the reverse.
-      e->dir_x = (o_.sidewinder_lineage ? 1.0 : -1.0) * std::sin(2.0 * M_PI * angle);
+      const double angle =
+          2.0 * M_PI * static_cast<double>(get_slot(d, dir) - dir.logical_min) / turn;
+      e.share = {(o_.sidewinder_lineage ? 1.0 : -1.0) * std::sin(angle), std::cos(angle)};
+      return;
     }
+    const auto linear = [&](const Slot& s, const Slot& enable) {
+      if (get_slot(d, enable) == 0) return 0.0;
+      const double mid = static_cast<double>(s.logical_min + s.logical_max) / 2.0;
+      const double half = static_cast<double>(s.logical_max - s.logical_min) / 2.0;
+      return (static_cast<double>(get_slot(d, s)) - mid) / half;
+    };
+    e.share = {-linear(dir, l_.se_axis_x), linear(l_.se_direction_y, l_.se_axis_y)};
   }
 
   void device_control(std::span<const std::uint8_t> d, const Send& send) {
@@ -192,34 +230,38 @@ class PidFirmware final : public HidFirmware {
     }
   }
 
-  // The force of every playing effect, as the amplifier makes it.
-  double force() {
-    if (device_fault()) return 0.0;
-    double f = 0.0;
+  // Each joint's force of every playing effect, as the amplifier makes it.
+  std::span<const double> force() {
+    forces_ = {};
+    if (device_fault()) return std::span<const double>(forces_.data(), joints());
     for (Effect& e : effects_) {
       if (e.playing && e.duration_ms > 0.0 &&
           static_cast<double>(plant().steps() - e.started) * period_ms_ >= e.duration_ms) {
         e.playing = false;  // ran out: the firmware's own watchdog
       }
       if (!e.playing) continue;
-      f += static_cast<double>(e.magnitude) / static_cast<double>(l_.sc_magnitude.logical_max) *
-           p_.force_full_scale * e.gain * e.dir_x;
+      const double level = static_cast<double>(e.magnitude) /
+                           static_cast<double>(l_.sc_magnitude.logical_max) * p_.force_full_scale *
+                           e.gain * device_gain_;
+      for (std::size_t j = 0; j < joints(); ++j) forces_[j] += level * e.share[j];
     }
-    return f * device_gain_;
+    return std::span<const double>(forces_.data(), joints());
   }
 
   void answer(const Send& send) {
     if (!answering()) return;
-    const Slot& s = l_.position;
-    const double span = static_cast<double>(s.logical_max - s.logical_min);
-    const double raw =
-        static_cast<double>(s.logical_min) +
-        (measured_position() - p_.position_min) / (p_.position_max - p_.position_min) * span;
     const auto d = data_of(std::span<std::uint8_t>(position_), l_.position_report, l_.numbered);
-    set_slot(d, s,
-             static_cast<std::int64_t>(std::clamp(std::nearbyint(raw),
-                                                  static_cast<double>(s.logical_min),
-                                                  static_cast<double>(s.logical_max))));
+    for (std::size_t j = 0; j < joints(); ++j) {
+      const Slot& s = l_.positions[j];
+      const PidPosition& p = p_.positions[j];
+      const double span = static_cast<double>(s.logical_max - s.logical_min);
+      const double raw = static_cast<double>(s.logical_min) +
+                         (measured_position(j) - p.min) / (p.max - p.min) * span;
+      set_slot(d, s,
+               static_cast<std::int64_t>(std::clamp(std::nearbyint(raw),
+                                                    static_cast<double>(s.logical_min),
+                                                    static_cast<double>(s.logical_max))));
+    }
     if (l_.sequence.present) set_slot(d, l_.sequence, next_sequence());
     send(position_);
   }
@@ -253,6 +295,7 @@ class PidFirmware final : public HidFirmware {
   PoolRef pool_;
   std::vector<std::uint8_t> position_, state_, sent_state_;
   std::array<Effect, 8> effects_{};
+  std::array<double, 2> forces_{};  // force()'s
   double device_gain_ = 1.0;
   Choice load_status_;
   std::int64_t load_block_ = 0;

@@ -1,0 +1,223 @@
+// The pid profile with two joints (issue 37, config/hid-pid-xy.yaml): one constant-force
+// effect per axis, each selecting its own axis with its own Direction, created at the enable;
+// each tick one Set Constant Force per joint and never a Set Effect (docs/drivers/hid.md,
+// "Two axes"). Against the simulated board, which reads the effects as OpenFFBoard's
+// HidFFB.cpp does, the scene presses the stick into the diagonal wall and it rests where the
+// wall balances the hand.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <thread>
+
+#include "drivers/hid/descriptor_builder.h"
+#include "drivers/hid/hid_device.h"
+#include "fake_hid_device.h"
+#include "hid_test_support.h"
+#include "scene_run.h"
+#include "sim/peers/paced_device.h"
+#include "sim/peers/peer_runner.h"
+
+namespace hapticd::drivers::hid {
+namespace {
+
+using XyPidBytes = std::vector<std::uint8_t>;
+
+std::vector<std::uint8_t> two_axis_descriptor() {
+  PidReferenceOptions o;
+  o.axes = 2;
+  o.sequence = false;  // config/hid-pid-xy.yaml reads no counter
+  return pid_reference_descriptor(o);
+}
+
+std::int64_t xy_slot(const XyPidBytes& report, const Slot& s) {
+  return get_slot(std::span<const std::uint8_t>(report).subspan(1), s);
+}
+
+// The fake board of two_axis_descriptor(), each Create New Effect given the next block.
+struct XyPidRig {
+  explicit XyPidRig(std::vector<std::string> sets)
+      : sets_(std::move(sets)),
+        fake(two_axis_descriptor()),
+        layout(*find_pid_layout(*parse_report_descriptor(two_axis_descriptor()).descriptor, xy)
+                    .layout) {
+    fake.on_get_feature = [this](std::uint8_t id) {
+      XyPidBytes r = make_report(layout.block_load, true);
+      if (id != layout.block_load.id) return XyPidBytes{};
+      const auto d = std::span<std::uint8_t>(r).subspan(1);
+      set_slot(d, layout.bl_block, ++blocks);
+      choose(d, layout.bl_success);
+      return r;
+    };
+    device = std::make_unique<HidDevice>(
+        testing::settings_of(testing::load_example("hid-pid-xy.yaml", sets_)), fake.opener(), 2e-3);
+  }
+  // The Set Effect reports the board received, in order.
+  std::vector<XyPidBytes> set_effects() {
+    std::vector<XyPidBytes> out;
+    for (const XyPidBytes& r : fake.outputs()) {
+      if (r[0] == layout.set_effect.id) out.push_back(r);
+    }
+    return out;
+  }
+  // The board reports on change (OpenFFBoard): the enable waits for its first report, which
+  // the fake sends while the enable runs.
+  void enable() {
+    std::thread board([this] {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      fake.send_input(make_report(layout.position_report, true));
+    });
+    device->enable();
+    board.join();
+  }
+  static constexpr std::uint32_t xy[] = {kGenericDesktopX, kGenericDesktopY};
+  std::vector<std::string> sets_;
+  testing::FakeHidDevice fake;
+  PidLayout layout;
+  std::int64_t blocks = 0;
+  std::unique_ptr<HidDevice> device;
+};
+
+TEST(HidPidTwoAxes, EachAxisHasItsOwnEffectAndATickSendsOneSetConstantForceEach) {
+  XyPidRig rig({"device.hid.pid.effect_duration_ms=0"});
+  const PidLayout& l = rig.layout;
+  rig.device->configure();
+  EXPECT_EQ(rig.device->info().joints, 2u);
+  rig.enable();
+  // Descriptor, stop all, disable; two Create New Effect and Block Load exchanges, two Set
+  // Effect, two zero forces, Device Gain, two starts, enable.
+  rig.fake.wait_for(15);
+  ASSERT_EQ(rig.fake.received().size(), 15u);
+  const std::vector<XyPidBytes> effects = rig.set_effects();
+  ASSERT_EQ(effects.size(), 2u);
+  for (std::size_t j = 0; j < 2; ++j) {
+    const XyPidBytes& e = effects[j];
+    EXPECT_EQ(xy_slot(e, l.se_block), static_cast<std::int64_t>(j + 1));
+    EXPECT_EQ(xy_slot(e, l.se_axis_x), j == 0 ? 1 : 0) << "effect " << j;
+    EXPECT_EQ(xy_slot(e, l.se_axis_y), j == 1 ? 1 : 0) << "effect " << j;
+    EXPECT_EQ(xy_slot(e, l.se_direction_enable), 0) << "each axis reads its own Direction";
+  }
+  // 0 and 360 degrees: the two ends of 0..36000, where OpenFFBoard's share is -1 on X and on Y.
+  EXPECT_EQ(xy_slot(effects[0], l.se_direction), 0);
+  EXPECT_EQ(xy_slot(effects[1], l.se_direction_y), 36000);
+
+  // Distinct values, so joints swapped or one effect's magnitude sent twice show.
+  const std::array<double, 2> forces{1.0, -0.5};
+  const std::size_t before = rig.fake.outputs().size();
+  ASSERT_EQ(rig.device->write(forces), IoStatus::kOk);
+  rig.fake.wait_for(17);
+  const auto out = rig.fake.outputs();
+  ASSERT_EQ(out.size(), before + 2) << "two reports a tick";
+  for (std::size_t j = 0; j < 2; ++j) {
+    const XyPidBytes& r = out[before + j];
+    EXPECT_EQ(r[0], l.set_constant.id);
+    EXPECT_EQ(xy_slot(r, l.sc_block), static_cast<std::int64_t>(j + 1));
+  }
+  // 2 N m at the Magnitude's 10000 (config/hid-pid-xy.yaml's force_full_scale).
+  EXPECT_EQ(xy_slot(out[before], l.sc_magnitude), 5000);
+  EXPECT_EQ(xy_slot(out[before + 1], l.sc_magnitude), -2500);
+
+  rig.device->disable();  // both zero, stop all, actuators off, both blocks freed
+  rig.fake.wait_for(23);
+  const auto end = rig.fake.outputs();
+  ASSERT_GE(end.size(), 6u);
+  EXPECT_EQ(xy_slot(end[end.size() - 6], l.sc_magnitude), 0);
+  EXPECT_EQ(xy_slot(end[end.size() - 5], l.sc_magnitude), 0);
+  EXPECT_EQ(xy_slot(end[end.size() - 5], l.sc_block), 2);
+  EXPECT_EQ(xy_slot(end[end.size() - 2], l.bf_block), 1);
+  EXPECT_EQ(xy_slot(end.back(), l.bf_block), 2);
+  EXPECT_EQ(rig.set_effects().size(), 2u) << "no Set Effect after the enable";
+}
+
+TEST(HidPidTwoAxes, FiniteEffectsAreRestartedInTurnEveryHalfDuration) {
+  XyPidRig rig({});  // 100 ms effects at 500 Hz: each restarted every 25 ticks
+  rig.device->configure();
+  rig.enable();
+  rig.fake.wait_for(15);
+  const std::array<double, 2> forces{0.1, 0.1};
+  for (int i = 0; i < 50; ++i) ASSERT_EQ(rig.device->write(forces), IoStatus::kOk);
+  rig.fake.wait_for(15 + 100 + 4);
+  std::array<int, 2> starts{};
+  for (const XyPidBytes& r : rig.fake.outputs()) {
+    if (r[0] != rig.layout.effect_operation.id || xy_slot(r, rig.layout.eo_block) < 1) continue;
+    ++starts[static_cast<std::size_t>(xy_slot(r, rig.layout.eo_block) - 1)];
+  }
+  EXPECT_EQ(starts[0], 3) << "the start at enable, then at ticks 25 and 50";
+  EXPECT_EQ(starts[1], 3) << "the start at enable, then at ticks 24 and 49: a tick apart";
+}
+
+// The setting a reversed force names (drivers/device_entry.h): each axis' Direction mirrored
+// about its range's middle, which a linear reading turns into the opposite share.
+TEST(HidPidTwoAxes, TheReversalMirrorsEachAxisDirection) {
+  const config::Config plain = testing::load_example("hid-pid-xy.yaml");
+  const ForceReversal f = wiring::find_driver("hid").force_reversal(plain);
+  EXPECT_EQ(f.key, "device.hid.pid.directions_deg");
+  EXPECT_EQ(f.now, "[0, 360]");
+  EXPECT_EQ(f.reversed, "[360, 0]");
+  const config::Config flipped =
+      testing::load_example("hid-pid-xy.yaml", {f.key + "=" + f.reversed});
+  EXPECT_EQ(testing::settings_of(flipped)->pid.directions_deg, (std::vector<double>{360.0, 0.0}));
+}
+
+// The stick of config/hid-pid-xy.yaml against the simulated board, in freerun.
+struct XyPidRun {
+  loop::LoopResult result;
+  std::vector<telemetry::TickRecord> records;
+  kinematics::Vec3 joints = kinematics::Vec3::Zero();
+  std::uint64_t allocations = 1, output_reports = 0, ticks = 0;
+  double peer_force_after = 1.0;
+};
+
+XyPidRun run_stick(const config::Config& cfg, std::uint64_t ticks) {
+  wiring::Loopback pair = wiring::find_driver("hid").make_loopback(cfg);
+  const auto* hid = dynamic_cast<const HidDevice*>(pair.device.get());
+  sim::PeerRunner runner(*pair.peer);
+  sim::PacedDevice device(std::move(pair.device), runner);
+  telemetry::SpscRing<telemetry::TickRecord> ring(4096);
+  device.configure();
+  device.enable();
+  XyPidRun out;
+  out.result = hapticd::testing::run_scene_loop(cfg, device, ticks, &ring, &out.allocations);
+  out.ticks = out.result.ticks;
+  if (hid != nullptr) out.output_reports = hid->hid_counts().output_reports;
+  out.records.resize(ring.size_approx());
+  out.records.resize(ring.pop_many(out.records.data(), out.records.size()));
+  device.disable();
+  runner.wait_idle();
+  out.peer_force_after = pair.peer->applied_force();
+  if (const sim::JointPlant* p = pair.peer->joint_plant()) out.joints = p->joint_positions();
+  device.close();
+  return out;
+}
+
+TEST(HidPidTwoAxes, TheStickRestsInTheDiagonalWallWhereTheWallBalancesTheHand) {
+  const config::Config cfg = testing::load_example("hid-pid-xy.yaml", {"loop.clock=freerun"});
+  // 500 Hz: the press is at depth from 0.7 s to 2.2 s, ticks 350 to 1100.
+  const XyPidRun r = run_stick(cfg, 1100);
+  ASSERT_EQ(r.result.fault.cause, loop::FaultCause::kNone) << loop::describe(r.result.fault);
+  EXPECT_EQ(r.allocations, 0u) << "the loop with both effects' reports allocates nothing";
+  EXPECT_EQ(r.peer_force_after, 0.0);
+  ASSERT_EQ(r.records.size(), 1100u);
+  double rest = 0.0;
+  for (std::size_t k = 1000; k < 1100; ++k) rest += r.records[k].penetration / 100.0;
+  // K p = k_h (depth - n . (point - origin) - p), along the normal.
+  const config::TaskWallConfig& wall = cfg.walls.front();
+  const config::OperatorSpec& hand = cfg.device.sim.op;
+  const double reach = 0.2 - wall.normal.dot(wall.point - hand.origin);  // setpoint.depth
+  const double expected = hand.stiffness * reach / (wall.law.stiffness + hand.stiffness);
+  EXPECT_NEAR(rest, expected, 0.02 * expected) << "F/K along the diagonal";
+  EXPECT_NEAR(r.joints[0], r.joints[1], 1e-3) << "a diagonal press turns both axes alike";
+  EXPECT_GT(r.joints[0], wall.point[0]) << "each axis' own effect moved it past the face";
+  // Two Set Constant Force a tick, a restart of each effect every 25 ticks, and the enable's
+  // zero forces: what reaches the board.
+  const double per_tick = static_cast<double>(r.output_reports) / static_cast<double>(r.ticks);
+  EXPECT_GE(per_tick, 2.0);
+  EXPECT_LE(per_tick, 2.0 + 2.0 / 25.0 + 0.01);
+  RecordProperty("rest_rad", std::to_string(rest));
+  RecordProperty("expected_rad", std::to_string(expected));
+  RecordProperty("output_reports_per_tick", std::to_string(per_tick));
+}
+
+}  // namespace
+}  // namespace hapticd::drivers::hid
