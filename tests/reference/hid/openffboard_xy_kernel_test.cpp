@@ -29,9 +29,13 @@ namespace {
 constexpr double kStiffness = 2.0;  // N m/rad along the normal
 constexpr double kPush = 0.3;       // N m: the hand's total push along the normal
 constexpr double kWallPoint = 0.05;
-// Each axis' hand: F/sqrt 2, and a damping that with the axis' 0.05 kg m^2 and the wall's K
-// is about critical (2 sqrt(K J) = 0.63): at rest within a second, not coasting for seconds.
-constexpr double kHandDamping = 0.6;
+// Each axis' hand: F/sqrt 2, and a damping above critical with the axis' 0.01 kg m^2 and the
+// wall's K (2 sqrt(K J) = 0.28): no ringing through the emulated USB's delays, and at rest
+// (the slow pole K / b, 0.3 s) well within the 4 s the test waits.
+constexpr double kHandDamping = 0.5;
+// The shipped file's device: each axis 0.01 kg m^2 with its own 0.05 N m s/rad, and 2 N m at
+// Magnitude 32767 (force_full_scale).
+constexpr double kInertia = 0.01, kDamping = 0.05, kFullScale = 2.0;
 constexpr double kLivenessMs = 1000.0;
 const double kPerAxis = kPush / std::sqrt(2.0);
 
@@ -53,6 +57,9 @@ OpenFfboardOptions joystick() {
   OpenFfboardOptions o;
   o.axes = 2;
   o.degrees = 40.0;
+  o.inertia = kInertia;
+  o.damping = kDamping;
+  o.torque_full_scale = kFullScale;
   o.start_position = 0.0;
   o.start_position_y = 0.0;
   o.usb_report_rate = 4;
@@ -117,9 +124,11 @@ Rest rest_of(OpenFfboard& b) {
 void expect_at_rest_in_the_wall(const Rest& s, const char* backend) {
   const double deep = kPush / kStiffness, each = deep / std::sqrt(2.0);
   EXPECT_NEAR(s.depth(), deep, 0.02 * deep) << "resting penetration along the normal";
-  // The wall's force reached both axes: each beyond the wall's point by F / (K sqrt 2).
-  EXPECT_NEAR(s.x - kWallPoint, each, 0.05 * each) << "x";
-  EXPECT_NEAR(s.y - kWallPoint, each, 0.05 * each) << "y";
+  // The wall's force reached both axes: each beyond the wall's point by about F / (K sqrt 2).
+  // About: nothing holds the stick along the wall's face, and the two axes' reports reach the
+  // board at different moments of the emulated USB's, so it rests a few % off the diagonal.
+  EXPECT_NEAR(s.x - kWallPoint, each, 0.1 * each) << "x";
+  EXPECT_NEAR(s.y - kWallPoint, each, 0.1 * each) << "y";
   // And each axis' torque holds that axis' hand: -F / sqrt 2.
   EXPECT_NEAR(s.tx, -kPerAxis, 0.03 * kPerAxis) << "x torque";
   EXPECT_NEAR(s.ty, -kPerAxis, 0.03 * kPerAxis) << "y torque";
@@ -157,12 +166,13 @@ TEST_P(OpenFfboardXy, AtRestInTheDiagonalWallBothAxesTakeTheWallsForce) {
   ASSERT_EQ(r.status, 0) << r.faults() << "\n" << r.log;
   EXPECT_EQ(r.faults(), "[]");
   expect_at_rest_in_the_wall(rest, GetParam());
-  // Per tick at the loop's 100 Hz: two Set Constant Force, less the ticks the emulated USB
-  // made the writer's queue drop (counted as out_queue_full); never more than two.
+  // Per tick at the loop's 100 Hz: two Set Constant Force, less what the emulated USB made the
+  // writer's queue drop (out_queue_full; over libusb up to a sixth of them); never more than
+  // two, and more than one: each axis its own report, not one for both.
   const double ticks = window_s * 100.0;
   const double constant_per_tick = window_constant / ticks,
                outputs_per_tick = window_outputs / ticks;
-  EXPECT_GT(constant_per_tick, 1.5) << "one Set Constant Force per axis a tick";
+  EXPECT_GT(constant_per_tick, 1.25) << "one Set Constant Force per axis a tick";
   EXPECT_LT(constant_per_tick, 2.1);
   EXPECT_EQ(set_effects_after, 0u) << "Set Effect after the enable";
   RecordProperty("constant_reports_per_tick", std::to_string(constant_per_tick));
@@ -224,28 +234,37 @@ bool inject(OpenFfboard& b, const std::vector<std::uint8_t>& report) {
   return sent;
 }
 
-// Item e: malformed gamepad reports (docs/drivers/hid.md, "Every tick": too short, or longer
-// than the descriptor declares) are counted by kind and never a fault, and never a position:
-// the long ones put both axes at their far end, which the run would show if it took them.
+// Item e: malformed input reports (docs/drivers/hid.md, "Every tick": too short, or longer than
+// the descriptor declares) are counted by kind, never a fault and never a position or a status:
+// the long gamepad reports put both axes at their far end, the long PID State reports say the
+// actuators are off, either of which the run would show if it took them. Over libusb every one
+// reaches hapticd. Over hidraw the kernel's usbhid stands between: a 40-byte report overflows
+// its 25-byte interrupt transfer (the descriptor's longest input report) and is dropped, and
+// hid-core drops a report shorter than declared on kernels with the 2025 hardening of
+// hid_report_raw_event (Debian 12's 6.1.192 has it); a 25-byte PID State (declared 2 bytes)
+// passes whole.
 TEST_P(OpenFfboardXy, MalformedReportsAreCountedAndTheRunIsUnharmed) {
   XyBoard b;
-  constexpr int kEach = 5;
+  constexpr std::uint64_t kEach = 5;
   Rest rest;
   const HapticdRun r = run_hapticd(
       shipped("hid-pid-xy.yaml"), sets(GetParam(), b.serial), {"--duration", "14"}, [&](pid_t pid) {
         ASSERT_TRUE(b.enabled());
         b.push();
         std::this_thread::sleep_for(std::chrono::seconds(3));
-        std::vector<std::uint8_t> shorter{1, 0, 0, 0, 0};      // report 1 cut after 4 button bytes
-        std::vector<std::uint8_t> longer(1 + 8 + 16 + 15, 0);  // report 1 and 15 bytes more
+        const std::vector<std::uint8_t> shorter{1, 0, 0, 0, 0};  // report 1 cut after 4 bytes
+        std::vector<std::uint8_t> longer(1 + 8 + 16 + 15, 0);    // report 1 and 15 bytes more
         longer[0] = 1;
         for (std::size_t at : {9u, 11u}) {  // X and Y at +32767
           longer[at] = 0xFF;
           longer[at + 1] = 0x7F;
         }
-        for (int i = 0; i < kEach; ++i) {
+        std::vector<std::uint8_t> long_state(25, 0);  // PID State: nothing enabled, 23 more
+        long_state[0] = 2;
+        for (std::uint64_t i = 0; i < kEach; ++i) {
           ASSERT_TRUE(inject(b.board(), shorter));
           ASSERT_TRUE(inject(b.board(), longer));
+          ASSERT_TRUE(inject(b.board(), long_state));
         }
         std::this_thread::sleep_for(std::chrono::seconds(3));
         ASSERT_FALSE(ended(pid)) << "hapticd ended after the malformed reports";
@@ -253,8 +272,20 @@ TEST_P(OpenFfboardXy, MalformedReportsAreCountedAndTheRunIsUnharmed) {
       });
   ASSERT_EQ(r.status, 0) << r.faults() << "\n" << r.log;
   EXPECT_EQ(r.faults(), "[]");
-  EXPECT_EQ(hid_counter(r, "short_reports"), std::uint64_t{kEach}) << r.summary["counters"];
-  EXPECT_EQ(hid_counter(r, "long_reports"), std::uint64_t{kEach}) << r.summary["counters"];
+  const std::uint64_t shorts = hid_counter(r, "short_reports");
+  const std::uint64_t longs = hid_counter(r, "long_reports");
+  if (std::string(GetParam()) == "libusb") {
+    EXPECT_EQ(shorts, kEach) << r.summary["counters"];
+    EXPECT_EQ(longs, 2 * kEach) << r.summary["counters"];
+  } else {
+    EXPECT_LE(shorts, kEach) << r.summary["counters"];
+    EXPECT_GE(longs, kEach) << "the long PID States pass usbhid whole: " << r.summary["counters"];
+    EXPECT_LE(longs, 2 * kEach) << r.summary["counters"];
+  }
+  RecordProperty("short_reports", std::to_string(shorts));
+  RecordProperty("long_reports", std::to_string(longs));
+  std::cout << GetParam() << ": " << shorts << " short and " << longs << " long reports counted of "
+            << kEach << " short and " << 2 * kEach << " long sent\n";
   expect_at_rest_in_the_wall(rest, GetParam());
   EXPECT_EQ(final_command(r), 0.0);
 }
@@ -311,8 +342,8 @@ class HandHost {
   int fd_ = -1;
 };
 
-// The torque the board applies for magnitude `m` with share `share` (full scale 10 N m).
-double torque_of(double m, double share) { return -m * share / 32767.0 * 10.0; }
+// The torque the board applies for magnitude `m` with share `share`.
+double torque_of(double m, double share) { return -m * share / 32767.0 * kFullScale; }
 
 TEST(OpenFfboardXyDevice, ReportsBothAxesAndTakesEachAxisShareAsTheFirmware) {
   OpenFfboardOptions o = joystick();
