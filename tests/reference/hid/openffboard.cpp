@@ -18,9 +18,10 @@ std::int16_t le16(std::span<const std::uint8_t> r, std::size_t at) {
 OpenFfboard::OpenFfboard(const OpenFfboardOptions& o)
     : o_(o),
       axis_(o.inertia, o.damping, o.start_position),
+      y_axis_(o.inertia, o.damping, o.start_position_y),
       effects_(o.effects),
       usb_({kVendor, kProduct, 0x0100, "Open FFBoard", "FFBoard", o.serial},
-           openffboard_descriptor(),
+           openffboard_descriptor(o.axes),
            {[this](std::span<const std::uint8_t> r) { output(r); },
             [this](std::span<const std::uint8_t> r) { return create_effect(r); },
             [this](std::uint8_t id) { return get_feature(id); }},
@@ -69,6 +70,7 @@ void OpenFfboard::main_loop() {
     last = now;
     if (hung_.load()) {
       axis_.step(cycles * 1e-3, axis_.motor());  // the last torque stays on
+      if (o_.axes == 2) y_axis_.step(cycles * 1e-3, y_axis_.motor());
       continue;
     }
     rate_count += cycles;
@@ -76,7 +78,9 @@ void OpenFfboard::main_loop() {
       send_report(rate_count / o_.usb_report_rate);
       rate_count %= o_.usb_report_rate;
     }
-    axis_.step(cycles * 1e-3, torque(now));
+    const Torques t = torque(now);
+    axis_.step(cycles * 1e-3, t.x);
+    if (o_.axes == 2) y_axis_.step(cycles * 1e-3, t.y);
   }
 }
 
@@ -85,12 +89,15 @@ void OpenFfboard::main_loop() {
 void OpenFfboard::send_report(int calls) {
   if (!usb_.configured()) return;
   const double half_range = o_.degrees / 2.0 * M_PI / 180.0;
-  const double raw = std::nearbyint(axis_.position() / half_range * 32767.0);
-  const auto x = static_cast<std::int16_t>(std::clamp(raw, -32767.0, 32767.0));
   std::vector<std::uint8_t> report(1 + 8 + 16, 0);  // reportHID_t<int16_t>
   report[0] = 1;
-  report[9] = static_cast<std::uint8_t>(x & 0xFF);
-  report[10] = static_cast<std::uint8_t>((x >> 8) & 0xFF);
+  // Axis i into the report's axis i (FFBHIDMain.cpp lines 192-202): X, then Y with two axes.
+  for (int i = 0; i < o_.axes; ++i) {
+    const double raw = std::nearbyint(axis(i).position() / half_range * 32767.0);
+    const auto v = static_cast<std::int16_t>(std::clamp(raw, -32767.0, 32767.0));
+    report[9 + 2 * i] = static_cast<std::uint8_t>(v & 0xFF);
+    report[10 + 2 * i] = static_cast<std::uint8_t>((v >> 8) & 0xFF);
+  }
   send_counter_ += calls;
   if (send_counter_ <= 100 / o_.usb_report_rate && report == last_sent_) return;
   if (!usb_.send_input(report)) return;  // tud_hid_n_ready() false: try next time
@@ -99,10 +106,12 @@ void OpenFfboard::send_report(int calls) {
   reports_.fetch_add(1);
 }
 
-double OpenFfboard::torque(std::int64_t now) {
+// EffectsCalculator::calculateEffects (lines 124-163): every playing effect's share on each
+// axis, summed per axis, each sum clipped on its own.
+OpenFfboard::Torques OpenFfboard::torque(std::int64_t now) {
   const std::lock_guard lock(m_);
-  if (!ffb_active_.load()) return 0.0;
-  double sum = 0.0;
+  if (!ffb_active_.load()) return {};
+  double sum[2] = {0.0, 0.0};
   for (Effect& e : effects_) {
     if (!e.playing) continue;
     if (e.duration_ms != 0xFFFF && e.duration_ms != 0 &&
@@ -110,12 +119,16 @@ double OpenFfboard::torque(std::int64_t now) {
       e.playing = false;  // expired
       continue;
     }
-    if (e.type == 1) sum += e.magnitude * e.axis_magnitude * e.gain / 255.0;
+    if (e.type != 1) continue;
+    for (int i = 0; i < 2; ++i) sum[i] += e.magnitude * e.axis_magnitude[i] * e.gain / 255.0;
   }
-  // calcComponentForce: result_torque = -forceVector * angle_ratio (the header says why).
-  if (o_.force_sign == ForceSign::kOpenFfboard) sum = -sum;
-  sum = std::clamp(sum * device_gain_ / 255.0, -32767.0, 32767.0);
-  return sum / 32767.0 * o_.torque_full_scale;
+  const auto scale = [&](double f) {
+    // calcComponentForce: result_torque = -forceVector * angle_ratio (the header says why).
+    if (o_.force_sign == ForceSign::kOpenFfboard) f = -f;
+    f = std::clamp(f * device_gain_ / 255.0, -32767.0, 32767.0);
+    return f / 32767.0 * o_.torque_full_scale;
+  };
+  return {scale(sum[0]), o_.axes == 2 ? scale(sum[1]) : 0.0};
 }
 
 // HidFFB::hidOut: the report id picks the handler; reports carry their id in byte 0.
@@ -124,6 +137,7 @@ void OpenFfboard::output(std::span<const std::uint8_t> r) {
   const std::lock_guard lock(m_);
   outputs_.fetch_add(1);
   if (r[0] == 0x05) constant_reports_.fetch_add(1);
+  if (r[0] == 0x01) set_effect_reports_.fetch_add(1);
   const std::uint8_t block = r[1];
   Effect* e = block >= 1 && std::size_t{block} <= effects_.size() ? &effects_[block - 1u] : nullptr;
   switch (r[0]) {
@@ -160,19 +174,27 @@ void OpenFfboard::output(std::span<const std::uint8_t> r) {
 }
 
 void OpenFfboard::set_effect(std::span<const std::uint8_t> r) {
-  // FFB_SetEffect_t: id, block, type, duration, trigger repeat, sample period, start delay
-  // (u16 each), gain, trigger button, enableAxis, directionX.
-  if (r.size() < 16 || r[1] == 0 || std::size_t{r[1]} > effects_.size()) return;
+  // FFB_SetEffect_t (ffb_defs.h lines 200-220): id, block, type, duration, trigger repeat,
+  // sample period, start delay (u16 each), gain, trigger button, enableAxis, directionX, and
+  // with two axes directionY.
+  const std::size_t length = o_.axes == 2 ? 18 : 16;
+  if (r.size() < length || r[1] == 0 || std::size_t{r[1]} > effects_.size()) return;
   Effect& e = effects_[r[1] - 1u];
   e.type = r[2];
   const auto duration = static_cast<std::uint16_t>(le16(r, 3));
   e.duration_ms = duration == 0 ? 0xFFFF : duration;  // "games assuming 0 is infinite"
   e.gain = r[11];
-  const bool direction_enable = (r[13] & 0x02) != 0;  // 1 << axisCount
-  const double direction = static_cast<std::uint16_t>(le16(r, 14));
-  e.axis_magnitude = direction_enable ? std::sin(2.0 * M_PI * direction / 36000.0)
-                     : (r[13] & 0x01) ? (direction - 18000.0) / 18000.0
-                                      : 0.0;
+  // HidFFB.cpp line 17 (the mask 1 << axisCount) and lines 318-321 (the shares).
+  const bool direction_enable = (r[13] & (1u << o_.axes)) != 0;
+  const double dx = static_cast<std::uint16_t>(le16(r, 14));
+  const double dy = o_.axes == 2 ? static_cast<std::uint16_t>(le16(r, 16)) : 0.0;
+  const double phase = 2.0 * M_PI * dx / 36000.0;
+  e.axis_magnitude[0] = direction_enable ? std::sin(phase)
+                        : (r[13] & 0x01) ? (dx - 18000.0) / 18000.0
+                                         : 0.0;
+  e.axis_magnitude[1] = direction_enable ? -std::cos(phase)
+                        : (r[13] & 0x02) ? -(dy - 18000.0) / 18000.0
+                                         : 0.0;
   if (!ffb_active_.load()) ffb_active_.store(true);  // start_FFB()
   status_report();
 }

@@ -51,40 +51,9 @@ void gamepad_and_commands(Items& d) {
   d.close();
 }
 
-void pid_reports(Items& d) {
-  // HIDDESC_FFB_STATEREP: five one-bit flags (paused, enabled, safety, power, playing).
-  d.page(0x0F).use(0x92).open(kLogical).id(2);
-  for (int u : {0x9F, 0xA0, 0xA4, 0xA6, 0x94}) d.use(u);
-  d.logical(0, 1).physical(0, 1).bits(1, 5).in(kVar).bits(1, 3).in(kConst).close();
-  // HIDDESC_FFB_SETEFREP and the one-axis tail of hid_1ffb_desc.
-  d.use(0x21).open(kLogical).id(1);
-  block_index(d, 0);
-  effect_types(d, false);
-  d.use(0x50).use(0x54).use(0x51).use(0xA7).logical(0, 32767).physical(0, 32767);
-  d.item(0x64, 0x1003).item(0x54, -3).bits(16, 4).out(kVar).item(0x54, 0).item(0x64, 0);
-  d.use(0x52).logical(0, 255).physical(0, 10000).bits(8, 1).out(kVar);
-  d.use(0x53).logical(1, 8).physical(1, 8).bits(8, 1).out(kVar);
-  d.use(0x55).open(kLogical).page(0x01).use(0x30).logical(0, 0).bits(1, 1).out(kVar).close();
-  d.page(0x0F).use(0x56).item(0x94, 1).out(kVar).item(0x94, 6).out(kConst);
-  d.use(0x57).open(kLogical).item(0x08, 0x000A0001).item(0x64, 0x14).logical(0, 36000);
-  d.physical(0, 36000).item(0x64, 0).bits(16, 1).out(kVar).item(0x54, 0).close();
-  d.page(0x0F).use(0x58).open(kLogical).item(0x08, 0x000A0001).item(0x24, 32765);
-  d.bits(16, 1).out(kVar).close().close();
-  // HIDDESC_FFB_SETENVREP.
-  d.use(0x5A).open(kLogical).id(2);
-  block_index(d, 0);
-  d.use(0x5B).use(0x5D).logical(0, 32767).physical(0, 32767).bits(16, 2).out(kVar);
-  d.use(0x5C).use(0x5E).item(0x64, 0x1003).item(0x54, -3).item(0x24, 32767).item(0x44, 32767);
-  d.item(0x74, 32).out(kVar).item(0x44, 0).item(0x64, 0).item(0x54, 0).close();
-  // The one-axis Set Condition report of hid_1ffb_desc.
-  d.use(0x5F).open(kLogical).id(3);
-  block_index(d, 0);
-  d.use(0x23).logical(0, 3).physical(0, 3).bits(6, 1).out(kVar);
-  d.use(0x58).open(kLogical).item(0x08, 0x000A0001).bits(2, 1).out(kVar).close();
-  d.logical(-32768, 32767).physical(-32768, 32767).use(0x60).bits(16, 1).out(kVar);
-  d.use(0x61).use(0x62).item(0x94, 2).out(kVar);
-  d.logical(0, 32767).physical(0, 32767).use(0x63).use(0x64).bits(16, 2).out(kVar);
-  d.use(0x65).item(0x94, 1).out(kVar).close();
+// The reports both descriptors share after the Set Condition report (usb_hid_1ffb_desc.c
+// lines 137-226, usb_hid_2ffb_desc.c lines 328-652).
+void other_reports(Items& d) {
   // HIDDESC_FFB_SETPERIODICREP (magnitude, offset, phase, period).
   d.use(0x6E).open(kLogical).id(4);
   block_index(d, 0);
@@ -131,14 +100,74 @@ void pid_reports(Items& d) {
   d.use(0xA9).use(0xAA).bits(1, 2).logical(0, 1).physical(0, 1).feature(kVar);
   d.bits(6, 1).feature(kConst).close();
 }
+// HIDDESC_FFB_SETEFREP and the tail of the Set Effect report of each descriptor: one axis
+// (usb_hid_1ffb_desc.c lines 28-76) or two (usb_hid_2ffb_desc.c lines 182-231: Axes Enable X
+// and Y, Direction Enable at bit 2, two Direction and two Type Specific Block Offset instances).
+void set_effect_report(Items& d, int axes) {
+  d.use(0x21).open(kLogical).id(1);
+  block_index(d, 0);
+  effect_types(d, false);
+  d.use(0x50).use(0x54).use(0x51).use(0xA7).logical(0, 32767).physical(0, 32767);
+  d.item(0x64, 0x1003).item(0x54, -3).bits(16, 4).out(kVar).item(0x54, 0).item(0x64, 0);
+  d.use(0x52).logical(0, 255).physical(0, 10000).bits(8, 1).out(kVar);
+  d.use(0x53).logical(1, 8).physical(1, 8).bits(8, 1).out(kVar);
+  if (axes == 1) {
+    d.use(0x55).open(kLogical).page(0x01).use(0x30).logical(0, 0).bits(1, 1).out(kVar).close();
+    d.page(0x0F).use(0x56).item(0x94, 1).out(kVar).item(0x94, 6).out(kConst);
+    d.use(0x57).open(kLogical).item(0x08, 0x000A0001).item(0x64, 0x14).logical(0, 36000);
+    d.physical(0, 36000).item(0x64, 0).bits(16, 1).out(kVar).item(0x54, 0).close();
+    d.page(0x0F).use(0x58).open(kLogical).item(0x08, 0x000A0001).item(0x24, 32765);
+    d.bits(16, 1).out(kVar).close().close();
+    return;
+  }
+  d.use(0x55).open(kLogical).page(0x01).use(0x30).use(0x31).logical(0, 1).bits(1, 2).out(kVar);
+  d.close().page(0x0F).use(0x56).item(0x94, 1).out(kVar).item(0x94, 5).out(kConst);
+  d.use(0x57).open(kLogical).item(0x08, 0x000A0001).item(0x08, 0x000A0002).item(0x64, 0x14);
+  d.item(0x54, -2).logical(0, 36000).physical(0, 36000).item(0x64, 0).bits(16, 2).out(kVar);
+  d.item(0x54, 0).item(0x64, 0).close();
+  d.page(0x0F).use(0x58).open(kLogical).item(0x08, 0x000A0001).item(0x08, 0x000A0002);
+  d.item(0x24, 32765).bits(16, 2).out(kVar).close().close();
+}
+
+// The Set Condition report, which the descriptors write out by axis count: one Type Specific
+// Block Offset of 2 bits after a 6-bit Parameter Block Offset (usb_hid_1ffb_desc.c lines
+// 80-135), or two after a 4-bit one (usb_hid_2ffb_desc.c lines 271-326).
+void condition_report(Items& d, int axes) {
+  d.use(0x5F).open(kLogical).id(3);
+  block_index(d, 0);
+  d.use(0x23).logical(0, 3).physical(0, 3).bits(axes == 1 ? 6 : 4, 1).out(kVar);
+  d.use(0x58).open(kLogical).item(0x08, 0x000A0001);
+  if (axes == 2) d.item(0x08, 0x000A0002);
+  d.bits(2, axes).out(kVar).close();
+  d.logical(-32768, 32767).physical(-32768, 32767).use(0x60).bits(16, 1).out(kVar);
+  d.use(0x61).use(0x62).item(0x94, 2).out(kVar);
+  d.logical(0, 32767).physical(0, 32767).use(0x63).use(0x64).bits(16, 2).out(kVar);
+  d.use(0x65).item(0x94, 1).out(kVar).close();
+}
+
+void pid_reports(Items& d, int axes) {
+  // HIDDESC_FFB_STATEREP: five one-bit flags (paused, enabled, safety, power, playing).
+  d.page(0x0F).use(0x92).open(kLogical).id(2);
+  for (int u : {0x9F, 0xA0, 0xA4, 0xA6, 0x94}) d.use(u);
+  d.logical(0, 1).physical(0, 1).bits(1, 5).in(kVar).bits(1, 3).in(kConst).close();
+  set_effect_report(d, axes);
+  // HIDDESC_FFB_SETENVREP.
+  d.use(0x5A).open(kLogical).id(2);
+  block_index(d, 0);
+  d.use(0x5B).use(0x5D).logical(0, 32767).physical(0, 32767).bits(16, 2).out(kVar);
+  d.use(0x5C).use(0x5E).item(0x64, 0x1003).item(0x54, -3).item(0x24, 32767).item(0x44, 32767);
+  d.item(0x74, 32).out(kVar).item(0x44, 0).item(0x64, 0).item(0x54, 0).close();
+  condition_report(d, axes);
+  other_reports(d);
+}
 
 }  // namespace
 
-std::vector<std::uint8_t> openffboard_descriptor() {
+std::vector<std::uint8_t> openffboard_descriptor(int axes) {
   Items d;
   d.page(0x01).use(0x04).open(kApplication);  // Joystick
   gamepad_and_commands(d);
-  pid_reports(d);
+  pid_reports(d, axes);
   d.close();
   return d.bytes;
 }
