@@ -58,8 +58,10 @@ class GpioLoopbackPeer final : public GpioPeer {
   bool inject(PeerFault f) noexcept override {
     if (!faults_.inject(f)) return false;
     if (f == PeerFault::kTransportFault) {
+      // The wires are cut: the driver's next recv sees it. The socket before the flag, so a
+      // caller preempted between the two never leaves the peer silent on an open socket.
+      ::shutdown(fd_, SHUT_RDWR);
       shut_ = true;
-      ::shutdown(fd_, SHUT_RDWR);  // the wires are cut: the driver's next recv sees it
       // ... and the motor drivers' inputs float to their pull-downs: no drive.
       felt_.vanish();
     }

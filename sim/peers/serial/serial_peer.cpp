@@ -63,8 +63,11 @@ class SerialLoopbackPeer final : public LoopbackPeer {
   bool inject(PeerFault f) noexcept override {
     if (!faults_.inject(f)) return false;
     if (f == PeerFault::kTransportFault) {  // unplugged: the driver's next read sees end-of-file
-      shut_ = true;
+      // The socket first: with shut_ set before it, a caller preempted between the two left
+      // the peer silent on an open socket, and a loaded test machine saw stale ticks, not the
+      // unplug (the conformance suite's serial case).
       ::shutdown(fd_.get(), SHUT_RDWR);
+      shut_ = true;
       felt_.vanish();
     }
     return true;
