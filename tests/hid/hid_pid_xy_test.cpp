@@ -15,9 +15,7 @@
 #include "drivers/hid/hid_device.h"
 #include "fake_hid_device.h"
 #include "hid_test_support.h"
-#include "scene_run.h"
-#include "sim/peers/paced_device.h"
-#include "sim/peers/peer_runner.h"
+#include "hid_xy_run.h"
 
 namespace hapticd::drivers::hid {
 namespace {
@@ -160,41 +158,10 @@ TEST(HidPidTwoAxes, TheReversalMirrorsEachAxisDirection) {
   EXPECT_EQ(testing::settings_of(flipped)->pid.directions_deg, (std::vector<double>{360.0, 0.0}));
 }
 
-// The stick of config/hid-pid-xy.yaml against the simulated board, in freerun.
-struct XyPidRun {
-  loop::LoopResult result;
-  std::vector<telemetry::TickRecord> records;
-  kinematics::Vec3 joints = kinematics::Vec3::Zero();
-  std::uint64_t allocations = 1, output_reports = 0, ticks = 0;
-  double peer_force_after = 1.0;
-};
-
-XyPidRun run_stick(const config::Config& cfg, std::uint64_t ticks) {
-  wiring::Loopback pair = wiring::find_driver("hid").make_loopback(cfg);
-  const auto* hid = dynamic_cast<const HidDevice*>(pair.device.get());
-  sim::PeerRunner runner(*pair.peer);
-  sim::PacedDevice device(std::move(pair.device), runner);
-  telemetry::SpscRing<telemetry::TickRecord> ring(4096);
-  device.configure();
-  device.enable();
-  XyPidRun out;
-  out.result = hapticd::testing::run_scene_loop(cfg, device, ticks, &ring, &out.allocations);
-  out.ticks = out.result.ticks;
-  if (hid != nullptr) out.output_reports = hid->hid_counts().output_reports;
-  out.records.resize(ring.size_approx());
-  out.records.resize(ring.pop_many(out.records.data(), out.records.size()));
-  device.disable();
-  runner.wait_idle();
-  out.peer_force_after = pair.peer->applied_force();
-  if (const sim::JointPlant* p = pair.peer->joint_plant()) out.joints = p->joint_positions();
-  device.close();
-  return out;
-}
-
 TEST(HidPidTwoAxes, TheStickRestsInTheDiagonalWallWhereTheWallBalancesTheHand) {
   const config::Config cfg = testing::load_example("hid-pid-xy.yaml", {"loop.clock=freerun"});
   // 500 Hz: the press is at depth from 0.7 s to 2.2 s, ticks 350 to 1100.
-  const XyPidRun r = run_stick(cfg, 1100);
+  const testing::XyRun r = testing::run_xy(cfg, 1100);
   ASSERT_EQ(r.result.fault.cause, loop::FaultCause::kNone) << loop::describe(r.result.fault);
   EXPECT_EQ(r.allocations, 0u) << "the loop with both effects' reports allocates nothing";
   EXPECT_EQ(r.peer_force_after, 0.0);
@@ -211,7 +178,8 @@ TEST(HidPidTwoAxes, TheStickRestsInTheDiagonalWallWhereTheWallBalancesTheHand) {
   EXPECT_GT(r.joints[0], wall.point[0]) << "each axis' own effect moved it past the face";
   // Two Set Constant Force a tick, a restart of each effect every 25 ticks, and the enable's
   // zero forces: what reaches the board.
-  const double per_tick = static_cast<double>(r.output_reports) / static_cast<double>(r.ticks);
+  const double per_tick =
+      static_cast<double>(r.output_reports) / static_cast<double>(r.result.ticks);
   EXPECT_GE(per_tick, 2.0);
   EXPECT_LE(per_tick, 2.0 + 2.0 / 25.0 + 0.01);
   RecordProperty("rest_rad", std::to_string(rest));

@@ -6,25 +6,21 @@
 #include <gtest/gtest.h>
 
 #include <array>
-#include <atomic>
 #include <cmath>
 #include <thread>
 
-#include "control/controller.h"
-#include "control/scene.h"
 #include "drivers/hid/descriptor_builder.h"
 #include "drivers/hid/hid_device.h"
 #include "fake_hid_device.h"
 #include "hid_test_support.h"
-#include "loop/scene_tick.h"
-#include "loop/servo_loop.h"
-#include "sim/peers/paced_device.h"
-#include "sim/peers/peer_runner.h"
+#include "hid_xy_run.h"
 
 namespace hapticd::drivers::hid {
 namespace {
 
 using XyBytes = std::vector<std::uint8_t>;
+using testing::run_xy;
+using testing::XyRun;
 
 TEST(HidTwoJoints, EachJointHasItsOwnFieldInBothReports) {
   const auto s = testing::settings_of(testing::load_example("hid-report-xy.yaml"));
@@ -87,64 +83,6 @@ TEST(HidTwoJoints, TheReversalOfTheListFormIsAListTheConfigurationReads) {
   }
   const ForceReversal back = wiring::find_driver("hid").force_reversal(flipped);
   EXPECT_EQ(back.reversed, f.now) << "reversed twice: as it was";
-}
-
-struct XyRun {
-  loop::LoopResult result;
-  std::vector<telemetry::TickRecord> records;
-  kinematics::Vec3 joints = kinematics::Vec3::Zero();  // the simulated stage's at the end
-  bool peer_on_after = true;
-  double peer_force_after = 1.0;
-  // Right after a faulted run, before the disable: what the driver's fault path left.
-  bool peer_on_at_fault = true;
-  std::array<double, 2> commands_at_fault{1.0, 1.0};
-  std::uint64_t contact_before_fault = 0;
-};
-
-// `ticks` ticks of the scene of `cfg` against its driver's simulated device, in freerun.
-XyRun run_xy(const config::Config& cfg, std::uint64_t ticks, bool fault_at_half = false) {
-  wiring::Loopback pair = wiring::find_driver(cfg.device.driver).make_loopback(cfg);
-  XyRun out;
-  sim::PeerRunner runner(*pair.peer);
-  sim::PacedDevice device(std::move(pair.device), runner);
-  control::Controller controller(control::make_control_law(cfg));  // unused at two joints
-  loop::SceneWalls walls(
-      std::make_unique<control::Scene>(control::make_scene(cfg)),
-      std::vector<control::ObserverParams>(cfg.walls.size(), control::observer_params(cfg, 0)));
-  loop::SceneState state(cfg.device.kinematics, walls, cfg.device.max_force.per_joint());
-  telemetry::SpscRing<telemetry::TickRecord> ring(8192);
-  loop::LoopOptions o;
-  o.sample.realtime = false;
-  o.sample.period_ns = std::llround(cfg.loop.sample_period_s() * 1e9);
-  o.sample.stale_fault_ticks = cfg.safety.stale_fault_ticks;
-  o.sample.sequence_gap_fault = cfg.safety.sequence_gap_fault;
-  o.sample.sequence_modulus = 0;
-  o.scene = &state;
-  device.configure();
-  o.sample.sequence_modulus = device.info().sequence_modulus;
-  device.enable();
-  const std::atomic<bool> stop{false};
-  o.max_ticks = fault_at_half ? ticks / 2 : ticks;
-  loop::ServoLoop servo(device, controller, &ring, o);
-  out.result = servo.run(stop);
-  if (fault_at_half) {
-    out.contact_before_fault = out.result.count(loop::kCounterContactTicks);
-    pair.peer->inject(sim::PeerFault::kDeviceFault);
-    loop::ServoLoop rest(device, controller, &ring, o);
-    out.result = rest.run(stop);
-    runner.wait_idle();
-    out.peer_on_at_fault = pair.peer->output_on();
-    out.commands_at_fault = {device.last_command(0), device.last_command(1)};
-  }
-  out.records.resize(ring.size_approx());
-  out.records.resize(ring.pop_many(out.records.data(), out.records.size()));
-  device.disable();
-  runner.wait_idle();
-  out.peer_on_after = pair.peer->output_on();
-  out.peer_force_after = pair.peer->applied_force();
-  if (const sim::JointPlant* p = pair.peer->joint_plant()) out.joints = p->joint_positions();
-  device.close();
-  return out;
 }
 
 TEST(HidTwoJoints, TheStageRestsInTheDiagonalWallAsTheSimDriversDoes) {
