@@ -72,11 +72,9 @@ class PidFirmware final : public HidFirmware {
   void on_output(std::span<const std::uint8_t> r, const Send& send) override {
     if (is_report(r, l_.set_constant, l_.numbered)) {
       const auto d = data_of(r, l_.set_constant, l_.numbered);
-      if (Effect* e = effect(get_slot(d, l_.sc_block))) {
-        e->magnitude = get_slot(d, l_.sc_magnitude);
-        e->fresh = true;
-      }
-      if (amplifier_on() && tick_complete()) {
+      Effect* e = effect(get_slot(d, l_.sc_block));
+      if (e != nullptr) e->magnitude = get_slot(d, l_.sc_magnitude);
+      if (tick_complete(e) && amplifier_on()) {
         step(force());
         answer(send);
       }
@@ -163,14 +161,17 @@ class PidFirmware final : public HidFirmware {
     return e.allocated ? &e : nullptr;
   }
 
-  // The host's tick has arrived: every playing effect has its new magnitude (one effect per
-  // axis: one Set Constant Force each), or none plays. Then the plant steps once a period,
-  // however many reports a tick carries.
-  bool tick_complete() {
-    const bool all = std::all_of(effects_.begin(), effects_.end(),
-                                 [](const Effect& e) { return !e.playing || e.fresh; });
+  // The host's tick has arrived with this Set Constant Force (of effect `e`): every playing
+  // effect has its new magnitude (one effect per axis: one report each), or none plays, or `e`
+  // had one already (a host that updates fewer effects than play, as hid-pidff may leave one
+  // playing). Then the plant steps once a period, however many reports a tick carries.
+  bool tick_complete(Effect* e) {
+    const bool repeat = e != nullptr && e->fresh;
+    if (e != nullptr) e->fresh = true;
+    const bool all = repeat || std::all_of(effects_.begin(), effects_.end(),
+                                           [](const Effect& x) { return !x.playing || x.fresh; });
     if (all) {
-      for (Effect& e : effects_) e.fresh = false;
+      for (Effect& x : effects_) x.fresh = false;
     }
     return all;
   }
