@@ -166,13 +166,9 @@ TEST(HidPidTwoAxes, TheStickRestsInTheDiagonalWallWhereTheWallBalancesTheHand) {
   EXPECT_EQ(r.allocations, 0u) << "the loop with both effects' reports allocates nothing";
   EXPECT_EQ(r.peer_force_after, 0.0);
   ASSERT_EQ(r.records.size(), 1100u);
-  double rest = 0.0;
-  for (std::size_t k = 1000; k < 1100; ++k) rest += r.records[k].penetration / 100.0;
-  // K p = k_h (depth - n . (point - origin) - p), along the normal.
+  const double rest = testing::mean_penetration(r, 1000, 1100);
+  const double expected = testing::balanced_penetration(cfg, 0.2);  // setpoint.depth
   const config::TaskWallConfig& wall = cfg.walls.front();
-  const config::OperatorSpec& hand = cfg.device.sim.op;
-  const double reach = 0.2 - wall.normal.dot(wall.point - hand.origin);  // setpoint.depth
-  const double expected = hand.stiffness * reach / (wall.law.stiffness + hand.stiffness);
   EXPECT_NEAR(rest, expected, 0.02 * expected) << "F/K along the diagonal";
   EXPECT_NEAR(r.joints[0], r.joints[1], 1e-3) << "a diagonal press turns both axes alike";
   EXPECT_GT(r.joints[0], wall.point[0]) << "each axis' own effect moved it past the face";

@@ -88,4 +88,20 @@ inline XyRun run_xy(const config::Config& cfg, std::uint64_t ticks, bool fault_a
   return out;
 }
 
+// The mean penetration of ticks [from, to): where the press rests.
+inline double mean_penetration(const XyRun& r, std::size_t from, std::size_t to) {
+  double sum = 0.0;
+  for (std::size_t k = from; k < to; ++k) sum += r.records[k].penetration;
+  return sum / static_cast<double>(to - from);
+}
+
+// Where the hand's spring and the first wall balance along its normal, the hand's set-point
+// `depth` along its direction from its origin: K p = k_h (n . (set-point - point) - p).
+inline double balanced_penetration(const config::Config& cfg, double depth) {
+  const config::TaskWallConfig& wall = cfg.walls.front();
+  const config::OperatorSpec& hand = cfg.device.sim.op;
+  const double reach = wall.normal.dot(hand.origin + depth * hand.direction - wall.point);
+  return hand.stiffness * reach / (wall.law.stiffness + hand.stiffness);
+}
+
 }  // namespace hapticd::drivers::hid::testing

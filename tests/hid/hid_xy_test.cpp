@@ -97,12 +97,8 @@ TEST(HidTwoJoints, TheStageRestsInTheDiagonalWallAsTheSimDriversDoes) {
   // At rest the hand's spring and the wall share the set-point's reach past the face along the
   // normal: K p = k_h (depth - n . (point - origin) - p). Mean over the hold's last 0.5 s.
   ASSERT_EQ(hid.records.size(), 2000u);
-  double rest = 0.0;
-  for (std::size_t k = 1500; k < 2000; ++k) rest += hid.records[k].penetration / 500.0;
-  const config::TaskWallConfig& wall = cfg.walls.front();
-  const config::OperatorSpec& hand = cfg.device.sim.op;
-  const double reach = 0.05 - wall.normal.dot(wall.point - hand.origin);  // setpoint.depth
-  const double expected = hand.stiffness * reach / (wall.law.stiffness + hand.stiffness);
+  const double rest = testing::mean_penetration(hid, 1500, 2000);
+  const double expected = testing::balanced_penetration(cfg, 0.05);  // setpoint.depth
   EXPECT_NEAR(rest, expected, 0.02 * expected) << "F/K along the diagonal";
   EXPECT_NEAR(hid.joints[0], hid.joints[1], 2e-5) << "a diagonal press moves both joints alike";
   EXPECT_GT(hid.joints[0], 0.02) << "both forces moved the one stage past the wall's point";
@@ -134,11 +130,9 @@ TEST(HidTwoJoints, AWallAcrossXStopsXAndLeavesYToTheHand) {
   const config::TaskWallConfig& wall = cfg.walls.front();
   const config::OperatorSpec& hand = cfg.device.sim.op;
   const kinematics::Vec3 setpoint = hand.origin + 0.05 * hand.direction;  // setpoint.depth
-  const double reach = wall.normal.dot(setpoint - wall.point);
-  const double expected = hand.stiffness * reach / (wall.law.stiffness + hand.stiffness);
+  const double expected = testing::balanced_penetration(cfg, 0.05);
   ASSERT_EQ(r.records.size(), 2000u);
-  double rest = 0.0;
-  for (std::size_t k = 1500; k < 2000; ++k) rest += r.records[k].penetration / 500.0;
+  const double rest = testing::mean_penetration(r, 1500, 2000);
   EXPECT_NEAR(rest, expected, 0.02 * expected) << "F/K across x";
   EXPECT_NEAR(r.joints[0], wall.point[0] + expected, 1e-4) << "x held in the wall";
   EXPECT_NEAR(r.joints[1], setpoint[1], 1e-4) << "y at the hand's set-point: no wall force on y";
