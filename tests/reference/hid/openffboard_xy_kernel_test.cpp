@@ -19,6 +19,7 @@
 #include "hapticd_process.h"
 #include "hid_support.h"
 #include "openffboard.h"
+#include "rt_syscalls.h"
 
 namespace hapticd::reference {
 namespace {
@@ -186,6 +187,28 @@ TEST_P(OpenFfboardXy, AtRestInTheDiagonalWallBothAxesTakeTheWallsForce) {
   if (std::string(GetParam()) == "hidraw") {  // libusb: hid-pidff resets it on rebinding
     EXPECT_EQ(b.board().allocated(), 0u) << "the run's effect blocks were not freed";
   }
+}
+
+// What the loop's thread asks of the kernel a tick (rt_syscalls.h) with two effects: the
+// reports go to the driver's writer thread through one eventfd wake a report at most, so the
+// loop's own calls do not grow with the axes' reports but by those wakes.
+TEST_P(OpenFfboardXy, TheLoopsSystemCallsATick) {
+  XyBoard b;
+  const std::string prefix = std::string("/tmp/hapticd-xy-strace-") + GetParam();
+  const HapticdRun r = run_hapticd(
+      shipped("hid-pid-xy.yaml"), sets(GetParam(), b.serial), {"--duration", "8"},
+      [&](pid_t) { ASSERT_TRUE(b.enabled()) << "output never enabled"; }, strace_to(prefix));
+  ASSERT_EQ(r.status, 0) << r.faults() << "\n" << r.log;
+  const TickCalls calls = tick_calls(prefix, 20);
+  RecordProperty("rt_syscalls", describe(calls));
+  std::cout << GetParam() << ", the loop's thread: " << describe(calls) << "\n";
+  ASSERT_GT(calls.ticks, 100);
+  const auto per_tick = [&](const char* name) {
+    const auto it = calls.per_tick.find(name);
+    return it == calls.per_tick.end() ? 0.0 : it->second;
+  };
+  EXPECT_LE(per_tick("write"), 2.1) << "an eventfd wake per report at most";
+  EXPECT_GT(per_tick("write"), 0.5) << "the reports leave through the writer thread";
 }
 
 // Item c: unplugged mid-run, pushed into the wall: the run ends with its fault, zero force.
