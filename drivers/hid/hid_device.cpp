@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <thread>
 
@@ -73,7 +74,7 @@ void HidDevice::await_first_sample() {
 void HidDevice::on_enable() {
   drain_stale();
   queue_full_streak_ = 0;
-  pending_ = {};
+  pending_count_ = 0;
   profile_->enable(*transport_);
   transport_->set_safe_reports(profile_->safe_reports());  // now naming the effect it made
   if (settings_->reports_on_change) await_first_sample();
@@ -225,6 +226,16 @@ IoStatus HidDevice::send(std::span<const std::uint8_t> report, bool& written) no
   return IoStatus::kOk;  // this tick's command is lost; the next one follows
 }
 
+// RT-safe: called every tick. Keeps `r` to send ahead of the force; a report already kept (the
+// same effect's restart, due again before the queue took it) is not kept twice.
+void HidDevice::queue_pending(std::span<const std::uint8_t> r) noexcept {
+  if (r.empty()) return;
+  for (std::size_t i = 0; i < pending_count_; ++i) {
+    if (pending_[i].data() == r.data()) return;
+  }
+  if (pending_count_ < pending_.size()) pending_[pending_count_++] = r;
+}
+
 IoStatus HidDevice::on_write(std::span<const double> forces) noexcept {
   if (state() == DeviceState::kFaulted) {  // after a fault nothing but zero, ahead of the queue
     transport_->write_safe();
@@ -234,12 +245,14 @@ IoStatus HidDevice::on_write(std::span<const double> forces) noexcept {
   // sent at the next tick that can: dropped, the effect would run out on the device and the
   // wall with it, however long the queue stays full. A tick whose queue took not even that
   // one has no room for its force either: it is one dropped tick, counted once.
-  if (const auto extra = profile_->before_force(); !extra.empty()) pending_ = extra;
+  queue_pending(profile_->before_force());
   bool written = true;
-  if (!pending_.empty()) {
-    const IoStatus s = send(pending_, written);
+  while (pending_count_ > 0) {
+    const IoStatus s = send(pending_[0], written);
     if (s != IoStatus::kOk || !written) return s;
-    pending_ = {};
+    std::copy(pending_.begin() + 1, pending_.begin() + static_cast<std::ptrdiff_t>(pending_count_),
+              pending_.begin());
+    --pending_count_;
   }
   // A report the full queue did not take ends the tick: the reports after it would render
   // some joints' forces of this tick beside others' of the last.

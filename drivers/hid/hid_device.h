@@ -86,6 +86,7 @@ class HidDevice final : public Device {
   // RT-safe: called every tick. A report the queue has no room for is lost (`written` false),
   // counted, and faults the loop after limits.out_queue_full_fault such ticks in a row.
   IoStatus send(std::span<const std::uint8_t> report, bool& written) noexcept;
+  void queue_pending(std::span<const std::uint8_t> r) noexcept;
   void log_counters() const;
   void drain_stale() noexcept;
 
@@ -102,7 +103,11 @@ class HidDevice final : public Device {
   Decoded decoded_;
   bool active_ = false;  // output enabled: the fault mask applies
   int queue_full_streak_ = 0;
-  std::span<const std::uint8_t> pending_;  // the profile's before_force() report, not yet sent
+  // The profile's before_force() reports not yet sent, oldest first: one per effect at most
+  // (a pid profile of two axes restarts its effects on consecutive ticks; a full queue must
+  // not let the second's restart replace the first's).
+  std::array<std::span<const std::uint8_t>, base::kMaxJoints> pending_{};
+  std::size_t pending_count_ = 0;
   using K = base::CounterKind;
   std::array<base::Counter, kCounterCount> c_{{
       {"input_reports", K::kCount, "input reports with a sample"},

@@ -87,7 +87,12 @@ void read_pid_axes(MapReader& m, Ctx& c, const Field& pid, int joints, PidSettin
   bool listed = false;
   for (const Field& f : joint_fields(m, c, "position", "positions", "pid",
                                      "{usage_page, usage, min, max}", listed)) {
-    p.positions.push_back(read_pid_position(c, f));
+    const PidPosition pos = read_pid_position(c, f);
+    if (!p.positions.empty() && pos.usage == p.positions.front().usage && !c.failed()) {
+      c.d.error(f.key_mark, f.path,
+                "the same usage as positions[0]: each joint reads its own axis");
+    }
+    p.positions.push_back(pos);
   }
   const Field dirs = m.take("directions_deg");
   if (joints > 2) {

@@ -230,6 +230,13 @@ class PidProfile final : public HidProfile {
       t.set_feature(create);
       a = read_block_load(t);
     }
+    if (a.full && freed_every_block_) {  // an effect of this enable holds a block already
+      throw DeviceError(
+          "hid: Block Load after Create New Effect: the device's effect memory is "
+          "full with this run's first effect in it: it cannot hold the " +
+          std::to_string(effects_.size()) +
+          " effects (one per axis) the pid profile of two axes needs");
+    }
     freed_every_block_ = true;
     if (!a.error.empty()) throw DeviceError("hid: Block Load after Create New Effect: " + a.error);
     return a.block;

@@ -44,8 +44,9 @@ struct XyPidRig {
       XyPidBytes r = make_report(layout.block_load, true);
       if (id != layout.block_load.id) return XyPidBytes{};
       const auto d = std::span<std::uint8_t>(r).subspan(1);
-      set_slot(d, layout.bl_block, ++blocks);
-      choose(d, layout.bl_success);
+      const bool room = blocks < capacity;
+      set_slot(d, layout.bl_block, room ? ++blocks : 0);
+      choose(d, room ? layout.bl_success : layout.bl_full);
       return r;
     };
     device = std::make_unique<HidDevice>(
@@ -73,7 +74,7 @@ struct XyPidRig {
   std::vector<std::string> sets_;
   testing::FakeHidDevice fake;
   PidLayout layout;
-  std::int64_t blocks = 0;
+  std::int64_t blocks = 0, capacity = 40;  // the board's effect pool
   std::unique_ptr<HidDevice> device;
 };
 
@@ -143,6 +144,65 @@ TEST(HidPidTwoAxes, FiniteEffectsAreRestartedInTurnEveryHalfDuration) {
   }
   EXPECT_EQ(starts[0], 3) << "the start at enable, then at ticks 25 and 50";
   EXPECT_EQ(starts[1], 3) << "the start at enable, then at ticks 24 and 49: a tick apart";
+}
+
+// Both effects' restarts fall due while the device takes nothing (its OUT queue full): neither
+// is lost, and both go, in order, at the first tick the queue takes again, ahead of its forces.
+TEST(HidPidTwoAxes, RestartsTheFullQueueDroppedAllGoAtTheNextTickThatWrites) {
+  XyPidRig rig({"device.hid.limits.out_queue_full_fault=100000"});  // restarts every 25 ticks
+  rig.device->configure();
+  rig.enable();
+  rig.fake.wait_for(15);
+  rig.fake.reading.store(false);
+  const std::array<double, 2> forces{0.1, 0.1};
+  int ticks = 0;
+  const auto tick = [&] {
+    ASSERT_EQ(rig.device->write(forces), IoStatus::kOk);
+    ++ticks;
+  };
+  while (rig.device->hid_counts().out_queue_full == 0 && ticks < 100000) tick();
+  ASSERT_GT(rig.device->hid_counts().out_queue_full, 0u) << "the queue never filled";
+  while ((ticks + 2) % 25 != 0) tick();  // the next tick is effect 1's restart, then effect 0's
+  tick();
+  tick();
+  rig.fake.reading.store(true);
+  std::size_t have = 0;  // what was queued, all taken
+  for (int quiet = 0; quiet < 50;) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    const std::size_t now = rig.fake.received().size();
+    quiet = now == have ? quiet + 1 : 0;
+    have = now;
+  }
+  tick();  // not a restart's own tick
+  rig.fake.wait_for(have + 4);
+  const auto out = rig.fake.outputs();
+  ASSERT_GE(out.size(), 4u);
+  const PidLayout& l = rig.layout;
+  for (const std::size_t back : {4u, 3u}) {
+    EXPECT_EQ(out[out.size() - back][0], l.effect_operation.id) << back << " from the end";
+    EXPECT_TRUE(
+        chosen(std::span<const std::uint8_t>(out[out.size() - back]).subspan(1), l.eo_start));
+  }
+  EXPECT_EQ(xy_slot(out[out.size() - 4], l.eo_block), 2) << "effect 1's restart, due first";
+  EXPECT_EQ(xy_slot(out[out.size() - 3], l.eo_block), 1) << "then effect 0's";
+  EXPECT_EQ(out[out.size() - 2][0], l.set_constant.id) << "then the tick's forces";
+  EXPECT_EQ(out.back()[0], l.set_constant.id);
+}
+
+// A board whose pool holds one effect: the second axis' effect is refused by name, output off.
+TEST(HidPidTwoAxes, ABoardThatHoldsOneEffectIsRefusedAtTheEnable) {
+  XyPidRig rig({});
+  rig.capacity = 1;
+  rig.device->configure();
+  try {
+    rig.device->enable();
+    FAIL() << "enabled with one effect for two axes";
+  } catch (const DeviceError& e) {
+    EXPECT_NE(std::string(e.what()).find("cannot hold the 2 effects (one per axis)"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_NE(rig.device->state(), DeviceState::kActive);
 }
 
 // The setting a reversed force names (drivers/device_entry.h): each axis' Direction mirrored

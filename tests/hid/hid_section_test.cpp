@@ -335,6 +335,9 @@ TEST(HidConfig, TwoAxesRefuseWhatTheirEffectsCannotDo) {
   e = errors(xy, {"device.hid.pid.positions=[{usage_page: 1, usage: 0x30, min: -1, max: 1}]"});
   EXPECT_TRUE(has(e, "device.hid.pid.positions: 1 position(s) for a mechanism of 2 joint(s)"))
       << all(e);
+  e = errors(xy, {"device.hid.pid.positions=[{usage_page: 1, usage: 0x30, min: -1, max: 1}, "
+                  "{usage_page: 1, usage: 0x30, min: -1, max: 1}]"});
+  EXPECT_TRUE(has(e, "device.hid.pid.positions[1]: the same usage as positions[0]")) << all(e);
   // Two reports a period, one a millisecond: 1 kHz cannot carry them.
   e = errors(xy, {"loop.rate_hz=1000"});
   EXPECT_TRUE(has(e,
