@@ -128,7 +128,12 @@ TEST_F(Transport, HidThroughHidrawWithASimulatedUsbDevice) {
           {"wall.stiffness=250", "safety.stale_fault_ticks=50", "safety.sequence_gap_fault=20",
            "device.hid.backend=hidraw", "device.hid.select.serial=hapticd-systemd",
            // As the CAN drive's: at rest until the service is up.
-           "device.sim.operator.setpoint.start=20", "device.sim.operator.setpoint.hold=600"}));
+           "device.sim.operator.setpoint.start=20", "device.sim.operator.setpoint.hold=600",
+           // The emulated USB controller stalls output transfers when the host is loaded (a
+           // clean test command's run, its sanitizer builds beside it: 10 ticks of a full OUT
+           // queue at 100 Hz, wake-ups 15 ms late); 100 full ticks fault, as in the reference
+           // devices' guest tests (tests/reference/hid/openffboard_kernel_test.cpp).
+           "device.hid.limits.out_queue_full_fault=100"}));
   Instance hid("hid", yaml);
   const config::Config cfg = load_config(yaml, hid.config_path());
   InstanceRules rules(hid, "--subsystem-match=hidraw");  // before the device: udevd applies them
