@@ -208,7 +208,13 @@ TEST_P(OpenFfboardXy, TheLoopsSystemCallsATick) {
     return it == calls.per_tick.end() ? 0.0 : it->second;
   };
   EXPECT_LE(per_tick("write"), 2.1) << "an eventfd wake per report at most";
-  EXPECT_GT(per_tick("write"), 0.5) << "the reports leave through the writer thread";
+  // The reports leave through the writer thread: the loop's thread wakes it (a wake it has not
+  // taken yet is not repeated: 0.49 to 1.07 a tick over libusb, by the host's load) and never
+  // submits a transfer itself (libusb's USBDEVFS ioctls are the writer's and libusb's threads').
+  EXPECT_GT(per_tick("write"), 0.0) << "the writer thread is woken";
+  for (const auto& [call, n] : calls.per_tick) {
+    EXPECT_NE(call.rfind("ioctl", 0), 0u) << call << " " << n << " a tick: no USB transfer there";
+  }
 }
 
 // Item c: unplugged mid-run, pushed into the wall: the run ends with its fault, zero force.
