@@ -32,8 +32,9 @@ inline config::Config load_example(const char* name, const std::vector<std::stri
 }
 
 // One tick per iteration: the device's read of every joint and a write of +-`force`
-// (alternating) on each, then the peer answers in this thread. With `driver_only` the iteration's time is read and write
-// alone (use ->UseManualTime()); otherwise it includes the peer's own work.
+// (alternating) on each, then the peer answers in this thread. With `driver_only` the
+// iteration's time is read and write alone (use ->UseManualTime()); otherwise it includes the
+// peer's own work.
 inline void run_ticks(benchmark::State& state, Device& device, sim::LoopbackPeer& peer,
                       bool driver_only, double force = 0.5) {
   std::array<PositionSample, base::kMaxJoints> s{};
