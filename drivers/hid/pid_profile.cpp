@@ -157,8 +157,7 @@ class PidProfile final : public HidProfile {
       std::span<const double> forces) noexcept override {
     const Slot& m = l_.sc_magnitude;
     for (std::size_t j = 0; j < effects_.size(); ++j) {
-      const double raw =
-          std::nearbyint(forces[j] / s_.force_full_scale * static_cast<double>(m.logical_max));
+      const double raw = std::nearbyint(forces[j] * counts_per_force_);
       const double clamped =
           std::clamp(raw, static_cast<double>(m.logical_min), static_cast<double>(m.logical_max));
       set_slot(data(effects_[j].constant, l_.set_constant), m, static_cast<std::int64_t>(clamped));
@@ -195,6 +194,7 @@ class PidProfile final : public HidProfile {
   }
 
   void prepare() {
+    counts_per_force_ = static_cast<double>(l_.sc_magnitude.logical_max) / s_.force_full_scale;
     for (std::size_t j = 0; j < effects_.size(); ++j) {
       const Slot& p = l_.positions[j];
       Effect& e = effects_[j];
@@ -353,6 +353,7 @@ class PidProfile final : public HidProfile {
   bool confirmed_ = false;  // a state report with the actuators enabled arrived since enable
   std::uint64_t refresh_ticks_ = 0, ticks_ = 0;
   bool freed_every_block_ = false;  // this enable has freed the pool once
+  double counts_per_force_ = 0.0;   // Magnitude counts per N (N m): its maximum at full scale
   std::vector<std::uint8_t> stop_all_, disable_, enable_;
 };
 

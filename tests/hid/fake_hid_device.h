@@ -75,6 +75,18 @@ class FakeHidDevice {
     }
     return out;
   }
+  // Waits until nothing more has arrived for `quiet_ms` (what the driver had queued, all
+  // taken); the messages received by then.
+  std::size_t wait_quiet(int quiet_ms = 50) {
+    std::size_t have = 0;
+    for (int quiet = 0; quiet < quiet_ms;) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      const std::size_t now = received().size();
+      quiet = now == have ? quiet + 1 : 0;
+      have = now;
+    }
+    return have;
+  }
   // Waits until `n` messages have arrived (or a second has passed).
   void wait_for(std::size_t n) {
     for (int i = 0; i < 1000 && received().size() < n; ++i) {

@@ -147,14 +147,8 @@ TEST(HidPid, ARestartTheFullQueueDroppedGoesAtTheNextTickThatWrites) {
   const std::uint64_t full = rig.device->hid_counts().out_queue_full;
   EXPECT_EQ(full - before, static_cast<std::uint64_t>(held))
       << "each tick the queue took nothing is one dropped tick, the pending restart's included";
-  std::size_t have = 0;  // what was queued, all taken: nothing more for 50 ms
-  for (int quiet = 0; quiet < 50;) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
-    const std::size_t now = rig.fake.received().size();
-    quiet = now == have ? quiet + 1 : 0;
-    have = now;
-  }
-  tick();  // not a restart's own tick
+  const std::size_t have = rig.fake.wait_quiet();  // what was queued, all taken
+  tick();                                          // not a restart's own tick
   rig.fake.wait_for(have + 2);
   const auto out = rig.fake.outputs();
   ASSERT_GE(out.size(), 2u);

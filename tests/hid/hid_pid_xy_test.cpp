@@ -166,14 +166,8 @@ TEST(HidPidTwoAxes, RestartsTheFullQueueDroppedAllGoAtTheNextTickThatWrites) {
   tick();
   tick();
   rig.fake.reading.store(true);
-  std::size_t have = 0;  // what was queued, all taken
-  for (int quiet = 0; quiet < 50;) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
-    const std::size_t now = rig.fake.received().size();
-    quiet = now == have ? quiet + 1 : 0;
-    have = now;
-  }
-  tick();  // not a restart's own tick
+  const std::size_t have = rig.fake.wait_quiet();  // what was queued, all taken
+  tick();                                          // not a restart's own tick
   rig.fake.wait_for(have + 4);
   const auto out = rig.fake.outputs();
   ASSERT_GE(out.size(), 4u);
