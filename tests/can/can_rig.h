@@ -52,15 +52,19 @@ struct CanRig {
       : cfg(c), pair(wiring::find_driver("can").make_loopback(c)), runner(*pair.peer) {}
   // The device configured one way, the simulated drive another (a firmware the driver must
   // find out about).
-  CanRig(const config::Config& device_cfg, const config::Config& peer_cfg)
-      : cfg(device_cfg), pair(split(device_cfg, peer_cfg)), runner(*pair.peer) {}
-  static wiring::Loopback split(const config::Config& device_cfg, const config::Config& peer_cfg) {
+  // `realtime_peer`: the drive keeps its wall-clock watchdogs, as `hapticd peer` on a bus does.
+  CanRig(const config::Config& device_cfg, const config::Config& peer_cfg,
+         bool realtime_peer = false)
+      : cfg(device_cfg), pair(split(device_cfg, peer_cfg, realtime_peer)), runner(*pair.peer) {}
+  static wiring::Loopback split(const config::Config& device_cfg, const config::Config& peer_cfg,
+                                bool realtime_peer) {
     auto [mine, theirs] = io::seqpacket_pair();
     auto fd = std::make_shared<io::UniqueFd>(std::move(mine));
     wiring::Loopback l;
     l.device =
         make_can_device(device_cfg, [fd] { return CanSocket::adopt(std::move(*fd), "pair"); });
-    l.peer = sim::make_can_peer(peer_cfg, CanSocket::adopt(std::move(theirs), "pair peer"), false);
+    l.peer = sim::make_can_peer(peer_cfg, CanSocket::adopt(std::move(theirs), "pair peer"),
+                                realtime_peer);
     return l;
   }
   ~CanRig() {

@@ -163,5 +163,33 @@ TEST(CanRealTimeLoopback, AHostStallIsNeitherALostMasterNorAnOldSample) {
   runner.stop();
 }
 
+// A drive on a bus (`hapticd peer`) watches SYNC by the wall clock. A stall of hapticd longer
+// than 20 cycles but shorter than the heartbeat consumer time it gave the drive
+// (drive_watchdog_ms) is no lost master: the systemd machine's emulator once held hapticd over
+// 200 ms at 100 Hz and the simulated drive sent EMCY 0x8100 though the configuration tolerated
+// 1 s. A silence past drive_watchdog_ms still switches the drive off.
+TEST(CanRealTimePeer, AStallShorterThanTheDrivesWatchdogIsNoLostMaster) {
+  const config::Config cfg = load_example(
+      "can-cia402.yaml", {"loop.rate_hz=100", "device.can.cia402.drive_watchdog_ms=1000",
+                          "device.can.heartbeat_timeout_ms=5000"});
+  CanRig rig(cfg, cfg, true);
+  rig.device().configure();
+  rig.device().enable();
+  PositionSample s;
+  const auto ticks = [&](int n) {
+    for (int i = 0; i < n; ++i) {
+      const IoStatus r = rig.tick(0.5, s);
+      ASSERT_TRUE(r == IoStatus::kOk || r == IoStatus::kNoNewData) << rig.device().describe_fault();
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+  };
+  ticks(20);
+  std::this_thread::sleep_for(std::chrono::milliseconds(400));  // 40 cycles, 0.4 of the watchdog
+  ticks(20);
+  EXPECT_TRUE(rig.peer().output_on()) << "the drive switched off on a stall it was told to bear";
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  EXPECT_FALSE(rig.peer().output_on()) << "hapticd silent past drive_watchdog_ms";
+}
+
 }  // namespace
 }  // namespace hapticd::drivers::can::testing

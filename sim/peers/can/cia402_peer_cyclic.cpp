@@ -128,10 +128,14 @@ void Cia402Peer::on_clock(std::int64_t now) {
     last_master_heartbeat_ns_ = 0;
     lose_master(0x8130);  // life guard / heartbeat error
   }
+  // The SYNC watch is the manufacturer's; this drive's is never stricter than the silence its
+  // master said it tolerates (0x1016:1), so a configuration's one tolerance for a stalled
+  // master (drive_watchdog_ms) holds for both watchdogs.
   const std::uint32_t cycle_us = object(0x1006, 0);
+  const std::int64_t sync_window_ns =
+      std::max(kSyncLossCycles * cycle_us * 1000LL, consumer_ms * 1'000'000LL);
   if (cycle_us > 0 && last_sync_ns_ != 0 && nmt_ == NmtState::kOperational &&
-      power_.load() == PowerState::kOperationEnabled &&
-      now - last_sync_ns_ > kSyncLossCycles * cycle_us * 1000LL) {
+      power_.load() == PowerState::kOperationEnabled && now - last_sync_ns_ > sync_window_ns) {
     last_sync_ns_ = 0;
     lose_master(0x8100);  // communication: SYNC lost
   }
