@@ -73,7 +73,7 @@ TEST(Profile, Sine) {
 TEST(Profile, PressPushesInHoldsAndWithdraws) {
   const ProfileSpec p = load_embedded_default().device.sim.op.setpoint;
   EXPECT_EQ(p.shape, ProfileSpec::Shape::kPress);
-  expect_points(p, {{0.2, -0.02}, {0.7, 0.01}, {1.7, 0.01}, {2.2, -0.02}});
+  expect_points(p, {{0.5, -0.02}, {1.0, 0.01}, {2.0, 0.01}, {2.5, -0.02}});
   expect_points(setpoint_of("{shape: press, rest: 0, depth: 1, ramp: 1, hold: 0}"),
                 {{0.0, 0.0}, {1.0, 1.0}, {1.0, 1.0}, {2.0, 0.0}});
 }
