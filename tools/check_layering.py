@@ -69,6 +69,7 @@ PURE_CODECS = (
     "drivers/gpio/quadrature_decoder.h", "drivers/gpio/gpio_wire.h", "drivers/gpio/gpio_settings.h",
     "drivers/evdev/evdev_settings.h", "drivers/evdev/evdev_wire.h",
     "drivers/serial/checksum.h", "drivers/serial/serial_frame.h", "drivers/serial/serial_settings.h",
+    "drivers/falcon/falcon_protocol.h",
 )
 # What a driver is given to build its device: a value type of the configuration, which a
 # driver's settings (a pure codec) are read from.
