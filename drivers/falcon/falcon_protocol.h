@@ -105,6 +105,7 @@ class PacketStream {
   bool next(Packet& out) noexcept;
   std::uint64_t skipped_bytes() const noexcept { return skipped_; }
   std::uint64_t overflowed_bytes() const noexcept { return overflowed_; }
+  std::size_t buffered_bytes() const noexcept { return size_; }  // not yet a frame nor skipped
   void clear() noexcept { size_ = 0; }
 
  private:
