@@ -95,7 +95,7 @@ PacketError decode_state(const Packet& p, State& s) noexcept {
   return PacketError::kNone;
 }
 
-void PacketStream::append(std::span<const unsigned char> data) noexcept {
+void PacketStream::feed_data(std::span<const unsigned char> data) noexcept {
   const std::size_t room = buffer_.size() - size_;
   const std::size_t n = std::min(room, data.size());
   std::memcpy(buffer_.data() + size_, data.data(), n);
@@ -107,7 +107,7 @@ void PacketStream::feed_transfer(std::span<const unsigned char> transfer) noexce
   while (!transfer.empty()) {
     const std::size_t usb = std::min(transfer.size(), kUsbPacketBytes);
     if (usb > kModemStatusBytes)
-      append(transfer.subspan(kModemStatusBytes, usb - kModemStatusBytes));
+      feed_data(transfer.subspan(kModemStatusBytes, usb - kModemStatusBytes));
     transfer = transfer.subspan(usb);
   }
 }

@@ -101,6 +101,8 @@ class PacketStream {
   // RT-safe: called every tick. One IN transfer of `n` bytes as the chip sent it: a 2-byte
   // modem status at the start of each 64-byte USB packet.
   void feed_transfer(std::span<const unsigned char> transfer) noexcept;
+  // RT-safe. Data bytes already without their modem status.
+  void feed_data(std::span<const unsigned char> data) noexcept;
   // RT-safe: called every tick. The next complete frame, oldest first; false when none.
   bool next(Packet& out) noexcept;
   std::uint64_t skipped_bytes() const noexcept { return skipped_; }
@@ -109,7 +111,6 @@ class PacketStream {
   void clear() noexcept { size_ = 0; }
 
  private:
-  void append(std::span<const unsigned char> data) noexcept;
   // Room for several packets: a tick's reply and the ones a late tick finds queued.
   std::array<unsigned char, 8 * kPacketBytes> buffer_{};
   std::size_t size_ = 0;
