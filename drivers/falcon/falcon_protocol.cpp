@@ -1,6 +1,7 @@
 #include "drivers/falcon/falcon_protocol.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <numbers>
 
@@ -142,6 +143,13 @@ double arm_angle(std::int16_t counts) noexcept {
   const double cable = std::numbers::pi * kShaftDiameter / kEncoderCountsPerTurn * counts;
   const double deg = cable / (std::numbers::pi * kDrumDiameter) * 360.0 + kThetaAtZeroDeg;
   return deg * std::numbers::pi / 180.0;
+}
+
+std::int16_t counts_at_angle(double angle_rad) noexcept {
+  const double per_rad = (arm_angle(1) - arm_angle(0));
+  const double counts = std::round((angle_rad - arm_angle(0)) / per_rad);
+  if (!std::isfinite(counts)) return 0;
+  return static_cast<std::int16_t>(std::clamp(counts, -32768.0, 32767.0));
 }
 
 }  // namespace hapticd::drivers::falcon

@@ -127,8 +127,20 @@ inline constexpr double kDrumDiameter = 0.110;     // m
 inline constexpr double kThetaAtZeroDeg = 35.0;
 // RT-safe: called every tick. The arm's angle (rad; the delta kinematics' q_i) for a count.
 double arm_angle(std::int16_t counts) noexcept;
+// RT-safe. Its inverse, to the nearest count (a simulated Falcon's encoder), saturated at the
+// int16 range (the count wraps there on the device; the arm never turns that far).
+std::int16_t counts_at_angle(double angle_rad) noexcept;
 // libnifalcon's command scale: 10000 counts per N m of torque at the arm, negated (a positive
 // count turns the arm toward smaller angles). The firmware's own gain is not published.
 inline constexpr double kCountsPerNewtonMetre = -10000.0;
+
+// --- the loopback socketpair's messages (one SOCK_SEQPACKET message each): the FT232's
+// control requests and bulk data, so the driver's load and exchange run unchanged against
+// the simulated Falcon (sim/peers/falcon/).
+enum LoopbackTag : unsigned char {
+  kTagControl = 1,  // host -> device: request, value (little-endian u16)
+  kTagBulkOut = 2,  // host -> device: the bytes of a bulk OUT transfer
+  kTagBulkIn = 3,   // device -> host: one bulk IN transfer, modem status bytes included
+};
 
 }  // namespace hapticd::drivers::falcon
