@@ -170,6 +170,17 @@ LoadResult load_firmware(FtdiLink& link, std::span<const unsigned char> image, i
   return r;
 }
 
+bool firmware_running(FtdiLink& link, const LoaderTiming& timing) {
+  Try t(link, timing);
+  try {
+    t.requests(normal_mode());
+    t.firmware_answers();
+    return true;
+  } catch (const StepFailed&) {
+    return false;
+  }
+}
+
 std::string describe(const LoadResult& r) {
   std::string s;
   for (std::size_t i = 0; i < r.tries.size(); ++i) {

@@ -41,6 +41,11 @@ std::vector<unsigned char> read_firmware_image(const std::string& path);
 LoadResult load_firmware(FtdiLink& link, std::span<const unsigned char> image, int max_tries,
                          const LoaderTiming& timing = {});
 
+// Whether Novint's firmware already runs (it stays loaded while the device has power: a
+// restarted hapticd finds it): the normal mode's requests, then a packet answered within
+// timing.answer_packets tries. Never resets the device.
+bool firmware_running(FtdiLink& link, const LoaderTiming& timing = {});
+
 // "try 1: <step>: saw <bytes>; try 2: loaded" - for the log and the refusal.
 std::string describe(const LoadResult& r);
 

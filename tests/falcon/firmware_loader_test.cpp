@@ -13,9 +13,6 @@
 namespace hapticd::drivers::falcon::testing {
 namespace {
 
-// Short waits: the simulated device answers at once or never.
-constexpr LoaderTiming kFast{5, 3, 50, 5, 3};
-
 std::vector<unsigned char> an_image(std::size_t n = 7914) {
   std::vector<unsigned char> v(n);
   for (std::size_t i = 0; i < n; ++i) v[i] = static_cast<unsigned char>(i * 7 + 3);

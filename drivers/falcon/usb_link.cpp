@@ -1,0 +1,255 @@
+#include "drivers/falcon/usb_link.h"
+
+#include <libusb.h>
+#include <sys/eventfd.h>
+#include <unistd.h>
+
+#include <array>
+#include <atomic>
+#include <cerrno>
+#include <cstring>
+#include <sstream>
+#include <thread>
+#include <vector>
+
+#include "base/hex.h"
+#include "drivers/device.h"
+#include "drivers/io/output_thread.h"
+
+namespace hapticd::drivers::falcon {
+namespace {
+
+constexpr int kStreamTimeoutMs = 100;  // how often the threads look at the stop flag
+constexpr std::size_t kRing = 4096;    // IN data bytes between the reader and the RT thread
+
+std::string usb_error(int code) { return libusb_error_name(code); }
+
+int errno_of(int code) {
+  return code == LIBUSB_ERROR_NO_DEVICE ? ENODEV : code == LIBUSB_ERROR_TIMEOUT ? ETIMEDOUT : EIO;
+}
+
+std::string serial_of(libusb_device_handle* h, const libusb_device_descriptor& d) {
+  unsigned char text[128] = {};
+  if (d.iSerialNumber == 0) return {};
+  const int n = libusb_get_string_descriptor_ascii(h, d.iSerialNumber, text, sizeof text - 1);
+  return n > 0 ? std::string(reinterpret_cast<char*>(text), static_cast<std::size_t>(n)) : "";
+}
+
+class UsbLink final : public FalconTransport {
+ public:
+  UsbLink(libusb_context* ctx, libusb_device_handle* h, std::string description, int priority)
+      : ctx_(ctx), h_(h), description_(std::move(description)), priority_(priority) {}
+  ~UsbLink() override {
+    stop_.store(true);
+    if (wake_ >= 0) {
+      const std::uint64_t one = 1;
+      [[maybe_unused]] const ssize_t n = ::write(wake_, &one, sizeof one);
+    }
+    if (writer_.joinable()) writer_.join();
+    if (reader_.joinable()) reader_.join();
+    if (wake_ >= 0) ::close(wake_);
+    libusb_release_interface(h_, 0);
+    libusb_close(h_);  // auto-detach gives a detached kernel driver its device back
+    libusb_exit(ctx_);
+  }
+
+  bool control(const FtdiRequest& r, std::string& error) override {
+    const int rc =
+        libusb_control_transfer(h_, kFtdiRequestType, r.request, r.value, 0, nullptr, 0, 1000);
+    if (rc >= 0) return true;
+    error = usb_error(rc);
+    return false;
+  }
+  bool write(std::span<const unsigned char> data, int timeout_ms, std::string& error) override {
+    int done = 0;
+    const int rc = libusb_bulk_transfer(h_, kEndpointOut, const_cast<unsigned char*>(data.data()),
+                                        static_cast<int>(data.size()), &done, timeout_ms);
+    if (rc == 0 && done == static_cast<int>(data.size())) return true;
+    error = rc != 0 ? usb_error(rc) : std::to_string(done) + " of " + std::to_string(data.size());
+    return false;
+  }
+  int read(std::span<unsigned char> buffer, int timeout_ms, std::string& error) override {
+    int done = 0;
+    const int rc = libusb_bulk_transfer(h_, kEndpointIn, buffer.data(),
+                                        static_cast<int>(buffer.size()), &done, timeout_ms);
+    if (rc == 0 || rc == LIBUSB_ERROR_TIMEOUT) return done;
+    error = usb_error(rc);
+    return -1;
+  }
+
+  std::string describe() const override { return description_; }
+  void start() override;
+  TransportIo send(const Packet& p) noexcept override;
+  TransportIo receive(PacketStream& stream) noexcept override;
+  int error() const noexcept override { return error_.load(); }
+  void emergency(const Packet&) noexcept override {}  // libusb is not async-signal-safe
+
+ private:
+  void write_loop();
+  void read_loop();
+  void fail(int code) noexcept {
+    error_.store(errno_of(code));
+    failed_.store(true);
+  }
+
+  libusb_context* ctx_;
+  libusb_device_handle* h_;
+  std::string description_;
+  int priority_;
+  int wake_ = -1;
+  std::atomic<bool> stop_{false}, failed_{false}, pending_{false};
+  std::atomic<int> error_{0};
+  Packet out_{};
+  std::array<unsigned char, kRing> ring_{};
+  std::atomic<std::uint64_t> head_{0}, tail_{0};  // bytes written by the reader, read by RT
+  std::thread writer_, reader_;
+};
+
+void UsbLink::start() {
+  wake_ = ::eventfd(0, EFD_CLOEXEC);
+  if (wake_ < 0) throw DeviceError("falcon: eventfd: " + std::string(std::strerror(errno)));
+  writer_ = io::start_output_thread("hapticd-falcout", priority_, [this] { write_loop(); });
+  reader_ = io::start_output_thread("hapticd-falcin", priority_, [this] { read_loop(); });
+}
+
+TransportIo UsbLink::send(const Packet& p) noexcept {
+  if (failed_.load()) return TransportIo::kError;
+  if (pending_.load(std::memory_order_acquire)) return TransportIo::kEmpty;
+  out_ = p;
+  pending_.store(true, std::memory_order_release);
+  const std::uint64_t one = 1;
+  [[maybe_unused]] const ssize_t n = ::write(wake_, &one, sizeof one);
+  return TransportIo::kOk;
+}
+
+TransportIo UsbLink::receive(PacketStream& stream) noexcept {
+  const std::uint64_t head = head_.load(std::memory_order_acquire);
+  std::uint64_t tail = tail_.load(std::memory_order_relaxed);
+  while (tail < head) {
+    const std::size_t at = tail % kRing;
+    const std::size_t n = std::min<std::uint64_t>(head - tail, kRing - at);
+    stream.feed_data({ring_.data() + at, n});
+    tail += n;
+  }
+  tail_.store(tail, std::memory_order_release);
+  return failed_.load() ? TransportIo::kError : TransportIo::kOk;
+}
+
+void UsbLink::write_loop() {
+  while (!stop_.load()) {
+    std::uint64_t count = 0;
+    if (::read(wake_, &count, sizeof count) < 0 && errno != EINTR) return;
+    if (stop_.load() || !pending_.load(std::memory_order_acquire)) continue;
+    int done = 0;
+    const int rc =
+        libusb_bulk_transfer(h_, kEndpointOut, out_.data(), kPacketBytes, &done, kStreamTimeoutMs);
+    pending_.store(false, std::memory_order_release);
+    if (rc != 0 && rc != LIBUSB_ERROR_TIMEOUT) return fail(rc);
+  }
+}
+
+void UsbLink::read_loop() {
+  std::array<unsigned char, 8 * kUsbPacketBytes> in{};
+  while (!stop_.load()) {
+    int done = 0;
+    const int rc = libusb_bulk_transfer(h_, kEndpointIn, in.data(), static_cast<int>(in.size()),
+                                        &done, kStreamTimeoutMs);
+    if (rc != 0 && rc != LIBUSB_ERROR_TIMEOUT) return fail(rc);
+    std::uint64_t head = head_.load(std::memory_order_relaxed);
+    const std::uint64_t tail = tail_.load(std::memory_order_acquire);
+    for (int k = 0; k < done; ++k) {
+      if (static_cast<std::size_t>(k) % kUsbPacketBytes < kModemStatusBytes) continue;
+      if (head - tail >= kRing) break;  // the RT thread stopped draining: drop the rest
+      ring_[head % kRing] = in[static_cast<std::size_t>(k)];
+      ++head;
+    }
+    head_.store(head, std::memory_order_release);
+  }
+}
+
+}  // namespace
+
+std::unique_ptr<FalconTransport> open_usb(const FalconSettings& s, int output_priority) {
+  libusb_context* ctx = nullptr;
+  if (const int rc = libusb_init(&ctx); rc != 0) {
+    throw DeviceError("falcon: libusb_init: " + usb_error(rc));
+  }
+  libusb_device** list = nullptr;
+  const ssize_t n = libusb_get_device_list(ctx, &list);
+  libusb_device_handle* chosen = nullptr;
+  std::string chosen_serial, seen, denied;
+  int matches = 0;
+  for (ssize_t i = 0; i < n; ++i) {
+    libusb_device_descriptor d{};
+    if (libusb_get_device_descriptor(list[i], &d) != 0) continue;
+    if (d.idVendor != kVendorId || d.idProduct != kProductId) continue;
+    libusb_device_handle* h = nullptr;
+    if (const int rc = libusb_open(list[i], &h); rc != 0) {
+      denied = usb_error(rc);
+      continue;
+    }
+    const std::string serial = serial_of(h, d);
+    seen += (seen.empty() ? "" : ", ") + (serial.empty() ? "(no serial)" : serial);
+    if ((s.serial.empty() || s.serial == serial) && ++matches == 1) {
+      chosen = h;
+      chosen_serial = serial;
+    } else {
+      libusb_close(h);
+    }
+  }
+  libusb_free_device_list(list, 1);
+  const auto refuse = [&](const std::string& why) {
+    if (chosen != nullptr) libusb_close(chosen);
+    libusb_exit(ctx);
+    throw DeviceError("falcon: " + why);
+  };
+  if (matches == 0 && !denied.empty()) {
+    refuse("a Falcon (0403:cb48) is attached but could not be opened (" + denied +
+           "): install the rule `hapticd udev-rules` writes for this configuration");
+  }
+  if (matches == 0) {
+    refuse(s.serial.empty() ? "no Falcon (0403:cb48) attached"
+                            : "no Falcon with serial '" + s.serial +
+                                  "' (attached: " + (seen.empty() ? "none" : seen) + ")");
+  }
+  if (matches > 1) refuse("several Falcons attached (" + seen + "): set device.falcon.serial");
+  libusb_set_auto_detach_kernel_driver(chosen, 1);
+  if (const int rc = libusb_claim_interface(chosen, 0); rc != 0) {
+    refuse("claiming its interface: " + usb_error(rc) + " (another program holds it?)");
+  }
+  const std::string description =
+      "falcon 0403:cb48 serial " + (chosen_serial.empty() ? std::string("?") : chosen_serial);
+  return std::make_unique<UsbLink>(ctx, chosen, description, output_priority);
+}
+
+std::string list_falcons() {
+  libusb_context* ctx = nullptr;
+  if (const int rc = libusb_init(&ctx); rc != 0) {
+    return "falcon: libusb cannot be asked (" + usb_error(rc) + ")\n";
+  }
+  libusb_device** list = nullptr;
+  const ssize_t n = libusb_get_device_list(ctx, &list);
+  std::ostringstream out;
+  int found = 0;
+  for (ssize_t i = 0; i < n; ++i) {
+    libusb_device_descriptor d{};
+    if (libusb_get_device_descriptor(list[i], &d) != 0) continue;
+    if (d.idVendor != kVendorId || d.idProduct != kProductId) continue;
+    ++found;
+    out << "falcon 0403:cb48 on bus " << int(libusb_get_bus_number(list[i])) << " address "
+        << int(libusb_get_device_address(list[i]));
+    libusb_device_handle* h = nullptr;
+    if (const int rc = libusb_open(list[i], &h); rc != 0) {
+      out << " (cannot open it: " << usb_error(rc) << "; `hapticd udev-rules` grants it)\n";
+      continue;
+    }
+    out << "\n  device.falcon.serial: " << serial_of(h, d) << "\n";
+    libusb_close(h);
+  }
+  if (n > 0) libusb_free_device_list(list, 1);
+  libusb_exit(ctx);
+  if (found == 0) out << "falcon: no Falcon (0403:cb48) attached\n";
+  return out.str();
+}
+
+}  // namespace hapticd::drivers::falcon
