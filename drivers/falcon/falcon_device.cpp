@@ -54,12 +54,13 @@ DeviceInfo FalconDevice::on_configure() {
       if (r.tries.size() > 1) notices_.push_back("falcon: firmware load: " + falcon::describe(r));
     }
     home();
+    transport_->start();  // the exchange's own threads, where the transport has them
   } catch (...) {
     emergency_.store(nullptr);
     transport_.reset();
     throw;
   }
-  last_packet_ns_ = base::monotonic_ns();
+  asked_ns_ = 0;
   DeviceInfo info;
   info.description = transport_->describe();
   info.transport_delay_samples = declared_delay_samples(period_s_);
@@ -114,7 +115,6 @@ void FalconDevice::on_disable() noexcept {
 
 void FalconDevice::on_clear_fault() {
   send_zero(kLedBlue);
-  last_packet_ns_ = base::monotonic_ns();
   if (newest_.homed != kAllHomed) {
     throw DeviceError("falcon: homing was lost (encoders not homed: " + homed_text(newest_.homed) +
                       "): close and configure again to home it");
@@ -138,6 +138,7 @@ bool FalconDevice::send(const std::array<std::int16_t, 3>& motor, std::uint8_t l
   c.homing = true;  // the firmware keeps the device homed only while every packet says so
   switch (transport_->send(encode_command(c))) {
     case TransportIo::kOk:
+      if (asked_ns_ == 0) asked_ns_ = base::monotonic_ns();
       c_[kSent].add();
       out_streak_ = 0;
       return true;
@@ -184,11 +185,13 @@ IoStatus FalconDevice::on_read(std::span<PositionSample> samples) noexcept {
   const std::int64_t now = base::monotonic_ns();
   if (state() != DeviceState::kActive) send_zero(kLedBlue);  // the firmware answers packets
   if (good == 0) {
-    if (now - last_packet_ns_ <= liveness_ns_) return IoStatus::kNoNewData;
+    // Silence counts from the first packet sent since the last answer: the firmware speaks
+    // only when spoken to, so a pause before the first tick is no silence.
+    if (asked_ns_ == 0 || now - asked_ns_ <= liveness_ns_) return IoStatus::kNoNewData;
     set_fault_code(kSilent);
     return IoStatus::kTransportFault;
   }
-  last_packet_ns_ = now;
+  asked_ns_ = 0;
   c_[kPackets].add(static_cast<std::uint64_t>(good));
   c_[kSuperseded].add(static_cast<std::uint64_t>(good - 1));
   if (newest_.homed != kAllHomed) {

@@ -79,7 +79,7 @@ class FalconDevice final : public Device {
   std::atomic<FalconTransport*> emergency_{nullptr};  // what a crash handler may write to
   PacketStream stream_;
   State newest_;
-  std::int64_t last_packet_ns_ = 0;
+  std::int64_t asked_ns_ = 0;  // the first packet sent since the last answer; 0: none
   std::int64_t liveness_ns_;
   int out_streak_ = 0;
   std::uint32_t homing_code_ = 0;  // the homed bits when homing was lost

@@ -141,6 +141,16 @@ TEST(FalconDevice, ASilentFirmwareIsATransportFaultAfterLiveness) {
       << rig.device->describe_fault();
 }
 
+// The firmware speaks only when spoken to: the gate's time between configure and the first
+// tick is no silence.
+TEST(FalconDevice, APauseBeforeTheFirstTickIsNoSilence) {
+  Rig rig(20.0);
+  rig.device->configure();
+  std::this_thread::sleep_for(std::chrono::milliseconds(60));
+  EXPECT_NE(rig.read(), IoStatus::kTransportFault) << rig.device->describe_fault();
+  EXPECT_EQ(rig.read(), IoStatus::kOk);
+}
+
 TEST(FalconDevice, LostHomingIsADeviceFaultAndUnplugATransportFaultEachWithZeroForce) {
   Rig rig;
   rig.device->configure();
