@@ -106,6 +106,7 @@ void FalconPeer::bulk_out(std::span<const unsigned char> data) {
   answers_.clear();
   firmware_.receive(data, answers_);
   publish();
+  if (faults_.active(PeerFault::kStopAnswering)) return;  // hung: taken, never answered
   for (df::Packet& p : answers_) {
     if (corrupt_next_.exchange(false)) p[5] = '0';  // out of 'A'..'P': the host's kBadNibble
     pending_.insert(pending_.end(), p.begin(), p.end());
@@ -117,6 +118,7 @@ void FalconPeer::publish() noexcept {
   felt_.publish(firmware_.felt_torque(), firmware_.amplifier_on());
   leds_ = firmware_.leds();
   homed_ = firmware_.homed();
+  taken_ = firmware_.packets_taken();
 }
 
 void FalconPeer::flush() {

@@ -63,6 +63,8 @@ class FalconPeer final : public LoopbackPeer {
   std::uint8_t leds() const noexcept { return leds_.load(); }  // the last command's Led bits
   bool homed() const noexcept { return homed_.load(); }
   bool firmware_running() const noexcept { return running_.load(); }
+  // Command packets the firmware took (each a period of the plant), state packets it sent.
+  std::uint64_t packets_taken() const noexcept { return taken_.load(); }
   std::uint64_t packets_answered() const noexcept { return answered_.load(); }
   int loads_completed() const noexcept { return loads_.load(); }
   int resets() const noexcept { return resets_.load(); }  // DTR pulses
@@ -92,6 +94,7 @@ class FalconPeer final : public LoopbackPeer {
   std::atomic<std::uint8_t> leds_{0};
   std::atomic<bool> homed_{false};
   std::atomic<bool> running_{false};
+  std::atomic<std::uint64_t> taken_{0};
   std::atomic<std::uint64_t> answered_{0};
   std::atomic<int> loads_{0};
   std::atomic<int> resets_{0};
