@@ -140,7 +140,10 @@ void FalconPeer::flush() {
     }
     if (::send(fd_.get(), tx.data(), n, MSG_DONTWAIT | MSG_NOSIGNAL) < 0) {
       if (errno == EAGAIN) break;  // the host is behind: the chip's FIFO keeps the rest
-      if (errno == EPIPE || errno == ECONNRESET || shut_) break;
+      if (errno == EPIPE || errno == ECONNRESET || shut_) {  // the host is gone: no one reads
+        pending_.clear();
+        return;
+      }
       throw std::system_error(errno, std::system_category(), "falcon peer: send");
     }
     sent += taken;
