@@ -26,6 +26,10 @@
 #include "drivers/serial/serial_driver.h"
 #include "sim/peers/serial/serial_peer_entry.h"
 #endif
+#if HAPTICD_WITH_FALCON
+#include "drivers/falcon/falcon_driver.h"
+#include "sim/peers/falcon/falcon_peer_entry.h"
+#endif
 
 namespace hapticd::wiring {
 namespace {
@@ -61,6 +65,9 @@ const std::vector<DriverEntry>& entries() {
 #endif
 #if HAPTICD_WITH_SERIAL
         join(drivers::serial::device_entry(), sim::serial::peer_entry()),
+#endif
+#if HAPTICD_WITH_FALCON
+        join(drivers::falcon::device_entry(), sim::falcon::peer_entry()),
 #endif
   };
   return kDrivers;

@@ -14,6 +14,7 @@
 #include "config/config_loader.h"
 #include "control/controller.h"
 #include "control/scene.h"
+#include "falcon_image.h"
 #include "loop/scene_tick.h"
 #include "loop/servo_loop.h"
 #include "scene_run.h"
@@ -35,6 +36,9 @@ const JointsCase kJointsCases[] = {
     {"hid", "config/hid-pid-xy.yaml"},     // two PID effects, one Set Constant Force each
 #endif
     {"sim", "config/sim-delta.yaml"},
+#if HAPTICD_WITH_FALCON
+    {"falcon", "config/falcon.yaml"},  // three arms, one packet each way a tick (issue 38)
+#endif
 };
 
 config::Config load_joints(const JointsCase& c) {
@@ -42,8 +46,13 @@ config::Config load_joints(const JointsCase& c) {
   std::ifstream in(path);
   std::stringstream text;
   text << in.rdbuf();
-  return config::load_config_text(text.str(), path, {config::parse_override("loop.clock=freerun")},
-                                  HAPTICD_SOURCE_DIR "/config", wiring::driver_schemas());
+  std::vector<config::Override> sets = {config::parse_override("loop.clock=freerun")};
+  if (std::string_view(c.driver) == "falcon") {  // the simulated Falcon takes any image
+    sets.push_back(
+        config::parse_override("device.falcon.firmware=" + hapticd::testing::falcon_test_image()));
+  }
+  return config::load_config_text(text.str(), path, sets, HAPTICD_SOURCE_DIR "/config",
+                                  wiring::driver_schemas());
 }
 
 // The scene's loop of `cfg` on `device` for `ticks` ticks; the allocations of its run.
