@@ -13,7 +13,7 @@ constexpr std::uint8_t kCheck2 = 0x41;
 // SIO_MODEM_CTRL: the low byte the lines' state, the high byte which of them to set.
 constexpr std::uint16_t kDtr = 0x0001, kRts = 0x0002, kDtrMask = 0x0100, kRtsMask = 0x0200;
 constexpr std::size_t kFifoLimit = 512;  // the chip's buffer toward the host: more is lost
-constexpr double kMaxStep = 0.010;       // seconds of plant per packet at most
+constexpr double kMaxPlantStep = 0.010;  // seconds of plant per packet at most
 
 bool nibble(std::uint8_t b) { return b >= kOffset && b <= kOffset + 0x0F; }
 
@@ -172,7 +172,7 @@ void FalconFirmware::firmware_bytes(std::span<const std::uint8_t> bytes, double 
 void FalconFirmware::command(const std::uint8_t* packet, double now) {
   Decoded d{};
   decode_packet(packet, d);
-  if (last_step_ >= 0) mechanism_.step(std::clamp(now - last_step_, 0.0, kMaxStep));
+  if (last_step_ >= 0) mechanism_.step(std::clamp(now - last_step_, 0.0, kMaxPlantStep));
   last_step_ = now;
   update_homing();
   mechanism_.set_motor_commands(d.values);

@@ -1,0 +1,415 @@
+#include "raw_usb_ftdi.h"
+
+#include <fcntl.h>
+#include <linux/usb/ch9.h>
+#include <linux/usb/raw_gadget.h>
+#include <pthread.h>
+#include <signal.h>
+#include <sys/ioctl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <stdexcept>
+
+namespace hapticd::reference::falcon {
+namespace {
+
+constexpr std::uint8_t kConfigValue = 1;
+constexpr std::uint16_t kMaxPacket = 64;  // full speed: ep0 and both bulk endpoints
+constexpr std::uint8_t kInAddress = 0x81, kOutAddress = 0x02;
+constexpr std::array<std::uint8_t, 2> kModemStatus{0x31, 0x60};
+// Vendor IN requests a host may make of an FT232 (libftdi's numbers).
+constexpr std::uint8_t kGetModemStatus = 5, kGetLatency = 10, kReadEeprom = 0x90;
+constexpr std::size_t kMaxIo = 1024;
+
+struct Io {
+  Io(int ep, std::size_t length) {
+    usb_raw_ep_io h{};
+    h.ep = static_cast<__u16>(ep);
+    h.length = static_cast<__u32>(std::min(length, kMaxIo));
+    std::memcpy(block.data(), &h, sizeof h);
+  }
+  std::uint8_t* data() { return block.data() + sizeof(usb_raw_ep_io); }
+  alignas(usb_raw_ep_io) std::array<std::uint8_t, sizeof(usb_raw_ep_io) + kMaxIo> block{};
+};
+
+bool broken(int e) { return e == EINVAL || e == EBUSY || e == ENODEV || e == EFAULT; }
+
+void wake(int) {}
+void install_wake() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    struct sigaction sa {};
+    sa.sa_handler = wake;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGURG, &sa, nullptr);  // no SA_RESTART: the blocked ioctl returns EINTR
+  });
+}
+void accept_wake() {
+  sigset_t s;
+  sigemptyset(&s);
+  sigaddset(&s, SIGURG);
+  pthread_sigmask(SIG_UNBLOCK, &s, nullptr);
+}
+void end_thread(std::thread& t, const std::atomic<bool>& done) {
+  if (!t.joinable()) return;
+  while (!done.load()) {
+    pthread_kill(t.native_handle(), SIGURG);
+    usleep(2000);
+  }
+  t.join();
+}
+
+void put16(std::vector<std::uint8_t>& v, std::uint16_t x) {
+  v.push_back(static_cast<std::uint8_t>(x & 0xFF));
+  v.push_back(static_cast<std::uint8_t>(x >> 8));
+}
+
+std::vector<std::uint8_t> string_descriptor(const std::string& s) {
+  std::vector<std::uint8_t> d{0, USB_DT_STRING};
+  for (char c : s) put16(d, static_cast<std::uint8_t>(c));
+  d[0] = static_cast<std::uint8_t>(d.size());
+  return d;
+}
+
+// The first controller in /sys/class/udc: its name and its driver's.
+std::pair<std::string, std::string> find_udc() {
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator("/sys/class/udc", ec)) {
+    const auto link = std::filesystem::read_symlink(e.path() / "device" / "driver", ec);
+    if (!ec) return {e.path().filename().string(), link.filename().string()};
+  }
+  throw std::runtime_error("raw gadget: no USB device controller");
+}
+
+}  // namespace
+
+RawUsbFtdi::RawUsbFtdi(const FirmwareOptions& options, const FtdiIdentity& id)
+    : id_(id), firmware_(options) {
+  // USB 2.0 9.6.1: full speed, class 0 (the interface says vendor-specific), one configuration.
+  device_desc_ = {18, USB_DT_DEVICE};
+  put16(device_desc_, 0x0200);
+  device_desc_.insert(device_desc_.end(), {0, 0, 0, kMaxPacket});
+  put16(device_desc_, id_.vendor_id);
+  put16(device_desc_, id_.product_id);
+  put16(device_desc_, id_.release);
+  device_desc_.insert(device_desc_.end(), {1, 2, 3, 1});
+  // 9.6.3 configuration, 9.6.5 one interface of class 0xFF, 9.6.6 the two bulk endpoints.
+  config_desc_ = {9, USB_DT_CONFIG, 0, 0, 1, kConfigValue, 0, 0x80, 45};
+  config_desc_.insert(config_desc_.end(), {9, USB_DT_INTERFACE, 0, 0, 2, 0xFF, 0xFF, 0xFF, 2});
+  config_desc_.insert(config_desc_.end(), {7, USB_DT_ENDPOINT, kInAddress, 2, kMaxPacket, 0, 0});
+  config_desc_.insert(config_desc_.end(), {7, USB_DT_ENDPOINT, kOutAddress, 2, kMaxPacket, 0, 0});
+  config_desc_[2] = static_cast<std::uint8_t>(config_desc_.size());
+
+  const auto [udc, driver] = find_udc();
+  usb_raw_init init{};
+  std::memcpy(init.driver_name, driver.data(),
+              std::min<std::size_t>(driver.size(), UDC_NAME_LENGTH_MAX - 1));
+  std::memcpy(init.device_name, udc.data(),
+              std::min<std::size_t>(udc.size(), UDC_NAME_LENGTH_MAX - 1));
+  init.speed = USB_SPEED_FULL;
+  // The controller may still be bound to the last gadget (its close unbinds it a little
+  // later): a refused run fails that raw gadget for good, so open a new one and try again.
+  for (int attempt = 0;; ++attempt) {
+    fd_ = ::open("/dev/raw-gadget", O_RDWR | O_CLOEXEC);
+    if (fd_ < 0) throw std::runtime_error(std::string("/dev/raw-gadget: ") + std::strerror(errno));
+    if (ioctl(fd_, USB_RAW_IOCTL_INIT, &init) == 0 && ioctl(fd_, USB_RAW_IOCTL_RUN, 0) == 0) break;
+    const int e = errno;
+    ::close(fd_);
+    if (e != EBUSY || attempt == 500) {
+      throw std::runtime_error("raw gadget on '" + udc + "': " + std::strerror(e));
+    }
+    usleep(10'000);
+  }
+  install_wake();
+  control_ = std::thread([this] { control_loop(); });
+}
+
+RawUsbFtdi::~RawUsbFtdi() { unplug(); }
+
+void RawUsbFtdi::unplug() noexcept {
+  if (unplugged_.exchange(true)) return;
+  {
+    const std::lock_guard lock(m_);
+    stopping_.store(true);
+    link_up_.store(false);
+  }
+  cv_.notify_all();
+  end_thread(control_, control_done_);
+  end_thread(in_, in_done_);
+  end_thread(out_, out_done_);
+  ::close(fd_);  // the gadget driver unregisters: the host sees the device go
+}
+
+std::string RawUsbFtdi::error() const {
+  const std::lock_guard lock(error_m_);
+  return error_;
+}
+
+void RawUsbFtdi::fail(const char* what) {
+  const std::lock_guard lock(error_m_);
+  if (error_.empty()) error_ = std::string(what) + ": " + std::strerror(errno);
+}
+
+double RawUsbFtdi::now() const {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+}
+
+void RawUsbFtdi::reply(std::uint16_t asked, const std::vector<std::uint8_t>& data) {
+  if (asked == 0) return ack();
+  const std::size_t n = std::min<std::size_t>({data.size(), asked, kMaxIo});
+  Io io(0, n);
+  std::memcpy(io.data(), data.data(), n);
+  if (ioctl(fd_, USB_RAW_IOCTL_EP0_WRITE, &io.block) < 0 && broken(errno)) fail("ep0 write");
+}
+
+void RawUsbFtdi::ack() {
+  Io io(0, 0);
+  if (ioctl(fd_, USB_RAW_IOCTL_EP0_READ, &io.block) < 0 && broken(errno)) fail("ep0 status");
+}
+
+void RawUsbFtdi::control_loop() {
+  accept_wake();
+  alignas(usb_raw_event) std::array<std::uint8_t, sizeof(usb_raw_event) + sizeof(usb_ctrlrequest)>
+      block{};
+  while (!stopping_.load()) {
+    usb_raw_event head{};
+    head.length = sizeof(usb_ctrlrequest);
+    std::memcpy(block.data(), &head, sizeof head);
+    if (ioctl(fd_, USB_RAW_IOCTL_EVENT_FETCH, block.data()) < 0) {
+      if (errno != EINTR) {
+        fail("event fetch");
+        break;
+      }
+      continue;
+    }
+    std::memcpy(&head, block.data(), sizeof head);
+    if (head.type != USB_RAW_EVENT_CONTROL) continue;
+    usb_ctrlrequest request{};
+    std::memcpy(&request, block.data() + sizeof head, sizeof request);
+    const unsigned type = request.bRequestType & USB_TYPE_MASK;
+    const bool ok = type == USB_TYPE_STANDARD ? standard(&request)
+                    : type == USB_TYPE_VENDOR ? vendor(&request)
+                                              : false;
+    if (!ok) ioctl(fd_, USB_RAW_IOCTL_EP0_STALL, 0);
+  }
+  control_done_.store(true);
+}
+
+bool RawUsbFtdi::standard(const void* p) {
+  const auto& r = *static_cast<const usb_ctrlrequest*>(p);
+  const std::uint8_t kind = r.wValue >> 8, index = r.wValue & 0xFF;
+  switch (r.bRequest) {
+    case USB_REQ_GET_DESCRIPTOR:
+      if (kind == USB_DT_DEVICE) return reply(r.wLength, device_desc_), true;
+      if (kind == USB_DT_CONFIG) return reply(r.wLength, config_desc_), true;
+      if (kind == USB_DT_STRING && index <= 3) {
+        reply(r.wLength, index == 0   ? std::vector<std::uint8_t>{4, USB_DT_STRING, 0x09, 0x04}
+                         : index == 1 ? string_descriptor(id_.manufacturer)
+                         : index == 2 ? string_descriptor(id_.product)
+                                      : string_descriptor(id_.serial));
+        return true;
+      }
+      return false;  // no device qualifier: full speed only
+    case USB_REQ_SET_CONFIGURATION:
+      if (r.wValue == 0) {
+        link_up_.store(false);
+      } else if (r.wValue != kConfigValue || !configure()) {
+        return false;
+      }
+      return ack(), true;
+    case USB_REQ_GET_CONFIGURATION:
+      return reply(r.wLength, {static_cast<std::uint8_t>(link_up_.load() ? kConfigValue : 0)}),
+             true;
+    case USB_REQ_GET_STATUS:
+      return reply(r.wLength, {0, 0}), true;
+    case USB_REQ_GET_INTERFACE:
+      return reply(r.wLength, {0}), true;
+    case USB_REQ_SET_INTERFACE:
+    case USB_REQ_CLEAR_FEATURE:
+    case USB_REQ_SET_FEATURE:
+      if ((r.bRequestType & USB_DIR_IN) != 0 || (r.bRequest == USB_REQ_SET_INTERFACE && r.wValue))
+        return false;
+      return ack(), true;
+    default:
+      return false;
+  }
+}
+
+bool RawUsbFtdi::vendor(const void* p) {
+  const auto& r = *static_cast<const usb_ctrlrequest*>(p);
+  if ((r.bRequestType & USB_DIR_IN) != 0) {
+    if (r.bRequest == kGetModemStatus)
+      return reply(r.wLength, {kModemStatus[0], kModemStatus[1]}), true;
+    if (r.bRequest == kGetLatency) {
+      const std::uint8_t l = with_firmware([](FalconFirmware& f) { return f.latency_ms(); });
+      return reply(r.wLength, {l}), true;
+    }
+    if (r.bRequest == kReadEeprom) return reply(r.wLength, {0xFF, 0xFF}), true;  // blank
+    return false;
+  }
+  bool ok = false, purged = false;
+  {
+    const std::lock_guard lock(m_);
+    const std::uint64_t purges = firmware_.purges();
+    ok = firmware_.control(r.bRequest, r.wValue);
+    purged = firmware_.purges() != purges;
+  }
+  if (!ok) return false;
+  ack();
+  // A purge empties the chip: the packet it had queued goes too.
+  if (purged) withdraw(false);
+  return true;
+}
+
+bool RawUsbFtdi::configure() {
+  if (!endpoints_.load()) {
+    const auto enable = [this](std::uint8_t address) {
+      usb_endpoint_descriptor d{};
+      d.bLength = USB_DT_ENDPOINT_SIZE;
+      d.bDescriptorType = USB_DT_ENDPOINT;
+      d.bEndpointAddress = address;
+      d.bmAttributes = USB_ENDPOINT_XFER_BULK;
+      d.wMaxPacketSize = kMaxPacket;
+      return ioctl(fd_, USB_RAW_IOCTL_EP_ENABLE, &d);
+    };
+    in_ep_ = enable(kInAddress);
+    out_ep_ = enable(kOutAddress);
+    if (in_ep_ < 0 || out_ep_ < 0 || ioctl(fd_, USB_RAW_IOCTL_VBUS_DRAW, 45) < 0 ||
+        ioctl(fd_, USB_RAW_IOCTL_CONFIGURE, 0) < 0) {
+      fail("configuring the endpoints");
+      return false;
+    }
+    endpoints_.store(true);
+    in_ = std::thread([this] { in_loop(); });
+    out_ = std::thread([this] { out_loop(); });
+  }
+  {
+    const std::lock_guard lock(m_);
+    ++generation_;
+    link_up_.store(true);
+  }
+  cv_.notify_all();
+  return true;
+}
+
+// A transfer cancelled by a bus reset: wait until the host configures the device again.
+void RawUsbFtdi::wait_for_host(std::uint64_t generation) {
+  std::unique_lock lock(m_);
+  if (generation_ == generation) link_up_.store(false);
+  cv_.wait(lock, [&] { return stopping_.load() || generation_ != generation; });
+}
+
+// Waits for the next IN packet: data as soon as there is some, the modem status alone once
+// the latency timer has run out. False when stopping.
+bool RawUsbFtdi::next_packet(std::vector<std::uint8_t>& packet, std::uint64_t& generation) {
+  std::unique_lock lock(m_);
+  while (true) {
+    if (stopping_.load()) return false;
+    if (!link_up_.load()) {
+      cv_.wait(lock);
+      continue;
+    }
+    const auto due = last_in_ + std::chrono::milliseconds(firmware_.latency_ms());
+    if (firmware_.pending() > 0 || std::chrono::steady_clock::now() >= due) break;
+    cv_.wait_until(lock, due);
+  }
+  packet.assign(kModemStatus.begin(), kModemStatus.end());
+  const auto data = firmware_.take(kMaxPacket - kModemStatus.size());
+  packet.insert(packet.end(), data.begin(), data.end());
+  in_flight_ = true;
+  in_flight_status_ = data.empty();
+  ++in_seq_;
+  generation = generation_;
+  return true;
+}
+
+void RawUsbFtdi::in_loop() {
+  accept_wake();
+  std::vector<std::uint8_t> packet;
+  std::uint64_t generation = 0;
+  while (next_packet(packet, generation)) {
+    Io io(in_ep_, packet.size());
+    std::memcpy(io.data(), packet.data(), packet.size());
+    const int n = ioctl(fd_, USB_RAW_IOCTL_EP_WRITE, &io.block);
+    const int e = errno;
+    bool status = false;
+    {
+      const std::lock_guard lock(m_);
+      status = in_flight_status_;
+      in_flight_ = false;
+      last_in_ = std::chrono::steady_clock::now();
+    }
+    cv_.notify_all();
+    if (n >= 0) {
+      (status ? status_packets_ : data_packets_).fetch_add(1);
+    } else if (e == EINTR) {
+      withdrawn_.fetch_add(1);  // taken back (purge, data behind it) or stopping
+    } else if (broken(e)) {
+      errno = e;
+      fail("bulk IN");
+      break;
+    } else {
+      wait_for_host(generation);
+    }
+  }
+  in_done_.store(true);
+}
+
+// Takes back the IN packet queued now (any, or only a status-only one), not the ones queued
+// after it: SIGURG makes the raw gadget dequeue it; repeated until the IN thread is out of the
+// ioctl, as the signal may land just before it blocks.
+void RawUsbFtdi::withdraw(bool status_only) {
+  std::uint64_t target = 0;
+  {
+    const std::lock_guard lock(m_);
+    target = in_seq_;
+  }
+  while (true) {
+    {
+      const std::lock_guard lock(m_);
+      if (stopping_.load() || !in_flight_ || in_seq_ != target) return;
+      if (status_only && !in_flight_status_) return;
+    }
+    pthread_kill(in_.native_handle(), SIGURG);
+    usleep(200);
+  }
+}
+
+void RawUsbFtdi::out_loop() {
+  accept_wake();
+  while (!stopping_.load()) {
+    std::uint64_t generation = 0;
+    {
+      const std::lock_guard lock(m_);
+      generation = generation_;
+    }
+    // One packet per read: a bulk write of whole packets has no short packet to end it.
+    Io io(out_ep_, kMaxPacket);
+    const int n = ioctl(fd_, USB_RAW_IOCTL_EP_READ, &io.block);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      if (broken(errno)) {
+        fail("bulk OUT");
+        break;
+      }
+      wait_for_host(generation);
+      continue;
+    }
+    bool answered = false;
+    {
+      const std::lock_guard lock(m_);
+      firmware_.receive({io.data(), static_cast<std::size_t>(n)}, now());
+      answered = firmware_.pending() > 0;
+    }
+    cv_.notify_all();
+    if (answered) withdraw(true);  // the answer goes out in place of a bare status
+  }
+  out_done_.store(true);
+}
+
+}  // namespace hapticd::reference::falcon
