@@ -124,7 +124,7 @@ void FalconFirmware::bootloader(std::uint8_t byte) {
   switch (stage_) {
     case Stage::kAwaitCheck1:
     case Stage::kAwaitCheck2:
-      if (divisor_ == kDivisor9600) {
+      if (stage_ == Stage::kAwaitCheck1 && divisor_ == kDivisor9600) {
         check_.push_back(byte);
         if (check_.size() > kCheck1.size()) check_.erase(check_.begin());
         if (std::equal(check_.begin(), check_.end(), kCheck1.begin(), kCheck1.end())) {

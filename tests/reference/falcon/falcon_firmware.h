@@ -12,7 +12,9 @@
 // - DTR is the microcontroller's reset: each DTR low->high edge restarts it in the bootloader
 //   (a running firmware is lost). The bootloader answers check 1 (0a 43 0d -> 0a 44 2c 0d) only
 //   while the chip runs at 9600 baud (divisor 0x4138), and check 2 ('A' -> 'A') only at divisor
-//   0x15 with DTR low: at any other rate the bytes arrive garbled and are ignored.
+//   0x15 with DTR low: at any other rate the bytes arrive garbled and are ignored. Check 1 is
+//   answered once per reset (then the bootloader waits for 'A'), so libnifalcon's loop of up
+//   to 100 check 1s, when a read missed the answer, finds one answer, not several.
 // - After check 2 it echoes every byte and keeps it as the image. The host's switch to divisor
 //   2 (setNormalMode) starts the image when its size is plausible (4096..16384 bytes; Novint's
 //   images are 7324..8492); otherwise the device stays silent until the next DTR pulse.
@@ -69,6 +71,10 @@ class FalconFirmware {
   // Up to `max` bytes of the FIFO toward the host (the chip adds the modem status).
   std::vector<std::uint8_t> take(std::size_t max);
   std::size_t pending() const { return fifo_.size(); }
+  // Bytes taken but never delivered (the USB side took its packet back) go first again.
+  void put_back(std::span<const std::uint8_t> bytes) {
+    fifo_.insert(fifo_.begin(), bytes.begin(), bytes.end());
+  }
   // Bumped by each purge of the host-bound FIFO: whatever the chip had queued is gone.
   std::uint64_t purges() const { return purges_; }
   std::uint8_t latency_ms() const { return latency_; }

@@ -260,6 +260,7 @@ bool RawUsbFtdi::vendor(const void* p) {
     purged = firmware_.purges() != purges;
   }
   if (!ok) return false;
+  cv_.notify_all();  // the firmware may have started: the IN side paces differently
   ack();
   // A purge empties the chip: the packet it had queued goes too.
   if (purged) withdraw(false);
@@ -304,25 +305,41 @@ void RawUsbFtdi::wait_for_host(std::uint64_t generation) {
   cv_.wait(lock, [&] { return stopping_.load() || generation_ != generation; });
 }
 
-// Waits for the next IN packet: data as soon as there is some, the modem status alone once
-// the latency timer has run out. False when stopping.
-bool RawUsbFtdi::next_packet(std::vector<std::uint8_t>& packet, std::uint64_t& generation) {
+// Waits for the next IN packet. While the firmware runs: the slot dummy_hcd keeps (see the
+// header) first gets a bare status (`decoy`), then data as soon as there is some, or a bare
+// status once the latency timer has run out. Before (the bootloader): only answers, at once.
+// False when stopping.
+bool RawUsbFtdi::next_packet(std::vector<std::uint8_t>& packet, std::uint64_t& generation,
+                             bool slot_taken, bool& decoy) {
   std::unique_lock lock(m_);
+  decoy = false;
   while (true) {
     if (stopping_.load()) return false;
     if (!link_up_.load()) {
       cv_.wait(lock);
       continue;
     }
+    const bool running = firmware_.stage() == Stage::kRunning;
+    if (running && !slot_taken) {
+      decoy = true;
+      break;
+    }
+    if (firmware_.pending() > 0) break;
     const auto due = last_in_ + std::chrono::milliseconds(firmware_.latency_ms());
-    if (firmware_.pending() > 0 || std::chrono::steady_clock::now() >= due) break;
-    cv_.wait_until(lock, due);
+    if (running && std::chrono::steady_clock::now() >= due) break;
+    if (running) {
+      cv_.wait_until(lock, due);
+    } else {
+      cv_.wait(lock);
+    }
   }
   packet.assign(kModemStatus.begin(), kModemStatus.end());
-  const auto data = firmware_.take(kMaxPacket - kModemStatus.size());
+  const auto data =
+      decoy ? std::vector<std::uint8_t>{} : firmware_.take(kMaxPacket - kModemStatus.size());
   packet.insert(packet.end(), data.begin(), data.end());
   in_flight_ = true;
   in_flight_status_ = data.empty();
+  in_flight_purges_ = firmware_.purges();
   ++in_seq_;
   generation = generation_;
   return true;
@@ -332,7 +349,8 @@ void RawUsbFtdi::in_loop() {
   accept_wake();
   std::vector<std::uint8_t> packet;
   std::uint64_t generation = 0;
-  while (next_packet(packet, generation)) {
+  bool slot_taken = false, decoy = false;  // what dummy_hcd's one-packet slot holds
+  while (next_packet(packet, generation, slot_taken, decoy)) {
     Io io(in_ep_, packet.size());
     std::memcpy(io.data(), packet.data(), packet.size());
     const int n = ioctl(fd_, USB_RAW_IOCTL_EP_WRITE, &io.block);
@@ -342,10 +360,17 @@ void RawUsbFtdi::in_loop() {
       const std::lock_guard lock(m_);
       status = in_flight_status_;
       in_flight_ = false;
+      // Data taken back by a withdrawal meant for an earlier bare status (the signal can land
+      // late) is not lost: only a purge discards it.
+      if (n < 0 && e == EINTR && !status && firmware_.purges() == in_flight_purges_) {
+        firmware_.put_back(std::span(packet).subspan(kModemStatus.size()));
+      }
       last_in_ = std::chrono::steady_clock::now();
     }
     cv_.notify_all();
     if (n >= 0) {
+      // The decoy sits in the slot; anything after it completed once the host had both.
+      slot_taken = decoy;
       (status ? status_packets_ : data_packets_).fetch_add(1);
     } else if (e == EINTR) {
       withdrawn_.fetch_add(1);  // taken back (purge, data behind it) or stopping
@@ -354,6 +379,7 @@ void RawUsbFtdi::in_loop() {
       fail("bulk IN");
       break;
     } else {
+      slot_taken = false;
       wait_for_host(generation);
     }
   }

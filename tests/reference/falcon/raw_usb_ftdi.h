@@ -7,13 +7,17 @@
 // code with hid/raw_usb_hid.cpp beyond its structure: three threads block in the raw gadget's
 // ioctls (ep0, IN, OUT) and SIGURG (no SA_RESTART) interrupts them.
 //
-// The IN side, and why it is paced: dummy_hcd completes a queued IN request at the host's
-// next poll, so a packet the device queued before the host purged the chip would reach the
-// host after the purge, which a real FT232 never does. Here one packet at a time is queued:
-// data as soon as the firmware has some, a status-only packet once the latency timer has run
-// out with nothing to send (as the chip does). A queued packet is taken back (SIGURG: the raw
-// gadget dequeues an interrupted request) when the host purges, and a status-only one when
-// data arrives behind it, so the host's next read has the answer, as on a cable.
+// The IN side, and why it is shaped so: dummy_hcd keeps one IN packet of up to 64 bytes in a
+// slot of its own and completes the device's request at once, so a packet queued there before
+// the host purged the chip still reaches the host after the purge (a real FT232 sends only
+// when polled). So here, while the firmware runs, the slot always holds a bare status first
+// (harmless if stale: libnifalcon's runIOLoop skips modem-only reads), and data waits behind it
+// as a request of its own that a purge takes back (SIGURG: the raw gadget dequeues an
+// interrupted request); a bare status behind it is replaced when data arrives, and one more is
+// sent per latency period while nothing else is, as the chip does. In the bootloader nothing
+// but answers is sent: libnifalcon reads each answer right after its write, and its 'A' read
+// is 3 bytes long, which a bare status queued ahead would fail (a real chip's latency timer,
+// 16 ms there, does not run out before the bootloader's answer).
 // Not RT code.
 #pragma once
 
@@ -73,7 +77,8 @@ class RawUsbFtdi {
   void ack();
   bool configure();
   void wait_for_host(std::uint64_t generation);
-  bool next_packet(std::vector<std::uint8_t>& packet, std::uint64_t& generation);
+  bool next_packet(std::vector<std::uint8_t>& packet, std::uint64_t& generation, bool slot_taken,
+                   bool& decoy);
   void withdraw(bool status_only);
   void fail(const char* what);
   double now() const;
@@ -86,7 +91,8 @@ class RawUsbFtdi {
   std::mutex m_;  // the firmware, the IN state, the generation
   std::condition_variable cv_;
   bool in_flight_ = false, in_flight_status_ = false;
-  std::uint64_t in_seq_ = 0;  // IN packets queued
+  std::uint64_t in_seq_ = 0;            // IN packets queued
+  std::uint64_t in_flight_purges_ = 0;  // the firmware's purges when it was queued
   std::chrono::steady_clock::time_point last_in_{};
   const std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
   std::atomic<bool> stopping_{false}, link_up_{false}, endpoints_{false}, unplugged_{false};
