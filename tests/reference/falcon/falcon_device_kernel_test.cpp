@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iostream>
 #include <memory>
 #include <optional>
 #include <string>
@@ -251,6 +252,8 @@ TEST(FalconDevice, LoadsAnImageExchangesPacketsAndMovesUnderForce) {
   ASSERT_TRUE(host.exchange(counts, 0x01).has_value());
   const Vec3 got =
       device.with_firmware([](FalconFirmware& f) { return f.mechanism().motor_force(); });
+  std::cout << "commanded (0, 0, 2) N as counts " << counts[0] << " " << counts[1] << " "
+            << counts[2] << "; applied (" << got[0] << ", " << got[1] << ", " << got[2] << ") N\n";
   EXPECT_NEAR(got[2], want[2], 0.01 * want[2]);
   EXPECT_NEAR(std::hypot(got[0], got[1]), 0, 0.01 * want[2]);
   std::array<int, 4> s{};
@@ -260,6 +263,8 @@ TEST(FalconDevice, LoadsAnImageExchangesPacketsAndMovesUnderForce) {
     s = Host::state(*p);
     std::this_thread::sleep_for(1ms);
   }
+  std::cout << "after 300 packets: encoders " << s[0] << " " << s[1] << " " << s[2]
+            << ", byte 13 0x" << std::hex << s[3] << std::dec << "\n";
   EXPECT_GT(std::abs(s[0]), 100) << "the encoders did not move";
   EXPECT_EQ((s[3] >> 4) & 7, 7) << "not homed";
   EXPECT_EQ(device.with_firmware([](FalconFirmware& f) { return f.malformed(); }), 0u);
@@ -268,6 +273,7 @@ TEST(FalconDevice, LoadsAnImageExchangesPacketsAndMovesUnderForce) {
   ASSERT_TRUE(wait_for(
       [&] { return device.with_firmware([](FalconFirmware& f) { return f.packets(); }) >= 302; }));
   ASSERT_EQ(host.vendor(0, 1), 0);
+  EXPECT_GE(device.withdrawn(), 1u) << "nothing was queued to take back";
   for (int i = 0; i < 5; ++i) {
     const auto r = host.read(64, 100);
     if (r) {
@@ -299,6 +305,19 @@ TEST(FalconDevice, HungAndSilentDevicesSendOnlyStatus) {
   EXPECT_GE(device.status_packets(), 5u);
   device.with_firmware([](FalconFirmware& f) { return f.hang(), 0; });
   EXPECT_FALSE(host.exchange({0, 0, 0}, 0).has_value());
+}
+
+// A host loading again over a running firmware (the DTR pulse resets the microcontroller):
+// what the running chip had queued must not spoil the handshake.
+TEST(FalconDevice, LoadsAgainOverARunningFirmware) {
+  RawUsbFtdi device;
+  Host host;
+  ASSERT_TRUE(host.open() && host.claim());
+  ASSERT_EQ(host.load_with_retries(image(4500)), 1);
+  for (int i = 0; i < 20; ++i) ASSERT_TRUE(host.exchange({100, 100, 100}, 0).has_value());
+  EXPECT_EQ(host.load_with_retries(image(7324)), 1) << device.error();
+  EXPECT_EQ(device.with_firmware([](FalconFirmware& f) { return f.image_size(); }), 7324u);
+  EXPECT_TRUE(host.exchange({0, 0, 0}, 0).has_value());
 }
 
 TEST(FalconDevice, UnplugIsSeenByTheHost) {
