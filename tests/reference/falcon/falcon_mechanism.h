@@ -53,6 +53,7 @@ struct MechanismOptions {
 // The effector as a point mass moved by the motors' force F = A^T tau (tau_i = -counts_i /
 // 10000 N m) and a hand force the test sets, against viscous damping. The workspace's stops
 // are the box below and the reach of the legs: the effector stops there (its speed zeroed).
+// No gravity: the arms' weight is not in libnifalcon's sources, and a test sets the hand.
 class FalconMechanism {
  public:
   explicit FalconMechanism(const MechanismOptions& o = {});
