@@ -99,7 +99,8 @@ PacketError decode_state(const Packet& p, State& s) noexcept {
 void PacketStream::feed_data(std::span<const unsigned char> data) noexcept {
   const std::size_t room = buffer_.size() - size_;
   const std::size_t n = std::min(room, data.size());
-  std::memcpy(buffer_.data() + size_, data.data(), n);
+  if (n > 0)
+    std::memcpy(buffer_.data() + size_, data.data(), n);  // an empty span's data() may be null
   size_ += n;
   overflowed_ += data.size() - n;  // a reader that fell this far behind lost these
 }

@@ -26,7 +26,7 @@ bool SocketLink::send_message(unsigned char tag, std::span<const unsigned char> 
     return false;
   }
   m[0] = tag;
-  std::memcpy(m.data() + 1, data.data(), data.size());
+  if (!data.empty()) std::memcpy(m.data() + 1, data.data(), data.size());
   if (::send(fd_.get(), m.data(), data.size() + 1, kFlags) < 0) {
     error_ = errno;
     error = gone(errno) ? "the device is gone" : base::errno_text(errno);

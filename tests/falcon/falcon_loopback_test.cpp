@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <thread>
 
@@ -89,7 +90,8 @@ TEST(FalconLoopback, TheForceAtTheGripIsTheOneCommandedWithin1PercentInEveryDire
   ASSERT_EQ(l.device.write(std::span<const double>(zero.data(), 3)), IoStatus::kOk);
   ASSERT_EQ(l.read(), IoStatus::kOk);
   const kinematics::Pose p =
-      kinematics::forward(l.cfg.device.kinematics, l.joints(), kinematics::Vec3::Constant(NAN));
+      kinematics::forward(l.cfg.device.kinematics, l.joints(),
+                          kinematics::Vec3::Constant(std::numeric_limits<double>::quiet_NaN()));
   ASSERT_EQ(p.status, kinematics::Status::kOk);
   int directions = 0;
   for (int a = -1; a <= 1; ++a) {
