@@ -11,7 +11,6 @@ namespace hapticd::drivers::falcon {
 namespace {
 
 constexpr std::uint8_t kAllHomed = 0x7;
-constexpr int kOutFullFault = 10;  // ticks in a row whose packet the transport would not take
 
 std::string homed_text(std::uint8_t bits) {
   std::string s;
@@ -41,7 +40,6 @@ DeviceInfo FalconDevice::on_configure() {
   emergency_.store(transport_.get());  // a crash while loading or homing stops the device too
   notices_.clear();
   stream_.clear();
-  out_streak_ = 0;
   try {
     if (firmware_running(*transport_, timing_)) {
       notices_.push_back("falcon: Novint's firmware was running already: not loaded again");
@@ -99,7 +97,6 @@ void FalconDevice::home() {
 }
 
 void FalconDevice::on_enable() {
-  out_streak_ = 0;
   if (!send({0, 0, 0}, kLedGreen)) {
     throw DeviceError("falcon: enabling: " + base::errno_text(transport_->error()));
   }
@@ -140,13 +137,10 @@ bool FalconDevice::send(const std::array<std::int16_t, 3>& motor, std::uint8_t l
     case TransportIo::kOk:
       if (asked_ns_ == 0) asked_ns_ = base::monotonic_ns();
       c_[kSent].add();
-      out_streak_ = 0;
       return true;
     case TransportIo::kEmpty:
       c_[kOutFull].add();
-      if (++out_streak_ < kOutFullFault) return true;
-      set_fault_code(kOutStuck);
-      return false;
+      return true;
     case TransportIo::kError:
       break;
   }
@@ -224,8 +218,6 @@ std::string FalconDevice::describe(const DeviceFault& fault) const {
     case kSilent:
       return "falcon: no packet for " + std::to_string(static_cast<int>(settings_->liveness_ms)) +
              " ms: the device hung or its firmware stopped";
-    case kOutStuck:
-      return "falcon: the device took no packet for " + std::to_string(kOutFullFault) + " ticks";
     case kHomingLost:
       return "falcon: the firmware lost its homing (encoders not homed: " +
              homed_text(static_cast<std::uint8_t>(homing_code_)) + ")";

@@ -59,7 +59,6 @@ class FalconDevice final : public Device {
   };
   // Why a fault latched (DeviceFault::code): an errno, or one of these.
   static constexpr std::uint32_t kSilent = 0x10000;      // no packet for liveness_ms
-  static constexpr std::uint32_t kOutStuck = 0x10001;    // packets not taken for 10 ticks
   static constexpr std::uint32_t kHomingLost = 0x10002;  // the firmware dropped a homed bit
 
   void load();
@@ -81,7 +80,6 @@ class FalconDevice final : public Device {
   State newest_;
   std::int64_t asked_ns_ = 0;  // the first packet sent since the last answer; 0: none
   std::int64_t liveness_ns_;
-  int out_streak_ = 0;
   std::uint32_t homing_code_ = 0;  // the homed bits when homing was lost
   std::vector<std::string> notices_;
   using K = base::CounterKind;
@@ -92,7 +90,8 @@ class FalconDevice final : public Device {
       {"skipped_bytes", K::kAnomaly, "input bytes in no packet (a byte lost or added)"},
       {"overflow_bytes", K::kAnomaly, "input bytes dropped: more arrived than a tick holds"},
       {"packets_sent", K::kCount, "command packets the transport took"},
-      {"out_full", K::kAnomaly, "ticks whose packet the transport would not take"},
+      {"out_full", K::kAnomaly,
+       "ticks whose packet replaced one not yet sent (or, on the loopback, was not taken)"},
   }};
 };
 

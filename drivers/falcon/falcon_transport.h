@@ -14,7 +14,9 @@ namespace hapticd::drivers::falcon {
 
 enum class TransportIo : std::uint8_t {
   kOk,     // send: handed on; receive: whatever arrived is in the stream (maybe nothing)
-  kEmpty,  // send: the previous packet has not gone out yet (this one is dropped)
+  kEmpty,  // send: the previous packet had not gone out yet: it is replaced by this one (libusb),
+           // or this one is dropped (a socket whose peer does not read); counted, and a device
+           // that gets no packet answers none: the liveness bound faults it
   kError,  // the transport failed: error() says why
 };
 

@@ -97,9 +97,17 @@ class UsbLink final : public FalconTransport {
   std::string description_;
   int priority_;
   int wake_ = -1;
-  std::atomic<bool> stop_{false}, failed_{false}, pending_{false};
+  std::atomic<bool> stop_{false}, failed_{false};
   std::atomic<int> error_{0};
-  Packet out_{};
+  // The newest packet from the RT thread to the writer, a triple buffer: the RT thread fills
+  // its back slot and swaps it with the middle (marked fresh); the writer swaps its front slot
+  // with a fresh middle. Neither waits, and a packet is never torn; one the writer had not
+  // taken yet is replaced by the newer (the Falcon wants the latest torques, not a backlog).
+  static constexpr std::uint8_t kFresh = 4;
+  std::array<Packet, 3> slots_{};
+  std::atomic<std::uint8_t> middle_{1};
+  std::uint8_t back_ = 0;   // the RT thread's
+  std::uint8_t front_ = 2;  // the writer's
   std::array<unsigned char, kRing> ring_{};
   std::atomic<std::uint64_t> head_{0}, tail_{0};  // bytes written by the reader, read by RT
   std::thread writer_, reader_;
@@ -114,12 +122,13 @@ void UsbLink::start() {
 
 TransportIo UsbLink::send(const Packet& p) noexcept {
   if (failed_.load()) return TransportIo::kError;
-  if (pending_.load(std::memory_order_acquire)) return TransportIo::kEmpty;
-  out_ = p;
-  pending_.store(true, std::memory_order_release);
+  slots_[back_] = p;
+  const std::uint8_t old = middle_.exchange(back_ | kFresh, std::memory_order_acq_rel);
+  back_ = old & 3;
   const std::uint64_t one = 1;
   [[maybe_unused]] const ssize_t n = ::write(wake_, &one, sizeof one);
-  return TransportIo::kOk;
+  // The writer had not taken the previous one: the newer goes instead (counted by the caller).
+  return (old & kFresh) != 0 ? TransportIo::kEmpty : TransportIo::kOk;
 }
 
 TransportIo UsbLink::receive(PacketStream& stream) noexcept {
@@ -139,12 +148,13 @@ void UsbLink::write_loop() {
   while (!stop_.load()) {
     std::uint64_t count = 0;
     if (::read(wake_, &count, sizeof count) < 0 && errno != EINTR) return;
-    if (stop_.load() || !pending_.load(std::memory_order_acquire)) continue;
-    int done = 0;
-    const int rc =
-        libusb_bulk_transfer(h_, kEndpointOut, out_.data(), kPacketBytes, &done, kStreamTimeoutMs);
-    pending_.store(false, std::memory_order_release);
-    if (rc != 0 && rc != LIBUSB_ERROR_TIMEOUT) return fail(rc);
+    while (!stop_.load() && (middle_.load(std::memory_order_acquire) & kFresh) != 0) {
+      front_ = middle_.exchange(front_, std::memory_order_acq_rel) & 3;
+      int done = 0;
+      const int rc = libusb_bulk_transfer(h_, kEndpointOut, slots_[front_].data(), kPacketBytes,
+                                          &done, kStreamTimeoutMs);
+      if (rc != 0 && rc != LIBUSB_ERROR_TIMEOUT) return fail(rc);
+    }
   }
 }
 

@@ -2,8 +2,8 @@
 // <libusb.h>). The FT232 is claimed whole (interface 0; a kernel driver bound to it, ftdi_sio,
 // is detached while hapticd holds it and given back after). The load and homing use libusb's
 // synchronous calls; from start() on, two threads of their own carry the ticks: a writer that
-// sends the packet the RT thread left (an eventfd wakes it) and a reader that keeps a bulk IN
-// transfer waiting and passes each one's data, its modem status bytes dropped, through a ring
+// sends the newest packet the RT thread left (an eventfd wakes it) and a reader that keeps a bulk
+// IN transfer waiting and passes each one's data, its modem status bytes dropped, through a ring
 // the RT thread drains. The RT thread never waits for USB and never calls libusb (a transfer's
 // submission allocates).
 #pragma once
