@@ -193,9 +193,13 @@ IoStatus FalconDevice::on_read(std::span<PositionSample> samples) noexcept {
     set_fault_code(kHomingLost);
     return IoStatus::kDeviceFault;
   }
+  // When the packet reached the host: the loop judges a jump over the time that really passed.
+  const std::int64_t at = transport_->received_ns();
   for (std::size_t j = 0; j < samples.size(); ++j) {
     samples[j].position = arm_angle(newest_.encoder[j]);
     samples[j].status = static_cast<std::uint32_t>(newest_.grip | newest_.homed << 4);
+    samples[j].time_ns = at;
+    samples[j].flags = at > 0 ? kSampleHasTime : 0;
   }
   return IoStatus::kOk;
 }

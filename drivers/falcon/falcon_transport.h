@@ -28,6 +28,9 @@ class FalconTransport : public FtdiLink {
   virtual TransportIo send(const Packet& p) noexcept = 0;
   // RT-safe: called every tick. Everything that arrived since the last call, into `stream`.
   virtual TransportIo receive(PacketStream& stream) noexcept = 0;
+  // RT-safe. CLOCK_MONOTONIC ns when the newest data that receive() handed on arrived at the
+  // host (0: none yet): a packet's time, as the firmware answers at once.
+  virtual std::int64_t received_ns() const noexcept = 0;
   // RT-safe. The errno of the failure (ENODEV: the device is gone).
   virtual int error() const noexcept = 0;
   // Not RT-safe. From here on the ticks' send and receive carry the exchange (the FtdiLink

@@ -7,6 +7,7 @@
 #include <cerrno>
 #include <cstring>
 
+#include "base/clock.h"
 #include "base/errno_text.h"
 
 namespace hapticd::drivers::falcon {
@@ -82,6 +83,7 @@ TransportIo SocketLink::receive(PacketStream& stream) noexcept {
     if (n > 0) {
       if (rx_[0] == kTagBulkIn) {
         stream.feed_transfer({rx_.data() + 1, static_cast<std::size_t>(n) - 1});
+        received_ns_ = base::monotonic_ns();
       }
       continue;
     }

@@ -23,6 +23,7 @@ class SocketLink final : public FalconTransport {
   TransportIo send(const Packet& p) noexcept override;
   TransportIo receive(PacketStream& stream) noexcept override;
   int error() const noexcept override { return error_; }
+  std::int64_t received_ns() const noexcept override { return received_ns_; }
   void emergency(const Packet& p) noexcept override;
 
  private:
@@ -30,6 +31,7 @@ class SocketLink final : public FalconTransport {
 
   io::UniqueFd fd_;
   int error_ = 0;
+  std::int64_t received_ns_ = 0;
   std::array<unsigned char, 1 + 8 * kUsbPacketBytes> rx_{};
 };
 

@@ -12,6 +12,7 @@
 #include <thread>
 #include <vector>
 
+#include "base/clock.h"
 #include "base/hex.h"
 #include "drivers/device.h"
 #include "drivers/io/output_thread.h"
@@ -82,6 +83,7 @@ class UsbLink final : public FalconTransport {
   TransportIo send(const Packet& p) noexcept override;
   TransportIo receive(PacketStream& stream) noexcept override;
   int error() const noexcept override { return error_.load(); }
+  std::int64_t received_ns() const noexcept override { return handed_ns_; }
   void emergency(const Packet&) noexcept override {}  // libusb is not async-signal-safe
 
  private:
@@ -110,6 +112,8 @@ class UsbLink final : public FalconTransport {
   std::uint8_t front_ = 2;  // the writer's
   std::array<unsigned char, kRing> ring_{};
   std::atomic<std::uint64_t> head_{0}, tail_{0};  // bytes written by the reader, read by RT
+  std::atomic<std::int64_t> arrived_ns_{0};       // when the reader's last data arrived
+  std::int64_t handed_ns_ = 0;                    // that time, as receive() last saw it
   std::thread writer_, reader_;
 };
 
@@ -132,6 +136,8 @@ TransportIo UsbLink::send(const Packet& p) noexcept {
 }
 
 TransportIo UsbLink::receive(PacketStream& stream) noexcept {
+  // Read before head_: data the reader adds after this time is handed on next tick.
+  const std::int64_t arrived = arrived_ns_.load(std::memory_order_acquire);
   const std::uint64_t head = head_.load(std::memory_order_acquire);
   std::uint64_t tail = tail_.load(std::memory_order_relaxed);
   while (tail < head) {
@@ -140,6 +146,7 @@ TransportIo UsbLink::receive(PacketStream& stream) noexcept {
     stream.feed_data({ring_.data() + at, n});
     tail += n;
   }
+  if (tail != tail_.load(std::memory_order_relaxed)) handed_ns_ = arrived;
   tail_.store(tail, std::memory_order_release);
   return failed_.load() ? TransportIo::kError : TransportIo::kOk;
 }
@@ -172,6 +179,9 @@ void UsbLink::read_loop() {
       if (head - tail >= kRing) break;  // the RT thread stopped draining: drop the rest
       ring_[head % kRing] = in[static_cast<std::size_t>(k)];
       ++head;
+    }
+    if (done > static_cast<int>(kModemStatusBytes)) {
+      arrived_ns_.store(base::monotonic_ns(), std::memory_order_release);
     }
     head_.store(head, std::memory_order_release);
   }

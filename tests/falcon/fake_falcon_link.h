@@ -94,6 +94,7 @@ class FakeFalconLink final : public FalconTransport {
     return TransportIo::kOk;
   }
   int error() const noexcept override { return unplugged ? 19 : 0; }  // ENODEV
+  std::int64_t received_ns() const noexcept override { return 0; }
   void emergency(const Packet&) noexcept override {}
 
   int read(std::span<unsigned char> buffer, int, std::string& error) override {

@@ -38,8 +38,10 @@ std::string image_file() {
 
 // hapticd opens the Falcon as it configures: the device is plugged in (the kernel has
 // enumerated it) before, as a user's is. libusb scans sysfs as it starts (no udevd here).
-bool plugged_in() {
-  return wait_until([] {
+bool plugged_in(const RawUsbFtdi& d) {
+  // The host configured this device (not a stale entry of the last one, still going).
+  return wait_until([&] {
+    if (!d.configured()) return false;
     std::error_code ec;
     for (const auto& e : std::filesystem::directory_iterator("/sys/bus/usb/devices", ec)) {
       std::ifstream v(e.path() / "idVendor"), p(e.path() / "idProduct");
@@ -145,12 +147,13 @@ TEST(FalconHapticd, LoadedHomedAndEachWallHoldsTheHandFOverKDeep) {
   FirmwareOptions o;
   o.fail_first_try = true;
   RawUsbFtdi device(o);
-  ASSERT_TRUE(plugged_in());
+  ASSERT_TRUE(plugged_in(device));
   Hand hand(device);
   std::vector<double> depth(6, 0.0);
   std::vector<Vec3> applied(6);
-  const HapticdRun r =
-      run_hapticd(shipped("falcon.yaml"), sets(), {"--duration", "40"}, [&](pid_t pid) {
+  const HapticdRun r = run_hapticd(
+      shipped("falcon.yaml"), sets(), {"--duration", "40", "--log", "/tmp/hapticd-kt-falcon.hlog"},
+      [&](pid_t pid) {
         ASSERT_TRUE(home(device, hand)) << "never homed";
         ASSERT_TRUE(wait_until(
             [&] {
@@ -179,6 +182,11 @@ TEST(FalconHapticd, LoadedHomedAndEachWallHoldsTheHandFOverKDeep) {
         ::kill(pid, SIGTERM);
       });
   EXPECT_EQ(r.status, 0) << r.log;
+  if (r.status != 0) {  // the ticks before the fault, for the record
+    const std::string cmd =
+        std::string(HAPTICD_BINARY) + " export /tmp/hapticd-kt-falcon.hlog | tail -25 >&2";
+    EXPECT_EQ(std::system(cmd.c_str()), 0);
+  }
   EXPECT_NE(notices(r).find("try 2: loaded"), std::string::npos) << notices(r);
   for (std::size_t i = 0; i < 6; ++i) {
     const Vec3& n = kFaces[i].normal;
@@ -198,7 +206,7 @@ TEST(FalconHapticd, LoadedHomedAndEachWallHoldsTheHandFOverKDeep) {
 // asserted only that the run holds (the emulator's timing is not the hardware's).
 TEST(FalconHapticd, SixtySecondsAt1kHzForTheRecord) {
   RawUsbFtdi device;
-  ASSERT_TRUE(plugged_in());
+  ASSERT_TRUE(plugged_in(device));
   Hand hand(device);
   const HapticdRun r = run_hapticd(shipped("falcon.yaml"), sets(), {"--duration", "60"},
                                    [&](pid_t) { ASSERT_TRUE(home(device, hand)); });
@@ -224,6 +232,7 @@ TEST(FalconHapticd, UnplugHangAndASilentFirmwareEachEndWithTheCauseNamed) {
   for (const char* fault : {"unplug", "hang"}) {
     SCOPED_TRACE(fault);
     RawUsbFtdi device;
+    ASSERT_TRUE(plugged_in(device));
     Hand hand(device);
     const HapticdRun r =
         run_hapticd(shipped("falcon.yaml"), sets(), {"--duration", "40"}, [&](pid_t pid) {
@@ -254,7 +263,7 @@ TEST(FalconHapticd, UnplugHangAndASilentFirmwareEachEndWithTheCauseNamed) {
   FirmwareOptions o;
   o.silent_firmware = true;
   RawUsbFtdi device(o);
-  ASSERT_TRUE(plugged_in());
+  ASSERT_TRUE(plugged_in(device));
   const HapticdRun r = run_hapticd(shipped("falcon.yaml"), sets(), {"--duration", "40"});
   EXPECT_EQ(r.status, 4) << r.log;
   EXPECT_NE(r.log.find("the firmware did not load in 3 tries"), std::string::npos) << r.log;
