@@ -97,6 +97,13 @@ void FalconDevice::home() {
 }
 
 void FalconDevice::on_enable() {
+  // What arrived since homing answered packets long gone: the first tick reads only answers
+  // to its own packets (a sample timed seconds ago is stale to the loop, rightly).
+  if (transport_->receive(stream_) == TransportIo::kError) {
+    throw DeviceError("falcon: enabling: " + base::errno_text(transport_->error()));
+  }
+  stream_.clear();
+  asked_ns_ = 0;
   if (!send({0, 0, 0}, kLedGreen)) {
     throw DeviceError("falcon: enabling: " + base::errno_text(transport_->error()));
   }
