@@ -25,8 +25,11 @@ namespace {
 
 using namespace std::chrono_literals;
 
-constexpr double kStiffness = 300.0;  // N/m, config/falcon.yaml's walls
-constexpr double kPush = 1.5;         // N: the hand's push along a wall's normal, F/K = 5 mm
+// The walls' stiffness here: the emulated USB answers a packet 5 to 20 ms late (several ticks,
+// where hardware takes one), and the reference's own damping, 3 N s/m, must outweigh K times
+// that delay for the loop to stay passive; 300 N/m (the shipped file's) does not, 100 does.
+constexpr double kStiffness = 100.0;  // N/m
+constexpr double kPush = 0.5;         // N: the hand's push along a wall's normal, F/K = 5 mm
 constexpr const char* kSerial = "FHS00001";
 
 std::string image_file() {
@@ -142,6 +145,14 @@ const Face kFaces[] = {{{0.02, 0, 0.11}, {1, 0, 0}}, {{-0.02, 0, 0.11}, {-1, 0, 
 
 double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
+std::vector<std::string> soft_walls() {
+  std::vector<std::string> v = sets();
+  for (int i = 0; i < 6; ++i) {
+    v.push_back("walls[" + std::to_string(i) + "].stiffness=" + std::to_string(kStiffness));
+  }
+  return v;
+}
+
 // Items of issue 38: loaded on the second try, homed, each face F/K deep at rest, the force
 // the motors apply the one hapticd commands (the wall's, -F along the normal) within 1 %.
 TEST(FalconHapticd, LoadedHomedAndEachWallHoldsTheHandFOverKDeep) {
@@ -153,8 +164,8 @@ TEST(FalconHapticd, LoadedHomedAndEachWallHoldsTheHandFOverKDeep) {
   std::vector<double> depth(6, 0.0);
   std::vector<Vec3> applied(6);
   const HapticdRun r = run_hapticd(
-      shipped("falcon.yaml"), sets(), {"--duration", "40", "--log", "/tmp/hapticd-kt-falcon.hlog"},
-      [&](pid_t pid) {
+      shipped("falcon.yaml"), soft_walls(),
+      {"--duration", "40", "--log", "/tmp/hapticd-kt-falcon.hlog"}, [&](pid_t pid) {
         ASSERT_TRUE(home(device, hand)) << "never homed";
         ASSERT_TRUE(wait_until(
             [&] {
