@@ -89,7 +89,18 @@ class UsbLink final : public FalconTransport {
  private:
   void write_loop();
   void read_loop();
+  // A transfer failed: an unplug often fails the transfers in flight with an I/O error before
+  // libusb knows the device is gone, so the handle is asked a few times (this is the reader's
+  // or writer's thread, never the loop's) and "gone" said when it is.
   void fail(int code) noexcept {
+    for (int i = 0; i < 10 && code != LIBUSB_ERROR_NO_DEVICE; ++i) {
+      int configuration = 0;
+      if (libusb_get_configuration(h_, &configuration) == LIBUSB_ERROR_NO_DEVICE) {
+        code = LIBUSB_ERROR_NO_DEVICE;
+      } else {
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+      }
+    }
     error_.store(errno_of(code));
     failed_.store(true);
   }

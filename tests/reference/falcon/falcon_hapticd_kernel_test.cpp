@@ -81,30 +81,32 @@ class Hand {
     t_.join();
   }
   // A push `f` (N) plus a spring (k N/m, damped) toward `centre` across the push's direction.
-  void set(const Vec3& f, const Vec3& centre, double k) {
+  void set(const Vec3& f, const Vec3& centre, double k, double b = 5.0) {
     const std::lock_guard l(m_);
     f_ = f;
     centre_ = centre;
     k_ = k;
+    b_ = b;
   }
 
  private:
   void run() {
     while (!stop_) {
       Vec3 f, c;
-      double k = 0;
+      double k = 0, b = 0;
       {
         const std::lock_guard l(m_);
-        f = f_, c = centre_, k = k_;
+        f = f_, c = centre_, k = k_, b = b_;
       }
       const double fn = std::sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
       d_.with_firmware([&](FalconFirmware& fw) {
         const Vec3 x = fw.mechanism().position(), v = fw.mechanism().velocity();
         Vec3 h{};
         for (int i = 0; i < 3; ++i) {
-          // The spring acts only across the push (along it the push alone, so F is exact).
+          // The spring acts only across the push (along it the push alone, so at rest F is
+          // exact); the hand's damping along every axis, as a person's arm has.
           const bool along = fn > 0 && std::abs(f[i]) > 1e-9;
-          h[i] = f[i] + (along ? 0.0 : k * (c[i] - x[i]) - 2.0 * v[i]);
+          h[i] = f[i] + (along ? 0.0 : k * (c[i] - x[i])) - b * v[i];
         }
         fw.mechanism().set_hand_force(h);
         return 0;
@@ -115,7 +117,7 @@ class Hand {
   RawUsbFtdi& d_;
   std::mutex m_;
   Vec3 f_{}, centre_{0, 0, 0.11};
-  double k_ = 0;
+  double k_ = 0, b_ = 5.0;
   std::atomic<bool> stop_{false};
   std::thread t_;
 };
@@ -126,13 +128,14 @@ bool home(RawUsbFtdi& d, Hand& hand) {
   if (!wait_until(
           [&] { return d.with_firmware([](FalconFirmware& f) { return f.homing_mode(); }); }, 60s))
     return false;
-  hand.set({0, 0, 2.0}, {0, 0, 0.11}, 0);
+  hand.set({0, 0, 1.0}, {0, 0, 0.11}, 0);
   if (!wait_until([&] { return d.with_firmware([](FalconFirmware& f) { return f.homed(); }) == 7; },
                   20s))
     return false;
-  // A soft spring back to the middle: the reference's plant moves only while packets flow,
-  // so most of the way back is after hapticd enables, slowly, as a resting hand's would be.
-  hand.set({0, 0, 0}, {0, 0, 0.11}, 10.0);
+  // A soft spring back to the middle and a firm grip: the reference's plant moves only while
+  // packets flow, so it resumes after hapticd enables with the speed the pull gave it, which
+  // the grip takes out at once (the box ends 15 mm beyond the arms' index), then slowly back.
+  hand.set({0, 0, 0}, {0, 0, 0.11}, 10.0, 20.0);
   return true;
 }
 
