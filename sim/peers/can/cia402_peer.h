@@ -4,8 +4,9 @@
 // mapping shows up as a wrong frame, as on a real drive), and at each SYNC the plant stepped
 // one period, the RPDO applied and the TPDOs sent. It produces its heartbeat, sends EMCY on a
 // fault, and - in realtime - watches hapticd's heartbeat (0x1016) and the SYNC cycle (0x1006:
-// 20 cycles, or the heartbeat consumer time if longer), reacting as 0x6007 says when the master goes silent: a drive that fails safe when the
-// process is killed. Rated torque 0x6076: kRatedTorqueMilliNm.
+// 20 cycles, or the heartbeat consumer time if longer), reacting as 0x6007 says when the master
+// goes silent: a drive that fails safe when the process is killed. Rated torque 0x6076:
+// kRatedTorqueMilliNm.
 #pragma once
 
 #include <cstdint>
