@@ -151,8 +151,8 @@ Command devices(CLI::App& app) {
   CLI::App* c = app.add_subcommand(
       "devices",
       "List the devices the drivers find attached (HID through hidapi's hidraw and libusb "
-      "backends, force-feedback input devices, USB serial ports), each with the configuration "
-      "keys that select it.");
+      "backends, force-feedback input devices, USB serial ports, Novint Falcons), each with the "
+      "configuration keys that select it.");
   return {c, [] { return devices_command(); }};
 }
 

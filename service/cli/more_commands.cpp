@@ -136,7 +136,7 @@ Command udev_rules(CLI::App& app) {
       "Print the udev rules this configuration's instance needs, and nothing more: its CAN "
       "interface's bitrate (no other interface), its GPIO chip and its one PWM channel, its HID "
       "device's node by vendor and product id, its serial port (and an FTDI port's latency "
-      "timer), each for group hapticd. Installing hapticd "
+      "timer), its Novint Falcon's USB device, each for group hapticd. Installing hapticd "
       "adds none of these; write them to /etc/udev/rules.d/70-hapticd-NAME.rules. Exit 0, 2 "
       "for a configuration a rule cannot match exactly.");
   add_config_options(c, o->first);
