@@ -1,6 +1,6 @@
 // What the driver benchmarks share: an example configuration from config/, in freerun (the
 // benchmark is the clock), with the benchmark's own overrides applied after; and the timed
-// ticks through a driver and its peer.
+// ticks through a driver and its peer; one of a driver's counters by name.
 #pragma once
 
 #include <benchmark/benchmark.h>
@@ -11,6 +11,7 @@
 #include <span>
 #include <sstream>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "base/joints.h"
@@ -19,6 +20,14 @@
 #include "wiring/registry.h"
 
 namespace hapticd::bench {
+
+// The driver's counter `name` (Device::counters), 0 when it has none of that name.
+inline std::uint64_t counter(const Device& device, std::string_view name) {
+  for (const base::Counter& c : device.counters()) {
+    if (c.name() == name) return c.value();
+  }
+  return 0;
+}
 
 inline config::Config load_example(const char* name, const std::vector<std::string>& sets = {}) {
   const std::string path = std::string(HAPTICD_SOURCE_DIR) + "/config/" + name;

@@ -16,15 +16,9 @@
 namespace {
 
 using namespace hapticd;
+using bench::counter;
 
 // The driver's counter `name` as the run summary lists it (Device::counters).
-std::uint64_t counter(const Device& device, std::string_view name) {
-  for (const base::Counter& c : device.counters()) {
-    if (c.name() == name) return c.value();
-  }
-  return 0;
-}
-
 void tick_bench(benchmark::State& state, const char* example, bool driver_only) {
   // The drive on the runner's thread answers at once unless the host holds that thread up: a
   // loaded host ran out of the examples' 100 ms SDO wait (as in tests/can/can_rig.h).

@@ -17,14 +17,8 @@
 namespace {
 
 using namespace hapticd;
+using bench::counter;
 using Clock = std::chrono::steady_clock;
-
-std::uint64_t counter(const Device& d, std::string_view name) {
-  for (const base::Counter& c : d.counters()) {
-    if (c.name() == name) return c.value();
-  }
-  return 0;
-}
 
 void tick_bench(benchmark::State& state, bool loop_thread_only) {
   const config::Config cfg = bench::load_example("evdev.yaml");

@@ -17,13 +17,7 @@
 namespace {
 
 using namespace hapticd;
-
-std::uint64_t counter(const Device& d, std::string_view name) {
-  for (const base::Counter& c : d.counters()) {
-    if (c.name() == name) return c.value();
-  }
-  return 0;
-}
+using bench::counter;
 
 // The simulated Falcon takes any image of a plausible size as Novint's.
 std::string image() {

@@ -18,13 +18,7 @@
 namespace {
 
 using namespace hapticd;
-
-std::uint64_t counter(const Device& d, std::string_view name) {
-  for (const base::Counter& c : d.counters()) {
-    if (c.name() == name) return c.value();
-  }
-  return 0;
-}
+using bench::counter;
 
 void tick_bench(benchmark::State& state, const char* example, bool driver_only) {
   const config::Config cfg = bench::load_example(example);

@@ -17,6 +17,14 @@ constexpr int kFlags = MSG_DONTWAIT | MSG_NOSIGNAL;
 
 bool gone(int e) noexcept { return e == EPIPE || e == ECONNRESET || e == ENOTCONN; }
 
+// RT- and async-signal-safe: one command packet as a bulk OUT message; send(2)'s result.
+ssize_t send_packet(int fd, const Packet& p) noexcept {
+  std::array<unsigned char, 1 + kPacketBytes> m{};
+  m[0] = kTagBulkOut;
+  std::memcpy(m.data() + 1, p.data(), p.size());
+  return ::send(fd, m.data(), m.size(), kFlags);
+}
+
 }  // namespace
 
 bool SocketLink::send_message(unsigned char tag, std::span<const unsigned char> data,
@@ -68,10 +76,7 @@ int SocketLink::read(std::span<unsigned char> buffer, int timeout_ms, std::strin
 }
 
 TransportIo SocketLink::send(const Packet& p) noexcept {
-  std::array<unsigned char, 1 + kPacketBytes> m{};
-  m[0] = kTagBulkOut;
-  std::memcpy(m.data() + 1, p.data(), p.size());
-  if (::send(fd_.get(), m.data(), m.size(), kFlags) >= 0) return TransportIo::kOk;
+  if (send_packet(fd_.get(), p) >= 0) return TransportIo::kOk;
   if (errno == EAGAIN) return TransportIo::kEmpty;
   error_ = gone(errno) ? ENODEV : errno;
   return TransportIo::kError;
@@ -94,10 +99,7 @@ TransportIo SocketLink::receive(PacketStream& stream) noexcept {
 }
 
 void SocketLink::emergency(const Packet& p) noexcept {
-  std::array<unsigned char, 1 + kPacketBytes> m{};
-  m[0] = kTagBulkOut;
-  std::memcpy(m.data() + 1, p.data(), p.size());
-  [[maybe_unused]] const ssize_t n = ::send(fd_.get(), m.data(), m.size(), kFlags);
+  [[maybe_unused]] const ssize_t n = send_packet(fd_.get(), p);
 }
 
 }  // namespace hapticd::drivers::falcon

@@ -10,21 +10,15 @@
 
 #include "drivers/falcon/falcon_device.h"
 #include "fake_falcon_link.h"
+#include "falcon_image.h"
 
 namespace hapticd::drivers::falcon::testing {
 namespace {
 
-std::string image_file() {
-  const std::string path = ::testing::TempDir() + "falcon_device_image.bin";
-  std::ofstream out(path, std::ios::binary);
-  for (int i = 0; i < 7914; ++i) out.put(static_cast<char>(i * 13));
-  return path;
-}
-
 struct Rig {
   explicit Rig(double liveness_ms = 100.0, double homing_timeout_s = 1.0) {
     settings = std::make_shared<FalconSettings>();
-    settings->firmware = image_file();
+    settings->firmware = hapticd::testing::falcon_test_image();
     settings->liveness_ms = liveness_ms;
     settings->homing_timeout_s = homing_timeout_s;
     device = std::make_unique<FalconDevice>(

@@ -19,7 +19,7 @@ constexpr df::LoaderTiming kFast{5, 3, 50, 5, 3};
 
 TEST(FalconPeerLoad, TheDriversLoaderLoadsThePeerOnTheFirstTry) {
   Rig rig;
-  const auto image = an_image();
+  const auto image = falcon_image_bytes();
   const df::LoadResult r = df::load_firmware(*rig.host, image, 3, kFast);
   ASSERT_TRUE(r.loaded) << df::describe(r);
   EXPECT_EQ(r.tries.size(), 1u);
@@ -36,7 +36,7 @@ TEST(FalconPeerLoad, ABootloaderThatIgnoresTheFirstTryLoadsOnTheSecond) {
   FalconPeerOptions o;
   o.fail_first_load = true;
   Rig rig(o);
-  const df::LoadResult r = df::load_firmware(*rig.host, an_image(), 3, kFast);
+  const df::LoadResult r = df::load_firmware(*rig.host, falcon_image_bytes(), 3, kFast);
   ASSERT_TRUE(r.loaded) << df::describe(r);
   ASSERT_EQ(r.tries.size(), 2u);
   EXPECT_NE(r.tries[0].failed_at.find("first check"), std::string::npos) << df::describe(r);
@@ -47,7 +47,7 @@ TEST(FalconPeerLoad, ABootloaderThatIgnoresTheFirstTryLoadsOnTheSecond) {
 
 TEST(FalconPeerLoad, AWrongFileIsEchoedButNeverRuns) {
   Rig rig;
-  const df::LoadResult r = df::load_firmware(*rig.host, an_image(1000), 2, kFast);
+  const df::LoadResult r = df::load_firmware(*rig.host, falcon_image_bytes(1000), 2, kFast);
   EXPECT_FALSE(r.loaded);
   ASSERT_EQ(r.tries.size(), 2u);
   EXPECT_NE(r.tries[1].failed_at.find("the firmware never answered"), std::string::npos)
@@ -58,7 +58,7 @@ TEST(FalconPeerLoad, AWrongFileIsEchoedButNeverRuns) {
 TEST(FalconPeerLoad, AHungDeviceFailsEveryTryAtTheFirstCheck) {
   Rig rig;
   ASSERT_TRUE(rig.peer->inject(PeerFault::kStopAnswering));
-  const df::LoadResult r = df::load_firmware(*rig.host, an_image(), 2, kFast);
+  const df::LoadResult r = df::load_firmware(*rig.host, falcon_image_bytes(), 2, kFast);
   EXPECT_FALSE(r.loaded);
   for (const df::LoadTry& t : r.tries)
     EXPECT_NE(t.failed_at.find("0a 44 2c 0d"), std::string::npos);
@@ -67,7 +67,7 @@ TEST(FalconPeerLoad, AHungDeviceFailsEveryTryAtTheFirstCheck) {
 TEST(FalconPeerLoad, AnUnpluggedDeviceFailsWithWhatTheHostSaw) {
   Rig rig;
   ASSERT_TRUE(rig.peer->inject(PeerFault::kTransportFault));
-  const df::LoadResult r = df::load_firmware(*rig.host, an_image(), 1, kFast);
+  const df::LoadResult r = df::load_firmware(*rig.host, falcon_image_bytes(), 1, kFast);
   EXPECT_FALSE(r.loaded);
   ASSERT_EQ(r.tries.size(), 1u);
   EXPECT_NE(r.tries[0].failed_at.find("refused"), std::string::npos) << df::describe(r);
@@ -78,7 +78,7 @@ TEST(FalconPeerLoad, ThePeerOnItsOwnThreadLoadsWithTheLoadersDefaultTiming) {
   o.fail_first_load = true;
   Rig rig(o, {}, /*pumped=*/false);
   PeerRunner runner(*rig.peer);
-  const df::LoadResult r = df::load_firmware(*rig.host, an_image(8492), 3);
+  const df::LoadResult r = df::load_firmware(*rig.host, falcon_image_bytes(8492), 3);
   runner.stop();
   EXPECT_EQ(runner.error(), "");
   ASSERT_TRUE(r.loaded) << df::describe(r);

@@ -10,10 +10,13 @@
 #include <vector>
 
 #include "config/config_loader.h"
+#include "falcon_image.h"
 #include "sim/peers/falcon/falcon_peer.h"
 #include "socket_falcon_host.h"
 
 namespace hapticd::sim::falcon::testing {
+
+using hapticd::testing::falcon_image_bytes;
 
 inline config::Config sim_delta(std::vector<std::string> sets = {}) {
   const std::string path = std::string(HAPTICD_SOURCE_DIR) + "/config/sim-delta.yaml";
@@ -27,12 +30,6 @@ inline config::Config sim_delta(std::vector<std::string> sets = {}) {
 
 // A hand of 1 N/m that barely holds the arms (the schema offers no operator "none" here):
 inline const std::string kLightHand = "device.sim.operator.stiffness=1";
-
-inline std::vector<unsigned char> an_image(std::size_t n = 7914) {
-  std::vector<unsigned char> v(n);
-  for (std::size_t i = 0; i < n; ++i) v[i] = static_cast<unsigned char>(i * 7 + 3);
-  return v;
-}
 
 struct Rig {
   explicit Rig(FalconPeerOptions o = {}, std::vector<std::string> sets = {}, bool pumped = true)

@@ -25,7 +25,7 @@ void load_by_hand(SocketFalconHost& h, std::size_t image_bytes) {
   ASSERT_TRUE(h.requests(df::loading_rate()));
   ASSERT_TRUE(h.out(kA));
   ASSERT_EQ(h.data(), kA);
-  const auto image = an_image(image_bytes);
+  const auto image = falcon_image_bytes(image_bytes);
   for (std::size_t at = 0; at < image.size(); at += df::kLoadChunkBytes) {
     const auto chunk =
         std::span(image).subspan(at, std::min(df::kLoadChunkBytes, image.size() - at));
@@ -84,7 +84,7 @@ TEST(FalconPeer, TheSecondCheckNeedsDtrLowAndTheLoadingRateThenEveryByteIsEchoed
   ASSERT_TRUE(h.requests(df::loading_rate()));
   ASSERT_TRUE(h.out(kA));
   EXPECT_EQ(h.data(), kA);
-  const auto bytes = an_image(300);  // more than a USB packet holds: several transfers
+  const auto bytes = falcon_image_bytes(300);  // more than a USB packet holds: several transfers
   const int before = h.transfers();
   ASSERT_TRUE(h.out(bytes));
   EXPECT_EQ(h.data(), bytes);

@@ -9,15 +9,12 @@
 
 #include "drivers/falcon/firmware_loader.h"
 #include "fake_falcon_link.h"
+#include "falcon_image.h"
 
 namespace hapticd::drivers::falcon::testing {
 namespace {
 
-std::vector<unsigned char> an_image(std::size_t n = 7914) {
-  std::vector<unsigned char> v(n);
-  for (std::size_t i = 0; i < n; ++i) v[i] = static_cast<unsigned char>(i * 7 + 3);
-  return v;
-}
+using hapticd::testing::falcon_image_bytes;
 
 bool contains(const std::string& s, const std::string& part) {
   return s.find(part) != std::string::npos;
@@ -26,7 +23,7 @@ bool contains(const std::string& s, const std::string& part) {
 TEST(FalconLoad, ABootloaderThatIgnoresTheFirstTryLoadsOnTheSecond) {
   FakeFalconLink link;
   link.ignore_first_pulses = 1;
-  const auto image = an_image();
+  const auto image = falcon_image_bytes();
   const LoadResult r = load_firmware(link, image, 3, kFast);
   ASSERT_TRUE(r.loaded) << describe(r);
   ASSERT_EQ(r.tries.size(), 2u);
@@ -43,7 +40,7 @@ TEST(FalconLoad, ABootloaderThatIgnoresTheFirstTryLoadsOnTheSecond) {
 TEST(FalconLoad, TheTriesAreBoundedAndEachSaysWhereItFailed) {
   FakeFalconLink link;
   link.ignore_first_pulses = 100;
-  const LoadResult r = load_firmware(link, an_image(), 4, kFast);
+  const LoadResult r = load_firmware(link, falcon_image_bytes(), 4, kFast);
   EXPECT_FALSE(r.loaded);
   ASSERT_EQ(r.tries.size(), 4u);
   EXPECT_EQ(link.pulses, 4);
@@ -53,7 +50,7 @@ TEST(FalconLoad, TheTriesAreBoundedAndEachSaysWhereItFailed) {
 TEST(FalconLoad, AWrongEchoFailsTheTryAtItsChunkWithTheBytesSeen) {
   FakeFalconLink link;
   link.corrupt_echo_at = 300;  // in the third chunk, from byte 256
-  const LoadResult r = load_firmware(link, an_image(), 2, kFast);
+  const LoadResult r = load_firmware(link, falcon_image_bytes(), 2, kFast);
   EXPECT_FALSE(r.loaded);
   ASSERT_EQ(r.tries.size(), 2u);
   EXPECT_TRUE(contains(r.tries[1].failed_at, "the image's echo at byte 256")) << describe(r);
@@ -64,7 +61,7 @@ TEST(FalconLoad, AWrongEchoFailsTheTryAtItsChunkWithTheBytesSeen) {
 TEST(FalconLoad, AFirmwareThatNeverAnswersIsNamed) {
   FakeFalconLink link;
   link.silent_firmware = true;
-  const LoadResult r = load_firmware(link, an_image(), 2, kFast);
+  const LoadResult r = load_firmware(link, falcon_image_bytes(), 2, kFast);
   EXPECT_FALSE(r.loaded);
   EXPECT_TRUE(contains(describe(r), "try 2: the firmware never answered a packet (3 sent)"))
       << describe(r);
@@ -73,7 +70,7 @@ TEST(FalconLoad, AFirmwareThatNeverAnswersIsNamed) {
 TEST(FalconLoad, AnUnpluggedDeviceFailsWithWhatTheHostSaid) {
   FakeFalconLink link;
   link.unplugged = true;
-  const LoadResult r = load_firmware(link, an_image(), 1, kFast);
+  const LoadResult r = load_firmware(link, falcon_image_bytes(), 1, kFast);
   EXPECT_FALSE(r.loaded);
   EXPECT_EQ(describe(r),
             "try 1: FTDI request 'purge the receive FIFO' refused, saw LIBUSB_ERROR_NO_DEVICE");
@@ -94,10 +91,10 @@ TEST(FalconImage, AFileOfTheWrongSizeIsRefusedNamingItAndWhereNovintsAre) {
   }
   {
     std::ofstream out(path, std::ios::binary);
-    const auto image = an_image();
+    const auto image = falcon_image_bytes();
     out.write(reinterpret_cast<const char*>(image.data()), static_cast<long>(image.size()));
   }
-  EXPECT_EQ(read_firmware_image(path), an_image());
+  EXPECT_EQ(read_firmware_image(path), falcon_image_bytes());
   std::remove(path.c_str());
   EXPECT_THROW(read_firmware_image(path), std::runtime_error);
 }

@@ -35,16 +35,6 @@ bool wait_for(const std::function<bool()>& done, std::chrono::milliseconds timeo
   return done();
 }
 
-bool falcon_in_sysfs() {
-  std::error_code ec;
-  for (const auto& e : std::filesystem::directory_iterator("/sys/bus/usb/devices", ec)) {
-    std::ifstream v(e.path() / "idVendor"), p(e.path() / "idProduct");
-    std::string vendor, product;
-    if (v >> vendor && p >> product && vendor == "0403" && product == "cb48") return true;
-  }
-  return false;
-}
-
 // The host: libnifalcon's requests on a libusb handle.
 class Host {
  public:
@@ -56,7 +46,7 @@ class Host {
   // libusb learns of devices from udev's events, and the machine runs no udevd: the context is
   // made once the kernel has the device (sysfs), so its first scan finds it.
   bool open() {
-    if (!wait_for(falcon_in_sysfs)) return false;
+    if (!wait_for([] { return listed_in_sysfs(); })) return false;
     return wait_for([&] {
       if (libusb_init(&ctx_) != 0) return false;
       h_ = libusb_open_device_with_vid_pid(ctx_, 0x0403, 0xCB48);

@@ -40,19 +40,10 @@ std::string image_file() {
 }
 
 // hapticd opens the Falcon as it configures: the device is plugged in (the kernel has
-// enumerated it) before, as a user's is. libusb scans sysfs as it starts (no udevd here).
+// enumerated it) before, as a user's is.
 bool plugged_in(const RawUsbFtdi& d) {
   // The host configured this device (not a stale entry of the last one, still going).
-  return wait_until([&] {
-    if (!d.configured()) return false;
-    std::error_code ec;
-    for (const auto& e : std::filesystem::directory_iterator("/sys/bus/usb/devices", ec)) {
-      std::ifstream v(e.path() / "idVendor"), p(e.path() / "idProduct");
-      std::string vendor, product;
-      if (v >> vendor && p >> product && vendor == "0403" && product == "cb48") return true;
-    }
-    return false;
-  });
+  return wait_until([&] { return d.configured() && listed_in_sysfs(); });
 }
 
 std::string notices(const HapticdRun& r) {

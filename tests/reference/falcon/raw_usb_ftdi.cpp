@@ -15,6 +15,7 @@
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <stdexcept>
 
 namespace hapticd::reference::falcon {
@@ -22,17 +23,20 @@ namespace {
 
 using namespace gadget;
 
-// The first controller in /sys/class/udc: its name and its driver's.
-std::pair<std::string, std::string> find_udc() {
-  std::error_code ec;
-  for (const auto& e : std::filesystem::directory_iterator("/sys/class/udc", ec)) {
-    const auto link = std::filesystem::read_symlink(e.path() / "device" / "driver", ec);
-    if (!ec) return {e.path().filename().string(), link.filename().string()};
-  }
-  throw std::runtime_error("raw gadget: no USB device controller");
-}
-
 }  // namespace
+
+bool listed_in_sysfs(const FtdiIdentity& id) {
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator("/sys/bus/usb/devices", ec)) {
+    std::ifstream v(e.path() / "idVendor"), p(e.path() / "idProduct");
+    unsigned vendor = 0, product = 0;
+    if (v >> std::hex >> vendor && p >> std::hex >> product && vendor == id.vendor_id &&
+        product == id.product_id) {
+      return true;
+    }
+  }
+  return false;
+}
 
 RawUsbFtdi::RawUsbFtdi(const FirmwareOptions& options, const FtdiIdentity& id)
     : id_(id), firmware_(options) {
@@ -51,27 +55,7 @@ RawUsbFtdi::RawUsbFtdi(const FirmwareOptions& options, const FtdiIdentity& id)
   config_desc_.insert(config_desc_.end(), {7, USB_DT_ENDPOINT, kOutAddress, 2, kMaxPacket, 0, 0});
   config_desc_[2] = static_cast<std::uint8_t>(config_desc_.size());
 
-  const auto [udc, driver] = find_udc();
-  usb_raw_init init{};
-  std::memcpy(init.driver_name, driver.data(),
-              std::min<std::size_t>(driver.size(), UDC_NAME_LENGTH_MAX - 1));
-  std::memcpy(init.device_name, udc.data(),
-              std::min<std::size_t>(udc.size(), UDC_NAME_LENGTH_MAX - 1));
-  init.speed = USB_SPEED_FULL;
-  // The controller may still be bound to the last gadget (its close unbinds it a little
-  // later): a refused run fails that raw gadget for good, so open a new one and try again.
-  for (int attempt = 0;; ++attempt) {
-    fd_ = ::open("/dev/raw-gadget", O_RDWR | O_CLOEXEC);
-    if (fd_ < 0) throw std::runtime_error(std::string("/dev/raw-gadget: ") + std::strerror(errno));
-    if (ioctl(fd_, USB_RAW_IOCTL_INIT, &init) == 0 && ioctl(fd_, USB_RAW_IOCTL_RUN, 0) == 0) break;
-    const int e = errno;
-    ::close(fd_);
-    if (e != EBUSY || attempt == 500) {
-      throw std::runtime_error("raw gadget on '" + udc + "': " + std::strerror(e));
-    }
-    usleep(10'000);
-  }
-  install_wake();
+  fd_ = start_gadget();
   control_ = std::thread([this] { control_loop(); });
 }
 

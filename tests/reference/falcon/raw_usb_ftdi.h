@@ -43,6 +43,10 @@ struct FtdiIdentity {
   std::string serial = "FHS00001";
 };
 
+// Whether the host's kernel lists a device of `id`'s vendor and product in /sys/bus/usb/devices
+// (enumerated it): libusb scans sysfs as it starts, and the machine runs no udevd.
+bool listed_in_sysfs(const FtdiIdentity& id = {});
+
 class RawUsbFtdi {
  public:
   // Binds to the first controller in /sys/class/udc and starts the threads; the host

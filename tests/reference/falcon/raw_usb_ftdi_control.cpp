@@ -11,13 +11,6 @@ namespace {
 
 using namespace gadget;
 
-std::vector<std::uint8_t> string_descriptor(const std::string& s) {
-  std::vector<std::uint8_t> d{0, USB_DT_STRING};
-  for (char c : s) put16(d, static_cast<std::uint8_t>(c));
-  d[0] = static_cast<std::uint8_t>(d.size());
-  return d;
-}
-
 }  // namespace
 
 void RawUsbFtdi::reply(std::uint16_t asked, const std::vector<std::uint8_t>& data) {

@@ -1,5 +1,7 @@
 #include "raw_usb_hid.h"
 
+#include "raw_gadget.h"
+
 #include <fcntl.h>
 #include <linux/usb/ch9.h>
 #include <linux/usb/raw_gadget.h>
@@ -26,60 +28,8 @@ constexpr std::uint8_t kDtHid = 0x21, kDtReport = 0x22;
 constexpr std::uint8_t kGetReport = 0x01, kGetIdle = 0x02, kGetProtocol = 0x03, kSetReport = 0x09,
                        kSetIdle = 0x0A, kSetProtocol = 0x0B;
 constexpr std::uint8_t kTypeOutput = 2, kTypeFeature = 3;
-constexpr std::size_t kMaxIo = 4096;  // HID_MAX_DESCRIPTOR_SIZE: the longest ep0 answer
 
-// One raw gadget transfer: the kernel's usb_raw_ep_io header, then the data.
-struct Io {
-  Io(int ep, std::size_t length, bool zlp = false) {
-    usb_raw_ep_io h{};
-    h.ep = static_cast<__u16>(ep);
-    h.flags = zlp ? USB_RAW_IO_FLAGS_ZERO : 0;
-    h.length = static_cast<__u32>(std::min(length, kMaxIo));
-    std::memcpy(block.data(), &h, sizeof h);
-  }
-  std::uint8_t* data() { return block.data() + sizeof(usb_raw_ep_io); }
-  alignas(usb_raw_ep_io) std::array<std::uint8_t, sizeof(usb_raw_ep_io) + kMaxIo> block{};
-};
-
-// The errors that mean the gadget (not one transfer) is unusable.
-bool broken(int e) { return e == EINVAL || e == EBUSY || e == ENODEV || e == EFAULT; }
-
-void wake(int) {}
-void install_wake() {
-  static std::once_flag once;
-  std::call_once(once, [] {
-    struct sigaction sa {};
-    sa.sa_handler = wake;
-    sigemptyset(&sa.sa_mask);
-    sigaction(SIGURG, &sa, nullptr);  // no SA_RESTART: the blocked ioctl returns EINTR
-  });
-}
-void accept_wake() {
-  sigset_t s;
-  sigemptyset(&s);
-  sigaddset(&s, SIGURG);
-  pthread_sigmask(SIG_UNBLOCK, &s, nullptr);
-}
-void end_thread(std::thread& t, const std::atomic<bool>& done) {
-  if (!t.joinable()) return;
-  while (!done.load()) {
-    pthread_kill(t.native_handle(), SIGURG);
-    usleep(2000);
-  }
-  t.join();
-}
-
-void put16(std::vector<std::uint8_t>& v, std::uint16_t x) {
-  v.push_back(static_cast<std::uint8_t>(x & 0xFF));
-  v.push_back(static_cast<std::uint8_t>(x >> 8));
-}
-
-std::vector<std::uint8_t> string_descriptor(const std::string& s) {
-  std::vector<std::uint8_t> d{0, USB_DT_STRING};
-  for (char c : s) put16(d, static_cast<std::uint8_t>(c));  // ASCII as UTF-16LE
-  d[0] = static_cast<std::uint8_t>(d.size());
-  return d;
-}
+using namespace gadget;
 
 }  // namespace
 
@@ -107,36 +57,7 @@ RawUsbHid::RawUsbHid(const UsbIdentity& id, std::vector<std::uint8_t> report_des
   config_desc_.insert(config_desc_.end(), {7, USB_DT_ENDPOINT, kOutAddress, 3, kPacket, 0, 1});
   config_desc_[2] = static_cast<std::uint8_t>(config_desc_.size());
 
-  std::string udc, driver;
-  std::error_code ec;
-  for (const auto& e : std::filesystem::directory_iterator("/sys/class/udc", ec)) {
-    const auto link = std::filesystem::read_symlink(e.path() / "device" / "driver", ec);
-    if (ec) continue;
-    udc = e.path().filename().string();
-    driver = link.filename().string();
-    break;
-  }
-  if (udc.empty()) throw std::runtime_error("raw gadget: no USB device controller");
-  usb_raw_init init{};
-  std::memcpy(init.driver_name, driver.data(),
-              std::min<std::size_t>(driver.size(), UDC_NAME_LENGTH_MAX - 1));
-  std::memcpy(init.device_name, udc.data(),
-              std::min<std::size_t>(udc.size(), UDC_NAME_LENGTH_MAX - 1));
-  init.speed = USB_SPEED_FULL;
-  // The controller may still be bound to the last gadget (its close unbinds it a little
-  // later): a refused run fails that raw gadget for good, so open a new one and try again.
-  for (int attempt = 0;; ++attempt) {
-    fd_ = ::open("/dev/raw-gadget", O_RDWR | O_CLOEXEC);
-    if (fd_ < 0) throw std::runtime_error(std::string("/dev/raw-gadget: ") + std::strerror(errno));
-    if (ioctl(fd_, USB_RAW_IOCTL_INIT, &init) == 0 && ioctl(fd_, USB_RAW_IOCTL_RUN, 0) == 0) break;
-    const int e = errno;
-    ::close(fd_);
-    if (e != EBUSY || attempt == 500) {
-      throw std::runtime_error("raw gadget on '" + udc + "': " + std::strerror(e));
-    }
-    usleep(10'000);
-  }
-  install_wake();
+  fd_ = gadget::start_gadget();
   control_ = std::thread([this] { control_loop(); });
 }
 
