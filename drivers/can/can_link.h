@@ -36,6 +36,7 @@ enum class CanCounter : std::uint8_t {
   kOverVelLimit,
   kInternalLimit,
   kUnsolicitedEstimates,
+  kEmcysInStop,
   kCount
 };
 
@@ -124,6 +125,8 @@ class CanLink {
        "itself)"},
       {"unsolicited_estimates", K::kAnomaly,
        "encoder estimates the axis sent by itself (not answers; its encoder rate is not 0)"},
+      {"emcys_in_stop", K::kAnomaly,
+       "EMCYs a drive sent while the stop switched it off (0x8100: a SYNC came late)"},
   }};
 };
 

@@ -42,6 +42,12 @@ void Cia402Node::note_async(const CanFrame& f) {
   if (f.id == canopen::kEmcyBase + node_.node_id) {
     const auto e = canopen::decode_emcy(f);
     if (e && e->code == 0) return;  // an error reset is good news
+    if (stopping_) {
+      // The stop goes on: the statusword, not the EMCY, says whether the power stage is off,
+      // and its watches must still be switched off (docs/drivers/can.md).
+      link_.count(CanCounter::kEmcysInStop);
+      return;
+    }
     throw DeviceError("can: node " + std::to_string(node_.node_id) + " sent EMCY " +
                       (e ? canopen::describe_emcy_code(e->code) + " (error register " +
                                hex(e->error_register, 2) + ")"

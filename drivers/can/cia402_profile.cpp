@@ -11,6 +11,18 @@ namespace {
 
 using cia402::PowerState;
 
+// The stop's SDO exchanges: an EMCY among their answers is counted, not thrown (note_async).
+class InStop {
+ public:
+  explicit InStop(bool& flag) noexcept : flag_(flag) { flag_ = true; }
+  ~InStop() { flag_ = false; }
+  InStop(const InStop&) = delete;
+  InStop& operator=(const InStop&) = delete;
+
+ private:
+  bool& flag_;
+};
+
 }  // namespace
 
 void Cia402Node::walk_to_enabled() {
@@ -106,6 +118,7 @@ void Cia402Node::enter_pre_operational() noexcept {
 // is given zero torque and the shutdown by SDO, each confirmed, and then asked again. False
 // when it stays enabled past state_timeout_ms or cannot be asked.
 bool Cia402Node::confirm_off() noexcept {
+  const InStop in_stop(stopping_);
   try {
     std::uint16_t sw = 0;
     const std::int64_t deadline = base::monotonic_ms() + settings_.state_timeout_ms;
@@ -125,6 +138,7 @@ bool Cia402Node::confirm_off() noexcept {
 // is no lost master (CANopenNode: EMCY 0x8100 at 1.5 cycles without SYNC, 0x8130 when the
 // heartbeat consumer times out, both in pre-operational too).
 void Cia402Node::stop_keeping_alive() noexcept {
+  const InStop in_stop(stopping_);
   try {
     if (has_cycle_period_) {
       sdo_write(cia402::kCommunicationCyclePeriod, 0, 4,

@@ -91,7 +91,8 @@ class Cia402Node {
                           const char* name);
   canopen::SdoReply sdo_exchange(const CanFrame& request, canopen::SdoAddress at, const char* name,
                                  bool may_lack = false);
-  // Frames that arrive while configuring or enabling: an EMCY ends it with a DeviceError.
+  // Frames that arrive while configuring or enabling: an EMCY ends it with a DeviceError. In
+  // the stop (stopping_) it is counted: the stop's steps go on.
   void note_async(const CanFrame& f);
   std::string sdo_where(canopen::SdoAddress at, const char* name) const;
 
@@ -115,6 +116,7 @@ class Cia402Node {
   std::uint32_t rated_torque_mnm_ = 0;
   double permille_per_force_ = 0.0;  // per mille of rated torque per N (or N m) of axis force
   int max_permille_ = 0;             // max_torque in per mille
+  bool stopping_ = false;            // in confirm_off or stop_keeping_alive
   bool has_cycle_period_ = false;    // 0x1006 exists (optional: CiA 301 requires it of SYNC
                                      // producers only)
 

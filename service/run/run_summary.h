@@ -20,8 +20,9 @@ namespace hapticd::service {
 // change of shape is a new version, listed in docs/operations.md: 1 had no schema_version
 // key; 2 added it, direction_check, and the status answer's direction_check; 3 added the
 // gate's workspace (several task axes); 4 the runs of several joints; 5 the workspace's
-// joint_damping (device.damping per joint).
-inline constexpr int kSummarySchemaVersion = 7;
+// joint_damping (device.damping per joint); 6 and 7 the scene's walls; 8 counters.can's
+// emcys_in_stop.
+inline constexpr int kSummarySchemaVersion = 8;
 
 struct RunSummary {
   bool realtime = true;

@@ -211,6 +211,7 @@ TEST(CanReferenceCia402, AShutdownTheDriveNeverTookIsSentAgainBySdo) {
   rig.device->configure();
   rig.device->enable();
   ASSERT_EQ(rig.run(0.5, 300), IoStatus::kOk) << rig.device->describe_fault();
+  sleep_ms(10);  // the last tick's frames reach the drive: the one lost is the stop's
   drive.lose_rpdos(1);
   const std::int64_t stop = reference::monotonic_ns();
   rig.device->disable();
@@ -220,6 +221,33 @@ TEST(CanReferenceCia402, AShutdownTheDriveNeverTookIsSentAgainBySdo) {
   EXPECT_EQ(writes_to(rig.runner->log(), 0x6040, 0, stop), std::vector<std::uint32_t>{0x06})
       << "the shutdown, once, by SDO";
   EXPECT_EQ(drive.object(0x1006, 0), 0u) << "the SYNC watch switched off once it was off";
+}
+
+// A stop that begins after the drive's SYNC watch has fired (a loop held past 1.5 cycles
+// before its stop: a loaded host): the drive's EMCY 0x8100 arrives among the stop's SDO
+// answers. The stop goes on, the statusword saying the power stage is off, and switches the
+// watches off, so that EMCY is the only one; it is counted. Before, the EMCY ended the stop's
+// confirmation and left the watches on: a second EMCY once SYNC stopped (seen under ASan in CI).
+TEST(CanReferenceCia402, AnEmcyDuringTheStopIsCountedAndTheStopGoesOn) {
+  Cia402Drive drive({}, damped_axis(), reference::monotonic_ns());
+  ReferenceRig rig(slow_cia402_config(), drive);
+  rig.device->configure();
+  rig.device->enable();
+  ASSERT_EQ(rig.run(0.5, 300), IoStatus::kOk) << rig.device->describe_fault();
+  sleep_ms(250);  // 2.5 cycles without SYNC: the drive's watch fires at 1.5
+  rig.device->disable();
+  EXPECT_FALSE(drive.torque_on());
+  sleep_ms(500);  // 5 cycles: a SYNC watch still on would fire again
+  rig.runner->stop();
+  int sync_lost = 0;
+  for (const LoggedFrame& l : rig.runner->log()) {
+    sync_lost += l.sent && l.frame.id == 0x081 && l.frame.u16(0) == 0x8100 ? 1 : 0;
+  }
+  EXPECT_EQ(sync_lost, 1) << "the late stop's EMCY, and no second one after the stop";
+  EXPECT_EQ(drive.object(0x1006, 0), 0u) << "the SYNC watch switched off all the same";
+  EXPECT_EQ(drive.object(0x1016, 1) & 0xFFFF, 0u) << "and the heartbeat consumer";
+  EXPECT_EQ(counter(*rig.device, "emcys_in_stop").value(), 1u);
+  EXPECT_EQ(counter(*rig.device, "emcys_in_stop").kind(), base::CounterKind::kAnomaly);
 }
 
 // After a fault the run disables the device and then closes it: one stop on the bus.

@@ -74,6 +74,7 @@ IoStatus run_joints(ReferenceRig& rig, std::array<double, 2> forces, int ms,
     }
     if (r == IoStatus::kTransportFault || r == IoStatus::kDeviceFault) return r;
     next += period;
+    if (next >= end) break;  // a stop that follows comes within the cycle, as the loop's
     std::this_thread::sleep_until(next);
   }
   return IoStatus::kOk;

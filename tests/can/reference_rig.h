@@ -63,6 +63,7 @@ struct ReferenceRig {
       if (r != IoStatus::kTransportFault && r != IoStatus::kDeviceFault) r = device->write(force);
       if (r == IoStatus::kTransportFault || r == IoStatus::kDeviceFault) return r;
       next += period;
+      if (next >= end) break;  // the stop that follows comes within the cycle, as the loop's
       std::this_thread::sleep_until(next);
     }
     return IoStatus::kOk;

@@ -29,7 +29,7 @@ class Scene:
             # While streaming, two samples reach the client before the answer.
             samples = [{"v": 1, "stream": {"tick": self.tick + k * self.streaming, "missed": 0}}
                        for k in range(2)] if self.streaming else []
-            return {"status": {"schema_version": 7, "state": "running", "tick": self.tick,
+            return {"status": {"schema_version": 8, "state": "running", "tick": self.tick,
                                "walls": [{"stiffness": w["stiffness"]} for w in self.walls]},
                     "_lines_before": samples}
         if cmd == "stop":

@@ -215,7 +215,7 @@ TEST(ControlSocket, StatusOfADeltaShowsEveryJointAndThePose) {
   ASSERT_TRUE(d.ready());
   const json s = d.wait_status(
       [](const json& j) { return j["counters"]["loop"]["contact_ticks"].get<int>() > 300; });
-  EXPECT_EQ(s["schema_version"], 7);
+  EXPECT_EQ(s["schema_version"], 8);
   ASSERT_TRUE(s["wall"].is_null()) << s.dump();
   ASSERT_EQ(s["walls"].size(), 6u);
   EXPECT_EQ(s["walls"][5]["stiffness"], 500.0);

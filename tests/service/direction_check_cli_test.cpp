@@ -61,7 +61,7 @@ TEST(CliDirectionCheck, EveryPeerWithItsForceReversedIsRefusedNamingTheSettingTh
     EXPECT_TRUE(has(r.out, "stopped by direction check")) << r.out;
     EXPECT_TRUE(has(r.out, "direction      REVERSED")) << r.out;
     const json j = json::parse(read_file(summary));
-    EXPECT_EQ(j["schema_version"], 7);
+    EXPECT_EQ(j["schema_version"], 8);
     EXPECT_EQ(j["direction_check"]["state"], "reversed");
     EXPECT_LT(j["direction_check"]["gain"].get<double>(), -0.2);
     EXPECT_EQ(j["counters"]["loop"]["contact_ticks"], 0) << "no wall ever acted";
