@@ -1,13 +1,18 @@
 #include "drivers/falcon/usb_link.h"
 
+#include <fcntl.h>
 #include <libusb.h>
+#include <linux/usbdevice_fs.h>
 #include <sys/eventfd.h>
+#include <sys/ioctl.h>
 #include <unistd.h>
 
 #include <array>
 #include <atomic>
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
+#include <ctime>
 #include <sstream>
 #include <thread>
 #include <vector>
@@ -20,8 +25,10 @@
 namespace hapticd::drivers::falcon {
 namespace {
 
-constexpr int kStreamTimeoutMs = 100;  // how often the threads look at the stop flag
-constexpr std::size_t kRing = 4096;    // IN data bytes between the reader and the RT thread
+constexpr int kStreamTimeoutMs = 100;          // how often the threads look at the stop flag
+constexpr std::size_t kRing = 4096;            // IN data bytes between the reader and the RT thread
+constexpr unsigned kEmergencyTimeoutMs = 250;  // a crash handler's one packet (a device that
+                                               // takes none: the process ends after it)
 
 std::string usb_error(int code) { return libusb_error_name(code); }
 
@@ -38,8 +45,10 @@ std::string serial_of(libusb_device_handle* h, const libusb_device_descriptor& d
 
 class UsbLink final : public FalconTransport {
  public:
-  UsbLink(libusb_context* ctx, libusb_device_handle* h, std::string description, int priority)
-      : ctx_(ctx), h_(h), description_(std::move(description)), priority_(priority) {}
+  // `h` wraps `fd`, the device's usbfs node, which the link closes after it.
+  UsbLink(libusb_context* ctx, libusb_device_handle* h, int fd, std::string description,
+          int priority)
+      : ctx_(ctx), h_(h), fd_(fd), description_(std::move(description)), priority_(priority) {}
   ~UsbLink() override {
     stop_.store(true);
     if (wake_ >= 0) {
@@ -51,6 +60,7 @@ class UsbLink final : public FalconTransport {
     if (wake_ >= 0) ::close(wake_);
     libusb_release_interface(h_, 0);
     libusb_close(h_);  // auto-detach gives a detached kernel driver its device back
+    ::close(fd_);      // libusb_close leaves a wrapped descriptor open
     libusb_exit(ctx_);
   }
 
@@ -84,7 +94,7 @@ class UsbLink final : public FalconTransport {
   TransportIo receive(PacketStream& stream) noexcept override;
   int error() const noexcept override { return error_.load(); }
   std::int64_t received_ns() const noexcept override { return handed_ns_; }
-  void emergency(const Packet&) noexcept override {}  // libusb is not async-signal-safe
+  void emergency(const Packet& p) noexcept override;
 
  private:
   void write_loop();
@@ -107,10 +117,14 @@ class UsbLink final : public FalconTransport {
 
   libusb_context* ctx_;
   libusb_device_handle* h_;
+  int fd_;
   std::string description_;
   int priority_;
   int wake_ = -1;
   std::atomic<bool> stop_{false}, failed_{false};
+  // The crash handler's packet must be the last: halted_ stops the writer, and in_transfer_
+  // (set before the writer looks at halted_) says whether one of its packets is in flight.
+  std::atomic<bool> halted_{false}, in_transfer_{false};
   std::atomic<int> error_{0};
   // The newest packet from the RT thread to the writer, a triple buffer: the RT thread fills
   // its back slot and swaps it with the middle (marked fresh); the writer swaps its front slot
@@ -167,13 +181,36 @@ void UsbLink::write_loop() {
     std::uint64_t count = 0;
     if (::read(wake_, &count, sizeof count) < 0 && errno != EINTR) return;
     while (!stop_.load() && (middle_.load(std::memory_order_acquire) & kFresh) != 0) {
+      in_transfer_.store(true);  // before halted_ is read: emergency() sees one or the other
+      if (halted_.load()) {
+        in_transfer_.store(false);
+        return;
+      }
       front_ = middle_.exchange(front_, std::memory_order_acq_rel) & 3;
       int done = 0;
       const int rc = libusb_bulk_transfer(h_, kEndpointOut, slots_[front_].data(), kPacketBytes,
                                           &done, kStreamTimeoutMs);
+      in_transfer_.store(false);
       if (rc != 0 && rc != LIBUSB_ERROR_TIMEOUT) return fail(rc);
     }
   }
+}
+
+// libusb is not async-signal-safe; an ioctl on the descriptor libusb drives is: one synchronous
+// bulk OUT on the interface this descriptor claimed, once the writer's packet in flight (its
+// transfer times out within kStreamTimeoutMs) has gone, so that no torque follows the zero.
+// Bounded: on the writer's own thread (a crash there) its flag never clears.
+void UsbLink::emergency(const Packet& p) noexcept {
+  halted_.store(true);
+  const std::int64_t until = base::monotonic_ns() + std::int64_t{kEmergencyTimeoutMs} * 1'000'000;
+  const timespec pause{0, 100'000};
+  while (in_transfer_.load() && base::monotonic_ns() < until) ::nanosleep(&pause, nullptr);
+  usbdevfs_bulktransfer b{};
+  b.ep = kEndpointOut;
+  b.len = kPacketBytes;
+  b.timeout = kEmergencyTimeoutMs;
+  b.data = const_cast<unsigned char*>(p.data());
+  [[maybe_unused]] const int rc = ::ioctl(fd_, USBDEVFS_BULK, &b);
 }
 
 void UsbLink::read_loop() {
@@ -196,6 +233,33 @@ void UsbLink::read_loop() {
     }
     head_.store(head, std::memory_order_release);
   }
+}
+
+// The chosen device again, through a descriptor of its usbfs node opened here, which libusb then
+// drives: a crash handler can write to it (UsbLink::emergency). `enumerated` is closed. The
+// descriptor (-1 and `error` said when it cannot be had) and the handle that wraps it.
+struct Wrapped {
+  libusb_device_handle* h = nullptr;
+  int fd = -1;
+  std::string error;
+};
+Wrapped wrap_usbfs_node(libusb_context* ctx, libusb_device_handle* enumerated) {
+  libusb_device* dev = libusb_get_device(enumerated);
+  char path[40];
+  std::snprintf(path, sizeof path, "/dev/bus/usb/%03u/%03u",
+                static_cast<unsigned>(libusb_get_bus_number(dev)),
+                static_cast<unsigned>(libusb_get_device_address(dev)));
+  libusb_close(enumerated);
+  Wrapped w;
+  w.fd = ::open(path, O_RDWR | O_CLOEXEC);
+  if (w.fd < 0) {
+    w.error = std::string(path) + ": " + std::strerror(errno);
+  } else if (const int rc = libusb_wrap_sys_device(ctx, w.fd, &w.h); rc != 0) {
+    w.error = std::string(path) + ": libusb_wrap_sys_device: " + usb_error(rc);
+    ::close(w.fd);
+    w.fd = -1;
+  }
+  return w;
 }
 
 }  // namespace
@@ -229,8 +293,10 @@ std::unique_ptr<FalconTransport> open_usb(const FalconSettings& s, int output_pr
     }
   }
   libusb_free_device_list(list, 1);
+  int fd = -1;
   const auto refuse = [&](const std::string& why) {
     if (chosen != nullptr) libusb_close(chosen);
+    if (fd >= 0) ::close(fd);
     libusb_exit(ctx);
     throw DeviceError("falcon: " + why);
   };
@@ -244,13 +310,17 @@ std::unique_ptr<FalconTransport> open_usb(const FalconSettings& s, int output_pr
                                   "' (attached: " + (seen.empty() ? "none" : seen) + ")");
   }
   if (matches > 1) refuse("several Falcons attached (" + seen + "): set device.falcon.serial");
+  const Wrapped w = wrap_usbfs_node(ctx, chosen);
+  chosen = w.h;
+  fd = w.fd;
+  if (fd < 0) refuse("opening its device node " + w.error);
   libusb_set_auto_detach_kernel_driver(chosen, 1);
   if (const int rc = libusb_claim_interface(chosen, 0); rc != 0) {
     refuse("claiming its interface: " + usb_error(rc) + " (another program holds it?)");
   }
   const std::string description =
       "falcon 0403:cb48 serial " + (chosen_serial.empty() ? std::string("?") : chosen_serial);
-  return std::make_unique<UsbLink>(ctx, chosen, description, output_priority);
+  return std::make_unique<UsbLink>(ctx, chosen, fd, description, output_priority);
 }
 
 std::string list_falcons() {

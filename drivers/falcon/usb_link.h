@@ -5,7 +5,9 @@
 // sends the newest packet the RT thread left (an eventfd wakes it) and a reader that keeps a bulk
 // IN transfer waiting and passes each one's data, its modem status bytes dropped, through a ring
 // the RT thread drains. The RT thread never waits for USB and never calls libusb (a transfer's
-// submission allocates).
+// submission allocates). libusb drives a descriptor of the device's usbfs node opened here, on
+// which a crash handler can write the zero packet with one ioctl (libusb is not
+// async-signal-safe).
 #pragma once
 
 #include <memory>

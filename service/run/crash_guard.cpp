@@ -19,7 +19,7 @@ void on_crash(int sig, siginfo_t* info, void*) {
     forward_stop_signal(sig);
     return;
   }
-  // Async-signal-safe: an atomic load and write(2)s of prebuilt messages.
+  // Async-signal-safe: an atomic load and write(2)s (or ioctl(2)s) of prebuilt messages.
   if (Device* d = g_device.exchange(nullptr)) d->emergency_stop();
   signal(sig, SIG_DFL);
   sigset_t only;

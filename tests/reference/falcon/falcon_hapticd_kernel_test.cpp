@@ -209,6 +209,46 @@ TEST(FalconHapticd, LoadedHomedAndEachWallHoldsTheHandFOverKDeep) {
   EXPECT_EQ(device.error(), "");
 }
 
+// A crash while the hand pushes into a wall: the crash handler's zero packet reaches the
+// firmware through the descriptor libusb drives (an ioctl: libusb itself is not
+// async-signal-safe), and the motors let go. Before, the Falcon kept the wall's last force.
+TEST(FalconHapticd, ACrashWhileAWallPushesLeavesTheMotorsAtZero) {
+  RawUsbFtdi device;
+  ASSERT_TRUE(plugged_in(device));
+  Hand hand(device);
+  Vec3 before{}, after{};
+  const HapticdRun r =
+      run_hapticd(shipped("falcon.yaml"), soft_walls(), {"--duration", "40"}, [&](pid_t pid) {
+        ASSERT_TRUE(home(device, hand));
+        ASSERT_TRUE(wait_until(
+            [&] {
+              return ended(pid) ||
+                     device.with_firmware([](FalconFirmware& f) { return f.leds() == 0x2; });
+            },
+            30s));
+        hand.set({0, 0, 0}, {0, 0, 0.11}, 60.0);
+        std::this_thread::sleep_for(3s);  // back in the middle of the box
+        hand.set({kPush, 0, 0}, {0, 0, 0.11}, 60.0);
+        std::this_thread::sleep_for(3s);  // at rest in the +x wall
+        ASSERT_FALSE(ended(pid)) << "hapticd ended while the hand pushed";
+        before =
+            device.with_firmware([](FalconFirmware& f) { return f.mechanism().motor_force(); });
+        ::kill(pid, SIGSEGV);
+        ASSERT_TRUE(wait_until([&] { return ended(pid); }, 10s));
+        // The packet the host's transfer handed over reaches the firmware on its own thread.
+        wait_until(
+            [&] {
+              after = device.with_firmware(
+                  [](FalconFirmware& f) { return f.mechanism().motor_force(); });
+              return after == Vec3{};
+            },
+            2s);
+      });
+  EXPECT_EQ(r.status, 128 + SIGSEGV) << r.log;
+  EXPECT_NEAR(before[0], -kPush, 0.05 * kPush) << "the wall held the hand before the crash";
+  for (int k = 0; k < 3; ++k) EXPECT_EQ(after[k], 0.0) << "the motors after the crash, axis " << k;
+}
+
 // The exchange at 1 kHz for 60 s, the grip resting in the middle of the box: what a tick's
 // round trip through the emulated USB costs (BENCHMARKS.md, "Falcon"), printed for the record;
 // asserted only that the run holds (the emulator's timing is not the hardware's).
