@@ -130,6 +130,15 @@ bool home(RawUsbFtdi& d, Hand& hand) {
   return true;
 }
 
+// Until hapticd has enabled output (the LED green) or ended.
+bool output_on(RawUsbFtdi& d, pid_t pid) {
+  return wait_until(
+      [&] {
+        return ended(pid) || d.with_firmware([](FalconFirmware& f) { return f.leds() == 0x2; });
+      },
+      30s);
+}
+
 struct Face {
   Vec3 point, normal;
 };
@@ -161,14 +170,7 @@ TEST(FalconHapticd, LoadedHomedAndEachWallHoldsTheHandFOverKDeep) {
       shipped("falcon.yaml"), soft_walls(),
       {"--duration", "40", "--log", "/tmp/hapticd-kt-falcon.hlog"}, [&](pid_t pid) {
         ASSERT_TRUE(home(device, hand)) << "never homed";
-        ASSERT_TRUE(wait_until(
-            [&] {
-              return ended(pid) || device.with_firmware([](FalconFirmware& f) {
-                return f.leds() == 0x2;  // green: output on
-              });
-            },
-            30s))
-            << "output never enabled";
+        ASSERT_TRUE(output_on(device, pid)) << "output never enabled";
         hand.set({0, 0, 0}, {0, 0, 0.11}, 60.0);
         std::this_thread::sleep_for(3s);  // back in the middle of the box
         for (std::size_t i = 0; i < 6; ++i) {
@@ -220,12 +222,7 @@ TEST(FalconHapticd, ACrashWhileAWallPushesLeavesTheMotorsAtZero) {
   const HapticdRun r =
       run_hapticd(shipped("falcon.yaml"), soft_walls(), {"--duration", "40"}, [&](pid_t pid) {
         ASSERT_TRUE(home(device, hand));
-        ASSERT_TRUE(wait_until(
-            [&] {
-              return ended(pid) ||
-                     device.with_firmware([](FalconFirmware& f) { return f.leds() == 0x2; });
-            },
-            30s));
+        ASSERT_TRUE(output_on(device, pid));
         hand.set({0, 0, 0}, {0, 0, 0.11}, 60.0);
         std::this_thread::sleep_for(3s);  // back in the middle of the box
         hand.set({kPush, 0, 0}, {0, 0, 0.11}, 60.0);
@@ -285,12 +282,7 @@ TEST(FalconHapticd, UnplugHangAndASilentFirmwareEachEndWithTheCauseNamed) {
     const HapticdRun r =
         run_hapticd(shipped("falcon.yaml"), sets(), {"--duration", "40"}, [&](pid_t pid) {
           ASSERT_TRUE(home(device, hand));
-          ASSERT_TRUE(wait_until(
-              [&] {
-                return ended(pid) ||
-                       device.with_firmware([](FalconFirmware& f) { return f.leds() == 0x2; });
-              },
-              30s));
+          ASSERT_TRUE(output_on(device, pid));
           std::this_thread::sleep_for(1s);
           if (std::string(fault) == "unplug") {
             device.unplug();
