@@ -224,8 +224,11 @@ TEST(EvdevJoystickFaults, AValueFarOutOfRangeIsImpossibleEncoderData) {
 // 5000 frames at once of values up to 40 times the range's end, then silence: more than
 // evdev's buffer for a reader holds, so the kernel drops what does not fit and hapticd reads
 // SYN_DROPPED (counted); libevdev then reads the kernel's state, the flood's last values, and
-// the loop's speed check refuses them. (A SYN_DROPPED alone is no fault: the state read after
-// it is the device's own, docs/drivers/evdev.md.)
+// the loop refuses them: its speed check, or, when the first garbage a tick reads is a pose
+// within a jump of the last but outside the kinematics' workspace, the workspace check (seen
+// once in the kernel test machine; which comes first depends on where the reads fall in the
+// flood). (A SYN_DROPPED alone is no fault: the state read after it is the device's own,
+// docs/drivers/evdev.md.)
 TEST(EvdevJoystickFaults, AFloodOfGarbageOverflowsTheKernelsBufferAndFaults) {
   UinputFfJoystick joystick;
   const HapticdRun h = joy_run(joy_sets(), 30.0, [&](pid_t) {
@@ -234,7 +237,8 @@ TEST(EvdevJoystickFaults, AFloodOfGarbageOverflowsTheKernelsBufferAndFaults) {
     joystick.flood(5000, 40);
   });
   EXPECT_EQ(h.status, 1) << h.log;
-  EXPECT_TRUE(std::regex_search(h.faults(), std::regex("impossible encoder data: position jumped")))
+  EXPECT_TRUE(std::regex_search(
+      h.faults(), std::regex("impossible encoder data: position jumped|outside workspace")))
       << h.faults();
   std::cout << "joystick, flood: counters " << h.summary["counters"]["evdev"].dump() << "\n";
   EXPECT_GT(h.summary["counters"]["evdev"]["syn_dropped"].get<std::uint64_t>(), 0u);
