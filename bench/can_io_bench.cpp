@@ -7,8 +7,6 @@
 // read+write alone; the full tick adds the simulated drive's own work.
 #include <benchmark/benchmark.h>
 
-#include <string_view>
-
 #include "bench_support.h"
 #include "sim/peers/peer_runner.h"
 #include "wiring/registry.h"
@@ -18,7 +16,6 @@ namespace {
 using namespace hapticd;
 using bench::counter;
 
-// The driver's counter `name` as the run summary lists it (Device::counters).
 void tick_bench(benchmark::State& state, const char* example, bool driver_only) {
   // The drive on the runner's thread answers at once unless the host holds that thread up: a
   // loaded host ran out of the examples' 100 ms SDO wait (as in tests/can/can_rig.h).

@@ -159,8 +159,8 @@ class Device {
 
   // Async-signal-safe: called from a crash handler, where nothing else can run. Only write(2)
   // (or an ioctl(2) that writes, as usbfs's bulk transfer) of prebuilt zero-force and disable
-  // messages on already-open descriptors. Default: nothing
-  // (an in-process device has nothing to stop once the process is gone).
+  // messages on already-open descriptors. Default: nothing (an in-process device has nothing
+  // to stop once the process is gone).
   virtual void emergency_stop() noexcept {}
 
  protected:

@@ -122,8 +122,9 @@ class UsbLink final : public FalconTransport {
   int priority_;
   int wake_ = -1;
   std::atomic<bool> stop_{false}, failed_{false};
-  // The crash handler's packet must be the last: halted_ stops the writer, and in_transfer_
-  // (set before the writer looks at halted_) says whether one of its packets is in flight.
+  // The emergency packet must be the last (a crash's, or a stuck loop's: nothing follows it
+  // either way): halted_ stops the writer for good, and in_transfer_ (set before the writer
+  // looks at halted_) says whether one of its packets is in flight.
   std::atomic<bool> halted_{false}, in_transfer_{false};
   std::atomic<int> error_{0};
   // The newest packet from the RT thread to the writer, a triple buffer: the RT thread fills
