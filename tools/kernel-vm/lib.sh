@@ -24,13 +24,17 @@ check_flavour() {
 
 # Sets the array qemu_cmd to boot VMLINUX with INITRAMFS under ACCEL (kvm or tcg), with the
 # kernel console on the first serial port written to CONSOLE_LOG. The caller appends shares
-# and further serial ports.
+# and further serial ports. CLOCK "instructions" (tcg only) makes the guest's clock count the
+# instructions it runs, one a nanosecond, and skip its idle time (-icount shift=0,sleep=off):
+# a deterministic 1 GHz machine whose timing is its code's, not the loaded host's. icount runs
+# every CPU on one host thread (thread=single); qemu 7.2 hangs bringing up a second CPU under
+# it, so that guest has one (run --timed).
 # -nodefaults drops the VGA card and the NIC (and the iPXE ROM the firmware would run for it).
 # quiet: the console is a log, read on failure. panic=-1 with -no-reboot makes a panic end qemu
 # at once instead of hanging until the time-out. unknown_nmi_panic and panic_print=0x40: an NMI
 # from the monitor (tools/kernel-vm/run, at a time-out) panics with every CPU's backtrace.
-qemu_command() {  # ACCEL VMLINUX INITRAMFS CONSOLE_LOG MEMORY_MB CPUS EXTRA_KERNEL_ARGS
-  local accel=$1 vmlinux=$2 initramfs=$3 console=$4 memory=$5 cpus=$6 extra=$7
+qemu_command() {  # ACCEL VMLINUX INITRAMFS CONSOLE_LOG MEMORY_MB CPUS EXTRA_KERNEL_ARGS [CLOCK]
+  local accel=$1 vmlinux=$2 initramfs=$3 console=$4 memory=$5 cpus=$6 extra=$7 clock=${8:-host}
   qemu_cmd=(qemu-system-x86_64 -machine pc -nodefaults -no-user-config -display none
     -no-reboot -rtc base=utc -m "$memory" -smp "$cpus"
     -kernel "$vmlinux" -initrd "$initramfs"
@@ -38,7 +42,11 @@ qemu_command() {  # ACCEL VMLINUX INITRAMFS CONSOLE_LOG MEMORY_MB CPUS EXTRA_KER
     -chardev "file,id=console,path=$console" -serial chardev:console)
   case $accel in
     kvm) qemu_cmd+=(-accel kvm -cpu host) ;;
-    tcg) qemu_cmd+=(-accel tcg,thread=multi -cpu max) ;;
+    tcg) if [[ $clock == instructions ]]; then
+           qemu_cmd+=(-accel tcg,thread=single -cpu max -icount shift=0,sleep=off)
+         else
+           qemu_cmd+=(-accel tcg,thread=multi -cpu max)
+         fi ;;
     *) die "unknown accelerator '$accel' (kvm or tcg)" ;;
   esac
 }
