@@ -1,7 +1,10 @@
 // The kernel tests' rig around the reference Falcon (falcon_rig.h).
 #include "falcon_rig.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 
 #include "falcon_firmware.h"
@@ -26,14 +29,10 @@ std::vector<std::string> reference_sets() {
   return {"device.falcon.firmware=" + image_file(), std::string("device.falcon.serial=") + kSerial};
 }
 
-std::string notices(const HapticdRun& r) {
-  return r.summary.is_object()
-             ? r.summary["device"].value("notices", nlohmann::json::array()).dump()
-             : "(no summary)";
-}
-
-double final_command(const HapticdRun& r) {
-  return r.summary.is_object() ? r.summary["device"].value("final_command", -1.0) : -1.0;
+void print_log_end(const std::string& log, int ticks) {
+  const std::string cmd =
+      std::string(HAPTICD_BINARY) + " export " + log + " | tail -" + std::to_string(ticks) + " >&2";
+  EXPECT_EQ(std::system(cmd.c_str()), 0);
 }
 
 Hand::Hand(RawUsbFtdi& d) : d_(d), t_([this] { run(); }) {}

@@ -29,8 +29,8 @@ bool plugged_in(const RawUsbFtdi& d);
 // The settings that point config/falcon.yaml at the reference: its firmware image and serial.
 std::vector<std::string> reference_sets();
 
-std::string notices(const HapticdRun& r);
-double final_command(const HapticdRun& r);
+// For a run that failed: the last `ticks` records of its tick log, on stderr.
+void print_log_end(const std::string& log, int ticks);
 
 // The test's hand on the reference's grip: a force it sets, and a spring to a line or a point
 // it runs from its own thread (the reference has no gravity and no hand of its own).
